@@ -1,0 +1,26 @@
+// hash.h — SHA-256 (FIPS 180-4) for content hashes of inputs and for scene identity.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace pf {
+
+class Sha256 {
+ public:
+  Sha256();
+  void update(const void* data, size_t len);
+  std::string hex();  // finishes the hash; 64 lowercase hex digits
+
+ private:
+  void block(const uint8_t* p);
+  uint32_t h_[8];
+  uint8_t buf_[64];
+  size_t buf_len_ = 0;
+  uint64_t total_ = 0;
+};
+
+// Hash of a file's bytes. Throws InputError if the file cannot be read.
+std::string sha256_file(const std::string& path);
+
+}  // namespace pf

@@ -1,0 +1,48 @@
+// raycast.h — ray casting over a baked scene: closest hit and any hit (shadow rays), single rays
+// and multithreaded batches, with three traversals:
+//   Ropes — stackless kd-tree traversal along ropes (Popov et al. 2007), what the GPU kernels use;
+//   Stack — classic recursive kd-tree traversal with an explicit stack;
+//   Brute — every triangle (the reference).
+// Triangles are tested with the Havel–Herout test (thesis eq. 4.3–4.7).
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "photonflow/scene.h"
+#include "photonflow/vec.h"
+
+namespace pf {
+
+struct Ray {
+  Vec3 o;
+  Vec3 d;  // need not be unit length; t is measured in units of |d|
+  float tmin = 0.f;
+  float tmax = INFINITY;
+};
+
+struct Hit {
+  float t = INFINITY;
+  int32_t tri = -1;  // triangle index, −1 = no hit
+  float u = 0, v = 0;  // barycentrics: P = (1−u−v)·v0 + u·v1 + v·v2
+  bool hit() const { return tri >= 0; }
+};
+
+enum class Traversal { Ropes, Stack, Brute };
+const char* traversal_name(Traversal t);
+
+// Closest hit with t in (tmin, tmax]. Returns hit.hit().
+bool intersect_closest(const Scene& scene, const Ray& ray, Hit& hit,
+                       Traversal trav = Traversal::Ropes);
+// True if any triangle is hit with t in (tmin, tmax) (shadow rays).
+bool intersect_any(const Scene& scene, const Ray& ray, Traversal trav = Traversal::Ropes);
+
+// Batches over all cores (threads = 0) or the given count; results do not depend on threads.
+void intersect_closest_batch(const Scene& scene, const std::vector<Ray>& rays,
+                             std::vector<Hit>& hits, Traversal trav = Traversal::Ropes,
+                             int threads = 0);
+void intersect_any_batch(const Scene& scene, const std::vector<Ray>& rays,
+                         std::vector<uint8_t>& occluded, Traversal trav = Traversal::Ropes,
+                         int threads = 0);
+
+}  // namespace pf

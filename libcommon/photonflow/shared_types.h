@@ -1,0 +1,155 @@
+/*
+ * shared_types.h — the structs that the C++ host and the OpenCL C kernels share.
+ *
+ * This one header is included by both sides (LuxCore's habit), so a buffer written by the host is
+ * read by a kernel with the same layout. Rules that keep the layout identical in C++ and OpenCL C:
+ *   - only 4-byte scalars and arrays of them (no float3/float4: their alignment differs),
+ *   - no pointers, no bool, no enums as members (enums become pf_int),
+ *   - every struct's size is asserted on the host side (bottom of this file).
+ * The same structs are the HDF5 compound types of the intermediates (docs/FORMATS.md), so a
+ * dataset read from a file can be uploaded to a device unchanged.
+ */
+#ifndef PHOTONFLOW_SHARED_TYPES_H
+#define PHOTONFLOW_SHARED_TYPES_H
+
+#ifdef __OPENCL_VERSION__
+typedef int pf_int;
+typedef uint pf_uint;
+typedef float pf_float;
+#else
+#include <cstdint>
+typedef int32_t pf_int;
+typedef uint32_t pf_uint;
+typedef float pf_float;
+#endif
+
+/* Material types. Materials are kept to what the scenes need (design card). */
+#define PF_MAT_DIFFUSE 0 /* Lambertian, color = albedo */
+#define PF_MAT_MIRROR 1  /* perfect specular reflection, color = reflectance */
+#define PF_MAT_GLASS 2   /* smooth dielectric with Fresnel, color = transmittance tint, ior */
+#define PF_MAT_EMITTER 3 /* one-sided area emitter along the geometric normal, emission = radiance;
+                            color = albedo of the (diffuse) surface under the emitter */
+
+/* A material. Units: color dimensionless in [0,1]; emission radiance W/(sr m^2) per channel. */
+typedef struct {
+  pf_int type;          /* PF_MAT_* */
+  pf_float ior;         /* index of refraction (glass only; 1 otherwise) */
+  pf_float color[3];    /* albedo / reflectance / transmittance */
+  pf_float emission[3]; /* radiance of an emitter, 0 otherwise */
+} pf_material;
+
+/* A scene triangle in world space. Winding v0→v1→v2 counter-clockwise seen from the front: the
+ * geometric normal is normalize((v1-v0)×(v2-v0)). Shading normals n0..n2 are the file's vertex
+ * normals, or the geometric normal when the file has none. */
+typedef struct {
+  pf_float v0[3];
+  pf_float v1[3];
+  pf_float v2[3];
+  pf_float n0[3];
+  pf_float n1[3];
+  pf_float n2[3];
+  pf_int mesh;     /* index into the scene's mesh table */
+  pf_int material; /* index into the scene's material table */
+} pf_triangle;
+
+/* Precomputed planes of the Havel–Herout ray–triangle test (thesis eq. 4.3–4.7):
+ *   n  = (N, d)   with N = (B−A)×(C−A), d = −N·A              (the triangle's plane)
+ *   n1 = (N1, d1) with N1 = ((C−A)×N)/|N|², d1 = −N1·A         (u = 1 at B, 0 on edge AC)
+ *   n2 = (N2, d2) with N2 = (N×(B−A))/|N|², d2 = −N2·A         (v = 1 at C, 0 on edge AB)
+ * A hit point P has barycentrics u = N1·P + d1, v = N2·P + d2; P = (1−u−v)A + uB + vC. */
+typedef struct {
+  pf_float n[4];
+  pf_float n1[4];
+  pf_float n2[4];
+} pf_hh_triangle;
+
+/* Node of the SAH kd-tree with ropes (Popov et al. 2007), stored flat.
+ * axis 0/1/2: inner node split at `split` on that axis, children left (< split) and right.
+ * axis PF_KD_LEAF: leaf holding leaf_tris[first .. first+count).
+ * ropes[f], f = 2·axis + (0 for the low face, 1 for the high face): the node on the other side of
+ * that face of the node's box (the deepest node whose box covers the whole face), −1 if the face
+ * lies on the scene bounds. Ropes are set on every node; stackless traversal only needs leaves'. */
+#define PF_KD_LEAF 3
+typedef struct {
+  pf_float lo[3];
+  pf_float hi[3];
+  pf_int axis;
+  pf_float split;
+  pf_int left;
+  pf_int right;
+  pf_int first;
+  pf_int count;
+  pf_int ropes[6];
+} pf_kd_node;
+
+/* Light types. */
+#define PF_LIGHT_AREA 0  /* one emissive triangle */
+#define PF_LIGHT_POINT 1 /* isotropic point light */
+
+/* A light. Area light: triangle index, its area (m^2), radiance (W/(sr m^2)); power = π·area·L.
+ * Point light: position and intensity (W/sr); power = 4π·I. `power` is the luminance-weighted
+ * scalar used for sampling lights in proportion to power (rgb weights 0.2126, 0.7152, 0.0722). */
+typedef struct {
+  pf_int type;
+  pf_int triangle;
+  pf_float area;
+  pf_float power;
+  pf_float position[3];
+  pf_float radiance[3]; /* area: radiance; point: intensity */
+} pf_light;
+
+/* Pinhole camera. Right-handed world; the image's +x is to the right, +y is down (row 0 at top). */
+typedef struct {
+  pf_float eye[3];
+  pf_float look_at[3];
+  pf_float up[3];
+  pf_float fov_y_deg; /* vertical field of view, degrees */
+  pf_int width;       /* pixels */
+  pf_int height;      /* pixels */
+} pf_camera;
+
+
+/* A hitpoint of progressive photon mapping (thesis ch. 3.5, 7.1; Hachisuka et al. 2008): the first
+ * diffuse surface seen through a pixel (after specular bounces). Units: world units for position and
+ * radius; weight is the RGB throughput of the specular chain times the pixel filter weight;
+ * n_photons is the accumulated photon count N (fractional after eq. 3.14); flux is τ (eq. 3.18),
+ * in units of the photons' flux (watts) times BRDF (1/sr). */
+typedef struct {
+  pf_float position[3];
+  pf_float normal[3]; /* shading normal, facing the incoming ray */
+  pf_float dir[3];    /* direction of the ray that arrived (pointing into the surface), unit */
+  pf_float weight[3];
+  pf_float radius;    /* R (eq. 3.16) */
+  pf_float n_photons; /* N (eq. 3.14) */
+  pf_float flux[3];   /* τ (eq. 3.18) */
+  pf_int pixel_x;
+  pf_int pixel_y;
+  pf_int mesh;
+  pf_int material;
+} pf_hitpoint;
+
+/* Photon flags. */
+#define PF_PHOTON_CAUSTIC 1 /* the path was L S+ D: only specular bounces before this hit */
+
+/* A photon stored at a diffuse hit. dir points along travel (into the surface); flux in watts. */
+typedef struct {
+  pf_float position[3];
+  pf_float dir[3];
+  pf_float flux[3];
+  pf_int mesh;
+  pf_int pass;
+  pf_int flags; /* PF_PHOTON_* */
+} pf_photon;
+
+#ifndef __OPENCL_VERSION__
+static_assert(sizeof(pf_material) == 32, "pf_material layout");
+static_assert(sizeof(pf_triangle) == 80, "pf_triangle layout");
+static_assert(sizeof(pf_hh_triangle) == 48, "pf_hh_triangle layout");
+static_assert(sizeof(pf_kd_node) == 72, "pf_kd_node layout");
+static_assert(sizeof(pf_light) == 40, "pf_light layout");
+static_assert(sizeof(pf_camera) == 48, "pf_camera layout");
+static_assert(sizeof(pf_hitpoint) == 84, "pf_hitpoint layout");
+static_assert(sizeof(pf_photon) == 48, "pf_photon layout");
+#endif
+
+#endif /* PHOTONFLOW_SHARED_TYPES_H */

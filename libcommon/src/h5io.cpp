@@ -1,0 +1,379 @@
+// HDF5 stage contract: see h5io.h.
+#include "photonflow/h5io.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstring>
+
+namespace pf::h5 {
+
+void quiet_hdf5() {
+  static bool done = false;
+  if (!done) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    done = true;
+  }
+}
+
+Handle& Handle::operator=(Handle&& o) noexcept {
+  if (this != &o) {
+    if (id_ >= 0) H5Idec_ref(id_);
+    id_ = o.id_;
+    o.id_ = -1;
+  }
+  return *this;
+}
+
+Handle::~Handle() {
+  if (id_ >= 0) H5Idec_ref(id_);
+}
+
+Compound::Compound(size_t size) : type_(H5Tcreate(H5T_COMPOUND, size)), size_(size) {}
+
+Compound& Compound::add(const char* name, size_t offset, hid_t base, int count) {
+  if (count == 1) {
+    H5Tinsert(type_.get(), name, offset, base);
+  } else {
+    hsize_t dims[1] = {hsize_t(count)};
+    Handle arr(H5Tarray_create2(base, 1, dims));
+    H5Tinsert(type_.get(), name, offset, arr.get());
+  }
+  return *this;
+}
+
+bool FileBase::exists(const std::string& obj) const {
+  if (obj == "/") return true;
+  // Check each prefix: H5Lexists fails on a path whose parent is missing.
+  size_t pos = 0;
+  while (true) {
+    pos = obj.find('/', pos + 1);
+    std::string prefix = obj.substr(0, pos);
+    if (H5Lexists(file_.get(), prefix.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (pos == std::string::npos) return true;
+  }
+}
+
+// ---- Writer ----------------------------------------------------------------------------------
+
+Writer::Writer(const std::string& final_path, const std::string& format, int version)
+    : final_path_(final_path) {
+  quiet_hdf5();
+  path_ = final_path + ".tmp." + std::to_string(getpid());
+  file_ = Handle(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  if (!file_.valid())
+    throw input_error(final_path, "cannot create output file",
+                      "check that the directory exists and is writable");
+  attr("/", "format", format);
+  attr("/", "format_version", int64_t(version));
+}
+
+Writer::~Writer() {
+  if (!committed_) {
+    file_ = Handle();
+    std::remove(path_.c_str());
+  }
+}
+
+void Writer::group(const std::string& path) {
+  if (exists(path)) return;
+  Handle lcpl(H5Pcreate(H5P_LINK_CREATE));
+  H5Pset_create_intermediate_group(lcpl.get(), 1);
+  Handle g(H5Gcreate2(file_.get(), path.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT));
+  if (!g.valid()) throw input_error(final_path_, "cannot create group " + path);
+}
+
+namespace {
+Handle open_object(hid_t file, const std::string& obj) {
+  return Handle(H5Oopen(file, obj.c_str(), H5P_DEFAULT));
+}
+void write_attr(hid_t file, const std::string& obj, const std::string& name, hid_t type,
+                const void* data, hsize_t n, bool scalar, const std::string& path) {
+  Handle o = open_object(file, obj);
+  if (!o.valid()) throw input_error(path, "cannot open " + obj + " to set attribute " + name);
+  if (H5Aexists(o.get(), name.c_str()) > 0) H5Adelete(o.get(), name.c_str());
+  Handle space(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr));
+  Handle a(H5Acreate2(o.get(), name.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT));
+  if (!a.valid() || H5Awrite(a.get(), type, data) < 0)
+    throw input_error(path, "cannot write attribute " + obj + "@" + name);
+}
+Handle string_type(size_t len) {
+  Handle t(H5Tcopy(H5T_C_S1));
+  H5Tset_size(t.get(), len > 0 ? len : 1);
+  H5Tset_strpad(t.get(), H5T_STR_NULLTERM);
+  H5Tset_cset(t.get(), H5T_CSET_UTF8);
+  return t;
+}
+}  // namespace
+
+void Writer::attr(const std::string& obj, const std::string& name, const std::string& value) {
+  Handle t = string_type(value.size() + 1);
+  write_attr(file_.get(), obj, name, t.get(), value.c_str(), 1, true, final_path_);
+}
+void Writer::attr(const std::string& obj, const std::string& name, int64_t value) {
+  write_attr(file_.get(), obj, name, H5T_NATIVE_INT64, &value, 1, true, final_path_);
+}
+void Writer::attr(const std::string& obj, const std::string& name, double value) {
+  write_attr(file_.get(), obj, name, H5T_NATIVE_DOUBLE, &value, 1, true, final_path_);
+}
+void Writer::attr(const std::string& obj, const std::string& name, const std::vector<double>& v) {
+  write_attr(file_.get(), obj, name, H5T_NATIVE_DOUBLE, v.data(), v.size(), false, final_path_);
+}
+
+void Writer::write_raw(const std::string& path, hid_t type, const void* data,
+                       const std::vector<size_t>& shape) {
+  auto slash = path.rfind('/');
+  if (slash != std::string::npos && slash > 0) group(path.substr(0, slash));
+  std::vector<hsize_t> dims(shape.begin(), shape.end());
+  hsize_t total = 1;
+  for (auto d : dims) total *= d;
+  Handle space(H5Screate_simple(int(dims.size()), dims.data(), nullptr));
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE));
+  // Chunk + deflate large datasets; small ones stay contiguous (cheaper to read).
+  if (total * H5Tget_size(type) > (1u << 20) && dims.size() == 1) {
+    hsize_t chunk = std::min<hsize_t>(dims[0], 1u << 16);
+    H5Pset_chunk(dcpl.get(), 1, &chunk);
+  }
+  Handle d(H5Dcreate2(file_.get(), path.c_str(), type, space.get(), H5P_DEFAULT, dcpl.get(),
+                      H5P_DEFAULT));
+  if (!d.valid()) throw input_error(final_path_, "cannot create dataset " + path);
+  if (total > 0 && H5Dwrite(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+    throw input_error(final_path_, "cannot write dataset " + path, "is the disk full?");
+}
+
+void Writer::write(const std::string& path, const Compound& type, const void* data, size_t n) {
+  write_raw(path, type.id(), data, {n});
+}
+
+void Writer::write_strings(const std::string& path, const std::vector<std::string>& v) {
+  Handle t(H5Tcopy(H5T_C_S1));
+  H5Tset_size(t.get(), H5T_VARIABLE);
+  H5Tset_cset(t.get(), H5T_CSET_UTF8);
+  std::vector<const char*> ptrs;
+  for (auto& s : v) ptrs.push_back(s.c_str());
+  write_raw(path, t.get(), ptrs.data(), {v.size()});
+}
+
+void Writer::describe(const std::string& path, const std::string& unit,
+                      const std::string& description) {
+  if (!unit.empty()) attr(path, "unit", unit);
+  if (!description.empty()) attr(path, "description", description);
+}
+
+void Writer::commit() {
+  if (H5Fflush(file_.get(), H5F_SCOPE_GLOBAL) < 0)
+    throw input_error(final_path_, "cannot flush output", "is the disk full?");
+  file_ = Handle();
+  if (std::rename(path_.c_str(), final_path_.c_str()) != 0) {
+    std::remove(path_.c_str());
+    throw input_error(final_path_, "cannot rename temporary output into place");
+  }
+  committed_ = true;
+}
+
+// ---- Reader ----------------------------------------------------------------------------------
+
+Reader::Reader(const std::string& path, const std::string& format, int max_version) {
+  quiet_hdf5();
+  path_ = path;
+  if (access(path.c_str(), R_OK) != 0)
+    throw input_error(path, "cannot read file", "check the path; run the stage that makes it");
+  if (H5Fis_hdf5(path.c_str()) <= 0)
+    throw input_error(path, "not a readable HDF5 file (truncated or foreign)",
+                      "remake it with the stage that writes " + format);
+  file_ = Handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  if (!file_.valid())
+    throw input_error(path, "cannot open HDF5 file (truncated or damaged)",
+                      "remake it with the stage that writes " + format);
+  if (!has_attr("/", "format"))
+    throw input_error(path, "not a photonflow file (no format attribute), expected " + format);
+  std::string f = attr_string("/", "format");
+  if (f != format)
+    throw input_error(path, "is a " + f + " file, expected " + format,
+                      "pass the right file to this option");
+  version_ = int(attr_int("/", "format_version"));
+  if (version_ < 1 || version_ > max_version)
+    throw input_error(path, format + " version " + std::to_string(version_) +
+                                " is not supported (this build reads 1.." +
+                                std::to_string(max_version) + ")",
+                      "remake the file with this build");
+}
+
+std::string Reader::scene_id() const {
+  return has_attr("/", "scene_id") ? attr_string("/", "scene_id") : std::string();
+}
+
+bool Reader::has_attr(const std::string& obj, const std::string& name) const {
+  if (!exists(obj)) return false;
+  return H5Aexists_by_name(file_.get(), obj.c_str(), name.c_str(), H5P_DEFAULT) > 0;
+}
+
+namespace {
+Handle open_attr(const FileBase& f, const std::string& obj, const std::string& name) {
+  Handle a(H5Aopen_by_name(f.id(), obj.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT));
+  if (!a.valid())
+    throw input_error(f.path(), "missing attribute " + obj + "@" + name,
+                      "the file is damaged or from another tool");
+  return a;
+}
+}  // namespace
+
+std::string Reader::attr_string(const std::string& obj, const std::string& name) const {
+  Handle a = open_attr(*this, obj, name);
+  Handle t(H5Aget_type(a.get()));
+  if (H5Tget_class(t.get()) != H5T_STRING)
+    throw input_error(path_, "attribute " + obj + "@" + name + " is not a string");
+  if (H5Tis_variable_str(t.get()) > 0) {
+    char* s = nullptr;
+    Handle mt(H5Tcopy(H5T_C_S1));
+    H5Tset_size(mt.get(), H5T_VARIABLE);
+    if (H5Aread(a.get(), mt.get(), &s) < 0 || !s)
+      throw input_error(path_, "cannot read attribute " + obj + "@" + name);
+    std::string out(s);
+    H5free_memory(s);
+    return out;
+  }
+  size_t n = H5Tget_size(t.get());
+  std::string buf(n, '\0');
+  if (H5Aread(a.get(), t.get(), buf.data()) < 0)
+    throw input_error(path_, "cannot read attribute " + obj + "@" + name);
+  buf.resize(std::strlen(buf.c_str()));
+  return buf;
+}
+
+int64_t Reader::attr_int(const std::string& obj, const std::string& name) const {
+  Handle a = open_attr(*this, obj, name);
+  int64_t v = 0;
+  if (H5Aread(a.get(), H5T_NATIVE_INT64, &v) < 0)
+    throw input_error(path_, "attribute " + obj + "@" + name + " is not an integer");
+  return v;
+}
+
+double Reader::attr_double(const std::string& obj, const std::string& name) const {
+  Handle a = open_attr(*this, obj, name);
+  double v = 0;
+  if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0)
+    throw input_error(path_, "attribute " + obj + "@" + name + " is not a number");
+  return v;
+}
+
+std::vector<double> Reader::attr_doubles(const std::string& obj, const std::string& name) const {
+  Handle a = open_attr(*this, obj, name);
+  Handle s(H5Aget_space(a.get()));
+  hssize_t n = H5Sget_simple_extent_npoints(s.get());
+  std::vector<double> v(n > 0 ? size_t(n) : 0);
+  if (!v.empty() && H5Aread(a.get(), H5T_NATIVE_DOUBLE, v.data()) < 0)
+    throw input_error(path_, "attribute " + obj + "@" + name + " is not numeric");
+  return v;
+}
+
+namespace {
+herr_t collect_attr(hid_t, const char* name, const H5A_info_t*, void* op) {
+  static_cast<std::vector<std::string>*>(op)->push_back(name);
+  return 0;
+}
+herr_t collect_link(hid_t, const char* name, const H5L_info_t*, void* op) {
+  static_cast<std::vector<std::string>*>(op)->push_back(name);
+  return 0;
+}
+}  // namespace
+
+std::vector<std::string> Reader::attr_names(const std::string& obj) const {
+  std::vector<std::string> names;
+  Handle o = open_object(file_.get(), obj);
+  if (!o.valid()) return names;
+  hsize_t idx = 0;
+  H5Aiterate2(o.get(), H5_INDEX_NAME, H5_ITER_INC, &idx, collect_attr, &names);
+  return names;
+}
+
+std::vector<std::string> Reader::children(const std::string& group) const {
+  std::vector<std::string> names;
+  if (!exists(group)) return names;
+  Handle g(H5Gopen2(file_.get(), group.c_str(), H5P_DEFAULT));
+  if (!g.valid()) return names;
+  hsize_t idx = 0;
+  H5Literate(g.get(), H5_INDEX_NAME, H5_ITER_INC, &idx, collect_link, &names);
+  return names;
+}
+
+Handle Reader::open_dataset(const std::string& path) const {
+  if (!exists(path))
+    throw input_error(path_, "missing dataset " + path, "the file is incomplete or of another kind");
+  Handle d(H5Dopen2(file_.get(), path.c_str(), H5P_DEFAULT));
+  if (!d.valid()) throw input_error(path_, "cannot open dataset " + path);
+  return d;
+}
+
+std::vector<size_t> Reader::shape(const std::string& path) const {
+  Handle d = open_dataset(path);
+  Handle s(H5Dget_space(d.get()));
+  int nd = H5Sget_simple_extent_ndims(s.get());
+  std::vector<hsize_t> dims(nd > 0 ? nd : 0);
+  if (nd > 0) H5Sget_simple_extent_dims(s.get(), dims.data(), nullptr);
+  return std::vector<size_t>(dims.begin(), dims.end());
+}
+
+size_t Reader::count(const std::string& path) const {
+  size_t n = 1;
+  for (auto d : shape(path)) n *= d;
+  return n;
+}
+
+void Reader::read(const std::string& path, const Compound& type, void* out, size_t n) const {
+  Handle d = open_dataset(path);
+  if (count(path) != n) throw input_error(path_, "dataset " + path + " has an unexpected size");
+  // Every field the caller asks for must exist in the file's compound.
+  Handle ft(H5Dget_type(d.get()));
+  if (H5Tget_class(ft.get()) != H5T_COMPOUND)
+    throw input_error(path_, "dataset " + path + " is not a compound of named fields");
+  int nm = H5Tget_nmembers(type.id());
+  for (int i = 0; i < nm; ++i) {
+    char* name = H5Tget_member_name(type.id(), unsigned(i));
+    bool found = H5Tget_member_index(ft.get(), name) >= 0;
+    std::string field(name);
+    H5free_memory(name);
+    if (!found)
+      throw input_error(path_, "dataset " + path + " lacks field '" + field + "'",
+                        "remake the file with this build");
+  }
+  if (n > 0 && H5Dread(d.get(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out) < 0)
+    throw input_error(path_, "cannot read dataset " + path + " (truncated or damaged)");
+}
+
+void Reader::read_raw(const std::string& path, hid_t type, void* out) const {
+  Handle d = open_dataset(path);
+  Handle ft(H5Dget_type(d.get()));
+  H5T_class_t c = H5Tget_class(ft.get());
+  if (c != H5T_INTEGER && c != H5T_FLOAT)
+    throw input_error(path_, "dataset " + path + " is not numeric");
+  if (count(path) > 0 && H5Dread(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out) < 0)
+    throw input_error(path_, "cannot read dataset " + path + " (truncated or damaged)");
+}
+
+std::vector<std::string> Reader::read_strings(const std::string& path) const {
+  Handle d = open_dataset(path);
+  size_t n = count(path);
+  Handle t(H5Tcopy(H5T_C_S1));
+  H5Tset_size(t.get(), H5T_VARIABLE);
+  std::vector<char*> ptrs(n, nullptr);
+  if (n > 0 && H5Dread(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0)
+    throw input_error(path_, "cannot read strings " + path);
+  std::vector<std::string> out;
+  for (char* p : ptrs) {
+    out.emplace_back(p ? p : "");
+    if (p) H5free_memory(p);
+  }
+  return out;
+}
+
+void Reader::require_same_scene(const Reader& other) const {
+  std::string a = scene_id(), b = other.scene_id();
+  if (a.empty() || b.empty() || a != b)
+    throw input_error(other.path(),
+                      "was made from a different scene than " + path_ + " (scene_id " +
+                          b.substr(0, 12) + " vs " + a.substr(0, 12) + ")",
+                      "rerun the stages from the same scene.h5");
+}
+
+}  // namespace pf::h5
