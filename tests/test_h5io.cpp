@@ -1,0 +1,238 @@
+// Stage contract: atomic writes, format/version/scene checks, named compound fields, provenance.
+#include <catch2/catch.hpp>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "photonflow/h5io.h"
+#include "photonflow/hash.h"
+#include "photonflow/provenance.h"
+#include "photonflow/scene.h"
+
+namespace fs = std::filesystem;
+using namespace pf;
+
+namespace {
+// A fresh, empty temporary directory per test case.
+struct TempDir {
+  fs::path dir;
+  TempDir() {
+    dir = fs::temp_directory_path() / ("pf-h5io-" + std::to_string(getpid()) + "-" +
+                                       std::to_string(counter()++));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  ~TempDir() { fs::remove_all(dir); }
+  std::string operator/(const std::string& name) const { return (dir / name).string(); }
+  static int& counter() { static int c = 0; return c; }
+  size_t file_count() const {
+    return size_t(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+  }
+};
+
+void write_minimal(const std::string& path, const std::string& format, int version,
+                   const std::string& scene_id) {
+  h5::Writer w(path, format, version);
+  w.attr("/", "scene_id", scene_id);
+  w.commit();
+}
+}  // namespace
+
+TEST_CASE("SHA-256 matches the FIPS 180-4 test vectors", "[hash]") {
+  Sha256 empty;
+  CHECK(empty.hex() == "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  Sha256 abc;
+  abc.update("abc", 3);
+  CHECK(abc.hex() == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  // Two-block message, fed in uneven pieces.
+  const char* m = "abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq";
+  Sha256 two;
+  two.update(m, 5);
+  two.update(m + 5, 51);
+  CHECK(two.hex() == "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+}
+
+TEST_CASE("datasets and attributes round-trip with named fields", "[h5io]") {
+  TempDir tmp;
+  std::string path = tmp / "a.h5";
+  std::vector<pf_photon> photons(1000);
+  for (size_t i = 0; i < photons.size(); ++i) {
+    pf_photon& p = photons[i];
+    for (int k = 0; k < 3; ++k) {
+      p.position[k] = float(i) * 0.5f + float(k);
+      p.dir[k] = -float(k);
+      p.flux[k] = 1e-3f * float(i + k);
+    }
+    p.mesh = int(i % 7);
+    p.pass = 3;
+    p.flags = int(i % 2);
+  }
+  std::vector<float> numbers{1.5f, -2.f, 3.25f, 4.f, 5.f, 6.f};
+  {
+    h5::Writer w(path, "photonflow.test", 2);
+    w.attr("/", "scene_id", "abc");
+    w.write("/data/photons", h5_type_photon(), photons);
+    w.write("/data/matrix", numbers, {2, 3});
+    w.write_strings("/names", {"floor", "", "ceiling light"});
+    w.attr("/data", "pi", 3.25);
+    w.attr("/data", "count", int64_t(-7));
+    w.attr("/data", "box", std::vector<double>{1, 2, 3});
+    w.describe("/data/photons", "W", "stored photons");
+    w.commit();
+  }
+  h5::Reader r(path, "photonflow.test", 2);
+  CHECK(r.version() == 2);
+  CHECK(r.scene_id() == "abc");
+  auto back = r.read<pf_photon>("/data/photons", h5_type_photon());
+  REQUIRE(back.size() == photons.size());
+  CHECK(std::memcmp(back.data(), photons.data(), photons.size() * sizeof(pf_photon)) == 0);
+  CHECK(r.shape("/data/matrix") == std::vector<size_t>{2, 3});
+  CHECK(r.read<float>("/data/matrix") == numbers);
+  CHECK(r.read_strings("/names") == std::vector<std::string>{"floor", "", "ceiling light"});
+  CHECK(r.attr_double("/data", "pi") == 3.25);
+  CHECK(r.attr_int("/data", "count") == -7);
+  CHECK(r.attr_doubles("/data", "box") == std::vector<double>{1, 2, 3});
+  CHECK(r.attr_string("/data/photons", "unit") == "W");
+  CHECK(r.children("/data") == std::vector<std::string>{"matrix", "photons"});
+}
+
+TEST_CASE("a writer that is not committed leaves no file behind", "[h5io]") {
+  TempDir tmp;
+  std::string path = tmp / "never.h5";
+  {
+    h5::Writer w(path, "photonflow.test", 1);
+    w.write("/x", std::vector<float>{1, 2, 3});
+    CHECK(w.path() != path);  // writing goes to a temporary name
+    CHECK(fs::exists(w.path()));
+    CHECK_FALSE(fs::exists(path));
+  }
+  CHECK_FALSE(fs::exists(path));
+  CHECK(tmp.file_count() == 0);
+}
+
+TEST_CASE("committing replaces an older file atomically", "[h5io]") {
+  TempDir tmp;
+  std::string path = tmp / "x.h5";
+  write_minimal(path, "photonflow.test", 1, "old");
+  write_minimal(path, "photonflow.test", 1, "new");
+  CHECK(h5::Reader(path, "photonflow.test", 1).scene_id() == "new");
+  CHECK(tmp.file_count() == 1);
+}
+
+TEST_CASE("readers refuse wrong, foreign, damaged and missing files with one line", "[h5io]") {
+  TempDir tmp;
+  auto message = [](auto&& fn) {
+    try {
+      fn();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("<no error>");
+  };
+  std::string good = tmp / "good.h5";
+  write_minimal(good, "photonflow.hitpoints", 1, "s1");
+
+  std::string m = message([&] { h5::Reader(good, "photonflow.photons", 1); });
+  CHECK(m.find(good) == 0);
+  CHECK(m.find("photonflow.hitpoints") != std::string::npos);
+  CHECK(m.find("photonflow.photons") != std::string::npos);
+  CHECK(m.find('\n') == std::string::npos);
+
+  std::string newer = tmp / "newer.h5";
+  write_minimal(newer, "photonflow.hitpoints", 9, "s1");
+  CHECK(message([&] { h5::Reader(newer, "photonflow.hitpoints", 1); }).find("version 9") !=
+        std::string::npos);
+
+  std::string missing = tmp / "missing.h5";
+  CHECK(message([&] { h5::Reader(missing, "photonflow.hitpoints", 1); }).find("cannot read") !=
+        std::string::npos);
+
+  std::string text = tmp / "text.h5";
+  std::ofstream(text) << "not hdf5 at all\n";
+  CHECK(message([&] { h5::Reader(text, "photonflow.hitpoints", 1); }).find("not a readable HDF5") !=
+        std::string::npos);
+
+  // A truncated copy of a real file.
+  std::string big = tmp / "big.h5";
+  {
+    h5::Writer w(big, "photonflow.hitpoints", 1);
+    w.write("/x", std::vector<float>(200000, 1.f));
+    w.commit();
+  }
+  std::string cut = tmp / "cut.h5";
+  fs::copy_file(big, cut);
+  fs::resize_file(cut, fs::file_size(big) / 2);
+  std::string mc = message([&] {
+    h5::Reader r(cut, "photonflow.hitpoints", 1);
+    r.read<float>("/x");
+  });
+  CHECK(mc.find(cut) == 0);
+
+  // A foreign HDF5 file: valid HDF5 without photonflow's format attribute.
+  std::string foreign = tmp / "foreign.h5";
+  {
+    hid_t f = H5Fcreate(foreign.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    H5Fclose(f);
+  }
+  CHECK(message([&] { h5::Reader(foreign, "photonflow.hitpoints", 1); }).find("not a photonflow") !=
+        std::string::npos);
+
+  // Missing dataset and missing field.
+  h5::Reader r(good, "photonflow.hitpoints", 1);
+  CHECK(message([&] { r.read<float>("/nope"); }).find("missing dataset /nope") != std::string::npos);
+}
+
+TEST_CASE("files from different scenes are refused", "[h5io]") {
+  TempDir tmp;
+  write_minimal(tmp / "a.h5", "photonflow.hitpoints", 1, "aaaa");
+  write_minimal(tmp / "b.h5", "photonflow.photons", 1, "bbbb");
+  write_minimal(tmp / "c.h5", "photonflow.photons", 1, "aaaa");
+  h5::Reader a(tmp / "a.h5", "photonflow.hitpoints", 1);
+  h5::Reader b(tmp / "b.h5", "photonflow.photons", 1);
+  h5::Reader c(tmp / "c.h5", "photonflow.photons", 1);
+  CHECK_THROWS_AS(a.require_same_scene(b), InputError);
+  CHECK_NOTHROW(a.require_same_scene(c));
+}
+
+TEST_CASE("an output that cannot be created is one InputError", "[h5io]") {
+  CHECK_THROWS_WITH(h5::Writer("/nonexistent-dir/x.h5", "photonflow.test", 1),
+                    Catch::Contains("/nonexistent-dir/x.h5") && Catch::Contains("cannot create"));
+}
+
+TEST_CASE("provenance round-trips with input hashes", "[h5io][provenance]") {
+  TempDir tmp;
+  std::string input = tmp / "input.txt";
+  std::ofstream(input) << "abc";
+  Provenance p;
+  p.tool = "test-tool";
+  p.seed = 1234567890123ull;
+  p.param("photons", 100000);
+  p.param("alpha", 0.7);
+  p.param("method", "grid");
+  p.param("verbose", true);
+  p.add_input("source", input);
+  p.wall_time_s = 1.25;
+  p.command_line = "test-tool --photons 100000";
+  std::string path = tmp / "p.h5";
+  {
+    h5::Writer w(path, "photonflow.test", 1);
+    write_provenance(w, p);
+    w.commit();
+  }
+  h5::Reader r(path, "photonflow.test", 1);
+  Provenance q = read_provenance(r);
+  CHECK(q.tool == "test-tool");
+  CHECK(q.seed == p.seed);
+  CHECK(q.parameters == p.parameters);
+  CHECK(q.parameters.at("photons") == "100000");
+  CHECK(q.wall_time_s == 1.25);
+  CHECK(q.command_line == p.command_line);
+  CHECK_FALSE(q.version.empty());
+  CHECK_FALSE(q.git_hash.empty());
+  REQUIRE(q.inputs.size() == 1);
+  CHECK(q.inputs[0].role == "source");
+  CHECK(q.inputs[0].sha256 == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+}
