@@ -34,7 +34,8 @@ const char* traversal_name(Traversal t);
 // Closest hit with t in (tmin, tmax]. Returns hit.hit().
 bool intersect_closest(const Scene& scene, const Ray& ray, Hit& hit,
                        Traversal trav = Traversal::Ropes);
-// True if any triangle is hit with t in (tmin, tmax) (shadow rays).
+// True if any triangle is hit with t in (tmin, tmax] (shadow rays; the same interval as
+// intersect_closest, so a ray is occluded exactly when it has a closest hit).
 bool intersect_any(const Scene& scene, const Ray& ray, Traversal trav = Traversal::Ropes);
 
 // Batches over all cores (threads = 0) or the given count; results do not depend on threads.

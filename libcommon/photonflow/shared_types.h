@@ -130,6 +130,7 @@ typedef struct {
 
 /* Photon flags. */
 #define PF_PHOTON_CAUSTIC 1 /* the path was L S+ D: only specular bounces before this hit */
+#define PF_PHOTON_DIRECT 2  /* the path was L D: first hit straight from the light */
 
 /* A photon stored at a diffuse hit. dir points along travel (into the surface); flux in watts. */
 typedef struct {

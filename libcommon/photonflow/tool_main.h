@@ -29,4 +29,10 @@ inline int run_tool(const char* tool, const std::function<int()>& body) {
   }
 }
 
+// Records every option of a parsed command line, defaults included, as provenance parameters.
+template <class Prov> void record_options(Prov& prov, const cxxopts::ParseResult& r) {
+  for (const auto& kv : r.defaults()) prov.parameters[kv.key()] = kv.value();
+  for (const auto& kv : r.arguments()) prov.parameters[kv.key()] = kv.value();
+}
+
 }  // namespace pf

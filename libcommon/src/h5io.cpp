@@ -227,6 +227,7 @@ std::string Reader::attr_string(const std::string& obj, const std::string& name)
     char* s = nullptr;
     Handle mt(H5Tcopy(H5T_C_S1));
     H5Tset_size(mt.get(), H5T_VARIABLE);
+    H5Tset_cset(mt.get(), H5Tget_cset(t.get()));
     if (H5Aread(a.get(), mt.get(), &s) < 0 || !s)
       throw input_error(path_, "cannot read attribute " + obj + "@" + name);
     std::string out(s);
@@ -356,6 +357,10 @@ std::vector<std::string> Reader::read_strings(const std::string& path) const {
   size_t n = count(path);
   Handle t(H5Tcopy(H5T_C_S1));
   H5Tset_size(t.get(), H5T_VARIABLE);
+  Handle ft(H5Dget_type(d.get()));
+  if (H5Tget_class(ft.get()) != H5T_STRING || H5Tis_variable_str(ft.get()) <= 0)
+    throw input_error(path_, "dataset " + path + " is not a list of strings");
+  H5Tset_cset(t.get(), H5Tget_cset(ft.get()));
   std::vector<char*> ptrs(n, nullptr);
   if (n > 0 && H5Dread(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0)
     throw input_error(path_, "cannot read strings " + path);

@@ -1,0 +1,376 @@
+// bench_raycast — ray casting throughput (ropes, stack, brute force, Embree 3) and kd-tree build
+// time / memory on procedural scenes. Prints markdown tables (docs/BENCHMARKS.md, issue 2).
+//
+//   bench_raycast [--rays 200000] [--image 512] [--runs 5] [--mesh PATH] ...
+//
+// Closest-hit rays per second are medians over --runs runs, each casting the same ray set through
+// intersect_closest_batch (schedule(dynamic), results independent of the thread count); Embree
+// casts the same rays with rtcIntersect1 (single rays) in an identical OpenMP loop.
+#include <omp.h>
+
+#include <algorithm>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <chrono>
+#include <cstdio>
+#include <cxxopts.hpp>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "photonflow/kdtree.h"
+#include "photonflow/procedural.h"
+#include "photonflow/raycast.h"
+
+#ifdef PF_HAVE_EMBREE
+#include <embree3/rtcore.h>
+#endif
+
+namespace {
+
+using pf::Vec3;
+
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// A benchmark scene: triangles, baked acceleration data, and a pinhole camera.
+struct BenchScene {
+  std::string name;
+  pf::Scene scene;
+  Vec3 eye, look_at;
+  float fov_y_deg = 60.f;
+};
+
+BenchScene make_scene(const std::string& name, std::vector<pf_triangle> tris, Vec3 eye,
+                      Vec3 look_at) {
+  BenchScene b;
+  b.name = name;
+  b.scene.triangles = std::move(tris);
+  b.scene.compute_hh();
+  b.scene.compute_bounds();
+  b.scene.kd = pf::build_kdtree(b.scene.triangles, {});
+  b.eye = eye;
+  b.look_at = look_at;
+  return b;
+}
+
+// Triangles of a mesh file (all meshes, node transforms ignored), scaled and centred so that the
+// longest extent is `size` and the centre is `center`. Empty if the file cannot be read.
+std::vector<pf_triangle> load_mesh(const std::string& path, Vec3 center, float size) {
+  Assimp::Importer importer;
+  const aiScene* s = importer.ReadFile(path, aiProcess_Triangulate);
+  std::vector<pf_triangle> tris;
+  if (!s) return tris;
+  pf::Bounds box;
+  for (unsigned m = 0; m < s->mNumMeshes; ++m)
+    for (unsigned v = 0; v < s->mMeshes[m]->mNumVertices; ++v) {
+      const aiVector3D& p = s->mMeshes[m]->mVertices[v];
+      box.extend(Vec3(p.x, p.y, p.z));
+    }
+  const Vec3 e = box.extent();
+  const float scale = size / std::max({e.x, e.y, e.z});
+  for (unsigned m = 0; m < s->mNumMeshes; ++m) {
+    const aiMesh* mesh = s->mMeshes[m];
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+      if (mesh->mFaces[f].mNumIndices != 3) continue;
+      pf_triangle t{};
+      float* v[3] = {t.v0, t.v1, t.v2};
+      for (int c = 0; c < 3; ++c) {
+        const aiVector3D& p = mesh->mVertices[mesh->mFaces[f].mIndices[c]];
+        ((Vec3(p.x, p.y, p.z) - box.center()) * scale + center).store(v[c]);
+      }
+      const Vec3 n = pf::cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0));
+      if (!(pf::length(n) > 0.f)) continue;  // the kd-tree wants no degenerate triangles
+      pf::normalize(n).store(t.n0);
+      pf::normalize(n).store(t.n1);
+      pf::normalize(n).store(t.n2);
+      t.mesh = 1;
+      t.material = 1;
+      tris.push_back(t);
+    }
+  }
+  return tris;
+}
+
+// Primary rays of a pinhole camera, one through each pixel centre of an image×image grid.
+std::vector<pf::Ray> primary_rays(const BenchScene& b, int image) {
+  const Vec3 fwd = pf::normalize(b.look_at - b.eye);
+  const Vec3 right = pf::normalize(pf::cross(fwd, Vec3(0, 1, 0)));
+  const Vec3 up = pf::cross(right, fwd);
+  const float h = std::tan(0.5f * b.fov_y_deg * 3.14159265f / 180.f);
+  std::vector<pf::Ray> rays;
+  rays.reserve(size_t(image) * size_t(image));
+  for (int y = 0; y < image; ++y)
+    for (int x = 0; x < image; ++x) {
+      const float sx = (2.f * (float(x) + 0.5f) / float(image) - 1.f) * h;
+      const float sy = (1.f - 2.f * (float(y) + 0.5f) / float(image)) * h;
+      pf::Ray r;
+      r.o = b.eye;
+      r.d = pf::normalize(fwd + right * sx + up * sy);
+      rays.push_back(r);
+    }
+  return rays;
+}
+
+// Rays with origins uniform in the scene box and directions uniform on the sphere.
+std::vector<pf::Ray> random_rays(const BenchScene& b, size_t n, uint32_t seed) {
+  uint64_t s = seed;
+  auto uni = [&]() {  // xorshift64*, [0, 1)
+    s ^= s >> 12;
+    s ^= s << 25;
+    s ^= s >> 27;
+    return float((s * 0x2545F4914F6CDD1Dull) >> 40) * (1.f / 16777216.f);
+  };
+  s += 0x9E3779B97F4A7C15ull;
+  const pf::Bounds& box = b.scene.bounds;
+  std::vector<pf::Ray> rays(n);
+  for (pf::Ray& r : rays) {
+    const Vec3 e = box.extent();
+    r.o = box.lo + Vec3(uni() * e.x, uni() * e.y, uni() * e.z);
+    const float z = 2.f * uni() - 1.f, phi = 6.2831853f * uni();
+    const float q = std::sqrt(std::max(0.f, 1.f - z * z));
+    r.d = Vec3(q * std::cos(phi), q * std::sin(phi), z);
+  }
+  return rays;
+}
+
+#ifdef PF_HAVE_EMBREE
+// The same triangles in an Embree 3 scene (default build quality).
+class EmbreeScene {
+ public:
+  explicit EmbreeScene(const std::vector<pf_triangle>& tris) {
+    device_ = rtcNewDevice(nullptr);
+    scene_ = rtcNewScene(device_);
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * tris.size()));
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), tris.size()));
+    for (size_t i = 0; i < tris.size(); ++i) {
+      std::copy(tris[i].v0, tris[i].v0 + 3, v + 9 * i);
+      std::copy(tris[i].v1, tris[i].v1 + 3, v + 9 * i + 3);
+      std::copy(tris[i].v2, tris[i].v2 + 3, v + 9 * i + 6);
+      for (unsigned c = 0; c < 3; ++c) idx[3 * i + c] = unsigned(3 * i + c);
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene_, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene_);
+  }
+  ~EmbreeScene() {
+    rtcReleaseScene(scene_);
+    rtcReleaseDevice(device_);
+  }
+  EmbreeScene(const EmbreeScene&) = delete;
+  EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+  // Closest hits of all rays (triangle index or −1) with rtcIntersect1.
+  void intersect(const std::vector<pf::Ray>& rays, std::vector<int32_t>& tri, int threads) const {
+    tri.resize(rays.size());
+    const int64_t n = int64_t(rays.size());
+#pragma omp parallel for schedule(dynamic, 256) num_threads(threads)
+    for (int64_t i = 0; i < n; ++i) {
+      const pf::Ray& r = rays[size_t(i)];
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      RTCRayHit rh;
+      rh.ray.org_x = r.o.x;
+      rh.ray.org_y = r.o.y;
+      rh.ray.org_z = r.o.z;
+      rh.ray.dir_x = r.d.x;
+      rh.ray.dir_y = r.d.y;
+      rh.ray.dir_z = r.d.z;
+      rh.ray.tnear = r.tmin;
+      rh.ray.tfar = r.tmax;
+      rh.ray.time = 0.f;
+      rh.ray.mask = ~0u;
+      rh.ray.id = 0;
+      rh.ray.flags = 0;
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(scene_, &ctx, &rh);
+      tri[size_t(i)] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int32_t(rh.hit.primID);
+    }
+  }
+
+ private:
+  RTCDevice device_;
+  RTCScene scene_;
+};
+#endif
+
+std::string mrays(double rays, double seconds) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f", rays / seconds / 1e6);
+  return buf;
+}
+
+// One table row per traversal: million closest-hit rays per second for each thread count.
+void bench_rays(const BenchScene& b, const std::string& ray_set, const std::vector<pf::Ray>& rays,
+                size_t brute_rays, const std::vector<int>& threads, int runs,
+                std::ostream& table) {
+  std::vector<pf::Hit> ref;
+  pf::intersect_closest_batch(b.scene, rays, ref, pf::Traversal::Ropes);
+  size_t hits = 0;
+  for (const pf::Hit& h : ref) hits += h.hit() ? 1 : 0;
+  auto row = [&](const std::string& method, const std::vector<pf::Ray>& rs, auto&& cast) {
+    table << "| " << b.name << " | " << ray_set << " | " << method << " |";
+    for (int t : threads) {
+      std::vector<double> sec;
+      for (int r = 0; r < runs; ++r) {
+        const double t0 = now();
+        cast(rs, t);
+        sec.push_back(now() - t0);
+      }
+      table << " " << mrays(double(rs.size()), median(sec)) << " |";
+    }
+    table << "\n" << std::flush;
+  };
+  for (pf::Traversal tr : {pf::Traversal::Ropes, pf::Traversal::Stack}) {
+    std::vector<pf::Hit> out;
+    row(pf::traversal_name(tr), rays, [&](const std::vector<pf::Ray>& rs, int t) {
+      pf::intersect_closest_batch(b.scene, rs, out, tr, t);
+    });
+  }
+  const std::vector<pf::Ray> sub(rays.begin(), rays.begin() + std::min(brute_rays, rays.size()));
+  std::vector<pf::Hit> out;
+  row("brute (" + std::to_string(sub.size()) + " rays)", sub,
+      [&](const std::vector<pf::Ray>& rs, int t) {
+        pf::intersect_closest_batch(b.scene, rs, out, pf::Traversal::Brute, t);
+      });
+#ifdef PF_HAVE_EMBREE
+  EmbreeScene embree(b.scene.triangles);
+  std::vector<int32_t> etri;
+  row("Embree 3 rtcIntersect1", rays, [&](const std::vector<pf::Ray>& rs, int t) {
+    embree.intersect(rs, etri, t);
+  });
+  size_t differ = 0;
+  for (size_t i = 0; i < rays.size(); ++i) differ += (etri[i] >= 0) != ref[i].hit() ? 1 : 0;
+  std::cerr << b.name << " / " << ray_set << ": " << rays.size() << " rays, " << hits
+            << " hits; hit/miss differs from Embree for " << differ << " rays\n";
+#else
+  table << "| " << b.name << " | " << ray_set << " | Embree 3 | not built (no embree) |\n";
+#endif
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cxxopts::Options opts("bench_raycast",
+                        "Ray casting and kd-tree build benchmark; prints markdown tables.");
+  // clang-format off
+  opts.add_options()
+    ("rays", "random rays per scene", cxxopts::value<size_t>()->default_value("200000"))
+    ("image", "primary rays: image side in pixels (image² rays)",
+     cxxopts::value<int>()->default_value("512"))
+    ("brute-rays", "rays of the brute-force subsample", cxxopts::value<size_t>()->default_value("2000"))
+    ("runs", "timed runs per measurement (the median is reported)",
+     cxxopts::value<int>()->default_value("5"))
+    ("threads", "thread counts to measure", cxxopts::value<std::vector<int>>()->default_value("1,2"))
+    ("blob-triangles", "triangles of the blob scene (at least)",
+     cxxopts::value<size_t>()->default_value("100000"))
+    ("build-sizes", "blob triangle counts for the build-time table",
+     cxxopts::value<std::vector<size_t>>()->default_value("10000,100000,1000000"))
+    ("mesh", "optional mesh file (e.g. /work/shared/scenes/stanford-bunny.obj) placed in the room",
+     cxxopts::value<std::string>()->default_value(""))
+    ("h,help", "print this help");
+  // clang-format on
+  const auto args = opts.parse(argc, argv);
+  if (args.count("help")) {
+    std::cout << opts.help() << "\n";
+    return 0;
+  }
+  const size_t n_rays = args["rays"].as<size_t>();
+  const int image = args["image"].as<int>();
+  const size_t brute_rays = args["brute-rays"].as<size_t>();
+  const int runs = std::max(1, args["runs"].as<int>());
+  const auto threads = args["threads"].as<std::vector<int>>();
+  const std::string mesh = args["mesh"].as<std::string>();
+
+  std::vector<BenchScene> scenes;
+  scenes.push_back(make_scene("Cornell room", pf::make_cornell_room(400), {0.5f, 0.5f, 0.99f},
+                              {0.5f, 0.5f, 0.f}));
+  {
+    auto tris = pf::make_box({-2, -2, -2}, {2, 2, 2}, true, {0, 0});
+    const auto blob = pf::make_blob({0, 0, 0}, 1.f, args["blob-triangles"].as<size_t>(), 0.3f, 3,
+                                    {1, 1});
+    tris.insert(tris.end(), blob.begin(), blob.end());
+    scenes.push_back(make_scene("blob room", std::move(tris), {0, 0, 1.95f}, {0, 0, 0}));
+  }
+  if (!mesh.empty()) {
+    auto tris = pf::make_box({-2, -2, -2}, {2, 2, 2}, true, {0, 0});
+    const auto m = load_mesh(mesh, {0, 0, 0}, 2.5f);
+    if (m.empty()) {
+      std::cout << "Mesh " << mesh << " not found or unreadable: mesh scene skipped.\n\n";
+    } else {
+      tris.insert(tris.end(), m.begin(), m.end());
+      const std::string name = mesh.substr(mesh.find_last_of('/') + 1) + " room";
+      scenes.push_back(make_scene(name, std::move(tris), {0, 0, 1.95f}, {0, 0, 0}));
+    }
+  }
+
+  std::ostringstream table;
+  table << "### Closest-hit throughput (million rays/s, median of " << runs << " runs)\n\n"
+        << "| scene | rays | method |";
+  for (int t : threads) table << " " << t << (t == 1 ? " thread" : " threads") << " |";
+  table << "\n|---|---|---|";
+  for (size_t i = 0; i < threads.size(); ++i) table << "---:|";
+  table << "\n";
+  for (const BenchScene& b : scenes) {
+    std::cerr << "rays: " << b.name << "\n";
+    bench_rays(b, "primary " + std::to_string(image) + "²", primary_rays(b, image), brute_rays,
+               threads, runs, table);
+    bench_rays(b, "random " + std::to_string(n_rays), random_rays(b, n_rays, 1), brute_rays,
+               threads, runs, table);
+  }
+
+  table << "\n### Scenes and kd-trees\n\n"
+        << "| scene | triangles | nodes | leaf refs | depth | tree memory (MiB) |\n"
+        << "|---|---:|---:|---:|---:|---:|\n";
+  for (const BenchScene& b : scenes) {
+    const pf::KdTree& kd = b.scene.kd;
+    char mem[32];
+    std::snprintf(mem, sizeof mem, "%.2f", double(kd.memory_bytes()) / (1 << 20));
+    table << "| " << b.name << " | " << b.scene.triangles.size() << " | " << kd.nodes.size()
+          << " | " << kd.leaf_tris.size() << " | " << kd.depth << " | " << mem << " |\n";
+  }
+
+  table << "\n### kd-tree build (procedural blob; seconds, median of runs)\n\n"
+        << "| triangles |";
+  for (int t : threads) table << " " << t << (t == 1 ? " thread" : " threads") << " |";
+  table << " nodes | leaf refs | tree memory (MiB) |\n|---:|";
+  for (size_t i = 0; i < threads.size(); ++i) table << "---:|";
+  table << "---:|---:|---:|\n";
+  for (size_t n : args["build-sizes"].as<std::vector<size_t>>()) {
+    std::cerr << "build: " << n << "\n";
+    const auto tris = pf::make_blob({0, 0, 0}, 1.f, n, 0.3f, 3);
+    table << "| " << tris.size() << " |";
+    pf::KdTree tree;
+    for (int t : threads) {
+      pf::KdBuildParams p;
+      p.threads = t;
+      std::vector<double> sec;
+      for (int r = 0; r < (n >= 1000000 ? std::min(runs, 3) : runs); ++r) {
+        tree = pf::build_kdtree(tris, p);
+        sec.push_back(tree.build_seconds);
+      }
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.3f", median(sec));
+      table << " " << buf << " |";
+    }
+    char mem[32];
+    std::snprintf(mem, sizeof mem, "%.1f", double(tree.memory_bytes()) / (1 << 20));
+    table << " " << tree.nodes.size() << " | " << tree.leaf_tris.size() << " | " << mem << " |\n";
+  }
+  std::cout << table.str();
+  return 0;
+}

@@ -1,0 +1,52 @@
+// eye_pass.h — the eye pass of progressive photon mapping (thesis ch. 3.5 and 7.1; Hachisuka et
+// al. 2008, section 4.1): trace rays from the camera through each pixel, follow mirror reflection
+// and glass refraction, and store a hitpoint at the first diffuse surface.
+//
+// Besides the hitpoints it produces two image layers (linear RGB, W/(sr m^2)):
+//   emitted — emitters seen directly or through specular chains (photons never carry this);
+//   direct  — direct light at the hitpoints by shadow rays, when DirectMode::ShadowRays; the photon
+//             gather then skips photons flagged PF_PHOTON_DIRECT so nothing is counted twice.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "photonflow/scene.h"
+
+namespace pf {
+
+enum class DirectMode {
+  Photons,     // all light at hitpoints comes from photons (PPM's usual choice)
+  ShadowRays,  // direct light by area-light sampling with shadow rays; photons carry the rest
+};
+const char* direct_mode_name(DirectMode m);
+
+struct EyePassOptions {
+  int spp = 1;             // eye samples per pixel (1: pixel centre; n > 1: stratified jitter)
+  int max_depth = 16;      // specular bounces before a path is dropped
+  DirectMode direct = DirectMode::Photons;
+  int shadow_samples = 4;  // light samples per hitpoint for DirectMode::ShadowRays
+  float radius = 0.f;      // initial radius R0, world units; 0 = automatic (default_radius)
+  uint32_t seed = 1;
+  int threads = 0;         // 0 = all cores; results do not depend on it
+};
+
+struct EyePassResult {
+  std::vector<pf_hitpoint> hitpoints;  // sorted by pixel (row-major), then sample
+  std::vector<float> emitted;          // width × height × 3
+  std::vector<float> direct;           // width × height × 3 (zero unless ShadowRays)
+  float radius = 0.f;                  // R0 used
+  int width = 0, height = 0;
+};
+
+// The automatic initial radius: a fraction of the scene, never below a few pixel footprints at
+// the camera-to-scene distance:  R0 = max(diag / 200, 4 · pixel_angle · |look_at − eye|).
+float default_radius(const Scene& scene);
+
+EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt);
+
+// Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with
+// shadow rays (`samples` per call; rng streams of (seed, pass, index)). Exposed for tests.
+Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
+                  const pf_material& m, int samples, uint32_t seed, uint32_t pass, uint32_t index);
+
+}  // namespace pf

@@ -1,0 +1,61 @@
+// illuminate.h — hitpoint illumination: the photon-density estimates of classic photon mapping
+// (thesis ch. 3.4, eq. 3.10) and of progressive photon mapping (thesis eq. 3.14–3.18).
+//
+// Which photons a hitpoint gathers (the same rule for every gather method, so methods agree):
+//   - |x_p − x|² ≤ R² (ppm.h's pf_ppm_in_radius),
+//   - the photon lies on the hitpoint's mesh (the thesis's per-mesh gather, ch. 7.3),
+//   - it arrived on the hitpoint's side of the surface: dot(photon.dir, hitpoint.normal) < 0,
+//   - with DirectMode::ShadowRays, photons flagged PF_PHOTON_DIRECT are skipped (direct light
+//     already came from shadow rays).
+// Each gathered photon contributes f_r·Φ_p with the Lambertian f_r = albedo/π (eq. 3.17).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "photonflow/photon_grid.h"
+#include "photonflow/photon_map.h"
+#include "photonflow/scene.h"
+#include "photonflow/stage_files.h"
+
+namespace pf {
+
+enum class Gather { Grid, Flann };
+const char* gather_name(Gather g);
+
+struct PpmOptions {
+  float alpha = 0.7f;  // fraction of new photons kept, eq. 3.14 (0 < α ≤ 1)
+  Gather gather = Gather::Grid;
+  int max_bins = 64;   // grid bins along a mesh's longest extent (eq. 7.1)
+  int threads = 0;     // 0 = all cores
+};
+
+// One PPM iteration (eq. 3.14–3.18) of every hitpoint over one pass's photons, gathering through
+// a grid (built here) or FLANN. Adds `emitted` to h.photons_emitted and counts the pass.
+void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
+              uint64_t emitted, const PpmOptions& opt);
+// The same iteration with a prebuilt grid (from build-grid).
+void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, uint64_t emitted,
+                   const PpmOptions& opt);
+
+struct ClassicOptions {
+  int k = 100;                  // nearest global photons per estimate (eq. 3.10)
+  float caustic_radius = 0.f;   // fixed radius of the caustic estimate; 0 = the hitpoints' R0
+  float eps = 0.f;              // FLANN approximate-search epsilon
+  int threads = 0;
+};
+
+// Classic photon mapping (eq. 3.10): global map by k nearest neighbours (caustic photons
+// excluded), caustic map by a fixed radius. Writes the estimate into the hitpoint state so that
+// synthesis applies eq. 3.19 unchanged: radius = distance to the k-th photon, flux = the summed
+// f_r·Φ with the caustic part rescaled to that radius, n_photons = photons used.
+void classic_estimate(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
+                      uint64_t emitted, const ClassicOptions& opt);
+
+// True when photon `p` may contribute to hitpoint `hp` (the rule above, without the distance).
+inline bool photon_accepted(const pf_hitpoint& hp, const pf_photon& p, bool skip_direct) {
+  if (p.mesh != hp.mesh) return false;
+  if (skip_direct && (p.flags & PF_PHOTON_DIRECT)) return false;
+  return p.dir[0] * hp.normal[0] + p.dir[1] * hp.normal[1] + p.dir[2] * hp.normal[2] < 0.f;
+}
+
+}  // namespace pf

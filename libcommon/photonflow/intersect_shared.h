@@ -1,0 +1,185 @@
+/*
+ * intersect_shared.h — ray–triangle test, ray–box test and stackless kd-tree traversal with ropes,
+ * written once for the C++ host and the OpenCL C 1.2 kernels (one source for CPU and GPU, in the
+ * manner of pbrt-v4).
+ *
+ * Rules that keep this file valid in both languages:
+ *   - plain C: scalars, float arrays and the structs of shared_types.h; no references, no
+ *     overloads, no std::, no float3 (its alignment differs between host and device);
+ *   - buffers of the scene (hh triangles, kd nodes, leaf triangle lists) are PF_GLOBAL pointers:
+ *     `__global` in a kernel, nothing on the host;
+ *   - rays and hit records live in private memory (plain pointers in both languages).
+ *
+ * Conventions: a ray is P(t) = o + t·d, d not necessarily unit length; a hit is accepted only for
+ * t in (tmin, tmax]. Barycentrics follow shared_types.h: P = (1−u−v)·v0 + u·v1 + v·v2.
+ */
+#ifndef PHOTONFLOW_INTERSECT_SHARED_H
+#define PHOTONFLOW_INTERSECT_SHARED_H
+
+#include "photonflow/shared_types.h"
+
+#ifdef __OPENCL_VERSION__
+#define PF_GLOBAL __global
+#define PF_INLINE static inline
+#else
+#include <math.h>
+#define PF_GLOBAL
+#define PF_INLINE static inline
+#endif
+
+/* Tolerance of the barycentric sign tests, in barycentric units (fraction of the triangle's size).
+ * The planes of eq. 4.3 are rounded once per triangle, so two triangles sharing an edge do not
+ * agree bit for bit on which side of the edge a point lies; without slack a ray through the edge
+ * can slip between them. Widening every triangle by this fraction closes those cracks. */
+#define PF_HH_EDGE_EPS 1e-5f
+
+/* Closest (or any) hit of a ray: t in units of |d|, triangle index (−1 = none), barycentrics. */
+typedef struct {
+  pf_float t;
+  pf_int tri;
+  pf_float u;
+  pf_float v;
+} pf_ray_hit;
+
+/* Havel–Herout ray–triangle test (thesis eq. 4.3–4.7) against the precomputed planes of `tri`.
+ * Returns 1 and writes t, u, v when the ray hits with t in (tmin, tmax], else 0.
+ *
+ * The sign tests of eq. 4.5–4.7 (sign(t') = sign(det·tmax − t'), sign(u') = sign(det − u'),
+ * sign(v') = sign(det − u' − v')) are evaluated after multiplying every quantity by sign(det), which
+ * turns each into one comparison against |det| = |D·N| and is free of signed-zero surprises. */
+PF_INLINE int pf_hh_intersect(PF_GLOBAL const pf_hh_triangle* tri, const float* o, const float* d,
+                              float tmin, float tmax, float* t_out, float* u_out, float* v_out) {
+  /* eq. 4.3: det = D·N; eq. 4.4: t' = −(d + O·N), so that t = t'/det. */
+  const float det = d[0] * tri->n[0] + d[1] * tri->n[1] + d[2] * tri->n[2];
+  if (det == 0.0f) return 0; /* ray parallel to the plane */
+  const float tp = -(tri->n[3] + o[0] * tri->n[0] + o[1] * tri->n[1] + o[2] * tri->n[2]);
+  const float sgn = det > 0.0f ? 1.0f : -1.0f;
+  const float adet = det * sgn;
+  const float st = tp * sgn; /* t'·sign(det) = t·|det| */
+  /* eq. 4.5 (t in [0, tmax]) */
+  if (st < 0.0f || st > adet * tmax) return 0;
+  /* eq. 4.5: P' = det·O + t'·D is the hit point scaled by det. */
+  const float px = det * o[0] + tp * d[0];
+  const float py = det * o[1] + tp * d[1];
+  const float pz = det * o[2] + tp * d[2];
+  /* eq. 4.6: u' = P'·N1 + det·d1 = det·u; sign test u in [0, 1]. */
+  const float su = (px * tri->n1[0] + py * tri->n1[1] + pz * tri->n1[2] + det * tri->n1[3]) * sgn;
+  const float slack = PF_HH_EDGE_EPS * adet;
+  if (su < -slack || su > adet + slack) return 0;
+  /* eq. 4.7: v' = P'·N2 + det·d2 = det·v; sign test v >= 0 and u + v <= 1. */
+  const float sv = (px * tri->n2[0] + py * tri->n2[1] + pz * tri->n2[2] + det * tri->n2[3]) * sgn;
+  if (sv < -slack || su + sv > adet + slack) return 0;
+  const float inv_det = 1.0f / det;
+  const float t = tp * inv_det;
+  /* The exact contract (tmin, tmax] on the divided t, whatever the rounding above. */
+  if (!(t > tmin && t <= tmax)) return 0;
+  *t_out = t;
+  *u_out = su / adet;
+  *v_out = sv / adet;
+  return 1;
+}
+
+/* Slab test of a ray against the box [lo, hi] (Kay & Kajiya), clipped to [tmin, tmax]; the box is
+ * a node's (global memory on a device). inv_d = 1/d per axis (±inf for a zero component, which is
+ * handled without NaNs). Returns 1 and writes the parametric entry and exit when the clipped
+ * segment is not empty. */
+PF_INLINE int pf_ray_box(PF_GLOBAL const float* lo, PF_GLOBAL const float* hi, const float* o,
+                         const float* d, const float* inv_d, float tmin, float tmax,
+                         float* t_enter, float* t_leave) {
+  float t0 = tmin;
+  float t1 = tmax;
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0.0f) {
+      if (o[k] < lo[k] || o[k] > hi[k]) return 0; /* parallel to the slab and outside it */
+      continue;
+    }
+    float tn = (lo[k] - o[k]) * inv_d[k];
+    float tf = (hi[k] - o[k]) * inv_d[k];
+    if (tn > tf) {
+      const float s = tn;
+      tn = tf;
+      tf = s;
+    }
+    t0 = tn > t0 ? tn : t0;
+    t1 = tf < t1 ? tf : t1;
+  }
+  *t_enter = t0;
+  *t_leave = t1;
+  return t0 <= t1;
+}
+
+/* Tests the triangles of one kd leaf, keeping the closest hit in `hit` (hit->t is the current
+ * tmax). Equal t are resolved towards the lower triangle index so the result does not depend on
+ * the order in which leaves are visited. With any_hit, returns 1 at the first hit. */
+PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
+                                   PF_GLOBAL const pf_int* leaf_tris,
+                                   PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                   const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
+  const pf_int end = leaf->first + leaf->count;
+  for (pf_int i = leaf->first; i < end; ++i) {
+    const pf_int tri = leaf_tris[i];
+    float t, u, v;
+    if (!pf_hh_intersect(&hh[tri], o, d, tmin, hit->t, &t, &u, &v)) continue;
+    if (t == hit->t && hit->tri >= 0 && tri > hit->tri) continue;
+    hit->t = t;
+    hit->tri = tri;
+    hit->u = u;
+    hit->v = v;
+    if (any_hit) return 1;
+  }
+  return 0;
+}
+
+/* Stackless kd-tree traversal with ropes (Popov et al. 2007; thesis ch. 4.3).
+ *
+ * `hit` must come in with hit->t = tmax and hit->tri = −1; on return it holds the closest hit with t
+ * in (tmin, tmax] (or, with any_hit, the first one found). Returns 1 when there is a hit.
+ *
+ * Loop: locate the leaf holding the entry point P = o + t_entry·d by descending from the current
+ * node (points exactly on a split plane go to the side the ray moves into), test its triangles,
+ * find the face through which the ray leaves the leaf, and follow that face's rope. Triangles are
+ * accepted anywhere along the ray, so the loop may stop as soon as the closest hit lies before the
+ * leaf's exit. t_entry never decreases, and at most `node_count` leaves are visited (a safety net
+ * against rounding cycles at leaf corners; a correct tree never needs it). */
+PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int node_count,
+                                   PF_GLOBAL const pf_int* leaf_tris,
+                                   PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                   const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
+  float inv_d[3];
+  for (int k = 0; k < 3; ++k) inv_d[k] = 1.0f / d[k];
+  float t_entry, t_root_exit;
+  if (node_count <= 0 ||
+      !pf_ray_box(nodes[0].lo, nodes[0].hi, o, d, inv_d, tmin, hit->t, &t_entry, &t_root_exit))
+    return 0;
+  pf_int node = 0;
+  for (pf_int step = 0; step < node_count; ++step) {
+    const float p[3] = {o[0] + t_entry * d[0], o[1] + t_entry * d[1], o[2] + t_entry * d[2]};
+    PF_GLOBAL const pf_kd_node* n = &nodes[node];
+    while (n->axis != PF_KD_LEAF) {
+      const int a = n->axis;
+      const int go_left = p[a] < n->split || (p[a] == n->split && d[a] < 0.0f);
+      node = go_left ? n->left : n->right;
+      n = &nodes[node];
+    }
+    if (pf_kd_leaf_intersect(n, leaf_tris, hh, o, d, tmin, any_hit, hit)) return 1;
+    /* Exit face: the nearest of the three faces the ray moves towards. */
+    float t_exit = INFINITY;
+    int face = -1;
+    for (int k = 0; k < 3; ++k) {
+      if (d[k] == 0.0f) continue;
+      const int high = d[k] > 0.0f;
+      const float te = ((high ? n->hi[k] : n->lo[k]) - o[k]) * inv_d[k];
+      if (te < t_exit) {
+        t_exit = te;
+        face = 2 * k + high;
+      }
+    }
+    if (face < 0 || hit->t <= t_exit) break; /* closest hit lies in this leaf, or tmax reached */
+    node = n->ropes[face];
+    if (node < 0) break; /* left the scene box */
+    t_entry = t_exit > t_entry ? t_exit : t_entry;
+  }
+  return hit->tri >= 0;
+}
+
+#endif /* PHOTONFLOW_INTERSECT_SHARED_H */

@@ -1,0 +1,19 @@
+// options.h — parsing and checking of stage options shared by the tools.
+#pragma once
+#include <string>
+
+#include "photonflow/error.h"
+#include "photonflow/vec.h"
+
+namespace pf {
+
+// "x,y,z" → Vec3; throws InputError naming the option on anything else.
+Vec3 parse_vec3(const std::string& option, const std::string& text);
+
+// Range checks with one-line InputErrors naming the option.
+void require_positive(const std::string& option, double value);
+void require_in_unit_interval(const std::string& option, double value);  // (0, 1]
+void require_choice(const std::string& option, const std::string& value,
+                    std::initializer_list<const char*> choices);
+
+}  // namespace pf

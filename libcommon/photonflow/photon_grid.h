@@ -1,0 +1,103 @@
+// photon_grid.h — one pass's photons sorted into a uniform grid per mesh (thesis ch. 7.3, eq. 7.1),
+// the layout the GPU hitpoint-illumination kernel reads and the CPU gather uses.
+//
+// A hitpoint gathers only the photons of its own mesh (the thesis sorts photons per mesh and
+// illuminates each mesh's hitpoints from that mesh's photons; photons landing on another mesh do
+// not contribute even if they are within R). Every query therefore names a mesh.
+//
+// Layout (the datasets of grid.h5):
+//   mesh_grid[m]  header of mesh m (pf_mesh_grid), for every mesh id 0 .. mesh_count−1;
+//   cell_start    for mesh m: bins+1 entries starting at mesh_grid[m].first_bin; the photons of
+//                 bin b are photons[cell_start[first_bin + b] .. cell_start[first_bin + b + 1]),
+//                 as absolute indices into `photons`;
+//   photons       the pass's photons reordered by (mesh, bin), stable (a counting sort), so the
+//                 result is deterministic; `order[i]` is the input index of photons[i].
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "photonflow/ppm.h"
+#include "photonflow/shared_types.h"
+
+/* Grid header of one mesh (C layout, 4-byte fields only, so it can join shared_types.h).
+ * Bin of a point p: per axis c = clamp(floor((p − lo)/bin_size), 0, n−1) (eq. 7.1), linear
+ * offset cx + cy·nx + cz·nx·ny. A mesh without photons has nx = ny = nz = 0 and one cell_start
+ * entry. */
+typedef struct {
+  pf_float lo[3];      /* minimum corner of the mesh's photons */
+  pf_float bin_size;   /* d = max(longest extent / max_bins, default_radius) */
+  pf_int nx, ny, nz;   /* bins per axis */
+  pf_int first_bin;    /* index of the mesh's first cell_start entry */
+  pf_int first_photon; /* index of the mesh's first photon in the sorted photon array */
+  pf_int photon_count; /* photons of this mesh */
+} pf_mesh_grid;
+
+static_assert(sizeof(pf_mesh_grid) == 40, "pf_mesh_grid layout");
+
+namespace pf {
+
+struct PhotonGridParams {
+  int max_bins = 64;           // bins along the longest extent of a mesh's photons, at most
+  float default_radius = 0.f;  // lower bound of the bin size (the initial hitpoint radius); > 0
+};
+
+// Bin coordinate of x along one axis (eq. 7.1), clamped to [0, n−1]. Monotone in x, so the bins
+// overlapping an interval [x0, x1] are those from coord(x0) to coord(x1).
+inline int grid_coord(float x, float lo, float bin_size, int n) {
+  float c = (x - lo) / bin_size;
+  if (!(c > 0.f)) return 0;  // also maps NaN to 0
+  if (c >= static_cast<float>(n - 1)) return n - 1;
+  return static_cast<int>(c);
+}
+
+struct PhotonGrid {
+  std::vector<pf_mesh_grid> mesh_grid;  // one per mesh id
+  std::vector<int32_t> cell_start;      // see the file comment
+  std::vector<pf_photon> photons;       // sorted by (mesh, bin)
+  std::vector<int32_t> order;           // input index of each sorted photon
+  PhotonGridParams params;
+
+  // Calls f(i) for every sorted photon index i of `mesh` with
+  // pf_ppm_in_radius(pf_ppm_dist2(q, photons[i].position), radius), in sorted order.
+  // A mesh id outside [0, mesh_count) or a negative radius visits nothing.
+  template <class F> void for_each_in_radius(int mesh, const float q[3], float radius, F&& f) const;
+
+  // The sorted photon indices that for_each_in_radius visits.
+  std::vector<int32_t> gather(int mesh, const float q[3], float radius) const;
+};
+
+// Sorts one pass's photons into per-mesh grids. mesh_count = number of meshes of the scene; every
+// photon's mesh must lie in [0, mesh_count) and its position must be finite
+// (std::invalid_argument otherwise, also for default_radius <= 0 or max_bins < 1).
+PhotonGrid build_photon_grid(const std::vector<pf_photon>& photons, int mesh_count,
+                             const PhotonGridParams& params);
+
+template <class F>
+void PhotonGrid::for_each_in_radius(int mesh, const float q[3], float radius, F&& f) const {
+  if (mesh < 0 || mesh >= static_cast<int>(mesh_grid.size()) || !(radius >= 0.f)) return;
+  const pf_mesh_grid& g = mesh_grid[mesh];
+  if (g.photon_count == 0) return;
+  // Box of the sphere, widened by a relative 1e-4: a photon outside [q − pad, q + pad] on some axis
+  // has a float |Δ| >= pad there (rounding is monotone), hence distance² > R² in float, so the
+  // bins of the widened box hold every photon the distance test accepts.
+  const float pad = radius * 1.0001f;
+  int lo[3], hi[3];
+  const int n[3] = {g.nx, g.ny, g.nz};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = grid_coord(q[a] - pad, g.lo[a], g.bin_size, n[a]);
+    hi[a] = grid_coord(q[a] + pad, g.lo[a], g.bin_size, n[a]);
+  }
+  for (int z = lo[2]; z <= hi[2]; ++z) {
+    for (int y = lo[1]; y <= hi[1]; ++y) {
+      const int row = g.first_bin + (y + z * g.ny) * g.nx;
+      const int begin = cell_start[row + lo[0]];
+      const int end = cell_start[row + hi[0] + 1];  // bins lo..hi of a row are contiguous
+      for (int i = begin; i < end; ++i) {
+        const float* p = photons[i].position;
+        if (pf_ppm_in_radius(pf_ppm_dist2(q[0], q[1], q[2], p[0], p[1], p[2]), radius)) f(i);
+      }
+    }
+  }
+}
+
+}  // namespace pf

@@ -1,0 +1,40 @@
+// photon_pass.h — photon tracing (thesis ch. 3.4 pass 1, ch. 7.2; Jensen 2001).
+//
+// Photons leave the lights in proportion to power: a light is picked from the scene's power CDF,
+// then an area light emits from a uniform point on its triangle in a cosine-distributed direction
+// around its front normal, and a point light emits uniformly over the sphere. Each photon starts
+// with flux Φ = P_light / p_light (P_light the light's RGB power, p_light its selection
+// probability); the estimate divides by the number of photons emitted (thesis eq. 3.19), so the
+// stored flux is "watts per emitted photon × photons emitted".
+//
+// At every diffuse hit the photon is stored (position, incoming direction, flux, mesh, pass,
+// flags: PF_PHOTON_DIRECT for L D, PF_PHOTON_CAUSTIC for L S+ D) and continues in a cosine
+// direction with Russian roulette on the albedo (survival p = max(albedo), flux ·= albedo / p).
+// Mirrors reflect (flux ·= reflectance); glass reflects with the Fresnel probability and refracts
+// otherwise (flux ·= tint).
+//
+// Randomness is counter-based: photon i of pass p uses the stream (seed, p, i), so the photons do
+// not depend on the thread count (and equal the OpenCL backend's up to float rounding).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "photonflow/scene.h"
+
+namespace pf {
+
+struct PhotonPassOptions {
+  uint32_t photons = 100000;  // photons emitted in the pass
+  uint32_t seed = 1;
+  int max_bounces = 16;       // diffuse + specular bounces before a photon is dropped
+  int threads = 0;            // 0 = all cores
+};
+
+struct PhotonPassResult {
+  std::vector<pf_photon> photons;  // in emission order (photon index, then bounce)
+  uint64_t emitted = 0;            // photons emitted in this pass
+};
+
+PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt);
+
+}  // namespace pf

@@ -1,0 +1,69 @@
+// scene_import.h — baking a scene file (anything assimp reads: COLLADA, OBJ/MTL, glTF, PLY, ...)
+// into a pf::Scene: one flat triangle array in world space, materials, lights, camera, derived
+// data (Havel–Herout planes, bounds, light CDF, kd-tree) and scene_id. This is the library side of
+// the scene-bake stage; the mapping from file materials to photonflow materials is documented in
+// scene_import.cpp and docs/SCENES.md.
+#pragma once
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "photonflow/kdtree.h"
+#include "photonflow/scene.h"
+#include "photonflow/vec.h"
+
+namespace pf {
+
+// An extra mesh file inserted into the scene (how the large benchmark scenes are made).
+// The mesh is scaled uniformly to the largest size that fits the target box, centred in x and z,
+// with its lowest point on the box's bottom face (y is up: the mesh "stands" on the box floor).
+struct MeshInsert {
+  std::string path;
+  // Target box as fractions of the scene's bounds before insertion (0 = lo, 1 = hi per axis).
+  Vec3 box_lo{0.3f, 0.0f, 0.3f};
+  Vec3 box_hi{0.7f, 0.4f, 0.7f};
+  // Name of a material of the main scene file for every inserted triangle; "" = a default
+  // diffuse material (albedo kInsertAlbedo) named "insert-default".
+  std::string material;
+};
+
+// Albedo of the default material of inserted meshes.
+constexpr float kInsertAlbedo = 0.75f;
+
+struct BakeOptions {
+  std::string input;                // scene file
+  std::vector<MeshInsert> inserts;  // extra meshes, in order
+  // Camera overrides; unset = from the file's first camera, else the default framing camera.
+  std::optional<Vec3> eye;
+  std::optional<Vec3> look_at;
+  std::optional<Vec3> up;
+  std::optional<float> fov_y_deg;   // vertical field of view, degrees, in (0, 180)
+  int width = 0;                    // pixels; 0 = 512, or derived from the other and the aspect
+  int height = 0;                   // pixels; 0 = 512, or derived from the other and the aspect
+  KdBuildParams kd;
+};
+
+// What the bake found and did, for the tool's summary and warnings.
+struct BakeReport {
+  size_t triangles_read = 0;          // triangular faces in all input files
+  size_t degenerate_dropped = 0;      // zero-area triangles removed (not in the scene)
+  size_t primitives_skipped = 0;      // point and line primitives ignored
+  size_t inserted_triangles = 0;      // triangles that came from BakeOptions::inserts
+  bool camera_from_file = false;      // the file had a camera (before overrides)
+  std::vector<std::string> warnings;  // one line each (clamped albedo, ignored lights, ...)
+  double import_seconds = 0;          // reading files, flattening, materials, lights, camera
+};
+
+// Default image size when neither the options nor the file's camera aspect say otherwise.
+constexpr int kDefaultImageSize = 512;
+// Vertical field of view of the default camera (no camera in the file), degrees.
+constexpr float kDefaultFovYDeg = 40.f;
+
+// Reads options.input (and the inserts), flattens the node graph into world-space triangles,
+// maps materials, collects lights, sets the camera, then computes hh, bounds, light CDF, kd-tree
+// and scene_id. Throws InputError (one line: file, problem, what to do) for unreadable or
+// unsupported files, no triangles, no light, non-finite coordinates, out-of-range indices and bad
+// options. Zero-area triangles are dropped and counted in `report`.
+Scene bake_scene(const BakeOptions& options, BakeReport& report);
+
+}  // namespace pf

@@ -1,0 +1,70 @@
+// stage_files.h — the render stages' intermediates (docs/FORMATS.md):
+//   hitpoints.h5  photonflow.hitpoints — eye-pass hitpoints and their PPM state, plus the emitted and
+//                 direct image layers (trace-hitpoints writes it, illuminate updates it)
+//   photons.h5    photonflow.photons   — the photons of one or more consecutive passes
+//   grid.h5       photonflow.grid      — per-mesh uniform grids over each pass's photons (eq. 7.1)
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "photonflow/eye_pass.h"
+#include "photonflow/photon_grid.h"
+#include "photonflow/provenance.h"
+
+namespace pf {
+
+constexpr const char* kHitpointsFormat = "photonflow.hitpoints";
+constexpr const char* kPhotonsFormat = "photonflow.photons";
+constexpr const char* kGridFormat = "photonflow.grid";
+
+// Hitpoints with their accumulated state.
+struct HitpointSet {
+  std::vector<pf_hitpoint> hitpoints;
+  std::vector<float> emitted;  // width × height × 3, W/(sr m^2)
+  std::vector<float> direct;   // width × height × 3, W/(sr m^2)
+  int width = 0, height = 0;
+  DirectMode direct_mode = DirectMode::Photons;
+  float radius0 = 0.f;           // initial radius R0
+  std::string estimator = "none";  // "none" (fresh), "ppm" or "classic"
+  uint64_t photons_emitted = 0;  // N_emitted of eq. 3.19, all passes applied so far
+  int passes = 0;                // photon passes applied so far (PPM)
+  std::string scene_id;
+};
+
+// One or more consecutive photon passes.
+struct PhotonSet {
+  std::vector<pf_photon> photons;       // all passes, in pass order
+  int first_pass = 0;                   // pass index of pass_begin[0]
+  std::vector<uint64_t> pass_begin;     // index of each pass's first photon; one past the end last
+  std::vector<uint64_t> pass_emitted;   // photons emitted in each pass
+  uint32_t seed = 0;
+  std::string scene_id;
+  int pass_count() const { return int(pass_emitted.size()); }
+  // Photons of the k-th pass of the set (k from 0).
+  std::vector<pf_photon> pass(int k) const {
+    return {photons.begin() + long(pass_begin[size_t(k)]),
+            photons.begin() + long(pass_begin[size_t(k) + 1])};
+  }
+};
+
+// Per-pass photon grids.
+struct GridSet {
+  std::vector<PhotonGrid> grids;  // one per pass, in pass order
+  int first_pass = 0;
+  std::vector<uint64_t> pass_emitted;
+  std::string scene_id;
+};
+
+void save_hitpoints(const HitpointSet& h, const std::string& path, const Provenance& prov);
+HitpointSet load_hitpoints(const std::string& path);
+void save_photons(const PhotonSet& p, const std::string& path, const Provenance& prov);
+PhotonSet load_photons(const std::string& path);
+void save_grids(const GridSet& g, const std::string& path, const Provenance& prov);
+GridSet load_grids(const std::string& path);
+
+// Throws InputError (one line naming `path`) unless scene_id equals `expected` (the scene's).
+void require_scene(const std::string& path, const std::string& scene_id,
+                   const std::string& expected, const std::string& scene_path);
+
+}  // namespace pf

@@ -1,0 +1,43 @@
+// surface.h — what a ray hit: position, normals, side and material, and safe ray offsets.
+#pragma once
+#include "photonflow/raycast.h"
+#include "photonflow/scene.h"
+#include "photonflow/vec.h"
+
+namespace pf {
+
+struct SurfaceHit {
+  Vec3 p;        // hit position
+  Vec3 ng;       // unit geometric normal of the triangle (CCW front), not flipped
+  Vec3 ns;       // unit shading normal, flipped to the same side as ng
+  bool front;    // the ray arrived on the front side (dot(d, ng) < 0)
+  int tri;
+  int mesh;
+  int material;
+};
+
+inline SurfaceHit surface_at(const Scene& s, const Ray& ray, const Hit& h) {
+  const pf_triangle& t = s.triangles[size_t(h.tri)];
+  SurfaceHit sh;
+  sh.p = ray.o + ray.d * h.t;
+  sh.ng = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+  float w = 1.f - h.u - h.v;
+  Vec3 ns = normalize(Vec3(t.n0) * w + Vec3(t.n1) * h.u + Vec3(t.n2) * h.v);
+  sh.ns = dot(ns, sh.ng) < 0.f ? -ns : ns;
+  if (!finite(sh.ns) || length(sh.ns) < 0.5f) sh.ns = sh.ng;
+  sh.front = dot(ray.d, sh.ng) < 0.f;
+  sh.tri = h.tri;
+  sh.mesh = t.mesh;
+  sh.material = t.material;
+  return sh;
+}
+
+// Offset of new ray origins from a surface, relative to the scene size, to avoid self-hits.
+inline float ray_epsilon(const Scene& s) { return 1e-5f * length(s.bounds.extent()) + 1e-7f; }
+
+// Origin for a ray leaving `sh` in direction `d`: pushed off the surface on d's side.
+inline Vec3 offset_origin(const SurfaceHit& sh, const Vec3& d, float eps) {
+  return sh.p + sh.ng * (dot(d, sh.ng) >= 0.f ? eps : -eps);
+}
+
+}  // namespace pf

@@ -1,0 +1,179 @@
+// Eye pass: see eye_pass.h.
+#include "photonflow/eye_pass.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "photonflow/camera.h"
+#include "photonflow/rng.h"
+#include "photonflow/sampling.h"
+#include "photonflow/surface.h"
+
+namespace pf {
+
+const char* direct_mode_name(DirectMode m) {
+  return m == DirectMode::Photons ? "photons" : "shadow-rays";
+}
+
+float default_radius(const Scene& scene) {
+  CameraFrame cam(scene.camera);
+  float dist = length(Vec3(scene.camera.look_at) - Vec3(scene.camera.eye));
+  float diag = length(scene.bounds.extent());
+  return std::max(diag / 200.f, 4.f * cam.pixel_angle() * dist);
+}
+
+namespace {
+// Random stream of the eye pass: pass slot 0xE7E (distinct from photon passes 0, 1, 2, ...).
+constexpr uint32_t kEyeStream = 0xE7E0000u;
+constexpr uint32_t kShadowStream = 0x5AD0000u;
+
+Vec3 mat_color(const pf_material& m) { return Vec3(m.color); }
+bool is_diffuse(const pf_material& m) {
+  return m.type == PF_MAT_DIFFUSE || (m.type == PF_MAT_EMITTER && luminance(mat_color(m)) > 0.f);
+}
+}  // namespace
+
+Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
+                  const pf_material& m, int samples, uint32_t seed, uint32_t pass,
+                  uint32_t index) {
+  if (scene.lights.empty() || samples <= 0) return {};
+  pf_rng rng = pf_rng_start(seed, kShadowStream + pass, index);
+  float eps = ray_epsilon(scene);
+  Vec3 sum;
+  for (int s = 0; s < samples; ++s) {
+    float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+    size_t li = size_t(std::upper_bound(scene.light_cdf.begin(), scene.light_cdf.end(), ul) -
+                       scene.light_cdf.begin());
+    li = std::min(li, scene.lights.size() - 1);
+    const pf_light& l = scene.lights[li];
+    float p_light = scene.light_cdf[li] - (li ? scene.light_cdf[li - 1] : 0.f);
+    if (p_light <= 0.f) continue;
+    Vec3 q, contrib;
+    float g;  // geometry term / pdf, without visibility
+    if (l.type == PF_LIGHT_AREA) {
+      const pf_triangle& t = scene.triangles[size_t(l.triangle)];
+      q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
+      Vec3 nl = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+      Vec3 w = q - p;
+      float d2 = dot(w, w);
+      if (d2 <= 0.f) continue;
+      w = w / std::sqrt(d2);
+      float cos_l = -dot(w, nl);  // one-sided emitter: light leaves along +nl
+      float cos_x = dot(w, ns);
+      if (cos_l <= 0.f || cos_x <= 0.f || dot(w, ng) <= 0.f) continue;
+      g = cos_x * cos_l * l.area / d2;  // pdf_area = 1 / area
+      contrib = Vec3(l.radiance);
+    } else {
+      q = Vec3(l.position);
+      Vec3 w = q - p;
+      float d2 = dot(w, w);
+      if (d2 <= 0.f) continue;
+      w = w / std::sqrt(d2);
+      float cos_x = dot(w, ns);
+      if (cos_x <= 0.f || dot(w, ng) <= 0.f) continue;
+      g = cos_x / d2;
+      contrib = Vec3(l.radiance);
+    }
+    Vec3 o = p + ng * eps;
+    Ray shadow{o, q - o, 0.f, 1.f - 1e-4f};
+    if (intersect_any(scene, shadow)) continue;
+    sum += contrib * (g / p_light);
+  }
+  return mat_color(m) * kInvPi * sum * (1.f / float(samples));
+}
+
+EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
+  const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
+  const int strata = int(std::ceil(std::sqrt(double(spp))));
+  CameraFrame cam(scene.camera);
+  EyePassResult res;
+  res.width = W;
+  res.height = H;
+  res.radius = opt.radius > 0.f ? opt.radius : default_radius(scene);
+  res.emitted.assign(size_t(W) * H * 3, 0.f);
+  res.direct.assign(size_t(W) * H * 3, 0.f);
+  const float eps = ray_epsilon(scene);
+
+  // One slot per (pixel, sample); filled in parallel, compacted in order afterwards, so the
+  // result does not depend on the thread count.
+  std::vector<pf_hitpoint> slots(size_t(W) * H * spp);
+  std::vector<uint8_t> used(slots.size(), 0);
+  int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) {
+      size_t pix = size_t(y) * W + x;
+      Vec3 emitted, direct;
+      for (int s = 0; s < spp; ++s) {
+        uint32_t index = uint32_t(pix * spp + s);
+        pf_rng rng = pf_rng_start(opt.seed, kEyeStream, index);
+        float jx = 0.5f, jy = 0.5f;
+        if (spp > 1) {  // stratified jitter on a strata × strata grid
+          jx = (float(s % strata) + pf_rng_next(&rng)) / float(strata);
+          jy = (float((s / strata) % strata) + pf_rng_next(&rng)) / float(strata);
+        }
+        Ray ray{cam.eye(), cam.direction(float(x) + jx, float(y) + jy)};
+        Vec3 T(1.f / spp, 1.f / spp, 1.f / spp);  // throughput × box filter weight
+        for (int depth = 0; depth <= opt.max_depth; ++depth) {
+          Hit h;
+          if (!intersect_closest(scene, ray, h)) break;
+          SurfaceHit sh = surface_at(scene, ray, h);
+          const pf_material& m = scene.materials[size_t(sh.material)];
+          if (m.type == PF_MAT_EMITTER && sh.front) emitted += T * Vec3(m.emission);
+          if (is_diffuse(m)) {
+            Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
+            pf_hitpoint hp{};
+            sh.p.store(hp.position);
+            n.store(hp.normal);
+            normalize(ray.d).store(hp.dir);
+            T.store(hp.weight);
+            hp.radius = res.radius;
+            hp.pixel_x = x;
+            hp.pixel_y = y;
+            hp.mesh = sh.mesh;
+            hp.material = sh.material;
+            slots[index] = hp;
+            used[index] = 1;
+            if (opt.direct == DirectMode::ShadowRays)
+              direct += T * direct_light(scene, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
+                                         opt.shadow_samples, opt.seed, 0, index);
+            break;
+          }
+          Vec3 n = sh.front ? sh.ns : -sh.ns;
+          Vec3 d = normalize(ray.d);
+          if (m.type == PF_MAT_MIRROR) {
+            T = T * mat_color(m);
+            d = reflect(d, n);
+          } else if (m.type == PF_MAT_GLASS) {
+            // Fresnel choice by probability F: reflect with F, refract with 1 − F; the weight
+            // correction F/F = (1−F)/(1−F) = 1 leaves the throughput unchanged.
+            float eta_i = sh.front ? 1.f : m.ior, eta_t = sh.front ? m.ior : 1.f;
+            float F = fresnel_dielectric(-dot(d, n), eta_i, eta_t);
+            Vec3 t;
+            if (pf_rng_next(&rng) < F || !refract(d, n, eta_i / eta_t, t)) {
+              d = reflect(d, n);
+            } else {
+              d = normalize(t);
+              T = T * mat_color(m);
+            }
+          } else {
+            break;  // an emitter that does not reflect
+          }
+          if (luminance(T) <= 0.f) break;
+          ray = Ray{offset_origin(sh, d, eps), d};
+        }
+      }
+      emitted.store(&res.emitted[pix * 3]);
+      direct.store(&res.direct[pix * 3]);
+    }
+  }
+  res.hitpoints.reserve(slots.size());
+  for (size_t i = 0; i < slots.size(); ++i)
+    if (used[i]) res.hitpoints.push_back(slots[i]);
+  return res;
+}
+
+}  // namespace pf

@@ -1,0 +1,250 @@
+// image.cpp — Image, OpenEXR I/O (OpenEXR 3 C++ API), sRGB preview and a minimal PNG encoder.
+#include "photonflow/image.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+#include "photonflow/error.h"
+
+namespace pf {
+
+namespace {
+
+// Temporary name beside the final file, unique per process.
+std::string temp_name(const std::string& path) {
+  return path + ".tmp." + std::to_string(static_cast<long>(getpid()));
+}
+
+// Renames the finished temporary file onto `path`, or removes it and throws.
+void commit_file(const std::string& tmp, const std::string& path) {
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw input_error(path, "cannot write the file", "check the directory and its permissions");
+  }
+}
+
+// CRC-32 (ISO 3309 / PNG, reflected polynomial 0xEDB88320), table-driven.
+uint32_t crc32(const uint8_t* data, size_t n, uint32_t crc = 0) {
+  static const std::array<uint32_t, 256> table = [] {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t i = 0; i < 256; ++i) {
+      uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  crc = ~crc;
+  for (size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xFFu] ^ (crc >> 8);
+  return ~crc;
+}
+
+// Adler-32 (RFC 1950), the zlib stream's checksum of the uncompressed data.
+uint32_t adler32(const uint8_t* data, size_t n) {
+  uint32_t a = 1, b = 0;
+  const uint32_t mod = 65521;
+  while (n > 0) {
+    size_t block = std::min<size_t>(n, 5552);  // largest run without 32-bit overflow
+    n -= block;
+    for (size_t i = 0; i < block; ++i) {
+      a += *data++;
+      b += a;
+    }
+    a %= mod;
+    b %= mod;
+  }
+  return (b << 16) | a;
+}
+
+void put_u32_be(std::vector<uint8_t>& out, uint32_t v) {
+  out.push_back(static_cast<uint8_t>(v >> 24));
+  out.push_back(static_cast<uint8_t>(v >> 16));
+  out.push_back(static_cast<uint8_t>(v >> 8));
+  out.push_back(static_cast<uint8_t>(v));
+}
+
+// Appends one PNG chunk: length, type, data, CRC-32 of type and data.
+void put_chunk(std::vector<uint8_t>& out, const char type[4], const std::vector<uint8_t>& data) {
+  put_u32_be(out, static_cast<uint32_t>(data.size()));
+  size_t start = out.size();
+  out.insert(out.end(), type, type + 4);
+  out.insert(out.end(), data.begin(), data.end());
+  put_u32_be(out, crc32(&out[start], out.size() - start));
+}
+
+// zlib stream (RFC 1950) of `raw` in stored deflate blocks (RFC 1951 §3.2.4, BTYPE = 00).
+std::vector<uint8_t> zlib_stored(const std::vector<uint8_t>& raw) {
+  // CMF 0x78: deflate with a 32 KiB window; FLG 0x01: no dictionary, FCHECK with 0x7801 % 31 == 0.
+  std::vector<uint8_t> z = {0x78, 0x01};
+  size_t pos = 0;
+  do {
+    size_t len = std::min<size_t>(raw.size() - pos, 65535);
+    bool last = pos + len == raw.size();
+    z.push_back(last ? 1 : 0);  // BFINAL, BTYPE = 00 (stored); the rest of the byte is padding
+    z.push_back(static_cast<uint8_t>(len));
+    z.push_back(static_cast<uint8_t>(len >> 8));
+    z.push_back(static_cast<uint8_t>(~len));
+    z.push_back(static_cast<uint8_t>(~len >> 8));
+    z.insert(z.end(), raw.begin() + pos, raw.begin() + pos + len);
+    pos += len;
+  } while (pos < raw.size());
+  put_u32_be(z, adler32(raw.data(), raw.size()));
+  return z;
+}
+
+void write_bytes(const std::string& path, const std::vector<uint8_t>& bytes) {
+  std::string tmp = temp_name(path);
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f)
+      throw input_error(path, "cannot create the file", "check the directory and its permissions");
+    f.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+    if (!f.flush()) {
+      f.close();
+      std::remove(tmp.c_str());
+      throw input_error(path, "cannot write the file", "disk full?");
+    }
+  }
+  commit_file(tmp, path);
+}
+
+bool is_rgb_channel(const std::string& name) { return name == "R" || name == "G" || name == "B"; }
+
+}  // namespace
+
+Image::Image(int w, int h) : width(w), height(h) {
+  if (w < 0 || h < 0) throw std::invalid_argument("image: negative size");
+  rgb.assign(3 * pixel_count(), 0.f);
+}
+
+std::vector<float>& Image::layer(const std::string& name) {
+  if (name.empty() || is_rgb_channel(name))
+    throw std::invalid_argument("image: invalid layer name '" + name + "'");
+  auto it = layers.find(name);
+  if (it == layers.end()) it = layers.emplace(name, std::vector<float>(pixel_count(), 0.f)).first;
+  return it->second;
+}
+
+void write_exr(const Image& img, const std::string& path) {
+  if (img.pixel_count() == 0) throw std::invalid_argument("write_exr: empty image");
+  if (img.rgb.size() != 3 * img.pixel_count())
+    throw std::invalid_argument("write_exr: rgb size does not match the image size");
+  for (const auto& [name, data] : img.layers)
+    if (data.size() != img.pixel_count() || name.empty() || is_rgb_channel(name))
+      throw std::invalid_argument("write_exr: bad layer '" + name + "'");
+
+  Imf::Header header(img.width, img.height);  // ZIP compression: lossless
+  Imf::FrameBuffer fb;
+  const size_t px = sizeof(float);
+  const char* rgb = reinterpret_cast<const char*>(img.rgb.data());
+  const char* names[3] = {"R", "G", "B"};
+  for (int c = 0; c < 3; ++c) {
+    header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+    fb.insert(names[c], Imf::Slice(Imf::FLOAT, const_cast<char*>(rgb + c * px), 3 * px,
+                                   3 * px * img.width));
+  }
+  for (const auto& [name, data] : img.layers) {
+    header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    fb.insert(name, Imf::Slice(Imf::FLOAT,
+                               reinterpret_cast<char*>(const_cast<float*>(data.data())), px,
+                               px * img.width));
+  }
+  std::string tmp = temp_name(path);
+  try {
+    Imf::OutputFile out(tmp.c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(img.height);
+  } catch (const std::exception& e) {
+    std::remove(tmp.c_str());
+    throw input_error(path, std::string("cannot write EXR: ") + e.what());
+  }
+  commit_file(tmp, path);
+}
+
+Image read_exr(const std::string& path) {
+  try {
+    Imf::InputFile in(path.c_str());
+    const Imath::Box2i dw = in.header().dataWindow();
+    const int w = dw.max.x - dw.min.x + 1;
+    const int h = dw.max.y - dw.min.y + 1;
+    Image img(w, h);
+    const Imf::ChannelList& channels = in.header().channels();
+    for (const char* c : {"R", "G", "B"})
+      if (!channels.findChannel(c))
+        throw input_error(path, std::string("EXR has no channel ") + c, "expected an RGB image");
+    Imf::FrameBuffer fb;
+    const size_t px = sizeof(float);
+    const char* names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c)
+      fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, img.rgb.data() + c, dw, 3 * px, 3 * px * w));
+    for (auto it = channels.begin(); it != channels.end(); ++it) {
+      std::string name = it.name();
+      if (is_rgb_channel(name)) continue;
+      std::vector<float>& data = img.layer(name);
+      fb.insert(name, Imf::Slice::Make(Imf::FLOAT, data.data(), dw, px, px * w));
+    }
+    in.setFrameBuffer(fb);
+    in.readPixels(dw.min.y, dw.max.y);
+    return img;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw input_error(path, std::string("cannot read EXR: ") + e.what());
+  }
+}
+
+float srgb_encode(float v) {
+  if (v <= 0.0031308f) return 12.92f * v;
+  return 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
+}
+
+std::vector<uint8_t> to_srgb8(const Image& img, float exposure_stops) {
+  const float scale = std::exp2(exposure_stops);
+  std::vector<uint8_t> out(img.rgb.size());
+  for (size_t i = 0; i < img.rgb.size(); ++i) {
+    float v = img.rgb[i] * scale;
+    v = v > 0.f ? std::min(v, 1.f) : 0.f;  // clamps, and NaN fails `v > 0`
+    out[i] = static_cast<uint8_t>(srgb_encode(v) * 255.f + 0.5f);
+  }
+  return out;
+}
+
+std::vector<uint8_t> encode_png(int w, int h, const std::vector<uint8_t>& rgb8) {
+  if (w <= 0 || h <= 0 || rgb8.size() != 3 * static_cast<size_t>(w) * static_cast<size_t>(h))
+    throw std::invalid_argument("encode_png: size does not match the pixel data");
+  std::vector<uint8_t> out = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  std::vector<uint8_t> ihdr;
+  put_u32_be(ihdr, static_cast<uint32_t>(w));
+  put_u32_be(ihdr, static_cast<uint32_t>(h));
+  ihdr.insert(ihdr.end(), {8, 2, 0, 0, 0});  // 8 bits, truecolour, deflate, filter 0, no interlace
+  put_chunk(out, "IHDR", ihdr);
+  // Scanlines, each preceded by filter type 0 (None).
+  const size_t row = 3 * static_cast<size_t>(w);
+  std::vector<uint8_t> raw;
+  raw.reserve((row + 1) * h);
+  for (int y = 0; y < h; ++y) {
+    raw.push_back(0);
+    raw.insert(raw.end(), rgb8.begin() + y * row, rgb8.begin() + (y + 1) * row);
+  }
+  put_chunk(out, "IDAT", zlib_stored(raw));
+  put_chunk(out, "IEND", {});
+  return out;
+}
+
+void write_png(const Image& img, const std::string& path, float exposure_stops) {
+  write_bytes(path, encode_png(img.width, img.height, to_srgb8(img, exposure_stops)));
+}
+
+}  // namespace pf

@@ -1,0 +1,46 @@
+#include "photonflow/options.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+namespace pf {
+
+Vec3 parse_vec3(const std::string& option, const std::string& text) {
+  float v[3];
+  std::istringstream in(text);
+  std::string part;
+  int n = 0;
+  while (std::getline(in, part, ',')) {
+    char* end = nullptr;
+    double d = std::strtod(part.c_str(), &end);
+    if (n >= 3 || part.empty() || *end != '\0' || !std::isfinite(d))
+      throw input_error("", "--" + option + " must be three finite numbers x,y,z, got '" + text + "'");
+    v[n++] = float(d);
+  }
+  if (n != 3)
+    throw input_error("", "--" + option + " must be three finite numbers x,y,z, got '" + text + "'");
+  return Vec3(v);
+}
+
+void require_positive(const std::string& option, double value) {
+  if (!(value > 0.0))
+    throw input_error("", "--" + option + " must be positive, got " + std::to_string(value));
+}
+
+void require_in_unit_interval(const std::string& option, double value) {
+  if (!(value > 0.0 && value <= 1.0))
+    throw input_error("", "--" + option + " must be in (0, 1], got " + std::to_string(value));
+}
+
+void require_choice(const std::string& option, const std::string& value,
+                    std::initializer_list<const char*> choices) {
+  std::string list;
+  for (const char* c : choices) {
+    if (value == c) return;
+    list += list.empty() ? c : std::string("|") + c;
+  }
+  throw input_error("", "--" + option + " must be one of " + list + ", got '" + value + "'");
+}
+
+}  // namespace pf

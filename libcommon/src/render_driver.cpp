@@ -1,0 +1,72 @@
+// Progressive render driver: see render_driver.h.
+#include "photonflow/render_driver.h"
+
+#include <unistd.h>
+
+namespace pf {
+
+namespace {
+HitpointSet fresh_state(const Scene& scene, const EyePassOptions& eye) {
+  EyePassResult r = trace_hitpoints(scene, eye);
+  HitpointSet h;
+  h.hitpoints = std::move(r.hitpoints);
+  h.emitted = std::move(r.emitted);
+  h.direct = std::move(r.direct);
+  h.width = r.width;
+  h.height = r.height;
+  h.direct_mode = eye.direct;
+  h.radius0 = r.radius;
+  h.scene_id = scene.scene_id;
+  return h;
+}
+}  // namespace
+
+ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
+    : scene_(scene), opt_(opt), state_(fresh_state(scene, opt.eye)) {}
+
+ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt,
+                                         HitpointSet state)
+    : scene_(scene), opt_(opt), state_(std::move(state)) {}
+
+void ProgressiveRenderer::run_iteration() {
+  PhotonPassResult pass = trace_photons(scene_, uint32_t(state_.passes), opt_.photons);
+  photons_stored_ += pass.photons.size();
+  ppm_pass(scene_, state_, pass.photons, pass.emitted, opt_.ppm);
+}
+
+void ProgressiveRenderer::save_state(const std::string& path, const Provenance& prov) const {
+  save_hitpoints(state_, path, prov);
+}
+
+HitpointSet render_progressive(const Scene& scene, const RenderOptions& opt, bool resume,
+                               const Provenance& prov,
+                               const std::function<void(int, double)>& on_pass) {
+  bool from_checkpoint = resume && !opt.checkpoint.empty() && access(opt.checkpoint.c_str(), F_OK) == 0;
+  std::unique_ptr<ProgressiveRenderer> r;
+  if (from_checkpoint) {
+    HitpointSet state = load_hitpoints(opt.checkpoint);
+    require_scene(opt.checkpoint, state.scene_id, scene.scene_id, scene.source);
+    if (state.estimator == "classic")
+      throw input_error(opt.checkpoint, "holds a classic photon-mapping estimate, not a PPM state",
+                        "delete it or pass another --checkpoint");
+    if (state.passes > opt.passes)
+      throw input_error(opt.checkpoint,
+                        "already has " + std::to_string(state.passes) + " passes, more than --passes",
+                        "raise --passes or start without --resume");
+    r = std::make_unique<ProgressiveRenderer>(scene, opt, std::move(state));
+  } else {
+    r = std::make_unique<ProgressiveRenderer>(scene, opt);
+  }
+  double photons = 0;
+  while (r->passes_done() < opt.passes) {
+    r->run_iteration();
+    photons += double(opt.photons.photons);
+    if (!opt.checkpoint.empty() && opt.checkpoint_every > 0 &&
+        (r->passes_done() % opt.checkpoint_every == 0 || r->passes_done() == opt.passes))
+      r->save_state(opt.checkpoint, prov);
+    if (on_pass) on_pass(r->passes_done(), photons);
+  }
+  return r->state();
+}
+
+}  // namespace pf

@@ -1,0 +1,572 @@
+// Scene import: assimp scene → baked pf::Scene (see scene_import.h, docs/SCENES.md).
+//
+// Reading. Post-processing is aiProcess_Triangulate | aiProcess_ValidateDataStructure only:
+//   - no aiProcess_GenNormals/GenSmoothNormals: shading normals are the file's own, or the
+//     geometric normal when the file has none;
+//   - no aiProcess_JoinIdenticalVertices: the output is a triangle soup, so joining changes
+//     nothing in the result, and it is not safe on bad input — it merges a vertex with a NaN
+//     coordinate into a finite one, which hides the error this stage must report;
+//   - no aiProcess_PreTransformVertices: the node graph is flattened here, keeping one mesh id per
+//     mesh instance (node × mesh), which the per-mesh photon sorting of thesis ch. 7.3 needs.
+// Face indices are checked again here (ValidateDataStructure runs only when the loader succeeds).
+//
+// Flattening. Each mesh instance is transformed by its node's accumulated matrix; normals by the
+// inverse transpose of its 3×3 part. A transform with a negative determinant (a mirror) reverses
+// the winding, so v1/v2 are swapped to keep the geometric normal on the front (CCW) side.
+//
+// Material mapping (same table in docs/SCENES.md). Values are read through assimp's keys:
+//   Kd = AI_MATKEY_COLOR_DIFFUSE, Ks = AI_MATKEY_COLOR_SPECULAR, Ke = AI_MATKEY_COLOR_EMISSIVE,
+//   Kr = AI_MATKEY_COLOR_REFLECTIVE × AI_MATKEY_REFLECTIVITY (COLLADA <reflective>, <reflectivity>),
+//   d  = AI_MATKEY_OPACITY (OBJ `d`, COLLADA <transparent> × <transparency>), Ni = AI_MATKEY_REFRACTI,
+//   illum = AI_MATKEY_OBJ_ILLUM ("$mat.illum", OBJ only: assimp 5.2.5 folds illum 0..2 into
+//           AI_MATKEY_SHADING_MODEL and keeps the original number under this key; checked by
+//           experiment with illum 1, 3, 5 and 7).
+// The first rule that matches decides:
+//   1. max(Ke) > 0                                     → EMITTER, emission = Ke, color = Kd
+//   2. illum 4, 6 or 7, or d < 1                       → GLASS, ior = Ni (1.5 if Ni ≤ 1), color = 1
+//   3. illum 3 or 5, or Kd black and Kr or Ks not black → MIRROR, color = Kr, else Ks, else 1
+//   4. otherwise                                       → DIFFUSE, color = Kd
+// Diffuse albedo (also the emitter's) is clamped per channel to [0, kMaxAlbedo] with a warning;
+// mirror reflectance to [0, 1]. AI_MATKEY_SHADING_MODEL is not consulted: lambert, phong and blinn
+// all reduce to "diffuse unless the colours say mirror", and no shading model means glass.
+// Note: assimp's OBJ loader fills a missing Kd with 0.6 and COLLADA's a missing <specular> with
+// 0.4, so an OBJ mirror needs `illum 3` or an explicit `Kd 0 0 0`.
+//
+// Camera. assimp's camera.h documents mHorizontalFOV as the half angle, but the loaders store the
+// full angle: the COLLADA loader copies <xfov> (the full horizontal angle of the COLLADA spec)
+// converted to radians, verified with <xfov>60</xfov> → 1.0472; glTF and FBX store full angles
+// too. It is therefore read as the full horizontal angle and converted to the vertical one with
+// the camera's aspect (mAspect, or width/height when the file has none). Two loader quirks of
+// assimp 5.2.5 are compensated: glTF stores yfov·aspect (not the exact 2·atan(aspect·tan(yfov/2)))
+// as the horizontal angle, which is accepted as is (a small error for wide cameras), and glTF
+// copies the camera node's translation into aiCamera::mPosition although the node keeps it too,
+// so the position is taken from the node alone for .gltf/.glb files.
+#include "photonflow/scene_import.h"
+
+#include <assimp/ObjMaterial.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <assimp/Importer.hpp>
+#include <cctype>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "photonflow/error.h"
+#include "photonflow/provenance.h"
+
+namespace pf {
+
+namespace {
+
+constexpr float kMaxAlbedo = 0.99f;        // diffuse albedo must stay below 1 (energy)
+constexpr float kDefaultGlassIor = 1.5f;   // glass whose file gives no usable Ni
+constexpr float kMinSliver = 1e-7f;        // 2·area / longest_edge² below this = zero area
+constexpr float kPi = 3.14159265358979323846f;
+
+std::string one_line(std::string s) {
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  std::replace(s.begin(), s.end(), '\r', ' ');
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+std::string fmt_float(float f) {
+  std::ostringstream os;
+  os << f;
+  return os.str();
+}
+
+std::string fmt_vec(const Vec3& v) {
+  std::ostringstream os;
+  os << v.x << "," << v.y << "," << v.z;
+  return os.str();
+}
+
+Vec3 to_vec(const aiVector3D& v) { return {v.x, v.y, v.z}; }
+Vec3 to_vec(const aiColor3D& c) { return {c.r, c.g, c.b}; }
+float max3(const Vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
+bool black(const Vec3& v) { return max3(v) <= 0.f; }
+Vec3 clamp3(const Vec3& v, float hi) {
+  return {std::clamp(v.x, 0.f, hi), std::clamp(v.y, 0.f, hi), std::clamp(v.z, 0.f, hi)};
+}
+
+// ".dae" for "dir/scene.DAE"; "" when the name has no extension.
+std::string lower_extension(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
+  std::string ext = path.substr(dot);
+  for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  return ext;
+}
+
+// Reads a file with assimp; the Importer owns the returned scene.
+const aiScene* read_file(Assimp::Importer& importer, const std::string& path) {
+  struct stat st {};
+  if (stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || access(path.c_str(), R_OK) != 0)
+    throw input_error(path, "cannot read scene file", "check the path and its permissions");
+  const aiScene* ai =
+      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_ValidateDataStructure);
+  if (!ai) {
+    const std::string ext = lower_extension(path);
+    if (ext.empty() || !importer.IsExtensionSupported(ext))
+      throw input_error(path, "not a scene format assimp reads",
+                        "use COLLADA (.dae), Wavefront OBJ, glTF or PLY");
+    throw input_error(path, "assimp cannot read it: " + one_line(importer.GetErrorString()),
+                      "check that the file is valid " + ext.substr(1));
+  }
+  if (!ai->mRootNode)
+    throw input_error(path, "has no scene graph", "export it again with its geometry");
+  return ai;
+}
+
+// World matrix of a node: the product of its ancestors' transforms and its own.
+aiMatrix4x4 global_transform(const aiNode* node) {
+  aiMatrix4x4 m;
+  for (const aiNode* n = node; n; n = n->mParent) m = n->mTransformation * m;
+  return m;
+}
+
+Vec3 get_color(const aiMaterial& m, const char* key, unsigned type, unsigned idx, Vec3 dflt) {
+  aiColor3D c;
+  return m.Get(key, type, idx, c) == aiReturn_SUCCESS ? to_vec(c) : dflt;
+}
+float get_float(const aiMaterial& m, const char* key, unsigned type, unsigned idx, float dflt) {
+  float f = 0;
+  return m.Get(key, type, idx, f) == aiReturn_SUCCESS ? f : dflt;
+}
+
+// Converts one assimp material by the rules at the top of this file.
+pf_material convert_material(const aiMaterial& am, const std::string& name,
+                             const std::string& file, BakeReport& report) {
+  const Vec3 kd = get_color(am, AI_MATKEY_COLOR_DIFFUSE, Vec3(0, 0, 0));
+  const Vec3 ks = get_color(am, AI_MATKEY_COLOR_SPECULAR, Vec3(0, 0, 0));
+  const Vec3 ke = get_color(am, AI_MATKEY_COLOR_EMISSIVE, Vec3(0, 0, 0));
+  const Vec3 kr = get_color(am, AI_MATKEY_COLOR_REFLECTIVE, Vec3(0, 0, 0)) *
+                  get_float(am, AI_MATKEY_REFLECTIVITY, 0.f);
+  const float opacity = get_float(am, AI_MATKEY_OPACITY, 1.f);
+  const float ni = get_float(am, AI_MATKEY_REFRACTI, 1.f);
+  int illum = -1;
+  am.Get(AI_MATKEY_OBJ_ILLUM, illum);
+
+  for (const Vec3& c : {kd, ks, ke, kr})
+    if (!finite(c))
+      throw input_error(file, "material '" + name + "' has a non-finite colour",
+                        "fix the material's numbers");
+  if (!std::isfinite(opacity) || !std::isfinite(ni))
+    throw input_error(file, "material '" + name + "' has a non-finite opacity or IOR",
+                      "fix the material's numbers");
+
+  auto albedo = [&](const Vec3& c) {
+    Vec3 a = clamp3(c, kMaxAlbedo);
+    if (max3(c) > kMaxAlbedo || c.x < 0 || c.y < 0 || c.z < 0)
+      report.warnings.push_back(file + ": material '" + name + "': albedo " + fmt_vec(c) +
+                                " clamped to " + fmt_vec(a) + " (albedo must be < 1)");
+    return a;
+  };
+
+  pf_material out{};
+  out.ior = 1.f;
+  Vec3 color(1, 1, 1);
+  if (max3(ke) > 0.f) {
+    out.type = PF_MAT_EMITTER;
+    clamp3(ke, INFINITY).store(out.emission);
+    color = albedo(kd);
+  } else if (illum == 4 || illum == 6 || illum == 7 || opacity < 1.f) {
+    out.type = PF_MAT_GLASS;
+    out.ior = ni > 1.f ? ni : kDefaultGlassIor;
+    if (!(ni > 1.f))
+      report.warnings.push_back(file + ": material '" + name + "': glass without an index of " +
+                                "refraction > 1, using " + fmt_float(kDefaultGlassIor));
+  } else if (illum == 3 || illum == 5 || (black(kd) && (!black(kr) || !black(ks)))) {
+    out.type = PF_MAT_MIRROR;
+    color = clamp3(!black(kr) ? kr : (!black(ks) ? ks : Vec3(1, 1, 1)), 1.f);
+  } else {
+    out.type = PF_MAT_DIFFUSE;
+    color = albedo(kd);
+  }
+  color.store(out.color);
+  return out;
+}
+
+// Appends the triangles of one assimp scene to a triangle list, adding mesh names and (lazily, in
+// order of first use) materials to the Scene.
+class Flattener {
+ public:
+  Flattener(const aiScene& ai, const std::string& file, Scene& scene, BakeReport& report)
+      : ai_(ai), file_(file), scene_(scene), report_(report),
+        material_map_(ai.mNumMaterials, -1), checked_(ai.mNumMeshes, false) {}
+
+  // Flattens the whole node graph into `out`. Mesh names get `prefix` in front; material ≥ 0
+  // replaces the file's materials.
+  void run(const std::string& prefix, int material, std::vector<pf_triangle>& out) {
+    prefix_ = prefix;
+    material_override_ = material;
+    out_ = &out;
+    visit(*ai_.mRootNode, aiMatrix4x4());
+  }
+
+  // Scene material index of assimp material `i`, converting it on first use.
+  int material(unsigned i) {
+    if (material_map_[i] < 0) {
+      const aiMaterial& am = *ai_.mMaterials[i];
+      std::string name = am.GetName().C_Str();
+      if (name.empty()) name = "material" + std::to_string(i);
+      material_map_[i] = int(scene_.materials.size());
+      scene_.materials.push_back(convert_material(am, name, file_, report_));
+      scene_.material_names.push_back(name);
+    }
+    return material_map_[i];
+  }
+
+  // Scene material index of the file's material called `name`, or −1 if there is none.
+  int material_by_name(const std::string& name) {
+    for (unsigned i = 0; i < ai_.mNumMaterials; ++i)
+      if (name == ai_.mMaterials[i]->GetName().C_Str()) return material(i);
+    return -1;
+  }
+
+ private:
+  void visit(const aiNode& node, const aiMatrix4x4& parent) {
+    aiMatrix4x4 m = parent * node.mTransformation;
+    for (unsigned i = 0; i < node.mNumMeshes; ++i) {
+      unsigned mi = node.mMeshes[i];
+      if (mi >= ai_.mNumMeshes)
+        throw input_error(file_, "node '" + std::string(node.mName.C_Str()) +
+                                     "' references mesh " + std::to_string(mi) + " of " +
+                                     std::to_string(ai_.mNumMeshes),
+                          "the file is damaged; export it again");
+      add_instance(*ai_.mMeshes[mi], mi, node, m);
+    }
+    for (unsigned i = 0; i < node.mNumChildren; ++i) visit(*node.mChildren[i], m);
+  }
+
+  void check_vertices(const aiMesh& mesh, unsigned mi, const std::string& name) {
+    if (checked_[mi]) return;
+    checked_[mi] = true;
+    for (unsigned v = 0; v < mesh.mNumVertices; ++v)
+      if (!finite(to_vec(mesh.mVertices[v])))
+        throw input_error(file_, "mesh '" + name + "' vertex " + std::to_string(v) +
+                                     " has a non-finite coordinate (NaN or Inf)",
+                          "fix or remove that vertex");
+  }
+
+  void add_instance(const aiMesh& mesh, unsigned mi, const aiNode& node, const aiMatrix4x4& m) {
+    std::string node_name = node.mName.C_Str(), mesh_name = mesh.mName.C_Str();
+    std::string name = node_name.empty() ? mesh_name : node_name;
+    if (!mesh_name.empty() && mesh_name != node_name && !node_name.empty())
+      name += "/" + mesh_name;
+    if (name.empty()) name = "mesh" + std::to_string(mi);
+    check_vertices(mesh, mi, name);
+
+    if (mesh.mMaterialIndex >= ai_.mNumMaterials)
+      throw input_error(file_, "mesh '" + name + "' references material " +
+                                   std::to_string(mesh.mMaterialIndex) + " of " +
+                                   std::to_string(ai_.mNumMaterials),
+                        "the file is damaged; export it again");
+    const int mesh_id = int(scene_.mesh_names.size());
+    scene_.mesh_names.push_back(prefix_ + name);
+    const int mat = material_override_ >= 0 ? material_override_ : material(mesh.mMaterialIndex);
+
+    const aiMatrix3x3 lin(m);
+    const float det = lin.Determinant();
+    const bool flip = det < 0.f;
+    aiMatrix3x3 nm = lin;
+    const bool use_normals = mesh.HasNormals() && det != 0.f;
+    if (use_normals) nm.Inverse().Transpose();
+
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices != 3) {
+        ++report_.primitives_skipped;
+        continue;
+      }
+      ++report_.triangles_read;
+      unsigned idx[3] = {face.mIndices[0], face.mIndices[1], face.mIndices[2]};
+      for (unsigned k : idx)
+        if (k >= mesh.mNumVertices)
+          throw input_error(file_, "mesh '" + name + "' face " + std::to_string(f) +
+                                       " references vertex " + std::to_string(k) + " of " +
+                                       std::to_string(mesh.mNumVertices),
+                            "the file is damaged; export it again");
+      if (flip) std::swap(idx[1], idx[2]);
+      Vec3 p[3];
+      for (int k = 0; k < 3; ++k) p[k] = to_vec(m * mesh.mVertices[idx[k]]);
+      for (const Vec3& q : p)
+        if (!finite(q))
+          throw input_error(file_, "node '" + node_name + "' transforms mesh '" + name +
+                                       "' to non-finite coordinates",
+                            "fix the node's transform");
+      const Vec3 g = cross(p[1] - p[0], p[2] - p[0]);
+      const float e2 = std::max({dot(p[1] - p[0], p[1] - p[0]), dot(p[2] - p[1], p[2] - p[1]),
+                                 dot(p[0] - p[2], p[0] - p[2])});
+      if (!(length(g) > kMinSliver * e2)) {
+        ++report_.degenerate_dropped;
+        continue;
+      }
+      const Vec3 ng = normalize(g);
+      pf_triangle t{};
+      p[0].store(t.v0);
+      p[1].store(t.v1);
+      p[2].store(t.v2);
+      float* normals[3] = {t.n0, t.n1, t.n2};
+      for (int k = 0; k < 3; ++k) {
+        Vec3 n = ng;
+        if (use_normals) {
+          Vec3 s = normalize(to_vec(nm * mesh.mNormals[idx[k]]));
+          if (finite(s) && length(s) > 0.5f) n = s;
+        }
+        n.store(normals[k]);
+      }
+      t.mesh = mesh_id;
+      t.material = mat;
+      out_->push_back(t);
+    }
+  }
+
+  const aiScene& ai_;
+  const std::string& file_;
+  Scene& scene_;
+  BakeReport& report_;
+  std::vector<int> material_map_;
+  std::vector<bool> checked_;
+  std::string prefix_;
+  int material_override_ = -1;
+  std::vector<pf_triangle>* out_ = nullptr;
+};
+
+// Point lights of the file, placed by their nodes. Other light kinds are ignored with a warning.
+void add_point_lights(const aiScene& ai, const std::string& file, Scene& scene,
+                      BakeReport& report) {
+  for (unsigned i = 0; i < ai.mNumLights; ++i) {
+    const aiLight& l = *ai.mLights[i];
+    std::string name = l.mName.C_Str();
+    if (l.mType != aiLightSource_POINT) {
+      report.warnings.push_back(file + ": light '" + name +
+                                "' ignored (only point lights and emissive surfaces are used)");
+      continue;
+    }
+    const aiNode* node = ai.mRootNode->FindNode(l.mName);
+    const Vec3 pos = to_vec((node ? global_transform(node) : aiMatrix4x4()) * l.mPosition);
+    const Vec3 intensity = to_vec(l.mColorDiffuse);
+    if (!finite(pos) || !finite(intensity))
+      throw input_error(file, "light '" + name + "' has a non-finite position or colour",
+                        "fix the light");
+    if (black(intensity)) {
+      report.warnings.push_back(file + ": light '" + name + "' ignored (zero intensity)");
+      continue;
+    }
+    pf_light pl{};
+    pl.type = PF_LIGHT_POINT;
+    pl.triangle = -1;
+    pos.store(pl.position);
+    clamp3(intensity, INFINITY).store(pl.radiance);  // power is set by compute_light_cdf
+    scene.lights.push_back(pl);
+  }
+}
+
+// The first camera of a file in world space.
+struct FileCamera {
+  Vec3 eye, dir, up;
+  float fov_x_rad = 0;  // full horizontal angle (see the note at the top of this file)
+  float aspect = 0;     // width / height; 0 = not given
+};
+
+std::optional<FileCamera> read_camera(const aiScene& ai, const std::string& file,
+                                      BakeReport& report) {
+  if (ai.mNumCameras == 0) return std::nullopt;
+  const aiCamera& c = *ai.mCameras[0];
+  const aiNode* node = ai.mRootNode->FindNode(c.mName);
+  const aiMatrix4x4 m = node ? global_transform(node) : aiMatrix4x4();
+  const aiMatrix3x3 lin(m);
+  const std::string ext = lower_extension(file);
+  const bool gltf = ext == ".gltf" || ext == ".glb";
+  FileCamera fc;
+  fc.eye = to_vec(m * (gltf ? aiVector3D(0, 0, 0) : c.mPosition));
+  fc.dir = normalize(to_vec(lin * c.mLookAt));
+  fc.up = normalize(to_vec(lin * c.mUp));
+  fc.fov_x_rad = c.mHorizontalFOV;
+  fc.aspect = c.mAspect;
+  if (!(fc.fov_x_rad > 0.f && fc.fov_x_rad < kPi)) {
+    report.warnings.push_back(file + ": camera '" + std::string(c.mName.C_Str()) +
+                              "' has no usable perspective angle; using " +
+                              fmt_float(kDefaultFovYDeg) + " degrees vertical");
+    fc.fov_x_rad = 0;
+  }
+  return fc;
+}
+
+// Camera from options, else from the file, else a default that frames the bounds: looking along
+// −z at the centre from the distance where the bounding sphere fits the narrower field of view.
+pf_camera resolve_camera(const BakeOptions& o, const std::optional<FileCamera>& fc,
+                         const Bounds& bounds, const std::string& file) {
+  const float file_aspect = fc && fc->aspect > 0.f ? fc->aspect : 0.f;
+  const float base_aspect = file_aspect > 0.f ? file_aspect : 1.f;
+  if (o.width < 0 || o.height < 0 || o.width > 65536 || o.height > 65536)
+    throw input_error(file, "image size " + std::to_string(o.width) + "x" +
+                                std::to_string(o.height) + " is out of range",
+                      "give --width and --height in pixels, 1..65536");
+  pf_camera cam{};
+  cam.width = o.width;
+  cam.height = o.height;
+  if (!cam.width && !cam.height) cam.width = kDefaultImageSize;
+  if (!cam.height) cam.height = std::max(1, int(std::lround(cam.width / base_aspect)));
+  if (!cam.width) cam.width = std::max(1, int(std::lround(cam.height * base_aspect)));
+  const float image_aspect = float(cam.width) / float(cam.height);
+
+  float fov_y = kDefaultFovYDeg;
+  if (o.fov_y_deg) {
+    fov_y = *o.fov_y_deg;
+  } else if (fc && fc->fov_x_rad > 0.f) {
+    const float a = file_aspect > 0.f ? file_aspect : image_aspect;
+    fov_y = 2.f * std::atan(std::tan(0.5f * fc->fov_x_rad) / a) * 180.f / kPi;
+  }
+  if (!(fov_y > 0.f && fov_y < 180.f))
+    throw input_error(file, "vertical field of view " + fmt_float(fov_y) +
+                                " is outside (0, 180) degrees",
+                      "give --fov in degrees");
+  cam.fov_y_deg = fov_y;
+
+  Vec3 eye, look_at, up(0, 1, 0);
+  if (fc) {
+    eye = fc->eye;
+    look_at = fc->eye + fc->dir;
+    up = fc->up;
+  } else {
+    const float half_y = 0.5f * fov_y * kPi / 180.f;
+    const float half_x = std::atan(std::tan(half_y) * image_aspect);
+    const float radius = 0.5f * length(bounds.extent());
+    const float dist = radius / std::sin(std::min(half_x, half_y));
+    look_at = bounds.center();
+    eye = look_at + Vec3(0, 0, dist);
+  }
+  if (o.eye) eye = *o.eye;
+  if (o.look_at) look_at = *o.look_at;
+  if (o.up) up = *o.up;
+  const Vec3 dir = look_at - eye;
+  if (!finite(eye) || !finite(look_at) || !finite(up) || !(length(dir) > 0.f))
+    throw input_error(file, "camera eye " + fmt_vec(eye) + " and look-at " + fmt_vec(look_at) +
+                                " do not give a view direction",
+                      "give distinct finite --eye and --look-at");
+  if (!(length(cross(normalize(dir), normalize(up))) > 1e-4f))
+    throw input_error(file, "camera up " + fmt_vec(up) + " is parallel to the view direction",
+                      "give an --up that is not along the view");
+  eye.store(cam.eye);
+  look_at.store(cam.look_at);
+  normalize(up).store(cam.up);
+  return cam;
+}
+
+// Inserts one extra mesh file, fitted into its box (see MeshInsert).
+void insert_mesh(const MeshInsert& ins, size_t k, const Bounds& scene_bounds,
+                 Flattener& main_file, const std::string& main_path, Scene& scene,
+                 BakeReport& report) {
+  if (!finite(ins.box_lo) || !finite(ins.box_hi) || ins.box_lo.x > ins.box_hi.x ||
+      ins.box_lo.y > ins.box_hi.y || ins.box_lo.z > ins.box_hi.z)
+    throw input_error(ins.path, "insert box " + fmt_vec(ins.box_lo) + " .. " +
+                                    fmt_vec(ins.box_hi) + " is empty or not finite",
+                      "give --insert-box as x0,y0,z0,x1,y1,z1 fractions with x0<=x1 etc.");
+  int material;
+  if (ins.material.empty()) {
+    auto it = std::find(scene.material_names.begin(), scene.material_names.end(),
+                        "insert-default");
+    material = int(it - scene.material_names.begin());
+    if (it == scene.material_names.end()) {
+      pf_material m{};
+      m.type = PF_MAT_DIFFUSE;
+      m.ior = 1.f;
+      Vec3(kInsertAlbedo, kInsertAlbedo, kInsertAlbedo).store(m.color);
+      scene.materials.push_back(m);
+      scene.material_names.push_back("insert-default");
+    }
+  } else {
+    material = main_file.material_by_name(ins.material);
+    if (material < 0)
+      throw input_error(ins.path, "material '" + ins.material + "' is not defined in " +
+                                      main_path,
+                        "give --insert-material one of the scene's material names");
+  }
+
+  Assimp::Importer importer;
+  const aiScene* ai = read_file(importer, ins.path);
+  std::vector<pf_triangle> tris;
+  Flattener(*ai, ins.path, scene, report)
+      .run("insert" + std::to_string(k) + ":", material, tris);
+  if (tris.empty())
+    throw input_error(ins.path, "has no triangles to insert", "check the mesh file");
+
+  Bounds mb;
+  for (auto& t : tris) {
+    mb.extend(Vec3(t.v0));
+    mb.extend(Vec3(t.v1));
+    mb.extend(Vec3(t.v2));
+  }
+  const Vec3 lo = scene_bounds.lo + ins.box_lo * scene_bounds.extent();
+  const Vec3 hi = scene_bounds.lo + ins.box_hi * scene_bounds.extent();
+  float scale = INFINITY;
+  for (int a = 0; a < 3; ++a)
+    if (mb.extent()[a] > 0.f) scale = std::min(scale, (hi[a] - lo[a]) / mb.extent()[a]);
+  if (!(scale > 0.f && std::isfinite(scale)))
+    throw input_error(ins.path, "insert box " + fmt_vec(lo) + " .. " + fmt_vec(hi) +
+                                    " has no room for the mesh",
+                      "give an --insert-box with a non-zero size on every axis");
+  const Vec3 anchor(mb.center().x, mb.lo.y, mb.center().z);
+  const Vec3 target(0.5f * (lo.x + hi.x), lo.y, 0.5f * (lo.z + hi.z));
+  for (auto& t : tris) {
+    for (float* v : {t.v0, t.v1, t.v2}) ((Vec3(v) - anchor) * scale + target).store(v);
+    scene.triangles.push_back(t);
+  }
+  report.inserted_triangles += tris.size();
+}
+
+}  // namespace
+
+Scene bake_scene(const BakeOptions& options, BakeReport& report) {
+  report = BakeReport();
+  Stopwatch import_clock;
+  Scene scene;
+  scene.source = options.input;
+  const std::string& file = options.input;
+
+  Assimp::Importer importer;
+  const aiScene* ai = read_file(importer, file);
+  Flattener flattener(*ai, file, scene, report);
+  flattener.run("", -1, scene.triangles);
+  if (scene.triangles.empty())
+    throw input_error(file, "no triangles (" + std::to_string(report.triangles_read) +
+                                " read, " + std::to_string(report.degenerate_dropped) +
+                                " of zero area, " + std::to_string(report.primitives_skipped) +
+                                " points or lines)",
+                      "the scene needs triangle or polygon meshes");
+  add_point_lights(*ai, file, scene, report);
+  const std::optional<FileCamera> file_camera = read_camera(*ai, file, report);
+  report.camera_from_file = file_camera.has_value();
+
+  scene.compute_bounds();
+  for (size_t k = 0; k < options.inserts.size(); ++k)
+    insert_mesh(options.inserts[k], k, scene.bounds, flattener, file, scene, report);
+
+  bool emitter = !scene.lights.empty();
+  for (size_t i = 0; i < scene.triangles.size() && !emitter; ++i)
+    emitter = scene.materials[size_t(scene.triangles[i].material)].type == PF_MAT_EMITTER;
+  if (!emitter)
+    throw input_error(file, "no light: no emissive material (Ke > 0) and no point light",
+                      "give a surface an emissive colour or add a point light");
+
+  scene.compute_bounds();
+  scene.camera = resolve_camera(options, file_camera, scene.bounds, file);
+  report.import_seconds = import_clock.seconds();
+
+  scene.compute_hh();
+  scene.compute_light_cdf();
+  scene.kd = build_kdtree(scene.triangles, options.kd);
+  scene.compute_scene_id();
+  return scene;
+}
+
+}  // namespace pf

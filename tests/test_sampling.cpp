@@ -1,0 +1,192 @@
+// Tests of sampling.h: densities checked by Monte Carlo moments, and the exact scattering
+// formulas (orthonormal basis, reflection, Snell refraction, Fresnel).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "photonflow/rng.h"
+#include "photonflow/sampling.h"
+
+using namespace pf;
+
+namespace {
+
+constexpr pf_uint kSeed = 2024;
+constexpr int kN = 400000;
+
+// A few unit normals, including the poles and the Duff et al. branch switch at n.z = 0.
+std::vector<Vec3> test_normals() {
+  return {Vec3(0, 0, 1), Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, -1, 0),
+          normalize(Vec3(1, 2, 3)), normalize(Vec3(-0.3f, 0.1f, -0.95f)),
+          normalize(Vec3(0.6f, -0.8f, 1e-7f)), normalize(Vec3(0.6f, -0.8f, -1e-7f))};
+}
+
+}  // namespace
+
+TEST_CASE("sampling: orthonormal basis is orthonormal and right-handed", "[sampling]") {
+  for (const Vec3& n : test_normals()) {
+    Vec3 t, b;
+    orthonormal_basis(n, t, b);
+    INFO("n = " << n.x << " " << n.y << " " << n.z);
+    CHECK(length(t) == Approx(1).margin(1e-6));
+    CHECK(length(b) == Approx(1).margin(1e-6));
+    CHECK(dot(t, b) == Approx(0).margin(1e-6));
+    CHECK(dot(t, n) == Approx(0).margin(1e-6));
+    CHECK(dot(b, n) == Approx(0).margin(1e-6));
+    Vec3 c = cross(t, b);  // right-handed: t × b = n
+    CHECK(c.x == Approx(n.x).margin(1e-6));
+    CHECK(c.y == Approx(n.y).margin(1e-6));
+    CHECK(c.z == Approx(n.z).margin(1e-6));
+  }
+}
+
+TEST_CASE("sampling: uniform triangle points have the centroid as mean and stay inside",
+          "[sampling]") {
+  const Vec3 a(0, 0, 0), b(4, 0, 1), c(1, 3, -2);
+  const Vec3 n = cross(b - a, c - a);
+  Vec3 mean;
+  int outside = 0;
+  double frac_near_a = 0;  // share of points in the sub-triangle at a with half the edge lengths
+  for (int i = 0; i < kN; ++i) {
+    Vec3 p = sample_triangle(a, b, c, pf_rng_float(kSeed, 0, i, 0), pf_rng_float(kSeed, 0, i, 1));
+    mean += p * (1.f / kN);
+    // Barycentric coordinates of p; all >= 0 inside.
+    float wb = dot(cross(p - a, c - a), n) / dot(n, n);
+    float wc = dot(cross(b - a, p - a), n) / dot(n, n);
+    outside += (wb < -1e-5f || wc < -1e-5f || wb + wc > 1 + 1e-5f);
+    frac_near_a += (wb + wc <= 0.5f) ? 1.0 / kN : 0.0;
+  }
+  Vec3 centroid = (a + b + c) * (1.f / 3.f);
+  CHECK(outside == 0);
+  CHECK(mean.x == Approx(centroid.x).margin(0.01));
+  CHECK(mean.y == Approx(centroid.y).margin(0.01));
+  CHECK(mean.z == Approx(centroid.z).margin(0.01));
+  // Uniform density: the corner triangle holds 1/4 of the area (sd of the share ≈ 7e-4).
+  CHECK(frac_near_a == Approx(0.25).margin(0.004));
+}
+
+TEST_CASE("sampling: cosine hemisphere has density cos/pi", "[sampling]") {
+  for (const Vec3& n : test_normals()) {
+    double mean_cos = 0, mean_cos2 = 0;
+    int below = 0;
+    Vec3 mean_dir;
+    for (int i = 0; i < kN; ++i) {
+      Vec3 d = sample_cosine_hemisphere(n, pf_rng_float(kSeed, 1, i, 0),
+                                        pf_rng_float(kSeed, 1, i, 1));
+      double c = dot(d, n);
+      below += (c < 0) || std::fabs(length(d) - 1.f) > 1e-5f;
+      mean_cos += c / kN;
+      mean_cos2 += c * c / kN;
+      mean_dir += d * (1.f / kN);
+    }
+    INFO("n = " << n.x << " " << n.y << " " << n.z);
+    CHECK(below == 0);
+    // E[cos] = ∫ cos · cos/π dω = 2/3; E[cos²] = 1/2. Tangential mean is 0 by symmetry.
+    CHECK(mean_cos == Approx(2.0 / 3.0).margin(0.003));
+    CHECK(mean_cos2 == Approx(0.5).margin(0.003));
+    Vec3 tangential = mean_dir - n * dot(mean_dir, n);
+    CHECK(length(tangential) < 0.005f);
+  }
+  CHECK(pdf_cosine_hemisphere(1.f) == Approx(1.0 / M_PI));
+  CHECK(pdf_cosine_hemisphere(-0.5f) == 0.f);
+}
+
+TEST_CASE("sampling: uniform sphere directions are isotropic", "[sampling]") {
+  Vec3 mean;
+  double mean_z2 = 0, upper = 0;
+  int not_unit = 0;
+  for (int i = 0; i < kN; ++i) {
+    Vec3 d = sample_uniform_sphere(pf_rng_float(kSeed, 2, i, 0), pf_rng_float(kSeed, 2, i, 1));
+    not_unit += std::fabs(length(d) - 1.f) > 1e-5f;
+    mean += d * (1.f / kN);
+    mean_z2 += double(d.z) * d.z / kN;
+    upper += (d.x > 0.5f) ? 1.0 / kN : 0.0;  // spherical cap x > 1/2 holds 1/4 of the sphere
+  }
+  CHECK(not_unit == 0);
+  CHECK(length(mean) < 0.006f);
+  CHECK(mean_z2 == Approx(1.0 / 3.0).margin(0.003));
+  CHECK(upper == Approx(0.25).margin(0.004));
+  CHECK(kPdfUniformSphere == Approx(1.0 / (4 * M_PI)));
+}
+
+TEST_CASE("sampling: reflect mirrors about the normal", "[sampling]") {
+  Vec3 n(0, 0, 1);
+  Vec3 d = normalize(Vec3(1, 2, -3));
+  Vec3 r = reflect(d, n);
+  CHECK(r.x == Approx(d.x));
+  CHECK(r.y == Approx(d.y));
+  CHECK(r.z == Approx(-d.z));
+  CHECK(length(r) == Approx(1.f));
+  // Independent of the normal's side.
+  Vec3 r2 = reflect(d, -n);
+  CHECK(r2.z == Approx(r.z));
+}
+
+TEST_CASE("sampling: refract obeys Snell's law and total internal reflection", "[sampling]") {
+  const Vec3 n(0, 0, 1);
+  for (float eta : {1.f / 1.5f, 1.5f, 1.f / 1.33f, 1.33f}) {
+    for (float theta_deg : {0.f, 10.f, 30.f, 41.f, 45.f, 60.f, 85.f}) {
+      float th = theta_deg * kPi / 180.f;
+      Vec3 d(std::sin(th), 0.f, -std::cos(th));  // arriving from above, into the surface
+      Vec3 t;
+      bool ok = refract(d, n, eta, t);
+      float sin_t = eta * std::sin(th);
+      INFO("eta " << eta << " theta " << theta_deg);
+      CHECK(ok == (sin_t < 1.f));
+      if (!ok) {
+        CHECK(fresnel_dielectric(std::cos(th), 1.f, 1.f / eta) == 1.f);  // TIR: all reflected
+        continue;
+      }
+      CHECK(length(t) == Approx(1.f).margin(1e-6));
+      CHECK(t.z < 0.f);                                     // continues through the surface
+      CHECK(t.y == Approx(0.f).margin(1e-7));               // stays in the plane of incidence
+      CHECK(t.x == Approx(sin_t).margin(1e-6));             // η_i sinθ_i = η_t sinθ_t
+      CHECK(t.x * d.x >= 0.f);                              // same side of the normal
+      // Reciprocity: refracting back with 1/eta recovers d.
+      Vec3 back;
+      REQUIRE(refract(-t, -n, 1.f / eta, back));
+      CHECK(back.x == Approx(-d.x).margin(1e-5));
+      CHECK(back.z == Approx(-d.z).margin(1e-5));
+    }
+  }
+}
+
+TEST_CASE("sampling: dielectric Fresnel reflectance", "[sampling]") {
+  // Normal incidence: ((n − 1)/(n + 1))², from either side.
+  for (float ior : {1.33f, 1.5f, 2.4f}) {
+    float r0 = (ior - 1) / (ior + 1);
+    CHECK(fresnel_dielectric(1.f, 1.f, ior) == Approx(r0 * r0).epsilon(1e-5));
+    CHECK(fresnel_dielectric(1.f, ior, 1.f) == Approx(r0 * r0).epsilon(1e-5));
+  }
+  // Glass, 45° from air: hand-computed Rs = 0.0920, Rp = 0.00846, mean 0.0502.
+  CHECK(fresnel_dielectric(std::cos(kPi / 4), 1.f, 1.5f) == Approx(0.05023).epsilon(1e-3));
+  // Brewster angle tan θ_B = η_t/η_i: Rp = 0, so R = Rs/2.
+  float tb = std::atan(1.5f);
+  float ct = std::cos(std::asin(std::sin(tb) / 1.5f));
+  float rs = (std::cos(tb) - 1.5f * ct) / (std::cos(tb) + 1.5f * ct);
+  CHECK(fresnel_dielectric(std::cos(tb), 1.f, 1.5f) == Approx(0.5f * rs * rs).epsilon(1e-4));
+  // Grazing incidence reflects everything; inside glass beyond the critical angle, TIR.
+  CHECK(fresnel_dielectric(0.f, 1.f, 1.5f) == Approx(1.f));
+  float critical = std::asin(1.f / 1.5f);
+  CHECK(fresnel_dielectric(std::cos(critical + 0.01f), 1.5f, 1.f) == 1.f);
+  CHECK(fresnel_dielectric(std::cos(critical - 0.01f), 1.5f, 1.f) < 1.f);
+  // Energy: reflectance within [0, 1] everywhere, and equal for the same pair of angles seen from
+  // both sides (reciprocity of the unpolarised formula).
+  for (int i = 0; i <= 100; ++i) {
+    float c = i / 100.f;
+    float r = fresnel_dielectric(c, 1.f, 1.5f);
+    CHECK(r >= 0.f);
+    CHECK(r <= 1.f);
+    float sin_t = std::sqrt(1 - c * c) / 1.5f;
+    float cos_t = std::sqrt(1 - sin_t * sin_t);
+    CHECK(fresnel_dielectric(cos_t, 1.5f, 1.f) == Approx(r).margin(1e-4));
+  }
+}
+
+TEST_CASE("sampling: luminance uses Rec.709 weights", "[sampling]") {
+  CHECK(luminance(Vec3(1, 1, 1)) == Approx(1.f));
+  CHECK(luminance(Vec3(1, 0, 0)) == Approx(0.2126f));
+  CHECK(luminance(Vec3(0, 1, 0)) == Approx(0.7152f));
+  CHECK(luminance(Vec3(0, 0, 1)) == Approx(0.0722f));
+}

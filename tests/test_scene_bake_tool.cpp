@@ -1,0 +1,191 @@
+// Tests of the scene-bake executable (run through std::system): bad input gives exactly one line
+// on stderr naming the file, exit code 2 and no output (nor temporary) file; a good input writes a
+// readable scene.h5 with provenance; --help documents every option.
+#include <catch2/catch.hpp>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "photonflow/h5io.h"
+#include "photonflow/provenance.h"
+#include "photonflow/scene.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string src(const std::string& rel) { return std::string(PF_SOURCE_DIR) + "/" + rel; }
+
+std::string tool() {
+  const char* bin = std::getenv("PF_BIN");
+  return (bin ? std::string(bin) : std::string(PF_BINARY_DIR) + "/bin") + "/scene-bake";
+}
+
+// A fresh scratch directory for one test case.
+fs::path scratch(const std::string& name) {
+  fs::path d = fs::path(PF_BINARY_DIR) / "test_scratch" / "scene_bake_tool" / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct Run {
+  int code = -1;
+  std::string out, err;
+};
+
+// Runs scene-bake with `args` (already shell-quoted where needed).
+Run run_tool(const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string cmd = "'" + tool() + "' " + args + " >'" + out.string() + "' 2>'" +
+                          err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  Run r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = read_text(out);
+  r.err = read_text(err);
+  return r;
+}
+
+size_t lines(const std::string& s) {
+  size_t n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+// No *.h5 and no temporary file in `dir`.
+bool no_outputs(const fs::path& dir) {
+  for (auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.find(".h5") != std::string::npos || name.find(".tmp.") != std::string::npos)
+      return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("scene-bake: bad inputs give one line, exit code 2 and no file", "[scene_bake_tool]") {
+  const fs::path dir = scratch("bad");
+  const std::string out = (dir / "scene.h5").string();
+  for (const char* rel :
+       {"tests/data/nan.obj", "tests/data/degenerate.obj", "tests/data/bad-index.obj",
+        "tests/data/bad-index.dae", "tests/data/no-light.obj", "tests/data/lines.obj",
+        "tests/data/garbage.dae", "tests/data/unknown.xyz", "tests/data/missing.obj"}) {
+    INFO(rel);
+    Run r = run_tool("'" + src(rel) + "' -o '" + out + "'", dir);
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(lines(r.err) == 1);
+    CHECK(r.err.rfind("scene-bake: ", 0) == 0);
+    CHECK(r.err.find(rel) != std::string::npos);
+    CHECK(no_outputs(dir));
+  }
+}
+
+TEST_CASE("scene-bake: bad options give one line and exit code 2", "[scene_bake_tool]") {
+  const fs::path dir = scratch("options");
+  const std::string in = "'" + src("data/cornell-box.dae") + "'";
+  const std::string out = " -o '" + (dir / "scene.h5").string() + "'";
+  for (const std::string& args :
+       {in + out + " --fov 200", in + out + " --eye 1,2", in + out + " --width -3",
+        in + out + " --no-such-option", in, std::string("-o x.h5"), in + out + " --insert-box 0,0,0,1,1,1",
+        in + out + " --insert '" + src("tests/data/tetra.ply") + "' --insert-material nope",
+        in + out + " --kd-max-leaf many", in + out + " --kd-max-leaf 0",
+        in + out + " --kd-ct -1", in + out + " --kd-max-depth 999", in + out + " --threads -2"}) {
+    INFO(args);
+    Run r = run_tool(args, dir);
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(lines(r.err) == 1);
+    CHECK(no_outputs(dir));
+  }
+}
+
+TEST_CASE("scene-bake: an unwritable output path is an input error", "[scene_bake_tool]") {
+  const fs::path dir = scratch("unwritable");
+  Run r = run_tool("'" + src("data/cornell-box.dae") + "' -o /nonexistent/dir/x.h5", dir);
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(lines(r.err) == 1);
+  CHECK(r.err.find("/nonexistent/dir/x.h5") != std::string::npos);
+  CHECK_FALSE(fs::exists("/nonexistent/dir/x.h5"));
+}
+
+TEST_CASE("scene-bake: a good input writes scene.h5 with provenance", "[scene_bake_tool]") {
+  const fs::path dir = scratch("good");
+  const fs::path out = dir / "scene.h5";
+  const std::string ply = src("tests/data/tetra.ply");
+  Run r = run_tool("'" + src("data/cornell-box.dae") + "' -o '" + out.string() +
+                       "' --width 320 --height 240 --insert '" + ply +
+                       "' --insert-box 0.2,0,0.2,0.5,0.3,0.5 --insert-material white --threads 1",
+                   dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.err.empty());
+  CHECK(r.out.find("triangles  36 (4 inserted") != std::string::npos);
+  CHECK(r.out.find("scene_id") != std::string::npos);
+  REQUIRE(fs::exists(out));
+  for (auto& e : fs::directory_iterator(dir))
+    CHECK(e.path().filename().string().find(".tmp.") == std::string::npos);
+
+  const pf::Scene s = pf::load_scene(out.string());
+  CHECK(s.triangles.size() == 36);
+  CHECK(s.camera.width == 320);
+  CHECK(s.camera.height == 240);
+  CHECK_FALSE(s.lights.empty());
+
+  pf::h5::Reader reader(out.string(), pf::kSceneFormat, pf::kSceneFormatVersion);
+  const pf::Provenance p = pf::read_provenance(reader);
+  CHECK(p.tool == "scene-bake");
+  CHECK(p.parameters.at("insert-material") == "white");
+  CHECK(p.parameters.at("width") == "320");
+  CHECK(p.parameters.count("kd-ct") == 1);
+  bool source = false, insert = false;
+  for (auto& in : p.inputs) {
+    source |= in.role == "source" && in.sha256.size() == 64;
+    insert |= in.role == "insert0" && in.path == ply;
+  }
+  CHECK(source);
+  CHECK(insert);
+
+  if (std::system("command -v h5dump >/dev/null 2>&1") == 0) {
+    const std::string cmd = "h5dump -H '" + out.string() + "' >/dev/null 2>&1";
+    CHECK(std::system(cmd.c_str()) == 0);
+  }
+}
+
+TEST_CASE("scene-bake: zero-area triangles are reported as a warning", "[scene_bake_tool]") {
+  const fs::path dir = scratch("degenerate");
+  Run r = run_tool("'" + src("tests/data/some-degenerate.obj") + "' -o '" +
+                       (dir / "scene.h5").string() + "'",
+                   dir);
+  CHECK(r.code == 0);
+  CHECK(r.err.find("dropped 1 zero-area triangles") != std::string::npos);
+  CHECK(fs::exists(dir / "scene.h5"));
+}
+
+TEST_CASE("scene-bake: --help explains every option", "[scene_bake_tool]") {
+  const fs::path dir = scratch("help");
+  Run r = run_tool("--help", dir);
+  CHECK(r.code == 0);
+  for (const char* opt :
+       {"--output", "--eye", "--look-at", "--up", "--fov", "--width", "--height", "--insert",
+        "--insert-box", "--insert-material", "--kd-ct", "--kd-ci", "--kd-empty-bonus",
+        "--kd-max-depth", "--kd-max-leaf", "--threads", "--help", "INPUT", "degrees", "pixels",
+        "default"}) {
+    INFO(opt);
+    CHECK(r.out.find(opt) != std::string::npos);
+  }
+}

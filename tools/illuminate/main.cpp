@@ -1,0 +1,119 @@
+// illuminate — hitpoint illumination. --estimator ppm: progressive photon mapping, one iteration
+// per photon pass in the photons file (thesis eq. 3.14–3.18), writing the updated hitpoint state
+// so that illuminate can be called pass after pass. --estimator classic: classic photon mapping
+// (k nearest global photons + fixed-radius caustic estimate, thesis eq. 3.10).
+#include <iostream>
+
+#include "photonflow/illuminate.h"
+#include "photonflow/options.h"
+#include "photonflow/progress.h"
+#include "photonflow/tool_main.h"
+
+int main(int argc, char** argv) {
+  return pf::run_tool("illuminate", [&] {
+    cxxopts::Options o("illuminate", "Gather photons at hitpoints (PPM or classic PM).");
+    o.add_options()
+      ("scene", "baked scene (scene.h5)", cxxopts::value<std::string>())
+      ("hitpoints", "hitpoint state (from trace-hitpoints or an earlier illuminate)",
+       cxxopts::value<std::string>())
+      ("photons", "photons file (from trace-photons)", cxxopts::value<std::string>())
+      ("grid", "prebuilt photon grids (from build-grid; PPM with --gather grid)",
+       cxxopts::value<std::string>())
+      ("o,output", "output hitpoint state (.h5)", cxxopts::value<std::string>())
+      ("estimator", "ppm | classic", cxxopts::value<std::string>()->default_value("ppm"))
+      ("alpha", "PPM: fraction of new photons kept, in (0, 1] (eq. 3.14)",
+       cxxopts::value<float>()->default_value("0.7"))
+      ("gather", "PPM: grid (per-mesh uniform grid) | flann (kd-tree radius search); both gather "
+       "the same photons", cxxopts::value<std::string>()->default_value("grid"))
+      ("max-bins", "PPM grid: bins along a mesh's longest extent",
+       cxxopts::value<int>()->default_value("64"))
+      ("k", "classic: nearest global photons per estimate",
+       cxxopts::value<int>()->default_value("100"))
+      ("caustic-radius", "classic: caustic-map radius in world units; 0 = the hitpoints' R0",
+       cxxopts::value<float>()->default_value("0"))
+      ("eps", "classic: FLANN approximate-search epsilon (0 = exact)",
+       cxxopts::value<float>()->default_value("0"))
+      ("threads", "worker threads, 0 = all cores", cxxopts::value<int>()->default_value("0"))
+      ("h,help", "print this help");
+    auto a = o.parse(argc, argv);
+    if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
+    if (!a.count("scene") || !a.count("hitpoints") || !a.count("output") ||
+        (!a.count("photons") && !a.count("grid")))
+      throw pf::input_error("", "--scene, --hitpoints, --photons (or --grid) and --output are required");
+    std::string estimator = a["estimator"].as<std::string>(), gather = a["gather"].as<std::string>();
+    pf::require_choice("estimator", estimator, {"ppm", "classic"});
+    pf::require_choice("gather", gather, {"grid", "flann"});
+    pf::PpmOptions ppm;
+    ppm.alpha = a["alpha"].as<float>();
+    ppm.gather = gather == "grid" ? pf::Gather::Grid : pf::Gather::Flann;
+    ppm.max_bins = a["max-bins"].as<int>();
+    ppm.threads = a["threads"].as<int>();
+    pf::require_in_unit_interval("alpha", ppm.alpha);
+    pf::require_positive("max-bins", ppm.max_bins);
+    pf::ClassicOptions classic;
+    classic.k = a["k"].as<int>();
+    classic.caustic_radius = a["caustic-radius"].as<float>();
+    classic.eps = a["eps"].as<float>();
+    classic.threads = ppm.threads;
+    pf::require_positive("k", classic.k);
+    if (!(classic.caustic_radius >= 0.f) || !(classic.eps >= 0.f))
+      throw pf::input_error("", "--caustic-radius and --eps must be >= 0");
+
+    pf::Stopwatch clock;
+    std::string scene_path = a["scene"].as<std::string>(), hp_path = a["hitpoints"].as<std::string>();
+    pf::Scene scene = pf::load_scene(scene_path);
+    pf::HitpointSet h = pf::load_hitpoints(hp_path);
+    pf::require_scene(hp_path, h.scene_id, scene.scene_id, scene_path);
+    pf::Provenance prov;
+    prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
+    prov.add_input("hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id);
+    if (estimator == "ppm" && h.estimator == "classic")
+      throw pf::input_error(hp_path, "holds a classic estimate; PPM continues only a PPM state",
+                            "start from trace-hitpoints' output");
+
+    if (a.count("grid") && estimator == "ppm") {
+      std::string grid_path = a["grid"].as<std::string>();
+      pf::GridSet grids = pf::load_grids(grid_path);
+      pf::require_scene(grid_path, grids.scene_id, scene.scene_id, scene_path);
+      prov.add_input("grid", grid_path, pf::kGridFormat, grids.scene_id);
+      if (grids.first_pass != h.passes)
+        throw pf::input_error(grid_path, "starts at pass " + std::to_string(grids.first_pass) +
+                              " but the hitpoints have " + std::to_string(h.passes) + " passes",
+                              "give the grid of the next pass");
+      pf::Progress progress("pass", long(grids.grids.size()), "photons");
+      for (size_t k = 0; k < grids.grids.size(); ++k) {
+        pf::ppm_pass_grid(scene, h, grids.grids[k], grids.pass_emitted[k], ppm);
+        progress.update(long(k + 1), double(h.photons_emitted));
+      }
+    } else {
+      if (!a.count("photons")) throw pf::input_error("", "--photons is required here");
+      std::string ph_path = a["photons"].as<std::string>();
+      pf::PhotonSet photons = pf::load_photons(ph_path);
+      pf::require_scene(ph_path, photons.scene_id, scene.scene_id, scene_path);
+      prov.add_input("photons", ph_path, pf::kPhotonsFormat, photons.scene_id);
+      if (estimator == "ppm") {
+        if (photons.first_pass != h.passes)
+          throw pf::input_error(ph_path, "starts at pass " + std::to_string(photons.first_pass) +
+                                " but the hitpoints have " + std::to_string(h.passes) + " passes",
+                                "trace photons with --first-pass " + std::to_string(h.passes));
+        pf::Progress progress("pass", photons.pass_count(), "photons");
+        for (int k = 0; k < photons.pass_count(); ++k) {
+          pf::ppm_pass(scene, h, photons.pass(k), photons.pass_emitted[size_t(k)], ppm);
+          progress.update(k + 1, double(h.photons_emitted));
+        }
+      } else {
+        uint64_t emitted = 0;
+        for (auto e : photons.pass_emitted) emitted += e;
+        pf::classic_estimate(scene, h, photons.photons, emitted, classic);
+      }
+    }
+    prov.tool = "illuminate";
+    pf::record_options(prov, a);
+    prov.command_line = pf::join_command_line(argc, argv);
+    prov.wall_time_s = clock.seconds();
+    pf::save_hitpoints(h, a["output"].as<std::string>(), prov);
+    std::cout << "illuminate: " << estimator << ", " << h.passes << " pass(es) in state, "
+              << h.photons_emitted << " photons emitted, " << clock.seconds() << " s\n";
+    return 0;
+  });
+}

@@ -1,0 +1,104 @@
+// render — progressive photon mapping in one process: eye pass, then `--passes` photon passes
+// with their gathers, no files between passes; checkpoints of the hitpoint state every
+// --checkpoint-every passes (atomic) and --resume to continue a killed run. Same stage functions
+// as trace-hitpoints → trace-photons → illuminate → synthesize, so both routes give one image.
+#include <iostream>
+
+#include "photonflow/options.h"
+#include "photonflow/progress.h"
+#include "photonflow/render_driver.h"
+#include "photonflow/synthesize.h"
+#include "photonflow/tool_main.h"
+
+int main(int argc, char** argv) {
+  return pf::run_tool("render", [&] {
+    cxxopts::Options o("render", "Progressive photon mapping render driver.");
+    o.add_options()
+      ("scene", "baked scene (scene.h5)", cxxopts::value<std::string>())
+      ("o,output", "output OpenEXR image; a PNG preview goes beside it",
+       cxxopts::value<std::string>())
+      ("passes", "photon passes in total", cxxopts::value<int>()->default_value("16"))
+      ("photons", "photons emitted per pass", cxxopts::value<int64_t>()->default_value("100000"))
+      ("alpha", "fraction of new photons kept, in (0, 1] (eq. 3.14)",
+       cxxopts::value<float>()->default_value("0.7"))
+      ("gather", "grid | flann", cxxopts::value<std::string>()->default_value("grid"))
+      ("max-bins", "grid bins along a mesh's longest extent", cxxopts::value<int>()->default_value("64"))
+      ("spp", "eye samples per pixel", cxxopts::value<int>()->default_value("1"))
+      ("max-depth", "specular bounces of eye paths", cxxopts::value<int>()->default_value("16"))
+      ("max-bounces", "bounces of photon paths", cxxopts::value<int>()->default_value("16"))
+      ("direct", "photons | shadow-rays", cxxopts::value<std::string>()->default_value("photons"))
+      ("shadow-samples", "light samples per hitpoint with --direct shadow-rays",
+       cxxopts::value<int>()->default_value("4"))
+      ("radius", "initial radius R0 in world units; 0 = automatic",
+       cxxopts::value<float>()->default_value("0"))
+      ("seed", "random seed", cxxopts::value<uint32_t>()->default_value("1"))
+      ("checkpoint", "hitpoint-state file written every --checkpoint-every passes",
+       cxxopts::value<std::string>()->default_value(""))
+      ("checkpoint-every", "passes between checkpoints", cxxopts::value<int>()->default_value("10"))
+      ("resume", "continue from --checkpoint if it exists")
+      ("exposure", "PNG exposure in stops", cxxopts::value<float>()->default_value("0"))
+      ("threads", "worker threads, 0 = all cores", cxxopts::value<int>()->default_value("0"))
+      ("h,help", "print this help");
+    auto a = o.parse(argc, argv);
+    if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
+    if (!a.count("scene") || !a.count("output"))
+      throw pf::input_error("", "--scene and --output are required");
+
+    pf::RenderOptions opt;
+    opt.passes = a["passes"].as<int>();
+    int64_t photons = a["photons"].as<int64_t>();
+    pf::require_positive("passes", opt.passes);
+    pf::require_positive("photons", double(photons));
+    if (photons > int64_t(UINT32_MAX)) throw pf::input_error("", "--photons must be below 2^32");
+    std::string gather = a["gather"].as<std::string>(), direct = a["direct"].as<std::string>();
+    pf::require_choice("gather", gather, {"grid", "flann"});
+    pf::require_choice("direct", direct, {"photons", "shadow-rays"});
+    int threads = a["threads"].as<int>();
+    uint32_t seed = a["seed"].as<uint32_t>();
+    opt.eye.spp = a["spp"].as<int>();
+    opt.eye.max_depth = a["max-depth"].as<int>();
+    opt.eye.direct = direct == "photons" ? pf::DirectMode::Photons : pf::DirectMode::ShadowRays;
+    opt.eye.shadow_samples = a["shadow-samples"].as<int>();
+    opt.eye.radius = a["radius"].as<float>();
+    opt.eye.seed = seed;
+    opt.eye.threads = threads;
+    opt.photons.photons = uint32_t(photons);
+    opt.photons.seed = seed;
+    opt.photons.max_bounces = a["max-bounces"].as<int>();
+    opt.photons.threads = threads;
+    opt.ppm.alpha = a["alpha"].as<float>();
+    opt.ppm.gather = gather == "grid" ? pf::Gather::Grid : pf::Gather::Flann;
+    opt.ppm.max_bins = a["max-bins"].as<int>();
+    opt.ppm.threads = threads;
+    opt.checkpoint = a["checkpoint"].as<std::string>();
+    opt.checkpoint_every = a["checkpoint-every"].as<int>();
+    pf::require_in_unit_interval("alpha", opt.ppm.alpha);
+    pf::require_positive("spp", opt.eye.spp);
+    pf::require_positive("max-bins", opt.ppm.max_bins);
+    if (!(opt.eye.radius >= 0.f)) pf::require_positive("radius", opt.eye.radius);
+    if (a.count("resume") && opt.checkpoint.empty())
+      throw pf::input_error("", "--resume needs --checkpoint FILE");
+
+    pf::Stopwatch clock;
+    std::string scene_path = a["scene"].as<std::string>();
+    pf::Scene scene = pf::load_scene(scene_path);
+    pf::Provenance prov;
+    prov.tool = "render";
+    prov.seed = seed;
+    pf::record_options(prov, a);
+    prov.command_line = pf::join_command_line(argc, argv);
+    prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
+
+    pf::Progress progress("pass", opt.passes, "photons");
+    pf::HitpointSet h = pf::render_progressive(
+        scene, opt, a.count("resume") > 0, prov,
+        [&](int done, double n) { progress.update(done, n); });
+    std::string out = a["output"].as<std::string>();
+    pf::Image img = pf::synthesize(h);
+    pf::write_exr(img, out);
+    pf::write_png(img, out.substr(0, out.rfind('.')) + ".png", a["exposure"].as<float>());
+    std::cout << "render: " << out << " (" << h.width << "x" << h.height << ", " << h.passes
+              << " passes, " << h.photons_emitted << " photons, " << clock.seconds() << " s)\n";
+    return 0;
+  });
+}

@@ -1,0 +1,39 @@
+// synthesize — image synthesis (thesis eq. 3.19): L = τ/(π R² N_emitted) per hitpoint, times its
+// weight, plus the emitted and direct layers; writes an OpenEXR (linear RGB + AOV layers radius,
+// photons, hitpoints) and an sRGB PNG preview.
+#include <iostream>
+
+#include "photonflow/stage_files.h"
+#include "photonflow/synthesize.h"
+#include "photonflow/tool_main.h"
+
+int main(int argc, char** argv) {
+  return pf::run_tool("synthesize", [&] {
+    cxxopts::Options o("synthesize", "Turn a hitpoint state into an image (EXR + PNG preview).");
+    o.add_options()
+      ("hitpoints", "hitpoint state (from illuminate)", cxxopts::value<std::string>())
+      ("o,output", "output OpenEXR image (linear RGB, W/(sr m^2))", cxxopts::value<std::string>())
+      ("png", "also write an sRGB PNG preview here (default: output with .png)",
+       cxxopts::value<std::string>())
+      ("exposure", "PNG exposure in stops (the EXR is never scaled)",
+       cxxopts::value<float>()->default_value("0"))
+      ("h,help", "print this help");
+    auto a = o.parse(argc, argv);
+    if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
+    if (!a.count("hitpoints") || !a.count("output"))
+      throw pf::input_error("", "--hitpoints and --output are required");
+    std::string out = a["output"].as<std::string>();
+    std::string png = a.count("png") ? a["png"].as<std::string>()
+                                     : out.substr(0, out.rfind('.')) + ".png";
+    pf::HitpointSet h = pf::load_hitpoints(a["hitpoints"].as<std::string>());
+    if (h.estimator == "none")
+      throw pf::input_error(a["hitpoints"].as<std::string>(), "has no photons gathered yet",
+                            "run illuminate on it first");
+    pf::Image img = pf::synthesize(h);
+    pf::write_exr(img, out);
+    pf::write_png(img, png, a["exposure"].as<float>());
+    std::cout << "synthesize: " << out << " and " << png << " (" << h.width << "x" << h.height
+              << ", " << h.passes << " pass(es), " << h.photons_emitted << " photons)\n";
+    return 0;
+  });
+}
