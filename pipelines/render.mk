@@ -1,14 +1,37 @@
-# render.mk — the default render's stage DAG, intermediates under $(OUT)/$(SCENE)/.
+# render.mk — the default render's stage DAG; intermediates under $(OUT)/$(SCENE)/.
 #
-# Until the render stages land (issue 3), the DAG is one stage: scene-bake. Running it again with
-# the same inputs and parameters does nothing; changing a parameter reruns only what depends on it.
+#   scene-bake → trace-hitpoints → trace-photons → build-grid → illuminate → synthesize
 #
-# Variables: BIN (folder of the stage executables), SCENE (name of a scene in data/),
-# OUT (output root), BAKE_FLAGS (extra scene-bake options, e.g. --width 320 --height 280).
+# Every stage's parameters go into a stamp file (pipelines/stamp.mk) that the stage depends on:
+# running again with the same inputs and parameters does nothing, and changing one stage's
+# parameter reruns that stage and the stages after it, no others.
+#
+# Long runs (PASSES > STAGED_MAX_PASSES) use the render driver instead: the same stage functions in
+# one process, with a checkpoint every CHECKPOINT_EVERY passes; interrupting `make render` and
+# running it again resumes from the checkpoint.
+#
+# Variables (defaults below): SCENE, OUT, BIN, WIDTH, HEIGHT, PASSES, PHOTONS, ALPHA, SEED, SPP,
+# DIRECT (photons | shadow-rays), RADIUS (0 = automatic), GATHER (grid | flann), MAX_BINS,
+# EXPOSURE, BAKE_FLAGS (extra scene-bake options), THREADS.
 BIN        ?= build/bin
 SCENE      ?= cornell-box
 OUT        ?= out
+WIDTH      ?= 512
+HEIGHT     ?= 512
+PASSES     ?= 16
+PHOTONS    ?= 100000
+ALPHA      ?= 0.7
+SEED       ?= 1
+SPP        ?= 1
+DIRECT     ?= photons
+RADIUS     ?= 0
+GATHER     ?= grid
+MAX_BINS   ?= 64
+EXPOSURE   ?= 0
 BAKE_FLAGS ?=
+THREADS    ?= 0
+STAGED_MAX_PASSES ?= 32
+CHECKPOINT_EVERY  ?= 10
 SCENE_FILE ?= $(firstword $(wildcard data/$(SCENE).dae data/$(SCENE).obj data/$(SCENE).gltf \
                                      data/$(SCENE).glb data/$(SCENE).ply))
 DIR := $(OUT)/$(SCENE)
@@ -19,9 +42,48 @@ ifeq ($(SCENE_FILE),)
 $(error no scene named '$(SCENE)' in data/ (looked for .dae .obj .gltf .glb .ply))
 endif
 
-.PHONY: render
-render: $(DIR)/scene.h5
-	@echo "render: $(DIR)/scene.h5 is up to date (the render stages come with issue 3)"
+BAKE_P  := --width $(WIDTH) --height $(HEIGHT) $(BAKE_FLAGS)
+EYE_P   := --spp $(SPP) --direct $(DIRECT) --radius $(RADIUS) --seed $(SEED)
+PHOT_P  := --passes $(PASSES) --photons $(PHOTONS) --seed $(SEED)
+GRID_P  := --max-bins $(MAX_BINS)
+ILL_P   := --alpha $(ALPHA) --gather $(GATHER) --max-bins $(MAX_BINS)
+SYN_P   := --exposure $(EXPOSURE)
+T       := --threads $(THREADS)
 
-$(DIR)/scene.h5: $(SCENE_FILE) $(BIN)/scene-bake $(call param_stamp,$(DIR)/bake.params,$(BAKE_FLAGS))
-	$(BIN)/scene-bake $(SCENE_FILE) -o $@ $(BAKE_FLAGS)
+.PHONY: render
+ifeq ($(shell test $(PASSES) -gt $(STAGED_MAX_PASSES) && echo driver),driver)
+render: $(DIR)/render.exr
+	@echo "render: $(DIR)/render.exr ($(PASSES) passes, render driver)"
+else
+render: $(DIR)/image.exr
+	@echo "render: $(DIR)/image.exr ($(PASSES) passes, staged)"
+endif
+
+$(DIR)/scene.h5: $(SCENE_FILE) $(BIN)/scene-bake $(call param_stamp,$(DIR)/bake.params,$(BAKE_P))
+	$(BIN)/scene-bake $(SCENE_FILE) -o $@ $(BAKE_P)
+
+$(DIR)/hitpoints.h5: $(DIR)/scene.h5 $(BIN)/trace-hitpoints $(call param_stamp,$(DIR)/eye.params,$(EYE_P))
+	$(BIN)/trace-hitpoints --scene $< -o $@ $(EYE_P) $(T)
+
+$(DIR)/photons.h5: $(DIR)/scene.h5 $(BIN)/trace-photons $(call param_stamp,$(DIR)/photons.params,$(PHOT_P))
+	$(BIN)/trace-photons --scene $< -o $@ $(PHOT_P) $(T)
+
+ifeq ($(GATHER),grid)
+$(DIR)/grid.h5: $(DIR)/photons.h5 $(DIR)/hitpoints.h5 $(BIN)/build-grid $(call param_stamp,$(DIR)/grid.params,$(GRID_P))
+	$(BIN)/build-grid --scene $(DIR)/scene.h5 --photons $(DIR)/photons.h5 --hitpoints $(DIR)/hitpoints.h5 -o $@ $(GRID_P)
+
+$(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/grid.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
+	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --grid $(DIR)/grid.h5 -o $@ $(ILL_P) $(T)
+else
+$(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/photons.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
+	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --photons $(DIR)/photons.h5 -o $@ $(ILL_P) $(T)
+endif
+
+$(DIR)/image.exr: $(DIR)/state.h5 $(BIN)/synthesize $(call param_stamp,$(DIR)/synthesize.params,$(SYN_P))
+	$(BIN)/synthesize --hitpoints $< -o $@ $(SYN_P)
+
+# The driver's parameters are all of the above in one stamp; its checkpoint makes reruns resume.
+DRIVER_P := $(EYE_P) --passes $(PASSES) --photons $(PHOTONS) $(ILL_P) $(SYN_P)
+$(DIR)/render.exr: $(DIR)/scene.h5 $(BIN)/render $(call param_stamp,$(DIR)/render.params,$(DRIVER_P))
+	$(BIN)/render --scene $< -o $@ $(DRIVER_P) $(T) \
+	  --checkpoint $(DIR)/render-checkpoint.h5 --checkpoint-every $(CHECKPOINT_EVERY) --resume

@@ -100,7 +100,8 @@ TEST_CASE("scene-bake: bad options give one line and exit code 2", "[scene_bake_
   const std::string out = " -o '" + (dir / "scene.h5").string() + "'";
   for (const std::string& args :
        {in + out + " --fov 200", in + out + " --eye 1,2", in + out + " --width -3",
-        in + out + " --no-such-option", in, std::string("-o x.h5"), in + out + " --insert-box 0,0,0,1,1,1",
+        in + out + " --no-such-option", in, std::string("-o x.h5"),
+        in + out + " --insert-box 0,0,0,1,1,1",
         in + out + " --insert '" + src("tests/data/tetra.ply") + "' --insert-material nope",
         in + out + " --kd-max-leaf many", in + out + " --kd-max-leaf 0",
         in + out + " --kd-ct -1", in + out + " --kd-max-depth 999", in + out + " --threads -2"}) {

@@ -88,7 +88,8 @@ TEST_CASE("OBJ/MTL materials map to the right kind and values", "[scene_import]"
   REQUIRE(s.triangles.size() == 8);
   // Each object uses the material of the same name; unused assimp defaults are not in the table.
   REQUIRE(s.materials.size() == 8);
-  for (auto& t : s.triangles) CHECK(s.mesh_names[size_t(t.mesh)] == s.material_names[size_t(t.material)]);
+  for (auto& t : s.triangles)
+    CHECK(s.mesh_names[size_t(t.mesh)] == s.material_names[size_t(t.material)]);
 
   const pf_material& white = material(s, "white");
   CHECK(white.type == PF_MAT_DIFFUSE);
@@ -308,7 +309,8 @@ TEST_CASE("glTF is read, camera placed by its node once", "[scene_import]") {
   CHECK(s.camera.width == 512);
   CHECK(s.camera.height == 341);  // aspectRatio 1.5
   // The emitter faces down (CCW seen from below).
-  for (size_t i : triangles_of(s, "lamp")) check_vec(geometric_normal(s.triangles[i]), Vec3(0, -1, 0));
+  for (size_t i : triangles_of(s, "lamp"))
+    check_vec(geometric_normal(s.triangles[i]), Vec3(0, -1, 0));
 }
 
 TEST_CASE("inserted meshes fit their box and take the given material", "[scene_import]") {
@@ -391,7 +393,8 @@ TEST_CASE("zero-area triangles are dropped and counted", "[scene_import]") {
   CHECK(s.hh.size() == 2);
 }
 
-TEST_CASE("bundled scenes bake with lights, materials and a camera on the scene", "[scene_import]") {
+TEST_CASE("bundled scenes bake with lights, materials and a camera on the scene",
+          "[scene_import]") {
   struct Expect {
     const char* file;
     std::vector<int> kinds;

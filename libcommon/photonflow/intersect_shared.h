@@ -31,7 +31,7 @@
  * The planes of eq. 4.3 are rounded once per triangle, so two triangles sharing an edge do not
  * agree bit for bit on which side of the edge a point lies; without slack a ray through the edge
  * can slip between them. Widening every triangle by this fraction closes those cracks. */
-#define PF_HH_EDGE_EPS 1e-5f
+#define PF_HH_EDGE_EPS 1e-4f
 
 /* Closest (or any) hit of a ray: t in units of |d|, triangle index (−1 = none), barycentrics. */
 typedef struct {
@@ -46,31 +46,31 @@ typedef struct {
  *
  * The sign tests of eq. 4.5–4.7 (sign(t') = sign(det·tmax − t'), sign(u') = sign(det − u'),
  * sign(v') = sign(det − u' − v')) are evaluated after multiplying every quantity by sign(det), which
- * turns each into one comparison against |det| = |D·N| and is free of signed-zero surprises. */
+ * turns each into one comparison against |det| = |D·N| and is free of signed-zero surprises. All
+ * of them are combined without branching: in a leaf most triangles are missed, and a mispredicted
+ * branch costs more than the arithmetic it would skip. */
 PF_INLINE int pf_hh_intersect(PF_GLOBAL const pf_hh_triangle* tri, const float* o, const float* d,
                               float tmin, float tmax, float* t_out, float* u_out, float* v_out) {
   /* eq. 4.3: det = D·N; eq. 4.4: t' = −(d + O·N), so that t = t'/det. */
   const float det = d[0] * tri->n[0] + d[1] * tri->n[1] + d[2] * tri->n[2];
-  if (det == 0.0f) return 0; /* ray parallel to the plane */
   const float tp = -(tri->n[3] + o[0] * tri->n[0] + o[1] * tri->n[1] + o[2] * tri->n[2]);
-  const float sgn = det > 0.0f ? 1.0f : -1.0f;
+  const float sgn = det < 0.0f ? -1.0f : 1.0f;
   const float adet = det * sgn;
   const float st = tp * sgn; /* t'·sign(det) = t·|det| */
-  /* eq. 4.5 (t in [0, tmax]) */
-  if (st < 0.0f || st > adet * tmax) return 0;
   /* eq. 4.5: P' = det·O + t'·D is the hit point scaled by det. */
   const float px = det * o[0] + tp * d[0];
   const float py = det * o[1] + tp * d[1];
   const float pz = det * o[2] + tp * d[2];
-  /* eq. 4.6: u' = P'·N1 + det·d1 = det·u; sign test u in [0, 1]. */
+  /* eq. 4.6: u' = P'·N1 + det·d1 = det·u; eq. 4.7: v' = P'·N2 + det·d2 = det·v. */
   const float su = (px * tri->n1[0] + py * tri->n1[1] + pz * tri->n1[2] + det * tri->n1[3]) * sgn;
-  const float slack = PF_HH_EDGE_EPS * adet;
-  if (su < -slack || su > adet + slack) return 0;
-  /* eq. 4.7: v' = P'·N2 + det·d2 = det·v; sign test v >= 0 and u + v <= 1. */
   const float sv = (px * tri->n2[0] + py * tri->n2[1] + pz * tri->n2[2] + det * tri->n2[3]) * sgn;
-  if (sv < -slack || su + sv > adet + slack) return 0;
-  const float inv_det = 1.0f / det;
-  const float t = tp * inv_det;
+  const float slack = PF_HH_EDGE_EPS * adet;
+  /* t in [0, tmax]; u >= 0, v >= 0, u + v <= 1 (u <= 1 follows); det == 0 (ray parallel to the
+   * plane) fails st <= adet·tmax or the barycentric tests, which then read 0 <= ±0. */
+  const int inside = (st >= 0.0f) & (st <= adet * tmax) & (su >= -slack) & (sv >= -slack) &
+                     (su + sv <= adet + slack) & (adet > 0.0f);
+  if (!inside) return 0;
+  const float t = tp / det;
   /* The exact contract (tmin, tmax] on the divided t, whatever the rounding above. */
   if (!(t > tmin && t <= tmax)) return 0;
   *t_out = t;
@@ -79,13 +79,12 @@ PF_INLINE int pf_hh_intersect(PF_GLOBAL const pf_hh_triangle* tri, const float* 
   return 1;
 }
 
-/* Slab test of a ray against the box [lo, hi] (Kay & Kajiya), clipped to [tmin, tmax]; the box is
- * a node's (global memory on a device). inv_d = 1/d per axis (±inf for a zero component, which is
- * handled without NaNs). Returns 1 and writes the parametric entry and exit when the clipped
- * segment is not empty. */
-PF_INLINE int pf_ray_box(PF_GLOBAL const float* lo, PF_GLOBAL const float* hi, const float* o,
-                         const float* d, const float* inv_d, float tmin, float tmax,
-                         float* t_enter, float* t_leave) {
+/* Slab test of a ray against the box [lo, hi] (Kay & Kajiya), clipped to [tmin, tmax].
+ * inv_d = 1/d per axis (±inf for a zero component, which is handled without NaNs).
+ * Returns 1 and writes the parametric entry and exit when the clipped segment is not empty. */
+PF_INLINE int pf_ray_box(const float* lo, const float* hi, const float* o, const float* d,
+                         const float* inv_d, float tmin, float tmax, float* t_enter,
+                         float* t_leave) {
   float t0 = tmin;
   float t1 = tmax;
   for (int k = 0; k < 3; ++k) {
@@ -108,6 +107,20 @@ PF_INLINE int pf_ray_box(PF_GLOBAL const float* lo, PF_GLOBAL const float* hi, c
   return t0 <= t1;
 }
 
+/* Where a ray enters and leaves the kd-tree's root box, clipped to [tmin, tmax]. The box is
+ * widened by PF_HH_EDGE_EPS of its largest extent: the triangle test accepts points up to that
+ * fraction of a triangle's size outside it, and those points must be reachable too. */
+PF_INLINE int pf_kd_enter_root(PF_GLOBAL const pf_kd_node* root, const float* o, const float* d,
+                               const float* inv_d, float tmin, float tmax, float* t_enter,
+                               float* t_leave) {
+  float ext = 0.0f;
+  for (int k = 0; k < 3; ++k) ext = root->hi[k] - root->lo[k] > ext ? root->hi[k] - root->lo[k] : ext;
+  const float margin = PF_HH_EDGE_EPS * ext;
+  const float lo[3] = {root->lo[0] - margin, root->lo[1] - margin, root->lo[2] - margin};
+  const float hi[3] = {root->hi[0] + margin, root->hi[1] + margin, root->hi[2] + margin};
+  return pf_ray_box(lo, hi, o, d, inv_d, tmin, tmax, t_enter, t_leave);
+}
+
 /* Tests the triangles of one kd leaf, keeping the closest hit in `hit` (hit->t is the current
  * tmax). Equal t are resolved towards the lower triangle index so the result does not depend on
  * the order in which leaves are visited. With any_hit, returns 1 at the first hit. */
@@ -115,19 +128,23 @@ PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
                                    PF_GLOBAL const pf_int* leaf_tris,
                                    PF_GLOBAL const pf_hh_triangle* hh, const float* o,
                                    const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
+  pf_ray_hit best = *hit; /* a private copy: stores through `hit` could alias the scene arrays */
   const pf_int end = leaf->first + leaf->count;
+  int found = 0;
   for (pf_int i = leaf->first; i < end; ++i) {
     const pf_int tri = leaf_tris[i];
     float t, u, v;
-    if (!pf_hh_intersect(&hh[tri], o, d, tmin, hit->t, &t, &u, &v)) continue;
-    if (t == hit->t && hit->tri >= 0 && tri > hit->tri) continue;
-    hit->t = t;
-    hit->tri = tri;
-    hit->u = u;
-    hit->v = v;
-    if (any_hit) return 1;
+    if (!pf_hh_intersect(&hh[tri], o, d, tmin, best.t, &t, &u, &v)) continue;
+    if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
+    best.t = t;
+    best.tri = tri;
+    best.u = u;
+    best.v = v;
+    found = 1;
+    if (any_hit) break;
   }
-  return 0;
+  if (found) *hit = best;
+  return found && any_hit;
 }
 
 /* Stackless kd-tree traversal with ropes (Popov et al. 2007; thesis ch. 4.3).
@@ -146,10 +163,16 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
                                    PF_GLOBAL const pf_hh_triangle* hh, const float* o,
                                    const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
   float inv_d[3];
-  for (int k = 0; k < 3; ++k) inv_d[k] = 1.0f / d[k];
-  float t_entry, t_root_exit;
+  int high[3]; /* per axis: 1 if the ray leaves nodes through their high face */
+  for (int k = 0; k < 3; ++k) {
+    inv_d[k] = 1.0f / d[k];
+    /* By the sign of 1/d, not of d: −0 gives −inf and the low face, so (face − o)·inv_d is +inf
+     * or NaN (never chosen) on an axis the ray does not move along. */
+    high[k] = inv_d[k] > 0.0f;
+  }
+  float t_entry, t_leave_root;
   if (node_count <= 0 ||
-      !pf_ray_box(nodes[0].lo, nodes[0].hi, o, d, inv_d, tmin, hit->t, &t_entry, &t_root_exit))
+      !pf_kd_enter_root(nodes, o, d, inv_d, tmin, hit->t, &t_entry, &t_leave_root))
     return 0;
   pf_int node = 0;
   for (pf_int step = 0; step < node_count; ++step) {
@@ -157,7 +180,7 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
     PF_GLOBAL const pf_kd_node* n = &nodes[node];
     while (n->axis != PF_KD_LEAF) {
       const int a = n->axis;
-      const int go_left = p[a] < n->split || (p[a] == n->split && d[a] < 0.0f);
+      const int go_left = (p[a] < n->split) | ((p[a] == n->split) & (d[a] < 0.0f));
       node = go_left ? n->left : n->right;
       n = &nodes[node];
     }
@@ -166,12 +189,10 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
     float t_exit = INFINITY;
     int face = -1;
     for (int k = 0; k < 3; ++k) {
-      if (d[k] == 0.0f) continue;
-      const int high = d[k] > 0.0f;
-      const float te = ((high ? n->hi[k] : n->lo[k]) - o[k]) * inv_d[k];
+      const float te = ((high[k] ? n->hi[k] : n->lo[k]) - o[k]) * inv_d[k];
       if (te < t_exit) {
         t_exit = te;
-        face = 2 * k + high;
+        face = 2 * k + high[k];
       }
     }
     if (face < 0 || hit->t <= t_exit) break; /* closest hit lies in this leaf, or tmax reached */

@@ -70,7 +70,8 @@ PF_INLINE int pf_ppm_in_radius(pf_float dist2, pf_float radius) {
  *   R̂ = R·sqrt(ratio)      (eq. 3.16)
  *   τ̂ = (τ_N + τ_M)·ratio  (eq. 3.18)
  * α ∈ (0, 1] is the fraction of new photons kept (0.7 is usual; α = 1 keeps R fixed). A pass that
- * found no photons (m = 0) leaves the hitpoint unchanged. */
+ * found no photons (m = 0) leaves the hitpoint unchanged. A device may differ from the host in the
+ * last bit here (FMA contraction, device sqrt); only the gather rule is bit-exact. */
 PF_INLINE void pf_ppm_update(PF_GLOBAL pf_hitpoint* hp, pf_int m, const pf_float tau_m[3],
                              pf_float alpha) {
   if (m <= 0) return;

@@ -40,6 +40,11 @@ struct Scene {
   void compute_scene_id();
 };
 
+// Derives everything a baked scene holds beyond triangles, materials, mesh/material names, point
+// lights and camera: Havel–Herout planes, bounds, area lights and their CDF, the kd-tree and the
+// scene id. scene-bake calls it after importing; tests call it on scenes built in memory.
+void finish_scene(Scene& scene, const KdBuildParams& kd = {});
+
 // Havel–Herout precomputation for one triangle (thesis eq. 4.3–4.7).
 pf_hh_triangle make_hh_triangle(const pf_triangle& t);
 

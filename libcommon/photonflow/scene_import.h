@@ -60,8 +60,8 @@ constexpr int kDefaultImageSize = 512;
 constexpr float kDefaultFovYDeg = 40.f;
 
 // Reads options.input (and the inserts), flattens the node graph into world-space triangles,
-// maps materials, collects lights, sets the camera, then computes hh, bounds, light CDF, kd-tree
-// and scene_id. Throws InputError (one line: file, problem, what to do) for unreadable or
+// maps materials, collects point lights, sets the camera, then derives hh, bounds, area lights and
+// their CDF, kd-tree and scene_id (finish_scene). Throws InputError (one line: file, problem, what to do) for unreadable or
 // unsupported files, no triangles, no light, non-finite coordinates, out-of-range indices and bad
 // options. Zero-area triangles are dropped and counted in `report`.
 Scene bake_scene(const BakeOptions& options, BakeReport& report);

@@ -273,29 +273,34 @@ class Builder {
         while (i < ev.size() && ev[i].pos == pos && ev_type(ev[i]) == kEnd) ++n_end, ++i;
         while (i < ev.size() && ev[i].pos == pos && ev_type(ev[i]) == kPlanar) ++n_planar, ++i;
         while (i < ev.size() && ev[i].pos == pos && ev_type(ev[i]) == kStart) ++n_start, ++i;
-        nr -= n_planar + n_end;
+        // References touching the plane from one side go to both children (see classify).
+        const size_t left = nl + n_start, right = nr - n_planar;
         if (pos > box.lo[k] && pos < box.hi[k]) {
-          const float cl = sah(box, k, pos, nl + n_planar, nr, inv_area);
-          const float cr = sah(box, k, pos, nl, nr + n_planar, inv_area);
+          const float cl = sah(box, k, pos, left + n_planar, right, inv_area);
+          const float cr = sah(box, k, pos, left, right + n_planar, inv_area);
           if (cl < best.cost) best = {k, pos, cl, kLeft};
           if (cr < best.cost) best = {k, pos, cr, kRight};
         }
+        nr -= n_planar + n_end;
         nl += n_start + n_planar;
       }
     }
     return best;
   }
 
-  // Side of split s for a reference with bounds b.
+  // Side of split s for a reference with bounds b. A reference that only touches the plane (a
+  // vertex or an edge on it) goes to both sides: splits sit at vertex coordinates, and a ray
+  // through such a vertex is accepted by the Havel–Herout test only thanks to PF_HH_EDGE_EPS, at
+  // a point that may lie a rounding error on either side of the plane.
   static Side classify(const Box& b, const Split& s) {
     const float lo = b.lo[s.axis], hi = b.hi[s.axis];
     if (lo == s.pos && hi == s.pos) return s.planar;
-    if (hi <= s.pos) return kLeft;
-    if (lo >= s.pos) return kRight;
+    if (hi < s.pos) return kLeft;
+    if (lo > s.pos) return kRight;
     return kBoth;
   }
 
-  // Bounds of reference r inside child box `child` (r straddles or lies in the split plane).
+  // Bounds of reference r inside child box `child` (r straddles, touches or lies in the plane).
   bool clip_ref(const Ref& r, const Split& s, const Box& child, Box& out) const {
     if (r.box.lo[s.axis] == r.box.hi[s.axis]) {  // lies in the plane: already inside both
       out = r.box;
@@ -330,9 +335,7 @@ class Builder {
   void build_exact_from_refs(Piece& out, const Box& box, std::vector<Ref>& refs, int depth) {
     EventNode node;
     node.refs.swap(refs);
-    for (int k = 0; k < 3; ++k) node.ev[k].reserve(2 * node.refs.size());
-    for (size_t i = 0; i < node.refs.size(); ++i) add_events(node.refs[i].box, uint32_t(i), node.ev);
-    for (auto& e : node.ev) std::sort(e.begin(), e.end());
+    add_all_events(node.refs, 0, node.ev);
     build_exact(out, box, node, depth);
   }
 
@@ -385,24 +388,49 @@ class Builder {
       if (clip_ref(r, s, rbox, c.box)) right.refs.push_back(c);
     }
     std::array<std::vector<Event>, 3> lnew, rnew;
-    for (size_t i = l_one; i < left.refs.size(); ++i) add_events(left.refs[i].box, uint32_t(i), lnew);
-    for (size_t i = r_one; i < right.refs.size(); ++i)
-      add_events(right.refs[i].box, uint32_t(i), rnew);
-    std::vector<Event> lold, rold;
+    add_all_events(left.refs, l_one, lnew);
+    add_all_events(right.refs, r_one, rnew);
     for (int k = 0; k < 3; ++k) {
-      lold.clear();
-      rold.clear();
+      // Events of one-sided references keep their order; count them first to size the lists.
+      size_t nl = 0, nr = 0;
+      for (const Event& e : node.ev[k]) {
+        const Side sd = side[ev_ref(e)];
+        nl += sd == kLeft;
+        nr += sd == kRight;
+      }
+      std::vector<Event>& lev = left.ev[k];
+      std::vector<Event>& rev = right.ev[k];
+      lev.resize(nl + lnew[k].size());
+      rev.resize(nr + rnew[k].size());
+      Event* lo = lev.data() + lnew[k].size();  // filtered events go behind room for the merge
+      Event* ro = rev.data() + rnew[k].size();
       for (const Event& e : node.ev[k]) {
         const uint32_t i = ev_ref(e);
-        if (side[i] == kLeft) lold.push_back({e.pos, remap[i] << 2 | ev_type(e)});
-        else if (side[i] == kRight) rold.push_back({e.pos, remap[i] << 2 | ev_type(e)});
+        const Event moved{e.pos, remap[i] << 2 | ev_type(e)};
+        if (side[i] == kLeft) *lo++ = moved;
+        else if (side[i] == kRight) *ro++ = moved;
       }
-      std::sort(lnew[k].begin(), lnew[k].end());
-      std::sort(rnew[k].begin(), rnew[k].end());
-      left.ev[k].resize(lold.size() + lnew[k].size());
-      right.ev[k].resize(rold.size() + rnew[k].size());
-      std::merge(lold.begin(), lold.end(), lnew[k].begin(), lnew[k].end(), left.ev[k].begin());
-      std::merge(rold.begin(), rold.end(), rnew[k].begin(), rnew[k].end(), right.ev[k].begin());
+      merge_in(lnew[k], lev);
+      merge_in(rnew[k], rev);
+    }
+  }
+
+  // Events of refs[first..] appended to per-axis lists, each list sorted.
+  static void add_all_events(const std::vector<Ref>& refs, size_t first,
+                             std::array<std::vector<Event>, 3>& ev) {
+    for (auto& e : ev) e.reserve(2 * (refs.size() - first));
+    for (size_t i = first; i < refs.size(); ++i) add_events(refs[i].box, uint32_t(i), ev);
+    for (auto& e : ev) std::sort(e.begin(), e.end());
+  }
+
+  // `dst` holds |fresh| unused slots followed by a sorted run; merges the sorted `fresh` in, front
+  // to back (the write position never overtakes the unread part of the run, and once `fresh` is
+  // used up the rest of the run is already in place).
+  static void merge_in(const std::vector<Event>& fresh, std::vector<Event>& dst) {
+    size_t w = 0, a = fresh.size(), b = 0;
+    while (b < fresh.size()) {
+      if (a < dst.size() && !(fresh[b] < dst[a])) dst[w++] = dst[a++];
+      else dst[w++] = fresh[b++];
     }
   }
 

@@ -36,8 +36,7 @@ bool traverse_stack(const Scene& scene, const float* o, const float* d, float tm
   if (kd.nodes.empty()) return false;
   const float inv_d[3] = {1.f / d[0], 1.f / d[1], 1.f / d[2]};
   float t0, t1;
-  if (!pf_ray_box(kd.nodes[0].lo, kd.nodes[0].hi, o, d, inv_d, tmin, hit.t, &t0, &t1))
-    return false;
+  if (!pf_kd_enter_root(kd.nodes.data(), o, d, inv_d, tmin, hit.t, &t0, &t1)) return false;
   struct Todo {
     int32_t node;
     float t0, t1;

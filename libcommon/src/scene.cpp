@@ -79,6 +79,14 @@ void Scene::compute_scene_id() {
   scene_id = h.hex();
 }
 
+void finish_scene(Scene& s, const KdBuildParams& kd) {
+  s.compute_hh();
+  s.compute_bounds();
+  s.compute_light_cdf();
+  s.kd = build_kdtree(s.triangles, kd);
+  s.compute_scene_id();
+}
+
 // ---- HDF5 compound types --------------------------------------------------------------------
 
 #define PF_F32(T, f, n) f32(#f, offsetof(T, f), n)

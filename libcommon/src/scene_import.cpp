@@ -16,8 +16,10 @@
 //
 // Material mapping (same table in docs/SCENES.md). Values are read through assimp's keys:
 //   Kd = AI_MATKEY_COLOR_DIFFUSE, Ks = AI_MATKEY_COLOR_SPECULAR, Ke = AI_MATKEY_COLOR_EMISSIVE,
-//   Kr = AI_MATKEY_COLOR_REFLECTIVE × AI_MATKEY_REFLECTIVITY (COLLADA <reflective>, <reflectivity>),
-//   d  = AI_MATKEY_OPACITY (OBJ `d`, COLLADA <transparent> × <transparency>), Ni = AI_MATKEY_REFRACTI,
+//   Kr = AI_MATKEY_COLOR_REFLECTIVE × AI_MATKEY_REFLECTIVITY (COLLADA <reflective>,
+//        <reflectivity>),
+//   d  = AI_MATKEY_OPACITY (OBJ `d`, COLLADA <transparent> × <transparency>),
+//   Ni = AI_MATKEY_REFRACTI,
 //   illum = AI_MATKEY_OBJ_ILLUM ("$mat.illum", OBJ only: assimp 5.2.5 folds illum 0..2 into
 //           AI_MATKEY_SHADING_MODEL and keeps the original number under this key; checked by
 //           experiment with illum 1, 3, 5 and 7).
@@ -53,7 +55,6 @@
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
-#include <memory>
 #include <sstream>
 
 #include "photonflow/error.h"
@@ -562,10 +563,7 @@ Scene bake_scene(const BakeOptions& options, BakeReport& report) {
   scene.camera = resolve_camera(options, file_camera, scene.bounds, file);
   report.import_seconds = import_clock.seconds();
 
-  scene.compute_hh();
-  scene.compute_light_cdf();
-  scene.kd = build_kdtree(scene.triangles, options.kd);
-  scene.compute_scene_id();
+  finish_scene(scene, options.kd);
   return scene;
 }
 

@@ -123,7 +123,8 @@ int run(int argc, char** argv) {
   o.input = args["input"].as<std::string>();
   const std::string out = args["output"].as<std::string>();
   if (args.count("eye")) o.eye = pf::parse_vec3("eye", args["eye"].as<std::string>());
-  if (args.count("look-at")) o.look_at = pf::parse_vec3("look-at", args["look-at"].as<std::string>());
+  if (args.count("look-at"))
+    o.look_at = pf::parse_vec3("look-at", args["look-at"].as<std::string>());
   if (args.count("up")) o.up = pf::parse_vec3("up", args["up"].as<std::string>());
   if (args.count("fov")) o.fov_y_deg = args["fov"].as<float>();
   o.width = args["width"].as<int>();

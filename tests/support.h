@@ -1,0 +1,125 @@
+// support.h — helpers shared by the tests: temporary folders, running tools, scenes in memory.
+#pragma once
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "photonflow/procedural.h"
+#include "photonflow/scene.h"
+
+namespace pf::test {
+
+// A fresh temporary folder, removed at the end of the scope.
+struct TempDir {
+  std::filesystem::path dir;
+  explicit TempDir(const std::string& tag) {
+    static int counter = 0;
+    dir = std::filesystem::temp_directory_path() /
+          ("pf-" + tag + "-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+  }
+  ~TempDir() { std::filesystem::remove_all(dir); }
+  std::string operator/(const std::string& name) const { return (dir / name).string(); }
+  size_t file_count() const {
+    size_t n = 0;
+    for (auto& e : std::filesystem::directory_iterator(dir)) n += e.is_regular_file();
+    return n;
+  }
+};
+
+// Folder of the built tools (ctest sets PF_BIN; else the build tree's bin/).
+inline std::string bin_dir() {
+  const char* b = std::getenv("PF_BIN");
+  return b ? b : std::string(PF_BINARY_DIR) + "/bin";
+}
+
+struct ToolRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+// Runs `tool args` from bin_dir(), capturing stdout and stderr.
+inline ToolRun run_tool(const std::string& tool, const std::string& args, const TempDir& tmp) {
+  std::string out = tmp / ".stdout", err = tmp / ".stderr";
+  std::string cmd = bin_dir() + "/" + tool + " " + args + " >" + out + " 2>" + err;
+  int status = std::system(cmd.c_str());
+  ToolRun r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  auto slurp = [](const std::string& p) {
+    std::ifstream f(p);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+  };
+  r.out = slurp(out);
+  r.err = slurp(err);
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
+  return r;
+}
+
+// Reverses a triangle's winding (and its normals): an outward mesh becomes inward.
+inline void flip(pf_triangle& t) {
+  for (int k = 0; k < 3; ++k) {
+    std::swap(t.v1[k], t.v2[k]);
+    std::swap(t.n1[k], t.n2[k]);
+    t.n0[k] = -t.n0[k];
+    t.n1[k] = -t.n1[k];
+    t.n2[k] = -t.n2[k];
+  }
+}
+
+// White furnace: the inside of a unit sphere whose walls all emit `le` and reflect diffusely with
+// albedo `rho`; the camera sits at the centre. Every radiance inside is le / (1 − rho).
+inline Scene furnace_scene(float rho, float le, int size, size_t triangles = 2000) {
+  Scene s;
+  s.triangles = make_sphere(Vec3(0, 0, 0), 1.f, triangles, {0, 0});
+  for (auto& t : s.triangles) flip(t);
+  s.mesh_names = {"sphere"};
+  pf_material m{};
+  m.type = PF_MAT_EMITTER;
+  m.ior = 1.f;
+  for (int c = 0; c < 3; ++c) {
+    m.color[c] = rho;
+    m.emission[c] = le;
+  }
+  s.materials = {m};
+  s.material_names = {"furnace"};
+  s.camera = pf_camera{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 60.f, size, size};
+  finish_scene(s);
+  return s;
+}
+
+// The unit Cornell-like room of procedural.h with a chosen material for the sphere, lit by a
+// small downward-facing ceiling quad. Meshes: 0 walls, 1 box, 2 sphere, 3 light.
+inline Scene room_scene(int sphere_material_type, int width, int height) {
+  Scene s;
+  s.triangles = make_cornell_room(400);
+  auto light = make_box(Vec3(0.4f, 0.98f, 0.4f), Vec3(0.6f, 0.99f, 0.6f), false, {3, 3});
+  s.triangles.insert(s.triangles.end(), light.begin(), light.end());
+  s.mesh_names = {"walls", "box", "sphere", "light"};
+  auto mat = [](int type, float r, float g, float b, float e) {
+    pf_material m{};
+    m.type = type;
+    m.ior = type == PF_MAT_GLASS ? 1.5f : 1.f;
+    m.color[0] = r; m.color[1] = g; m.color[2] = b;
+    for (int c = 0; c < 3; ++c) m.emission[c] = e;
+    return m;
+  };
+  s.materials = {mat(PF_MAT_DIFFUSE, 0.7f, 0.6f, 0.5f, 0), mat(PF_MAT_DIFFUSE, 0.5f, 0.5f, 0.8f, 0),
+                 mat(sphere_material_type, 0.9f, 0.9f, 0.9f, 0),
+                 mat(PF_MAT_EMITTER, 0.f, 0.f, 0.f, 20.f)};
+  s.material_names = {"walls", "box", "sphere", "light"};
+  // Inside the closed room, near the front wall, looking at the back wall.
+  s.camera = pf_camera{{0.5f, 0.5f, 0.97f}, {0.5f, 0.45f, 0.f}, {0, 1, 0}, 70.f, width, height};
+  finish_scene(s);
+  return s;
+}
+
+}  // namespace pf::test

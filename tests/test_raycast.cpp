@@ -1,0 +1,266 @@
+// test_raycast.cpp — closest/any hit of the rope and stack kd traversals against brute force,
+// hit interval, barycentrics, and watertightness on closed meshes.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+
+#include "photonflow/procedural.h"
+#include "photonflow/raycast.h"
+
+namespace {
+
+using pf::Vec3;
+
+pf::Scene make_scene(std::vector<pf_triangle> tris) {
+  pf::Scene s;
+  s.triangles = std::move(tris);
+  s.compute_hh();
+  s.compute_bounds();
+  s.kd = pf::build_kdtree(s.triangles, {});
+  return s;
+}
+
+// The three scenes of the issue: Cornell-like room, random soup, ≥ 100k-triangle blob in a room.
+const pf::Scene& room() {
+  static const pf::Scene s = make_scene(pf::make_cornell_room(400));
+  return s;
+}
+const pf::Scene& soup() {
+  static const pf::Scene s = [] {
+    pf::Bounds box;
+    box.extend({0, 0, 0});
+    box.extend({1, 1, 1});
+    return make_scene(pf::make_triangle_soup(box, 1000, 0.1f, 5));
+  }();
+  return s;
+}
+const pf::Scene& blob() {
+  static const pf::Scene s = [] {
+    auto tris = pf::make_box({-2, -2, -2}, {2, 2, 2}, true, {0, 0});
+    const auto b = pf::make_blob({0, 0, 0}, 1.f, 100000, 0.3f, 3, {1, 1});
+    tris.insert(tris.end(), b.begin(), b.end());
+    return make_scene(std::move(tris));
+  }();
+  return s;
+}
+
+Vec3 random_direction(std::mt19937& rng) {
+  std::uniform_real_distribution<float> uni(-1.f, 1.f);
+  for (;;) {
+    const Vec3 d(uni(rng), uni(rng), uni(rng));
+    const float l2 = pf::dot(d, d);
+    if (l2 > 1e-4f && l2 <= 1.f) return d / std::sqrt(l2);
+  }
+}
+
+// Origins uniform in the scene box (slightly enlarged, so some start outside), uniform directions;
+// every 16th ray is axis-parallel (zero direction components), every 16th starts on a kd split
+// plane; a third have a finite tmax.
+std::vector<pf::Ray> random_rays(const pf::Scene& s, size_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> uni(0.f, 1.f);
+  const Vec3 lo = s.bounds.lo - s.bounds.extent() * 0.05f;
+  const Vec3 e = s.bounds.extent() * 1.1f;
+  std::vector<pf::Ray> rays(n);
+  for (size_t i = 0; i < n; ++i) {
+    pf::Ray& r = rays[i];
+    r.o = lo + Vec3(uni(rng) * e.x, uni(rng) * e.y, uni(rng) * e.z);
+    r.d = random_direction(rng) * (0.5f + uni(rng));
+    if (i % 16 == 3) {  // axis-parallel: one or two zero components
+      const int k = int(rng() % 3);
+      r.d[k] = 0.f;
+      if (rng() % 2) r.d[(k + 1) % 3] = 0.f;
+    }
+    if (i % 16 == 7) {  // origin on the split plane of a random inner node
+      const pf_kd_node& n = s.kd.nodes[rng() % s.kd.nodes.size()];
+      if (n.axis != PF_KD_LEAF) r.o[n.axis] = n.split;
+    }
+    if (i % 3 == 0) r.tmax = uni(rng) * 2.f;
+  }
+  return rays;
+}
+
+// Closest hits equal up to ties: both miss, or both hit at t within 1e-5 relative, by the same
+// triangle or by another one that the ray also hits at that t.
+bool same_hit(const pf::Scene& s, const pf::Ray& ray, const pf::Hit& a, const pf::Hit& b) {
+  if (a.hit() != b.hit()) return false;
+  if (!a.hit()) return true;
+  if (std::fabs(a.t - b.t) > 1e-5f * std::fmax(1.f, std::fabs(a.t))) return false;
+  if (a.tri == b.tri) return true;
+  // A tie: the ray must hit b's triangle at (nearly) a's t as well.
+  pf::Scene one;
+  one.hh = {s.hh[size_t(b.tri)]};
+  pf::Hit h;
+  pf::Ray r = ray;
+  r.tmax = INFINITY;
+  return pf::intersect_closest(one, r, h, pf::Traversal::Brute) &&
+         std::fabs(h.t - a.t) <= 1e-5f * std::fmax(1.f, std::fabs(a.t));
+}
+
+size_t count_mismatches(const pf::Scene& s, const std::vector<pf::Ray>& rays,
+                        const std::vector<pf::Hit>& a, const std::vector<pf::Hit>& b) {
+  size_t bad = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (same_hit(s, rays[i], a[i], b[i])) continue;
+    if (bad++ < 5)
+      WARN("ray " << i << ": tri " << a[i].tri << " t " << a[i].t << " vs tri " << b[i].tri
+                  << " t " << b[i].t);
+  }
+  return bad;
+}
+
+void check_against_brute(const pf::Scene& s, size_t n_rays, uint32_t seed) {
+  const auto rays = random_rays(s, n_rays, seed);
+  std::vector<pf::Hit> brute, ropes, stack;
+  pf::intersect_closest_batch(s, rays, brute, pf::Traversal::Brute);
+  pf::intersect_closest_batch(s, rays, ropes, pf::Traversal::Ropes);
+  pf::intersect_closest_batch(s, rays, stack, pf::Traversal::Stack);
+  size_t hits = 0;
+  for (const pf::Hit& h : brute) hits += h.hit() ? 1 : 0;
+  INFO(s.triangles.size() << " triangles, " << n_rays << " rays, " << hits << " hits");
+  CHECK(hits > n_rays / 4);
+  CHECK(count_mismatches(s, rays, brute, ropes) == 0);
+  CHECK(count_mismatches(s, rays, brute, stack) == 0);
+  CHECK(count_mismatches(s, rays, ropes, stack) == 0);
+}
+
+}  // namespace
+
+TEST_CASE("kd traversals equal brute force on the Cornell room", "[raycast]") {
+  check_against_brute(room(), 100000, 1);
+}
+
+TEST_CASE("kd traversals equal brute force on a random soup", "[raycast]") {
+  check_against_brute(soup(), 100000, 2);
+}
+
+TEST_CASE("kd traversals equal brute force on a 100k-triangle blob", "[raycast]") {
+  REQUIRE(blob().triangles.size() >= 100000);
+  check_against_brute(blob(), 2000, 3);
+}
+
+TEST_CASE("ropes equal the stack traversal exactly on many rays", "[raycast]") {
+  // Same triangles, same test, same tie rule: the two kd traversals agree bit for bit.
+  for (const pf::Scene* s : {&room(), &blob()}) {
+    const auto rays = random_rays(*s, 100000, 4);
+    std::vector<pf::Hit> ropes, stack;
+    pf::intersect_closest_batch(*s, rays, ropes, pf::Traversal::Ropes);
+    pf::intersect_closest_batch(*s, rays, stack, pf::Traversal::Stack);
+    CHECK(count_mismatches(*s, rays, ropes, stack) == 0);
+  }
+}
+
+TEST_CASE("any hit agrees with closest hit", "[raycast]") {
+  for (const pf::Scene* s : {&room(), &soup()}) {
+    const auto rays = random_rays(*s, 20000, 5);
+    for (pf::Traversal trav : {pf::Traversal::Ropes, pf::Traversal::Stack, pf::Traversal::Brute}) {
+      std::vector<pf::Hit> closest;
+      std::vector<uint8_t> occluded;
+      pf::intersect_closest_batch(*s, rays, closest, trav);
+      pf::intersect_any_batch(*s, rays, occluded, trav);
+      size_t bad = 0;
+      for (size_t i = 0; i < rays.size(); ++i)
+        bad += (occluded[i] != 0) != closest[i].hit() ? 1 : 0;
+      INFO(pf::traversal_name(trav));
+      CHECK(bad == 0);
+    }
+  }
+}
+
+TEST_CASE("batches do not depend on the thread count", "[raycast]") {
+  const auto rays = random_rays(room(), 20000, 6);
+  std::vector<pf::Hit> one, two;
+  pf::intersect_closest_batch(room(), rays, one, pf::Traversal::Ropes, 1);
+  pf::intersect_closest_batch(room(), rays, two, pf::Traversal::Ropes, 2);
+  size_t differ = 0;
+  for (size_t i = 0; i < rays.size(); ++i)
+    differ += (one[i].tri != two[i].tri || one[i].t != two[i].t) ? 1 : 0;
+  CHECK(differ == 0);
+}
+
+TEST_CASE("hits are accepted for t in (tmin, tmax] only", "[raycast]") {
+  // The floor of the room at y = 0, seen from y = 0.5 straight down: t = 0.5.
+  pf::Ray r;
+  r.o = {0.3f, 0.5f, 0.2f};
+  r.d = {0.f, -1.f, 0.f};
+  for (pf::Traversal trav : {pf::Traversal::Ropes, pf::Traversal::Stack, pf::Traversal::Brute}) {
+    INFO(pf::traversal_name(trav));
+    pf::Hit h;
+    REQUIRE(pf::intersect_closest(room(), r, h, trav));
+    CHECK(h.t == Approx(0.5f));
+    pf::Ray at = r;
+    at.tmax = h.t;  // tmax itself is included
+    CHECK(pf::intersect_closest(room(), at, h, trav));
+    CHECK(pf::intersect_any(room(), at, trav));
+    pf::Ray before = r;
+    before.tmax = std::nextafter(h.t, 0.f);
+    CHECK_FALSE(pf::intersect_closest(room(), before, h, trav));
+    CHECK_FALSE(pf::intersect_any(room(), before, trav));
+    pf::Ray after = r;
+    after.tmin = h.t;  // tmin itself is excluded
+    CHECK_FALSE(pf::intersect_closest(room(), after, h, trav));
+  }
+}
+
+TEST_CASE("barycentrics reconstruct the hit point", "[raycast]") {
+  const pf::Scene& s = room();
+  const auto rays = random_rays(s, 20000, 7);
+  std::vector<pf::Hit> hits;
+  pf::intersect_closest_batch(s, rays, hits, pf::Traversal::Ropes);
+  size_t bad = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const pf::Hit& h = hits[i];
+    if (!h.hit()) continue;
+    const pf_triangle& t = s.triangles[size_t(h.tri)];
+    const Vec3 p = Vec3(t.v0) * (1.f - h.u - h.v) + Vec3(t.v1) * h.u + Vec3(t.v2) * h.v;
+    const Vec3 q = rays[i].o + rays[i].d * h.t;
+    bad += pf::length(p - q) > 1e-4f ? 1 : 0;
+    bad += (h.u < -1e-4f || h.v < -1e-4f || h.u + h.v > 1.0001f) ? 1 : 0;
+  }
+  CHECK(bad == 0);
+}
+
+TEST_CASE("closed meshes are watertight from inside", "[raycast]") {
+  // Rays from inside a closed mesh must always hit it: through triangle interiors, exactly
+  // through shared vertices and edges, and starting exactly on a triangle.
+  const auto sphere = pf::make_sphere({0.1f, -0.2f, 0.3f}, 1.f, 20000);
+  const auto lumpy = pf::make_blob({0, 0, 0}, 1.f, 20000, 0.3f, 9);
+  for (const auto* tris : {&sphere, &lumpy}) {
+    const pf::Scene s = make_scene(*tris);
+    const Vec3 c = s.bounds.center();
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<float> uni(-0.3f, 0.3f);
+    std::vector<pf::Ray> rays;
+    for (int i = 0; i < 100000; ++i) {  // random rays from near the centre
+      pf::Ray r;
+      r.o = c + Vec3(uni(rng), uni(rng), uni(rng));
+      r.d = random_direction(rng);
+      rays.push_back(r);
+    }
+    for (const pf_triangle& t : *tris) {  // exactly at vertices and edge midpoints
+      for (const Vec3& target : {Vec3(t.v0), (Vec3(t.v0) + Vec3(t.v1)) * 0.5f}) {
+        pf::Ray r;
+        r.o = c;
+        r.d = target - c;
+        rays.push_back(r);
+      }
+    }
+    for (size_t i = 0; i < tris->size(); i += 7) {  // from a triangle's centroid, inwards
+      const pf_triangle& t = (*tris)[i];
+      const Vec3 a(t.v0), b(t.v1), e(t.v2);
+      pf::Ray r;
+      r.o = (a + b + e) * (1.f / 3.f);
+      r.d = random_direction(rng);
+      if (pf::dot(r.d, pf::cross(b - a, e - a)) > 0) r.d = -r.d;  // against the geometric normal
+      rays.push_back(r);
+    }
+    for (pf::Traversal trav : {pf::Traversal::Ropes, pf::Traversal::Stack}) {
+      std::vector<pf::Hit> hits;
+      pf::intersect_closest_batch(s, rays, hits, trav);
+      size_t missed = 0;
+      for (const pf::Hit& h : hits) missed += h.hit() ? 0 : 1;
+      INFO(pf::traversal_name(trav) << ", " << rays.size() << " rays");
+      CHECK(missed == 0);
+    }
+  }
+}
