@@ -208,9 +208,11 @@ class EmbreeScene {
 };
 #endif
 
+// Million rays per second: two decimals, or three significant digits below 1 (brute force).
 std::string mrays(double rays, double seconds) {
+  const double m = rays / seconds / 1e6;
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.2f", rays / seconds / 1e6);
+  std::snprintf(buf, sizeof buf, m < 1.0 ? "%.3g" : "%.2f", m);
   return buf;
 }
 
@@ -272,10 +274,12 @@ int main(int argc, char** argv) {
     ("rays", "random rays per scene", cxxopts::value<size_t>()->default_value("200000"))
     ("image", "primary rays: image side in pixels (image² rays)",
      cxxopts::value<int>()->default_value("512"))
-    ("brute-rays", "rays of the brute-force subsample", cxxopts::value<size_t>()->default_value("2000"))
+    ("brute-rays", "rays of the brute-force subsample",
+     cxxopts::value<size_t>()->default_value("2000"))
     ("runs", "timed runs per measurement (the median is reported)",
      cxxopts::value<int>()->default_value("5"))
-    ("threads", "thread counts to measure", cxxopts::value<std::vector<int>>()->default_value("1,2"))
+    ("threads", "thread counts to measure",
+     cxxopts::value<std::vector<int>>()->default_value("1,2"))
     ("blob-triangles", "triangles of the blob scene (at least)",
      cxxopts::value<size_t>()->default_value("100000"))
     ("build-sizes", "blob triangle counts for the build-time table",

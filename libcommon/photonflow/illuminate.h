@@ -33,6 +33,9 @@ struct PpmOptions {
 // a grid (built here) or FLANN. Adds `emitted` to h.photons_emitted and counts the pass.
 void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
               uint64_t emitted, const PpmOptions& opt);
+// The grid parameters ppm_pass builds its grid with for `h`: opt.max_bins, and the initial
+// radius R0 as the smallest bin size (eq. 7.1).
+PhotonGridParams ppm_grid_params(const HitpointSet& h, const PpmOptions& opt);
 // The same iteration with a prebuilt grid (from build-grid).
 void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, uint64_t emitted,
                    const PpmOptions& opt);

@@ -1,7 +1,7 @@
 /*
- * intersect_shared.h — ray–triangle test, ray–box test and stackless kd-tree traversal with ropes,
- * written once for the C++ host and the OpenCL C 1.2 kernels (one source for CPU and GPU, in the
- * manner of pbrt-v4).
+ * intersect_shared.h — ray–triangle test, ray–box test and stackless kd-tree traversal with
+ * ropes, written once for the C++ host and the OpenCL C 1.2 kernels (one source for CPU and
+ * GPU, in the manner of pbrt-v4).
  *
  * Rules that keep this file valid in both languages:
  *   - plain C: scalars, float arrays and the structs of shared_types.h; no references, no
@@ -27,10 +27,12 @@
 #define PF_INLINE static inline
 #endif
 
-/* Tolerance of the barycentric sign tests, in barycentric units (fraction of the triangle's size).
- * The planes of eq. 4.3 are rounded once per triangle, so two triangles sharing an edge do not
- * agree bit for bit on which side of the edge a point lies; without slack a ray through the edge
- * can slip between them. Widening every triangle by this fraction closes those cracks. */
+/* Tolerance of the barycentric sign tests, in barycentric units (fraction of the triangle's
+ * size). The planes of eq. 4.3 are rounded once per triangle, and u = N1·P + d1 cancels digits of
+ * |N1|·|P| (large for thin triangles far from the origin), so two triangles sharing an edge or a
+ * vertex do not agree on which side of it a point lies; without slack a ray through the edge or
+ * vertex can slip between them. Widening every triangle by this fraction closes those cracks. The
+ * kd build (kdtree.h) and the root-box entry below are made consistent with the widening. */
 #define PF_HH_EDGE_EPS 1e-4f
 
 /* Closest (or any) hit of a ray: t in units of |d|, triangle index (−1 = none), barycentrics. */
@@ -41,14 +43,14 @@ typedef struct {
   pf_float v;
 } pf_ray_hit;
 
-/* Havel–Herout ray–triangle test (thesis eq. 4.3–4.7) against the precomputed planes of `tri`.
- * Returns 1 and writes t, u, v when the ray hits with t in (tmin, tmax], else 0.
+/* Havel–Herout ray–triangle test (thesis eq. 4.3–4.7) against the precomputed planes of
+ * `tri`. Returns 1 and writes t, u, v when the ray hits with t in (tmin, tmax], else 0.
  *
  * The sign tests of eq. 4.5–4.7 (sign(t') = sign(det·tmax − t'), sign(u') = sign(det − u'),
- * sign(v') = sign(det − u' − v')) are evaluated after multiplying every quantity by sign(det), which
- * turns each into one comparison against |det| = |D·N| and is free of signed-zero surprises. All
- * of them are combined without branching: in a leaf most triangles are missed, and a mispredicted
- * branch costs more than the arithmetic it would skip. */
+ * sign(v') = sign(det − u' − v')) are evaluated after multiplying every quantity by sign(det),
+ * which turns each into one comparison against |det| = |D·N| and is free of signed-zero
+ * surprises. All of them are combined without branching: in a leaf most triangles are
+ * missed, and a mispredicted branch costs more than the arithmetic it would skip. */
 PF_INLINE int pf_hh_intersect(PF_GLOBAL const pf_hh_triangle* tri, const float* o, const float* d,
                               float tmin, float tmax, float* t_out, float* u_out, float* v_out) {
   /* eq. 4.3: det = D·N; eq. 4.4: t' = −(d + O·N), so that t = t'/det. */
@@ -114,7 +116,10 @@ PF_INLINE int pf_kd_enter_root(PF_GLOBAL const pf_kd_node* root, const float* o,
                                const float* inv_d, float tmin, float tmax, float* t_enter,
                                float* t_leave) {
   float ext = 0.0f;
-  for (int k = 0; k < 3; ++k) ext = root->hi[k] - root->lo[k] > ext ? root->hi[k] - root->lo[k] : ext;
+  for (int k = 0; k < 3; ++k) {
+    const float e = root->hi[k] - root->lo[k];
+    ext = e > ext ? e : ext;
+  }
   const float margin = PF_HH_EDGE_EPS * ext;
   const float lo[3] = {root->lo[0] - margin, root->lo[1] - margin, root->lo[2] - margin};
   const float hi[3] = {root->hi[0] + margin, root->hi[1] + margin, root->hi[2] + margin};
@@ -149,8 +154,8 @@ PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
 
 /* Stackless kd-tree traversal with ropes (Popov et al. 2007; thesis ch. 4.3).
  *
- * `hit` must come in with hit->t = tmax and hit->tri = −1; on return it holds the closest hit with t
- * in (tmin, tmax] (or, with any_hit, the first one found). Returns 1 when there is a hit.
+ * `hit` must come in with hit->t = tmax and hit->tri = −1; on return it holds the closest hit
+ * with t in (tmin, tmax] (or, with any_hit, the first one found). Returns 1 when there is a hit.
  *
  * Loop: locate the leaf holding the entry point P = o + t_entry·d by descending from the current
  * node (points exactly on a split plane go to the side the ray moves into), test its triangles,
@@ -166,8 +171,8 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
   int high[3]; /* per axis: 1 if the ray leaves nodes through their high face */
   for (int k = 0; k < 3; ++k) {
     inv_d[k] = 1.0f / d[k];
-    /* By the sign of 1/d, not of d: −0 gives −inf and the low face, so (face − o)·inv_d is +inf
-     * or NaN (never chosen) on an axis the ray does not move along. */
+    /* By the sign of 1/d, not of d: −0 gives −inf and the low face, so (face − o)·inv_d is
+     * +inf or NaN (never chosen) on an axis the ray does not move along. */
     high[k] = inv_d[k] > 0.0f;
   }
   float t_entry, t_leave_root;

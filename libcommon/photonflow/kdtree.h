@@ -10,7 +10,10 @@
 // below kKdExactMaxTriangles the exact SAH over all triangle bounds is found by a sweep over events
 // kept sorted from parent to child (Wald & Havran 2006). Triangles that straddle a split are
 // clipped to each child's box as polygons ("split clipping"), so every reference's bounds are those
-// of the part of the triangle inside the node. Subtrees are built in parallel and spliced in a
+// of the part of the triangle inside the node. A triangle that only touches a split plane (with a
+// vertex or an edge) is kept on both sides: splits sit at vertex coordinates, and a ray through
+// such a vertex is caught by the widened triangle test (PF_HH_EDGE_EPS, intersect_shared.h) at a
+// point a rounding error away on either side. Subtrees are built in parallel and spliced in a
 // fixed order: the arrays are the same bytes for any thread count.
 #pragma once
 #include <cstdint>

@@ -72,6 +72,21 @@ struct PhotonGrid {
 PhotonGrid build_photon_grid(const std::vector<pf_photon>& photons, int mesh_count,
                              const PhotonGridParams& params);
 
+// A run of photons; a list of spans stands for their concatenation (photon index = position in
+// the concatenation), e.g. the per-chunk buffers of a photon pass.
+struct PhotonSpan {
+  const pf_photon* data;
+  size_t size;
+};
+
+// The same grid, built into `grid` with `threads` workers (0 = all cores), reusing the capacity
+// of grid's arrays: a stream of similar passes allocates nothing after the first. The result is
+// identical to build_photon_grid's for any thread count.
+void build_photon_grid_into(PhotonGrid& grid, const std::vector<pf_photon>& photons,
+                            int mesh_count, const PhotonGridParams& params, int threads = 0);
+void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t span_count,
+                            int mesh_count, const PhotonGridParams& params, int threads = 0);
+
 template <class F>
 void PhotonGrid::for_each_in_radius(int mesh, const float q[3], float radius, F&& f) const {
   if (mesh < 0 || mesh >= static_cast<int>(mesh_grid.size()) || !(radius >= 0.f)) return;

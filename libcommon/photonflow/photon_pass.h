@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "photonflow/photon_grid.h"
 #include "photonflow/scene.h"
 
 namespace pf {
@@ -36,5 +37,21 @@ struct PhotonPassResult {
 };
 
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt);
+
+// The photons of a pass as traced: one buffer per chunk of kChunk emitted photons (chunk c holds
+// the photons of indices [kChunk·c, kChunk·(c+1)), in order); their concatenation is
+// PhotonPassResult::photons. Buffers keep their capacity from pass to pass.
+struct PhotonBuffers {
+  static constexpr uint32_t kChunk = 1024;
+  std::vector<std::vector<pf_photon>> chunks;
+  size_t size() const;                                 // photons stored, all chunks
+  std::vector<PhotonSpan> spans() const;               // the chunks, for build_photon_grid_into
+  void concatenate(std::vector<pf_photon>& out) const; // out = all photons, in order
+};
+
+// trace_photons into reusable buffers (no allocation once they have grown); returns the number
+// of photons emitted.
+uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
+                            PhotonBuffers& out);
 
 }  // namespace pf

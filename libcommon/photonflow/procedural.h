@@ -49,8 +49,8 @@ std::vector<pf_triangle> make_triangle_soup(const Bounds& box, size_t count, flo
 std::vector<pf_triangle> make_box(const Vec3& lo, const Vec3& hi, bool inward, MeshIds ids = {});
 
 // Cornell-box-like room for tests and benchmarks: an inward-facing unit room [0, 1]³ (12
-// triangles, walls of meshes 0), an outward box standing on the floor (12 triangles, mesh 1) and a
-// UV sphere of at least `sphere_triangles` triangles (mesh 2). Material = mesh index.
+// triangles, mesh 0), an outward box standing on the floor (12 triangles, mesh 1) and a UV sphere
+// of at least `sphere_triangles` triangles (mesh 2). Material id = mesh id.
 std::vector<pf_triangle> make_cornell_room(size_t sphere_triangles);
 
 // Writes a Wavefront OBJ (v, vn and f v//vn lines; identical vertices shared) atomically:

@@ -10,6 +10,7 @@
 #include <functional>
 #include <string>
 
+#include "photonflow/cl_runtime.h"
 #include "photonflow/eye_pass.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/image.h"
@@ -26,6 +27,7 @@ struct RenderOptions {
   int passes = 16;                 // total photon passes of the run
   std::string checkpoint;          // hitpoint-state file ("" = none)
   int checkpoint_every = 10;       // passes between checkpoints
+  ClContext* device = nullptr;     // OpenCL backend (cl_backend.h; naive gather); nullptr = CPU
 };
 
 class ProgressiveRenderer {
@@ -49,6 +51,10 @@ class ProgressiveRenderer {
   RenderOptions opt_;
   HitpointSet state_;
   uint64_t photons_stored_ = 0;
+  // Per-pass work space, reused by every pass (the memory of a run does not grow with passes):
+  PhotonBuffers photon_chunks_;   // the pass's photons, per chunk as traced
+  PhotonGrid grid_;               // their grid (Gather::Grid), built straight from the chunks
+  std::vector<pf_photon> photons_;  // their concatenation (Gather::Flann)
 };
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the

@@ -96,14 +96,15 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
   res.direct.assign(size_t(W) * H * 3, 0.f);
   const float eps = ray_epsilon(scene);
 
-  // One slot per (pixel, sample); filled in parallel, compacted in order afterwards, so the
-  // result does not depend on the thread count.
-  std::vector<pf_hitpoint> slots(size_t(W) * H * spp);
-  std::vector<uint8_t> used(slots.size(), 0);
+  // Each image row collects its hitpoints in (pixel, sample) order; the rows are concatenated in
+  // order afterwards, so the result does not depend on the thread count.
+  std::vector<std::vector<pf_hitpoint>> rows(size_t(std::max(H, 0)));
   int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
 
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
   for (int y = 0; y < H; ++y) {
+    thread_local std::vector<pf_hitpoint> row_buf;  // this thread's current row, reused
+    row_buf.clear();
     for (int x = 0; x < W; ++x) {
       size_t pix = size_t(y) * W + x;
       Vec3 emitted, direct;
@@ -135,8 +136,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
             hp.pixel_y = y;
             hp.mesh = sh.mesh;
             hp.material = sh.material;
-            slots[index] = hp;
-            used[index] = 1;
+            row_buf.push_back(hp);
             if (opt.direct == DirectMode::ShadowRays)
               direct += T * direct_light(scene, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
                                          opt.shadow_samples, opt.seed, 0, index);
@@ -169,10 +169,17 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
       emitted.store(&res.emitted[pix * 3]);
       direct.store(&res.direct[pix * 3]);
     }
+    rows[size_t(y)].assign(row_buf.begin(), row_buf.end());
   }
-  res.hitpoints.reserve(slots.size());
-  for (size_t i = 0; i < slots.size(); ++i)
-    if (used[i]) res.hitpoints.push_back(slots[i]);
+  std::vector<size_t> offset(rows.size() + 1, 0);
+  for (size_t y = 0; y < rows.size(); ++y) offset[y + 1] = offset[y] + rows[y].size();
+  res.hitpoints.resize(offset.back());
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int y = 0; y < H; ++y) {
+    std::copy(rows[size_t(y)].begin(), rows[size_t(y)].end(),
+              res.hitpoints.begin() + long(offset[size_t(y)]));
+    std::vector<pf_hitpoint>().swap(rows[size_t(y)]);
+  }
   return res;
 }
 

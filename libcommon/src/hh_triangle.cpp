@@ -8,7 +8,9 @@ namespace {
 struct D3 {
   double x, y, z;
 };
-D3 sub(const float* a, const float* b) { return {double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]}; }
+D3 sub(const float* a, const float* b) {
+  return {double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]};
+}
 D3 cross(const D3& a, const D3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }

@@ -22,30 +22,6 @@ Vec3 brdf(const Scene& s, const pf_hitpoint& hp) {
   return Vec3(s.materials[size_t(hp.material)].color) * kInvPi;
 }
 
-// Applies eq. 3.14–3.18 to hitpoint i given the photons `gather(i, visit)` reports.
-template <class GatherFn>
-void ppm_update_all(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
-                    float alpha, int threads, GatherFn&& gather) {
-  const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
-#pragma omp parallel for schedule(dynamic, 256) num_threads(threads)
-  for (size_t i = 0; i < h.hitpoints.size(); ++i) {
-    pf_hitpoint& hp = h.hitpoints[i];
-    Vec3 fr = brdf(scene, hp);
-    int m = 0;
-    double tau[3] = {0, 0, 0};  // summed in a fixed order (photon index order): reproducible
-    gather(hp, [&](int32_t j) {
-      const pf_photon& p = photons[size_t(j)];
-      if (!photon_accepted(hp, p, skip_direct)) return;
-      ++m;
-      tau[0] += double(fr.x * p.flux[0]);
-      tau[1] += double(fr.y * p.flux[1]);
-      tau[2] += double(fr.z * p.flux[2]);
-    });
-    const float tau_m[3] = {float(tau[0]), float(tau[1]), float(tau[2])};
-    pf_ppm_update(&hp, m, tau_m, alpha);  // eq. 3.14, 3.16, 3.18
-  }
-}
-
 void finish_pass(HitpointSet& h, uint64_t emitted) {
   h.photons_emitted += emitted;
   h.passes += 1;
@@ -57,45 +33,171 @@ void check_alpha(float alpha) {
     throw input_error("", "alpha must be in (0, 1], got " + std::to_string(alpha));
 }
 
+// One gathered photon: its sort key (the photon's index in the pass's original order) and its
+// BRDF-weighted flux f_r·Φ_p, each channel one float product as eq. 3.17 sums it.
+struct Contribution {
+  int32_t key;
+  float c[3];
+};
+
+// Sums the contributions in key order (photon index order: the same order for every gather
+// method and thread count, so the sums are reproducible) and applies eq. 3.14–3.18.
+inline void apply_update(pf_hitpoint& hp, const Contribution* e, size_t m, float alpha) {
+  double tau[3] = {0, 0, 0};
+  for (size_t k = 0; k < m; ++k) {
+    tau[0] += double(e[k].c[0]);
+    tau[1] += double(e[k].c[1]);
+    tau[2] += double(e[k].c[2]);
+  }
+  const float tau_m[3] = {float(tau[0]), float(tau[1]), float(tau[2])};
+  pf_ppm_update(&hp, int(m), tau_m, alpha);  // eq. 3.14, 3.16, 3.18
+}
+
+inline Contribution contribution(int32_t key, const Vec3& fr, const pf_photon& p) {
+  return {key, {fr.x * p.flux[0], fr.y * p.flux[1], fr.z * p.flux[2]}};
+}
+
+// Sorts distinct keys ascending. The lists are short (tens of photons) and made of a few
+// ascending runs (one per grid bin), where insertion sort beats std::sort; long ones use the
+// latter.
+void sort_keys(uint64_t* k, size_t n) {
+  if (n > 64) {
+    std::sort(k, k + n);
+    return;
+  }
+  for (size_t i = 1; i < n; ++i) {
+    if (k[i - 1] < k[i]) continue;
+    const uint64_t x = k[i];
+    size_t j = i;
+    do {
+      k[j] = k[j - 1];
+      --j;
+    } while (j > 0 && k[j - 1] > x);
+    k[j] = x;
+  }
+}
+
 }  // namespace
 
 void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, uint64_t emitted,
                    const PpmOptions& opt) {
   check_alpha(opt.alpha);
-  // The grid's photons are sorted by bin; visiting them in sorted-index order would make the sum
-  // order differ from FLANN's. Gather indices first, sort them by original photon index, then sum.
-  ppm_update_all(scene, h, grid.photons, opt.alpha, thread_count(opt.threads),
-                 [&](const pf_hitpoint& hp, auto&& visit) {
-                   thread_local std::vector<int32_t> idx;
-                   idx.clear();
-                   grid.for_each_in_radius(hp.mesh, hp.position, hp.radius,
-                                           [&](int i) { idx.push_back(i); });
-                   std::sort(idx.begin(), idx.end(),
-                             [&](int32_t a, int32_t b) { return grid.order[a] < grid.order[b]; });
-                   for (int32_t i : idx) visit(i);
-                 });
+  const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
+  const float alpha = opt.alpha;
+  const int64_t count = int64_t(h.hitpoints.size());
+  const int mesh_count = int(grid.mesh_grid.size());
+  const pf_photon* photons = grid.photons.data();
+  const int32_t* order = grid.order.data();
+  const int32_t* cell_start = grid.cell_start.data();
+  // The grid holds the photons sorted by bin. Each hitpoint scans the bins of its sphere's box
+  // (the bins PhotonGrid::for_each_in_radius visits), keeps the photons that pass the gather rule
+  // (pf_ppm_in_radius and photon_accepted) without branching, orders them by original photon
+  // index (grid.order) and sums them in that order, exactly as the FLANN gather does.
+#pragma omp parallel num_threads(thread_count(opt.threads))
+  {
+    // Per-thread work space, kept from pass to pass.
+    thread_local std::vector<int32_t> cand;   // sorted-array indices of the accepted photons
+    thread_local std::vector<uint64_t> keys;  // (original index << 32) | sorted index: sum order
+    thread_local std::vector<Contribution> buf;
+#pragma omp for schedule(dynamic, 256)
+    for (int64_t hi = 0; hi < count; ++hi) {
+      pf_hitpoint& hp = h.hitpoints[size_t(hi)];
+      const int mesh = hp.mesh;
+      const float radius = hp.radius;
+      if (mesh < 0 || mesh >= mesh_count || !(radius >= 0.f)) continue;  // nothing to gather
+      const pf_mesh_grid& g = grid.mesh_grid[size_t(mesh)];
+      if (g.photon_count == 0) continue;
+      const float q[3] = {hp.position[0], hp.position[1], hp.position[2]};
+      const float nrm[3] = {hp.normal[0], hp.normal[1], hp.normal[2]};
+      // The bin box of PhotonGrid::for_each_in_radius (see there for the padding).
+      const float pad = radius * 1.0001f;
+      int lo[3], hi3[3];
+      const int n[3] = {g.nx, g.ny, g.nz};
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = grid_coord(q[a] - pad, g.lo[a], g.bin_size, n[a]);
+        hi3[a] = grid_coord(q[a] + pad, g.lo[a], g.bin_size, n[a]);
+      }
+      size_t m = 0;
+      for (int z = lo[2]; z <= hi3[2]; ++z) {
+        for (int y = lo[1]; y <= hi3[1]; ++y) {
+          const int row = g.first_bin + (y + z * g.ny) * g.nx;
+          const int begin = cell_start[row + lo[0]];
+          const int end = cell_start[row + hi3[0] + 1];  // bins lo..hi of a row are contiguous
+          if (cand.size() < m + size_t(end - begin)) cand.resize(2 * (m + size_t(end - begin)));
+          int32_t* out = cand.data();
+          for (int i = begin; i < end; ++i) {
+            const pf_photon& p = photons[i];
+            const bool inside =
+                pf_ppm_in_radius(pf_ppm_dist2(q[0], q[1], q[2], p.position[0], p.position[1],
+                                              p.position[2]),
+                                 radius) != 0;
+            // photon_accepted, evaluated without branches.
+            const bool facing = p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
+            const bool ok = inside & (p.mesh == mesh) &
+                            !(skip_direct & ((p.flags & PF_PHOTON_DIRECT) != 0)) & facing;
+            out[m] = i;
+            m += ok ? 1 : 0;
+          }
+        }
+      }
+      if (m == 0) continue;  // pf_ppm_update leaves the hitpoint unchanged
+      // Sum order: original photon index. The candidates come as one ascending run per bin.
+      if (keys.size() < m) keys.resize(2 * m);
+      uint64_t* k = keys.data();
+      for (size_t j = 0; j < m; ++j)
+        k[j] = (uint64_t(uint32_t(order[cand[j]])) << 32) | uint32_t(cand[j]);
+      sort_keys(k, m);
+      if (buf.size() < m) buf.resize(2 * m);
+      const Vec3 fr = brdf(scene, hp);
+      for (size_t j = 0; j < m; ++j) {
+        const int32_t i = int32_t(uint32_t(k[j]));
+        buf[j] = contribution(int32_t(k[j] >> 32), fr, photons[i]);
+      }
+      apply_update(hp, buf.data(), m, alpha);
+    }
+  }
   finish_pass(h, emitted);
+}
+
+PhotonGridParams ppm_grid_params(const HitpointSet& h, const PpmOptions& opt) {
+  PhotonGridParams gp;
+  gp.max_bins = opt.max_bins;
+  gp.default_radius = h.radius0 > 0.f ? h.radius0 : 1e-3f;
+  return gp;
 }
 
 void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
               uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
   if (opt.gather == Gather::Grid) {
-    PhotonGridParams gp;
-    gp.max_bins = opt.max_bins;
-    gp.default_radius = h.radius0 > 0.f ? h.radius0 : 1e-3f;
-    PhotonGrid grid = build_photon_grid(photons, int(scene.mesh_names.size()), gp);
+    const PhotonGridParams gp = ppm_grid_params(h, opt);
+    // The calling thread's grid, reused by its next pass (no reallocation in a stream of passes).
+    thread_local PhotonGrid grid;
+    build_photon_grid_into(grid, photons, int(scene.mesh_names.size()), gp, opt.threads);
     ppm_pass_grid(scene, h, grid, emitted, opt);
     return;
   }
+  const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
+  const float alpha = opt.alpha;
+  const int64_t count = int64_t(h.hitpoints.size());
   PhotonMap map(photons);
-  ppm_update_all(scene, h, photons, opt.alpha, thread_count(opt.threads),
-                 [&](const pf_hitpoint& hp, auto&& visit) {
-                   thread_local std::vector<int32_t> idx;
-                   map.gather_radius(hp.position, hp.radius, hp.mesh, idx);
-                   std::sort(idx.begin(), idx.end());
-                   for (int32_t i : idx) visit(i);
-                 });
+#pragma omp parallel num_threads(thread_count(opt.threads))
+  {
+    thread_local std::vector<int32_t> idx;  // per-thread work space, kept from pass to pass
+    thread_local std::vector<Contribution> buf;
+#pragma omp for schedule(dynamic, 256)
+    for (int64_t i = 0; i < count; ++i) {
+      pf_hitpoint& hp = h.hitpoints[size_t(i)];
+      const Vec3 fr = brdf(scene, hp);
+      map.gather_radius(hp.position, hp.radius, hp.mesh, idx);  // increasing photon index
+      buf.clear();
+      for (int32_t j : idx) {
+        const pf_photon& p = photons[size_t(j)];
+        if (photon_accepted(hp, p, skip_direct)) buf.push_back(contribution(j, fr, p));
+      }
+      apply_update(hp, buf.data(), buf.size(), alpha);
+    }
+  }
   finish_pass(h, emitted);
 }
 

@@ -302,8 +302,18 @@ class Builder {
 
   // Bounds of reference r inside child box `child` (r straddles, touches or lies in the plane).
   bool clip_ref(const Ref& r, const Split& s, const Box& child, Box& out) const {
-    if (r.box.lo[s.axis] == r.box.hi[s.axis]) {  // lies in the plane: already inside both
+    const float lo = r.box.lo[s.axis], hi = r.box.hi[s.axis];
+    if (lo == hi) {  // lies in the plane: already inside both
       out = r.box;
+      return true;
+    }
+    if (hi == s.pos || lo == s.pos) {
+      // Touches the plane from one side. Into the far child goes only what lies on the plane; its
+      // bounds are the reference's bounds squashed onto the plane (conservative, and cheap).
+      // The near child holds the whole reference.
+      out = r.box;
+      const bool far = (hi == s.pos) == (child.lo[s.axis] == s.pos);
+      if (far) out.lo[s.axis] = out.hi[s.axis] = s.pos;
       return true;
     }
     if (clip_triangle_bounds(tris_[size_t(r.tri)], child, out)) return true;

@@ -1,10 +1,25 @@
 // photon_grid.cpp — per-mesh uniform photon grids (thesis ch. 7.3, eq. 7.1), built with a stable
 // counting sort by (mesh, bin).
+//
+// The build is parallel and deterministic: the photons are cut into fixed blocks, each worker
+// takes a contiguous run of blocks (so the workers' ranges are in photon order), and
+//   1. bounds and counts per mesh are reduced from per-worker partials (min/max and integer sums
+//      are exact, so the reduction order does not matter),
+//   2. every worker computes its photons' keys and a histogram over all bins,
+//   3. one pass over the bins turns the histograms into per-worker write cursors (the start of a
+//      bin, plus the photons earlier workers put there),
+//   4. every worker scatters its photons in order.
+// A stable counting sort has exactly one result, so the arrays are the same bytes for any thread
+// count. All buffers live in the PhotonGrid (and a per-calling-thread scratch) and are reused by
+// the next build, so a steady stream of passes allocates nothing.
 #include "photonflow/photon_grid.h"
+
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -16,7 +31,7 @@ namespace pf {
 namespace {
 
 // Linear bin offset of p in grid g (eq. 7.1): x + y·nx + z·nx·ny.
-int bin_of(const pf_mesh_grid& g, const float* p) {
+inline int bin_of(const pf_mesh_grid& g, const float* p) {
   int x = grid_coord(p[0], g.lo[0], g.bin_size, g.nx);
   int y = grid_coord(p[1], g.lo[1], g.bin_size, g.ny);
   int z = grid_coord(p[2], g.lo[2], g.bin_size, g.nz);
@@ -29,6 +44,69 @@ int bins_along(float extent, float d, int max_bins) {
   return std::clamp(static_cast<int>(std::ceil(extent / d)), 1, max_bins);
 }
 
+// Photons per work block (a block never spans two input spans).
+constexpr size_t kBlock = 8192;
+// Below this many photons the build runs on the calling thread only.
+constexpr size_t kParallelMin = 32768;
+
+// Resizes a buffer whose contents are about to be overwritten. Growing past the capacity frees
+// the old array first (no copy, and the old and new arrays never coexist) and leaves a little
+// headroom, so a stream of passes of nearly equal size settles on one allocation.
+template <class T>
+void resize_for_overwrite(std::vector<T>& v, size_t n) {
+  if (n > v.capacity()) {
+    std::vector<T>().swap(v);
+    v.reserve(n + n / 16);
+  }
+  v.resize(n);
+}
+
+struct Block {
+  const pf_photon* data;
+  size_t size;
+  size_t base;  // photon index of data[0]
+};
+
+// Per-mesh bounds and count, reduced exactly like Bounds::extend with std::fmin / std::fmax:
+// on equal values (±0) the earlier photon's value is kept.
+struct MeshAcc {
+  float lo[3], hi[3];
+  int32_t count;
+};
+
+struct Scratch {
+  std::vector<Block> blocks;
+  std::vector<int32_t> key;                    // global bin of each photon
+  std::vector<std::vector<MeshAcc>> acc;       // per worker
+  std::vector<std::vector<int32_t>> hist;      // per worker: counts, then write cursors
+  std::vector<size_t> first_bad;               // per worker: first invalid photon index
+};
+
+Scratch& scratch() {
+  thread_local Scratch s;
+  return s;
+}
+
+void reset_acc(std::vector<MeshAcc>& acc, int mesh_count) {
+  acc.resize(size_t(mesh_count));
+  for (MeshAcc& a : acc) {
+    for (int k = 0; k < 3; ++k) {
+      a.lo[k] = INFINITY;
+      a.hi[k] = -INFINITY;
+    }
+    a.count = 0;
+  }
+}
+
+[[noreturn]] void throw_bad_photon(const pf_photon& p, size_t i, int mesh_count) {
+  if (p.mesh < 0 || p.mesh >= mesh_count)
+    throw std::invalid_argument("photon grid: photon " + std::to_string(i) + " has mesh id " +
+                                std::to_string(p.mesh) + " outside [0, " +
+                                std::to_string(mesh_count) + ")");
+  throw std::invalid_argument("photon grid: photon " + std::to_string(i) +
+                              " has a non-finite position");
+}
+
 }  // namespace
 
 std::vector<int32_t> PhotonGrid::gather(int mesh, const float q[3], float radius) const {
@@ -39,51 +117,114 @@ std::vector<int32_t> PhotonGrid::gather(int mesh, const float q[3], float radius
 
 PhotonGrid build_photon_grid(const std::vector<pf_photon>& photons, int mesh_count,
                              const PhotonGridParams& params) {
+  PhotonGrid grid;
+  build_photon_grid_into(grid, photons, mesh_count, params);
+  return grid;
+}
+
+void build_photon_grid_into(PhotonGrid& grid, const std::vector<pf_photon>& photons,
+                            int mesh_count, const PhotonGridParams& params, int threads) {
+  PhotonSpan span{photons.data(), photons.size()};
+  build_photon_grid_into(grid, &span, 1, mesh_count, params, threads);
+}
+
+void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t span_count,
+                            int mesh_count, const PhotonGridParams& params, int threads) {
   if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
     throw std::invalid_argument("photon grid: default_radius must be positive and finite");
   if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
   if (mesh_count < 0) throw std::invalid_argument("photon grid: negative mesh count");
-  if (photons.size() > static_cast<size_t>(std::numeric_limits<int32_t>::max()))
+  size_t n = 0;
+  for (size_t s = 0; s < span_count; ++s) n += spans[s].size;
+  if (n > static_cast<size_t>(std::numeric_limits<int32_t>::max()))
     throw std::invalid_argument("photon grid: more than 2^31-1 photons");
 
-  // Bounds and count of each mesh's photons.
-  std::vector<Bounds> bounds(mesh_count);
-  std::vector<int32_t> count(mesh_count, 0);
-  for (size_t i = 0; i < photons.size(); ++i) {
-    const pf_photon& p = photons[i];
-    Vec3 pos(p.position);
-    if (p.mesh < 0 || p.mesh >= mesh_count)
-      throw std::invalid_argument("photon grid: photon " + std::to_string(i) + " has mesh id " +
-                                  std::to_string(p.mesh) + " outside [0, " +
-                                  std::to_string(mesh_count) + ")");
-    if (!finite(pos))
-      throw std::invalid_argument("photon grid: photon " + std::to_string(i) +
-                                  " has a non-finite position");
-    bounds[p.mesh].extend(pos);
-    ++count[p.mesh];
+  Scratch& sc = scratch();
+  sc.blocks.clear();
+  {
+    size_t base = 0;
+    for (size_t s = 0; s < span_count; ++s) {
+      for (size_t b = 0; b < spans[s].size; b += kBlock)
+        sc.blocks.push_back({spans[s].data + b, std::min(kBlock, spans[s].size - b), base + b});
+      base += spans[s].size;
+    }
+  }
+  const int nblocks = int(sc.blocks.size());
+  int workers = threads > 0 ? threads : omp_get_max_threads();
+  if (n < kParallelMin) workers = 1;
+  workers = std::max(1, std::min(workers, nblocks));
+  // Worker w owns blocks [block_begin(w), block_begin(w + 1)): contiguous, in photon order.
+  auto block_begin = [&](int w) { return int(int64_t(nblocks) * w / workers); };
+  if (int(sc.acc.size()) < workers) sc.acc.resize(size_t(workers));
+  if (int(sc.hist.size()) < workers) sc.hist.resize(size_t(workers));
+  sc.first_bad.assign(size_t(workers), SIZE_MAX);
+
+  // 1. Bounds and count of each mesh's photons; the first invalid photon.
+#pragma omp parallel num_threads(workers)
+  {
+    const int w = omp_get_thread_num();
+    std::vector<MeshAcc>& acc = sc.acc[size_t(w)];
+    reset_acc(acc, mesh_count);
+    for (int b = block_begin(w); b < block_begin(w + 1); ++b) {
+      const Block& blk = sc.blocks[size_t(b)];
+      for (size_t j = 0; j < blk.size; ++j) {
+        const pf_photon& p = blk.data[j];
+        const float* pos = p.position;
+        if (p.mesh < 0 || p.mesh >= mesh_count || !std::isfinite(pos[0]) ||
+            !std::isfinite(pos[1]) || !std::isfinite(pos[2])) {
+          sc.first_bad[size_t(w)] = blk.base + j;
+          b = block_begin(w + 1);  // stop this worker: later photons cannot be reported first
+          break;
+        }
+        MeshAcc& a = acc[size_t(p.mesh)];
+        for (int k = 0; k < 3; ++k) {
+          a.lo[k] = pos[k] < a.lo[k] ? pos[k] : a.lo[k];
+          a.hi[k] = pos[k] > a.hi[k] ? pos[k] : a.hi[k];
+        }
+        ++a.count;
+      }
+    }
+  }
+  for (int w = 0; w < workers; ++w) {
+    size_t i = sc.first_bad[size_t(w)];
+    if (i == SIZE_MAX) continue;
+    for (const Block& blk : sc.blocks)
+      if (i >= blk.base && i < blk.base + blk.size) throw_bad_photon(blk.data[i - blk.base], i, mesh_count);
+  }
+  std::vector<MeshAcc>& total = sc.acc[0];
+  for (int w = 1; w < workers; ++w) {  // in worker order: earlier photons win ties, as in order
+    for (int m = 0; m < mesh_count; ++m) {
+      MeshAcc& a = total[size_t(m)];
+      const MeshAcc& o = sc.acc[size_t(w)][size_t(m)];
+      for (int k = 0; k < 3; ++k) {
+        a.lo[k] = o.lo[k] < a.lo[k] ? o.lo[k] : a.lo[k];
+        a.hi[k] = o.hi[k] > a.hi[k] ? o.hi[k] : a.hi[k];
+      }
+      a.count += o.count;
+    }
   }
 
-  // Per-mesh headers: bin size and counts (eq. 7.1), bin and photon offsets.
-  PhotonGrid grid;
+  // 2. Per-mesh headers: bin size and counts (eq. 7.1), bin and photon offsets.
   grid.params = params;
-  grid.mesh_grid.resize(mesh_count);
+  grid.mesh_grid.resize(size_t(mesh_count));
   int64_t total_entries = 0;
   int32_t first_photon = 0;
   for (int m = 0; m < mesh_count; ++m) {
-    pf_mesh_grid& g = grid.mesh_grid[m];
+    pf_mesh_grid& g = grid.mesh_grid[size_t(m)];
+    const MeshAcc& a = total[size_t(m)];
     g.first_bin = static_cast<pf_int>(total_entries);
     g.first_photon = first_photon;
-    g.photon_count = count[m];
-    if (count[m] == 0) {
+    g.photon_count = a.count;
+    if (a.count == 0) {
       g.lo[0] = g.lo[1] = g.lo[2] = 0.f;
       g.bin_size = params.default_radius;
       g.nx = g.ny = g.nz = 0;
       total_entries += 1;
     } else {
-      Vec3 ext = bounds[m].extent();
+      Vec3 ext = Vec3(a.hi) - Vec3(a.lo);
       float longest = std::max(ext.x, std::max(ext.y, ext.z));
       float d = std::max(longest / static_cast<float>(params.max_bins), params.default_radius);
-      bounds[m].lo.store(g.lo);
+      for (int k = 0; k < 3; ++k) g.lo[k] = a.lo[k];
       g.bin_size = d;
       g.nx = bins_along(ext.x, d, params.max_bins);
       g.ny = bins_along(ext.y, d, params.max_bins);
@@ -92,33 +233,79 @@ PhotonGrid build_photon_grid(const std::vector<pf_photon>& photons, int mesh_cou
     }
     if (total_entries > std::numeric_limits<int32_t>::max())
       throw std::invalid_argument("photon grid: more than 2^31-1 bins (lower max_bins)");
-    first_photon += count[m];
+    first_photon += a.count;
   }
+  const size_t entries = size_t(total_entries);
 
-  // Counting sort by global bin = first_bin(mesh) + bin. Each mesh's last entry (its end marker)
-  // receives no photons, so one prefix sum over all entries gives every mesh's bins+1 starts.
-  std::vector<int32_t> key(photons.size());
-  grid.cell_start.assign(static_cast<size_t>(total_entries), 0);
-  for (size_t i = 0; i < photons.size(); ++i) {
-    const pf_mesh_grid& g = grid.mesh_grid[photons[i].mesh];
-    key[i] = g.first_bin + bin_of(g, photons[i].position);
-    ++grid.cell_start[key[i]];
+  // 3. Keys (global bin = first_bin(mesh) + bin) and per-worker histograms. Each mesh's last entry
+  // (its end marker) receives no photons, so one prefix sum over all entries gives every mesh's
+  // bins+1 starts.
+  resize_for_overwrite(sc.key, n);
+  resize_for_overwrite(grid.cell_start, entries);
+  resize_for_overwrite(grid.photons, n);
+  resize_for_overwrite(grid.order, n);
+  const pf_mesh_grid* mg = grid.mesh_grid.data();
+#pragma omp parallel num_threads(workers)
+  {
+    const int w = omp_get_thread_num();
+    std::vector<int32_t>& hist = sc.hist[size_t(w)];
+    resize_for_overwrite(hist, entries);
+    std::fill(hist.begin(), hist.end(), 0);
+    int32_t* key = sc.key.data();
+    for (int b = block_begin(w); b < block_begin(w + 1); ++b) {
+      const Block& blk = sc.blocks[size_t(b)];
+      for (size_t j = 0; j < blk.size; ++j) {
+        const pf_mesh_grid& g = mg[blk.data[j].mesh];
+        const int32_t k = g.first_bin + bin_of(g, blk.data[j].position);
+        key[blk.base + j] = k;
+        ++hist[size_t(k)];
+      }
+    }
   }
-  int32_t running = 0;
-  for (int32_t& c : grid.cell_start) {
-    int32_t n = c;
-    c = running;
-    running += n;
+  // Exclusive prefix over (bin, worker): cell_start[b] is the first photon of bin b, and worker w
+  // writes its photons of bin b after those of workers 0..w−1.
+  {
+    int32_t running = 0;
+    int32_t* cs = grid.cell_start.data();
+    if (workers == 1) {
+      int32_t* h0 = sc.hist[0].data();
+      for (size_t e = 0; e < entries; ++e) {
+        const int32_t c = h0[e];
+        cs[e] = running;
+        h0[e] = running;
+        running += c;
+      }
+    } else {
+      std::vector<int32_t*> h(static_cast<size_t>(workers));
+      for (int w = 0; w < workers; ++w) h[size_t(w)] = sc.hist[size_t(w)].data();
+      for (size_t e = 0; e < entries; ++e) {
+        cs[e] = running;
+        for (int w = 0; w < workers; ++w) {
+          const int32_t c = h[size_t(w)][e];
+          h[size_t(w)][e] = running;
+          running += c;
+        }
+      }
+    }
   }
-  std::vector<int32_t> next(grid.cell_start);  // write cursor per bin
-  grid.photons.resize(photons.size());
-  grid.order.resize(photons.size());
-  for (size_t i = 0; i < photons.size(); ++i) {
-    int32_t dst = next[key[i]]++;
-    grid.photons[dst] = photons[i];
-    grid.order[dst] = static_cast<int32_t>(i);
+  // 4. Stable scatter: every worker writes its photons, in order, from its cursors.
+  pf_photon* out = grid.photons.data();
+  int32_t* order = grid.order.data();
+#pragma omp parallel num_threads(workers)
+  {
+    const int w = omp_get_thread_num();
+    int32_t* cursor = sc.hist[size_t(w)].data();
+    const int32_t* key = sc.key.data();
+    for (int b = block_begin(w); b < block_begin(w + 1); ++b) {
+      const Block& blk = sc.blocks[size_t(b)];
+      for (size_t j = 0; j < blk.size; ++j) {
+        const size_t i = blk.base + j;
+        const int32_t dst = cursor[key[i]]++;
+        std::memcpy(&out[dst], &blk.data[j], sizeof(pf_photon));
+        order[dst] = static_cast<int32_t>(i);
+      }
+    }
   }
-  return grid;
 }
 
 }  // namespace pf

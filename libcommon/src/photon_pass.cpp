@@ -14,8 +14,15 @@ namespace pf {
 
 namespace {
 
+// What emission needs of each light, computed once per pass (the same expressions as before,
+// so the same bits): area lights' corners and unit front normal.
+struct LightInfo {
+  Vec3 v0, v1, v2, n;
+};
+
 // Emits photon `index`: picks a light by power and samples a ray and its flux.
-bool emit(const Scene& scene, pf_rng& rng, Ray& ray, Vec3& flux, float eps) {
+bool emit(const Scene& scene, const std::vector<LightInfo>& info, pf_rng& rng, Ray& ray,
+          Vec3& flux, float eps) {
   float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
   float u3 = pf_rng_next(&rng), u4 = pf_rng_next(&rng);
   size_t li = size_t(std::upper_bound(scene.light_cdf.begin(), scene.light_cdf.end(), ul) -
@@ -25,11 +32,10 @@ bool emit(const Scene& scene, pf_rng& rng, Ray& ray, Vec3& flux, float eps) {
   float p_light = scene.light_cdf[li] - (li ? scene.light_cdf[li - 1] : 0.f);
   if (p_light <= 0.f) return false;
   if (l.type == PF_LIGHT_AREA) {
-    const pf_triangle& t = scene.triangles[size_t(l.triangle)];
-    Vec3 p = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
-    Vec3 n = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
-    Vec3 d = sample_cosine_hemisphere(n, u3, u4);
-    ray = Ray{p + n * eps, d};
+    const LightInfo& t = info[li];
+    Vec3 p = sample_triangle(t.v0, t.v1, t.v2, u1, u2);
+    Vec3 d = sample_cosine_hemisphere(t.n, u3, u4);
+    ray = Ray{p + t.n * eps, d};
     // Φ = L · A · π for a one-sided Lambertian emitter (cosine sampling: L·cos/pdf = L·π).
     flux = Vec3(l.radiance) * (l.area * kPi / p_light);
   } else {
@@ -39,29 +45,87 @@ bool emit(const Scene& scene, pf_rng& rng, Ray& ray, Vec3& flux, float eps) {
   return true;
 }
 
+std::vector<LightInfo> light_info(const Scene& scene) {
+  std::vector<LightInfo> info(scene.lights.size());
+  for (size_t li = 0; li < scene.lights.size(); ++li) {
+    const pf_light& l = scene.lights[li];
+    if (l.type != PF_LIGHT_AREA) continue;
+    const pf_triangle& t = scene.triangles[size_t(l.triangle)];
+    info[li].v0 = Vec3(t.v0);
+    info[li].v1 = Vec3(t.v1);
+    info[li].v2 = Vec3(t.v2);
+    info[li].n = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+  }
+  return info;
+}
+
+// Emitted photons per chunk: chunk c traces photon indices [c·kChunk, (c+1)·kChunk). The
+// output does not depend on it (chunks are concatenated in index order); small chunks balance
+// the threads' load at the end of a pass.
+constexpr uint32_t kChunk = PhotonBuffers::kChunk;
+
+// Appends to a chunk buffer, growing it by a fixed step instead of doubling: a pass that stores a
+// few more photons than any before adds a step, so a long run's buffers stay close to the
+// largest pass (doubling could leave them twice that).
+inline void append(std::vector<pf_photon>& out, const pf_photon& ph) {
+  if (out.size() == out.capacity()) out.reserve(out.capacity() + 2 * kChunk);
+  out.push_back(ph);
+}
+
 }  // namespace
 
+size_t PhotonBuffers::size() const {
+  size_t n = 0;
+  for (const auto& c : chunks) n += c.size();
+  return n;
+}
+
+std::vector<PhotonSpan> PhotonBuffers::spans() const {
+  std::vector<PhotonSpan> s;
+  s.reserve(chunks.size());
+  for (const auto& c : chunks) s.push_back({c.data(), c.size()});
+  return s;
+}
+
+void PhotonBuffers::concatenate(std::vector<pf_photon>& out) const {
+  out.clear();
+  out.reserve(size());
+  for (const auto& c : chunks) out.insert(out.end(), c.begin(), c.end());
+}
+
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt) {
+  // The calling thread's chunk buffers, reused by its next pass.
+  thread_local PhotonBuffers buffers;
   PhotonPassResult res;
-  res.emitted = opt.photons;
-  if (scene.lights.empty() || opt.photons == 0) return res;
+  res.emitted = trace_photons_into(scene, pass, opt, buffers);
+  buffers.concatenate(res.photons);
+  return res;
+}
+
+uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
+                            PhotonBuffers& out_buffers) {
+  // Fixed-size chunks of photon indices, kept in chunk order: the output order does not depend on
+  // the thread count or on scheduling.
+  const uint32_t nchunks =
+      (scene.lights.empty() || opt.photons == 0) ? 0 : (opt.photons + kChunk - 1) / kChunk;
+  std::vector<std::vector<pf_photon>>& parts = out_buffers.chunks;
+  parts.resize(nchunks);  // keeps the capacity of the chunks a previous pass grew
+  for (auto& p : parts) p.clear();
+  if (nchunks == 0) return opt.photons;
   const float eps = ray_epsilon(scene);
-  // Fixed-size chunks of photon indices, concatenated in chunk order: the output order does not
-  // depend on the thread count or on scheduling.
-  const uint32_t chunk = 4096;
-  const uint32_t nchunks = (opt.photons + chunk - 1) / chunk;
-  std::vector<std::vector<pf_photon>> parts(nchunks);
-  int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  const std::vector<LightInfo> info = light_info(scene);
+  const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  const pf_uint key = pf_rng_key(opt.seed, pass);
 
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (uint32_t c = 0; c < nchunks; ++c) {
     std::vector<pf_photon>& out = parts[c];
-    uint32_t end = std::min(opt.photons, (c + 1) * chunk);
-    for (uint32_t i = c * chunk; i < end; ++i) {
-      pf_rng rng = pf_rng_start(opt.seed, pass, i);
+    const uint32_t end = std::min(opt.photons, (c + 1) * kChunk);
+    for (uint32_t i = c * kChunk; i < end; ++i) {
+      pf_rng rng{key, i, 0};  // = pf_rng_start(opt.seed, pass, i), key computed once
       Ray ray;
       Vec3 flux;
-      if (!emit(scene, rng, ray, flux, eps)) continue;
+      if (!emit(scene, info, rng, ray, flux, eps)) continue;
       bool specular_only = true;  // every bounce so far was specular (caustic path)
       bool first_hit = true;
       for (int bounce = 0; bounce <= opt.max_bounces; ++bounce) {
@@ -83,12 +147,16 @@ PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPa
           ph.pass = int32_t(pass);
           ph.flags = (first_hit ? PF_PHOTON_DIRECT : 0) |
                      (!first_hit && specular_only ? PF_PHOTON_CAUSTIC : 0);
-          out.push_back(ph);
+          append(out, ph);
           // Russian roulette by albedo.
           float p = std::max(color.x, std::max(color.y, color.z));
           if (pf_rng_next(&rng) >= p) break;
           flux = flux * color * (1.f / p);
-          d = sample_cosine_hemisphere(n, pf_rng_next(&rng), pf_rng_next(&rng));
+          // Two draws in a fixed order (function arguments have none in C++): the OpenCL
+          // kernel draws u1 then u2 too.
+          const float u1 = pf_rng_next(&rng);
+          const float u2 = pf_rng_next(&rng);
+          d = sample_cosine_hemisphere(n, u1, u2);
           specular_only = false;
         } else if (m.type == PF_MAT_MIRROR) {
           flux = flux * color;
@@ -112,11 +180,7 @@ PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPa
       }
     }
   }
-  size_t total = 0;
-  for (auto& p : parts) total += p.size();
-  res.photons.reserve(total);
-  for (auto& p : parts) res.photons.insert(res.photons.end(), p.begin(), p.end());
-  return res;
+  return opt.photons;
 }
 
 }  // namespace pf

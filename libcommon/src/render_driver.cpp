@@ -3,11 +3,13 @@
 
 #include <unistd.h>
 
+#include "photonflow/cl_backend.h"
+
 namespace pf {
 
 namespace {
-HitpointSet fresh_state(const Scene& scene, const EyePassOptions& eye) {
-  EyePassResult r = trace_hitpoints(scene, eye);
+HitpointSet fresh_state(const Scene& scene, const EyePassOptions& eye, ClContext* device) {
+  EyePassResult r = device ? trace_hitpoints(scene, eye, *device) : trace_hitpoints(scene, eye);
   HitpointSet h;
   h.hitpoints = std::move(r.hitpoints);
   h.emitted = std::move(r.emitted);
@@ -22,16 +24,34 @@ HitpointSet fresh_state(const Scene& scene, const EyePassOptions& eye) {
 }  // namespace
 
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
-    : scene_(scene), opt_(opt), state_(fresh_state(scene, opt.eye)) {}
+    : scene_(scene), opt_(opt), state_(fresh_state(scene, opt.eye, opt.device)) {}
 
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt,
                                          HitpointSet state)
     : scene_(scene), opt_(opt), state_(std::move(state)) {}
 
 void ProgressiveRenderer::run_iteration() {
-  PhotonPassResult pass = trace_photons(scene_, uint32_t(state_.passes), opt_.photons);
-  photons_stored_ += pass.photons.size();
-  ppm_pass(scene_, state_, pass.photons, pass.emitted, opt_.ppm);
+  if (opt_.device) {  // OpenCL backend (issue 4): device photon tracing and naive gather
+    PhotonPassResult pass =
+        trace_photons(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
+    photons_stored_ += pass.photons.size();
+    ppm_pass(scene_, state_, pass.photons, pass.emitted, opt_.ppm, *opt_.device);
+    return;
+  }
+  // The same photons and the same gather as trace_photons + ppm_pass, without the copies: the
+  // grid is sorted straight out of the per-chunk buffers, and every buffer is reused.
+  const uint64_t emitted =
+      trace_photons_into(scene_, uint32_t(state_.passes), opt_.photons, photon_chunks_);
+  photons_stored_ += photon_chunks_.size();
+  if (opt_.ppm.gather == Gather::Grid) {
+    const std::vector<PhotonSpan> spans = photon_chunks_.spans();
+    build_photon_grid_into(grid_, spans.data(), spans.size(), int(scene_.mesh_names.size()),
+                           ppm_grid_params(state_, opt_.ppm), opt_.ppm.threads);
+    ppm_pass_grid(scene_, state_, grid_, emitted, opt_.ppm);
+  } else {
+    photon_chunks_.concatenate(photons_);
+    ppm_pass(scene_, state_, photons_, emitted, opt_.ppm);
+  }
 }
 
 void ProgressiveRenderer::save_state(const std::string& path, const Provenance& prov) const {

@@ -1,6 +1,7 @@
 // gen-mesh — writes a procedural test mesh (procedural.h) as a Wavefront OBJ file.
 //
 //   gen-mesh --shape blob --triangles 120000 --out out/data/blob.obj [--seed 1]
+#include <filesystem>
 #include <iostream>
 #include <string>
 
@@ -17,11 +18,15 @@ int main(int argc, char** argv) {
       ("triangles", "minimum triangle count (sphere, blob, heightfield: the smallest grid that "
        "reaches it; soup: exact; box: always 12)",
        cxxopts::value<size_t>()->default_value("10000"))
-      ("radius", "sphere/blob radius, heightfield/soup/box half extent, in scene units", cxxopts::value<float>()->default_value("1"))
-      ("amplitude", "blob displacement and heightfield relief, as a fraction of --radius", cxxopts::value<float>()->default_value("0.25"))
+      ("radius", "sphere/blob radius, heightfield/soup/box half extent (soup triangles are "
+       "0.05·radius across), in scene units",
+       cxxopts::value<float>()->default_value("1"))
+      ("amplitude", "blob displacement and heightfield relief, as a fraction of --radius",
+       cxxopts::value<float>()->default_value("0.25"))
       ("seed", "random seed of blob, heightfield and soup",
        cxxopts::value<uint64_t>()->default_value("1"))
-      ("out", "output OBJ path (required; written atomically)", cxxopts::value<std::string>())
+      ("out", "output OBJ path (required; missing directories are created; written atomically)",
+       cxxopts::value<std::string>())
       ("h,help", "print this help");
     // clang-format on
     const auto args = opts.parse(argc, argv);
@@ -58,6 +63,9 @@ int main(int argc, char** argv) {
                             "use sphere, blob, heightfield, soup or box");
     }
     const std::string out = args["out"].as<std::string>();
+    const std::filesystem::path dir = std::filesystem::path(out).parent_path();
+    std::error_code ec;
+    if (!dir.empty()) std::filesystem::create_directories(dir, ec);  // write_obj reports failure
     pf::write_obj(out, tris);
     std::cout << "gen-mesh: wrote " << tris.size() << " triangles to " << out << "\n";
     return 0;

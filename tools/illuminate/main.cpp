@@ -4,6 +4,8 @@
 // (k nearest global photons + fixed-radius caustic estimate, thesis eq. 3.10).
 #include <iostream>
 
+#include "photonflow/cl_backend.h"
+#include "photonflow/device_options.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/options.h"
 #include "photonflow/progress.h"
@@ -35,8 +37,10 @@ int main(int argc, char** argv) {
        cxxopts::value<float>()->default_value("0"))
       ("threads", "worker threads, 0 = all cores", cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
+    pf::add_device_options(o);
     auto a = o.parse(argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
+    if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("hitpoints") || !a.count("output") ||
         (!a.count("photons") && !a.count("grid")))
       throw pf::input_error("", "--scene, --hitpoints, --photons (or --grid) and --output are required");
@@ -59,6 +63,20 @@ int main(int argc, char** argv) {
     if (!(classic.caustic_radius >= 0.f) || !(classic.eps >= 0.f))
       throw pf::input_error("", "--caustic-radius and --eps must be >= 0");
 
+    // The OpenCL backend gathers PPM passes from --photons with the naive kernel (every hitpoint
+    // loops over all photons; the same photons as --gather grid/flann). Classic estimates and
+    // prebuilt grids stay on the CPU.
+    pf::DeviceOptions devopt = pf::device_options(a);
+    const bool device_path = estimator == "ppm" && !a.count("grid");
+    if (!device_path && devopt.device == "opencl")
+      throw pf::input_error("", "--device opencl supports --estimator ppm with --photons (naive "
+                            "gather); classic estimates and --grid run with --device cpu");
+    if (!device_path && devopt.device == "auto") {
+      std::cerr << "illuminate: device: cpu backend (auto: no OpenCL path for "
+                << (estimator == "ppm" ? "--grid" : "--estimator classic") << ")\n";
+      devopt.device = "cpu";
+    }
+    std::unique_ptr<pf::ClContext> dev = pf::open_device(devopt, "illuminate");
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>(), hp_path = a["hitpoints"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
@@ -98,7 +116,10 @@ int main(int argc, char** argv) {
                                 "trace photons with --first-pass " + std::to_string(h.passes));
         pf::Progress progress("pass", photons.pass_count(), "photons");
         for (int k = 0; k < photons.pass_count(); ++k) {
-          pf::ppm_pass(scene, h, photons.pass(k), photons.pass_emitted[size_t(k)], ppm);
+          if (dev)
+            pf::ppm_pass(scene, h, photons.pass(k), photons.pass_emitted[size_t(k)], ppm, *dev);
+          else
+            pf::ppm_pass(scene, h, photons.pass(k), photons.pass_emitted[size_t(k)], ppm);
           progress.update(k + 1, double(h.photons_emitted));
         }
       } else {
@@ -109,6 +130,7 @@ int main(int argc, char** argv) {
     }
     prov.tool = "illuminate";
     pf::record_options(prov, a);
+    pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.wall_time_s = clock.seconds();
     pf::save_hitpoints(h, a["output"].as<std::string>(), prov);

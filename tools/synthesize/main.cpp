@@ -3,6 +3,8 @@
 // photons, hitpoints) and an sRGB PNG preview.
 #include <iostream>
 
+#include "photonflow/cl_backend.h"
+#include "photonflow/device_options.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/synthesize.h"
 #include "photonflow/tool_main.h"
@@ -18,8 +20,10 @@ int main(int argc, char** argv) {
       ("exposure", "PNG exposure in stops (the EXR is never scaled)",
        cxxopts::value<float>()->default_value("0"))
       ("h,help", "print this help");
+    pf::add_device_options(o);
     auto a = o.parse(argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
+    if (pf::list_devices_requested(a)) return 0;
     if (!a.count("hitpoints") || !a.count("output"))
       throw pf::input_error("", "--hitpoints and --output are required");
     std::string out = a["output"].as<std::string>();
@@ -29,7 +33,8 @@ int main(int argc, char** argv) {
     if (h.estimator == "none")
       throw pf::input_error(a["hitpoints"].as<std::string>(), "has no photons gathered yet",
                             "run illuminate on it first");
-    pf::Image img = pf::synthesize(h);
+    std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "synthesize");
+    pf::Image img = dev ? pf::synthesize(h, *dev) : pf::synthesize(h);
     pf::write_exr(img, out);
     pf::write_png(img, png, a["exposure"].as<float>());
     std::cout << "synthesize: " << out << " and " << png << " (" << h.width << "x" << h.height

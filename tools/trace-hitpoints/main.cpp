@@ -4,6 +4,8 @@
 // writes hitpoints.h5: the hitpoints (R = R0, N = 0, τ = 0) and the emitted/direct image layers.
 #include <iostream>
 
+#include "photonflow/cl_backend.h"
+#include "photonflow/device_options.h"
 #include "photonflow/eye_pass.h"
 #include "photonflow/options.h"
 #include "photonflow/stage_files.h"
@@ -34,8 +36,10 @@ int main(int argc, char** argv) {
       ("threads", "worker threads, 0 = all cores (results do not depend on it)",
        cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
+    pf::add_device_options(o);
     auto a = o.parse(argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
+    if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("output"))
       throw pf::input_error("", "--scene and --output are required");
 
@@ -57,7 +61,8 @@ int main(int argc, char** argv) {
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
-    pf::EyePassResult r = pf::trace_hitpoints(scene, opt);
+    std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "trace-hitpoints");
+    pf::EyePassResult r = dev ? pf::trace_hitpoints(scene, opt, *dev) : pf::trace_hitpoints(scene, opt);
 
     pf::HitpointSet h;
     h.hitpoints = std::move(r.hitpoints);
@@ -73,6 +78,7 @@ int main(int argc, char** argv) {
     prov.tool = "trace-hitpoints";
     prov.seed = opt.seed;
     pf::record_options(prov, a);
+    pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
     prov.wall_time_s = clock.seconds();

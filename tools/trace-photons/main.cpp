@@ -4,6 +4,8 @@
 // table). Counter-based randomness: the same photons for any thread count.
 #include <iostream>
 
+#include "photonflow/cl_backend.h"
+#include "photonflow/device_options.h"
 #include "photonflow/options.h"
 #include "photonflow/photon_pass.h"
 #include "photonflow/progress.h"
@@ -27,8 +29,10 @@ int main(int argc, char** argv) {
       ("threads", "worker threads, 0 = all cores (results do not depend on it)",
        cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
+    pf::add_device_options(o);
     auto a = o.parse(argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
+    if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("output"))
       throw pf::input_error("", "--scene and --output are required");
     int64_t photons = a["photons"].as<int64_t>();
@@ -48,6 +52,7 @@ int main(int argc, char** argv) {
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
+    std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "trace-photons");
     pf::PhotonSet set;
     set.first_pass = first;
     set.seed = opt.seed;
@@ -55,7 +60,8 @@ int main(int argc, char** argv) {
     set.pass_begin.push_back(0);
     pf::Progress progress("pass", passes, "photons");
     for (int p = 0; p < passes; ++p) {
-      pf::PhotonPassResult r = pf::trace_photons(scene, uint32_t(first + p), opt);
+      pf::PhotonPassResult r = dev ? pf::trace_photons(scene, uint32_t(first + p), opt, *dev)
+                                   : pf::trace_photons(scene, uint32_t(first + p), opt);
       set.photons.insert(set.photons.end(), r.photons.begin(), r.photons.end());
       set.pass_begin.push_back(set.photons.size());
       set.pass_emitted.push_back(r.emitted);
@@ -65,6 +71,7 @@ int main(int argc, char** argv) {
     prov.tool = "trace-photons";
     prov.seed = opt.seed;
     pf::record_options(prov, a);
+    pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
     prov.wall_time_s = clock.seconds();

@@ -1,0 +1,176 @@
+/*
+ * trace_hitpoints.cl — the eye pass of progressive photon mapping on an OpenCL device (thesis
+ * ch. 7.2 "ray tracing" block; CPU twin: eye_pass.cpp). One work-item per pixel; each loops over
+ * its eye samples and follows mirror/glass bounces iteratively (no recursion) to the first diffuse
+ * surface, where it stores a hitpoint. Rays are traced by the stackless kd-tree traversal with
+ * ropes (intersect_shared.h) — the spatial index the thesis's GPU tracer did not have.
+ *
+ * Random numbers: stream (seed, kEyeStream, pixel·spp + s) for jitter and glass choices, stream
+ * (seed, kShadowStream + 0, same index) for shadow rays — the CPU's streams and dimension order.
+ *
+ * Output per (pixel, sample) slot: the hitpoint and a used flag; the host compacts the used slots
+ * in slot order (= the CPU's order: pixel row-major, then sample).
+ */
+#pragma OPENCL FP_CONTRACT OFF
+#include "trace_common.h"
+
+#define PF_EYE_STREAM 0xE7E0000u
+#define PF_SHADOW_STREAM 0x5AD0000u
+
+/* eye_pass.cpp's direct_light: irradiance-weighted direct radiance at a diffuse point by light
+ * sampling with shadow rays. Adds weight · L_direct to `direct`. */
+static void pf_direct_light(const pf_scene_view* s, const float* p, const float* ng,
+                            const float* ns, __global const pf_material* m, int samples,
+                            uint seed, uint pass, uint index, float eps, const float* weight,
+                            float* direct) {
+  if (s->light_count <= 0 || samples <= 0) return;
+  pf_rng rng = pf_rng_start(seed, PF_SHADOW_STREAM + pass, index);
+  float sum[3] = {0.0f, 0.0f, 0.0f};
+  for (int smp = 0; smp < samples; ++smp) {
+    const float ul = pf_rng_next(&rng);
+    const float u1 = pf_rng_next(&rng);
+    const float u2 = pf_rng_next(&rng);
+    float p_light;
+    const int li = pf_pick_light(s, ul, &p_light);
+    __global const pf_light* l = &s->lights[li];
+    if (p_light <= 0.0f) continue;
+    float q[3], w[3], g;
+    if (l->type == PF_LIGHT_AREA) {
+      __global const pf_triangle* t = &s->tris[l->triangle];
+      const float v0[3] = {t->v0[0], t->v0[1], t->v0[2]};
+      const float v1[3] = {t->v1[0], t->v1[1], t->v1[2]};
+      const float v2[3] = {t->v2[0], t->v2[1], t->v2[2]};
+      pf_sample_triangle(v0, v1, v2, u1, u2, q);
+      float e1[3], e2[3], nl[3];
+      for (int k = 0; k < 3; ++k) {
+        e1[k] = v1[k] - v0[k];
+        e2[k] = v2[k] - v0[k];
+      }
+      pf_cross3(e1, e2, nl);
+      pf_normalize3(nl);
+      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
+      const float d2 = pf_dot3(w, w);
+      if (d2 <= 0.0f) continue;
+      const float dl = sqrt(d2);
+      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
+      const float cos_l = -pf_dot3(w, nl);
+      const float cos_x = pf_dot3(w, ns);
+      if (cos_l <= 0.0f || cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
+      g = cos_x * cos_l * l->area / d2;
+    } else {
+      for (int k = 0; k < 3; ++k) q[k] = l->position[k];
+      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
+      const float d2 = pf_dot3(w, w);
+      if (d2 <= 0.0f) continue;
+      const float dl = sqrt(d2);
+      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
+      const float cos_x = pf_dot3(w, ns);
+      if (cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
+      g = cos_x / d2;
+    }
+    float o[3], sd[3];
+    for (int k = 0; k < 3; ++k) o[k] = p[k] + ng[k] * eps;
+    for (int k = 0; k < 3; ++k) sd[k] = q[k] - o[k];
+    pf_ray_hit hit;
+    if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
+    const float f = g / p_light;
+    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + l->radiance[k] * f;
+  }
+  const float inv = 1.0f / (float)samples;
+  for (int k = 0; k < 3; ++k)
+    direct[k] = direct[k] + weight[k] * (m->color[k] * PF_S_INV_PI * sum[k] * inv);
+}
+
+/* cam: eye[3], forward[3], right[3], up[3], tan_half_x, tan_half_y (camera.h's CameraFrame).
+ * Pixels pixel_offset .. pixel_offset + pixel_count − 1 (row-major) form this batch; outputs are
+ * indexed from the batch's start. */
+__kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int width, int height,
+                              int spp, int strata, int max_depth, int shadow_rays,
+                              int shadow_samples, float radius, uint seed, float eps,
+                              int pixel_offset, int pixel_count, __global pf_hitpoint* slots,
+                              __global int* used, __global float* emitted_out,
+                              __global float* direct_out) {
+  const int local_pix = (int)get_global_id(0);
+  if (local_pix >= pixel_count) return;
+  PF_SCENE_VIEW(s);
+  const int pix = pixel_offset + local_pix;
+  const int x = pix % width, y = pix / width;
+  const float eye[3] = {cam[0], cam[1], cam[2]};
+  float emitted[3] = {0.0f, 0.0f, 0.0f}, direct[3] = {0.0f, 0.0f, 0.0f};
+  for (int smp = 0; smp < spp; ++smp) {
+    const uint index = (uint)pix * (uint)spp + (uint)smp;
+    const size_t slot = (size_t)local_pix * (size_t)spp + (size_t)smp;
+    used[slot] = 0;
+    pf_rng rng = pf_rng_start(seed, PF_EYE_STREAM, index);
+    float jx = 0.5f, jy = 0.5f;
+    if (spp > 1) {
+      jx = ((float)(smp % strata) + pf_rng_next(&rng)) / (float)strata;
+      jy = ((float)((smp / strata) % strata) + pf_rng_next(&rng)) / (float)strata;
+    }
+    /* CameraFrame::direction */
+    const float px = (float)x + jx, py = (float)y + jy;
+    const float sx = (2.0f * px / (float)width - 1.0f) * cam[12];
+    const float sy = (1.0f - 2.0f * py / (float)height) * cam[13];
+    float o[3], d[3];
+    for (int k = 0; k < 3; ++k) {
+      o[k] = eye[k];
+      d[k] = cam[3 + k] + cam[6 + k] * sx + cam[9 + k] * sy;
+    }
+    pf_normalize3(d);
+    const float w0 = 1.0f / (float)spp;
+    float T[3] = {w0, w0, w0};
+    for (int depth = 0; depth <= max_depth; ++depth) {
+      pf_ray_hit h;
+      if (!pf_trace(&s, o, d, 0.0f, INFINITY, 0, &h)) break;
+      pf_surface sh;
+      pf_surface_at(&s, o, d, &h, &sh);
+      __global const pf_material* m = &s.mats[sh.material];
+      if (m->type == PF_MAT_EMITTER && sh.front)
+        for (int k = 0; k < 3; ++k) emitted[k] = emitted[k] + T[k] * m->emission[k];
+      float n[3];
+      for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
+      if (pf_is_diffuse(m)) {
+        pf_hitpoint hp;
+        float nd[3] = {d[0], d[1], d[2]};
+        pf_normalize3(nd);
+        for (int k = 0; k < 3; ++k) {
+          hp.position[k] = sh.p[k];
+          hp.normal[k] = n[k];
+          hp.dir[k] = nd[k];
+          hp.weight[k] = T[k];
+          hp.flux[k] = 0.0f;
+        }
+        hp.radius = radius;
+        hp.n_photons = 0.0f;
+        hp.pixel_x = x;
+        hp.pixel_y = y;
+        hp.mesh = sh.mesh;
+        hp.material = sh.material;
+        slots[slot] = hp;
+        used[slot] = 1;
+        if (shadow_rays) {
+          float ng[3];
+          for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
+          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, seed, 0u, index, eps, T, direct);
+        }
+        break;
+      }
+      pf_normalize3(d);
+      if (m->type == PF_MAT_MIRROR) {
+        for (int k = 0; k < 3; ++k) T[k] = T[k] * m->color[k];
+        pf_reflect(d, n, d);
+      } else if (m->type == PF_MAT_GLASS) {
+        const float u = pf_rng_next(&rng);
+        pf_glass_bounce(m, &sh, n, u, d, T);
+      } else {
+        break; /* an emitter that does not reflect */
+      }
+      if (pf_luminance3(T) <= 0.0f) break;
+      pf_offset_origin(&sh, d, eps, o);
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    emitted_out[3 * (size_t)local_pix + k] = emitted[k];
+    direct_out[3 * (size_t)local_pix + k] = direct[k];
+  }
+}

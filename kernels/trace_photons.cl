@@ -1,0 +1,119 @@
+/*
+ * trace_photons.cl — photon tracing on an OpenCL device (thesis ch. 7.2 "photon tracing" block;
+ * CPU twin: photon_pass.cpp). One work-item per emitted photon, an iterative bounce loop with the
+ * fixed limit max_bounces, rays traced by the stackless rope traversal (intersect_shared.h).
+ *
+ * Random numbers: photon i of pass p uses the counter-based stream (seed, p, i) in the CPU's
+ * dimension order (light choice, 2 position, 2 direction; then per bounce: Russian roulette and
+ * two direction numbers at a diffuse hit, one Fresnel choice at glass), so both backends trace the
+ * same paths (thesis ch. 7.2 kept LCG seeds per photon; a counter-based generator needs none).
+ *
+ * Storage: each photon owns max_bounces + 1 slots (one stored photon per diffuse hit at most per
+ * bounce) and a count; the host concatenates the used slots in photon order, which is the CPU's
+ * order (photon index, then bounce). Slots are stored slot-major — slot k of batch photon i at
+ * [k·count + i] — so that neighbouring work-items write neighbouring photons (dense cache lines;
+ * most photons use only their first slots).
+ */
+#pragma OPENCL FP_CONTRACT OFF
+#include "trace_common.h"
+
+/* Photons first .. first + count − 1 of the pass form this batch; outputs indexed from 0. */
+__kernel void trace_photons(PF_SCENE_PARAMS, uint seed, uint pass, int max_bounces, float eps,
+                            uint first, int count, __global pf_photon* slots,
+                            __global int* stored) {
+  const int local_i = (int)get_global_id(0);
+  if (local_i >= count) return;
+  PF_SCENE_VIEW(s);
+  const uint i = first + (uint)local_i;
+  int n_stored = 0;
+  pf_rng rng = pf_rng_start(seed, pass, i);
+  /* emit (photon_pass.cpp) */
+  const float ul = pf_rng_next(&rng);
+  const float u1 = pf_rng_next(&rng);
+  const float u2 = pf_rng_next(&rng);
+  const float u3 = pf_rng_next(&rng);
+  const float u4 = pf_rng_next(&rng);
+  float p_light;
+  const int li = pf_pick_light(&s, ul, &p_light);
+  __global const pf_light* l = &s.lights[li];
+  if (s.light_count <= 0 || p_light <= 0.0f) {
+    stored[local_i] = 0;
+    return;
+  }
+  float o[3], d[3], flux[3];
+  if (l->type == PF_LIGHT_AREA) {
+    __global const pf_triangle* t = &s.tris[l->triangle];
+    const float v0[3] = {t->v0[0], t->v0[1], t->v0[2]};
+    const float v1[3] = {t->v1[0], t->v1[1], t->v1[2]};
+    const float v2[3] = {t->v2[0], t->v2[1], t->v2[2]};
+    float p[3], e1[3], e2[3], n[3];
+    pf_sample_triangle(v0, v1, v2, u1, u2, p);
+    for (int k = 0; k < 3; ++k) {
+      e1[k] = v1[k] - v0[k];
+      e2[k] = v2[k] - v0[k];
+    }
+    pf_cross3(e1, e2, n);
+    pf_normalize3(n);
+    pf_sample_cosine_hemisphere(n, u3, u4, d);
+    const float f = l->area * PF_S_PI / p_light;
+    for (int k = 0; k < 3; ++k) {
+      o[k] = p[k] + n[k] * eps;
+      flux[k] = l->radiance[k] * f;
+    }
+  } else {
+    pf_sample_uniform_sphere(u1, u2, d);
+    const float f = 4.0f * PF_S_PI / p_light;
+    for (int k = 0; k < 3; ++k) {
+      o[k] = l->position[k];
+      flux[k] = l->radiance[k] * f;
+    }
+  }
+  int specular_only = 1, first_hit = 1;
+  for (int bounce = 0; bounce <= max_bounces; ++bounce) {
+    pf_ray_hit h;
+    if (!pf_trace(&s, o, d, 0.0f, INFINITY, 0, &h)) break;
+    pf_surface sh;
+    pf_surface_at(&s, o, d, &h, &sh);
+    __global const pf_material* m = &s.mats[sh.material];
+    pf_normalize3(d);
+    float n[3];
+    for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
+    const float c[3] = {m->color[0], m->color[1], m->color[2]};
+    if (pf_is_diffuse(m)) {
+      pf_photon ph;
+      for (int k = 0; k < 3; ++k) {
+        ph.position[k] = sh.p[k];
+        ph.dir[k] = d[k];
+        ph.flux[k] = flux[k];
+      }
+      ph.mesh = sh.mesh;
+      ph.pass = (int)pass;
+      ph.flags = (first_hit ? PF_PHOTON_DIRECT : 0) |
+                 (!first_hit && specular_only ? PF_PHOTON_CAUSTIC : 0);
+      slots[(size_t)n_stored * (size_t)count + (size_t)local_i] = ph;
+      ++n_stored;
+      /* Russian roulette by albedo: p = std::max(c0, std::max(c1, c2)) */
+      const float m12 = c[1] < c[2] ? c[2] : c[1];
+      const float p = c[0] < m12 ? m12 : c[0];
+      if (pf_rng_next(&rng) >= p) break;
+      const float inv_p = 1.0f / p;
+      for (int k = 0; k < 3; ++k) flux[k] = flux[k] * c[k] * inv_p;
+      const float b1 = pf_rng_next(&rng);
+      const float b2 = pf_rng_next(&rng);
+      pf_sample_cosine_hemisphere(n, b1, b2, d);
+      specular_only = 0;
+    } else if (m->type == PF_MAT_MIRROR) {
+      for (int k = 0; k < 3; ++k) flux[k] = flux[k] * c[k];
+      pf_reflect(d, n, d);
+    } else if (m->type == PF_MAT_GLASS) {
+      const float u = pf_rng_next(&rng);
+      pf_glass_bounce(m, &sh, n, u, d, flux);
+    } else {
+      break; /* a black emitter absorbs */
+    }
+    first_hit = 0;
+    if (pf_luminance3(flux) <= 0.0f) break;
+    pf_offset_origin(&sh, d, eps, o);
+  }
+  stored[local_i] = n_stored;
+}

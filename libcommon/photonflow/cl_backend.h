@@ -1,0 +1,46 @@
+// cl_backend.h — the OpenCL backend of the render stages (issue 4; thesis ch. 7.2 GPU blocks):
+// the same functions, options and results as the CPU backend (eye_pass.h, photon_pass.h,
+// illuminate.h, synthesize.h) with a device context as the last argument, so a tool or the render
+// driver switches backends with one pointer.
+//
+//   trace_hitpoints — kernels/trace_hitpoints.cl: one work-item per pixel, iterative specular
+//                     chain, stackless kd-tree traversal with ropes (intersect_shared.h);
+//   trace_photons   — kernels/trace_photons.cl: one work-item per photon, fixed bounce limit,
+//                     per-photon slots compacted on the host into the CPU's order;
+//   ppm_pass        — kernels/illuminate_naive.cl: the naive gather (every hitpoint loops over all
+//                     photons of the pass; thesis Table 7.1 "Hitpoint Illumination"), same
+//                     acceptance rule and summation order as the CPU gathers;
+//   synthesize      — kernels/synthesize.cl: atomic float adds (compare-and-swap loop).
+//
+// Both backends use the same counter-based random numbers (rng.h) in the same dimension order and
+// the same sampling formulas (sampling_shared.h), so they trace the same rays and photon paths up
+// to float rounding. Buffers larger than the device's allocation limit (ClContext::max_alloc) are
+// processed in batches of pixels, photons or hitpoints; the scene itself must fit one allocation
+// per array.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "photonflow/cl_runtime.h"
+#include "photonflow/eye_pass.h"
+#include "photonflow/illuminate.h"
+#include "photonflow/image.h"
+#include "photonflow/photon_pass.h"
+#include "photonflow/scene.h"
+#include "photonflow/stage_files.h"
+
+namespace pf {
+
+EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClContext& dev);
+
+PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
+                               ClContext& dev);
+
+// One PPM iteration (eq. 3.14–3.18) by the naive device gather; opt.gather/max_bins are ignored
+// (every gather selects the same photons). Adds `emitted` to h.photons_emitted, counts the pass.
+void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
+              uint64_t emitted, const PpmOptions& opt, ClContext& dev);
+
+Image synthesize(const HitpointSet& h, ClContext& dev);
+
+}  // namespace pf

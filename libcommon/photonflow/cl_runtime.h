@@ -1,0 +1,165 @@
+// cl_runtime.h — the OpenCL side of photonflow's device backend (issue 4; thesis ch. 7.2): device
+// listing and choice (--device cpu|opencl|auto, --cl-platform, --cl-device), one context and
+// in-order queue, programs built from the embedded kernels (or from source under
+// PHOTONFLOW_KERNEL_DIR), buffers checked against the largest allocation the device allows, and
+// kernel launches with a fixed work-group size.
+//
+// Failures are one line: no OpenCL platform, a device index out of range, or a kernel that does not
+// build (its build log is saved to photonflow-cl-build.log in the current folder, or in $TMPDIR
+// when that is not writable) all throw pf::InputError; nothing crashes.
+//
+// Allocation limit: CL_DEVICE_MAX_MEM_ALLOC_SIZE (2 GiB on PoCL), lowered by the environment
+// variable PF_CL_MAX_ALLOC=<bytes> or set_max_alloc() (tests force small limits to exercise the
+// batched paths).
+#pragma once
+#include <CL/cl.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pf {
+
+struct ClDeviceInfo {
+  int platform = 0;  // index in clGetPlatformIDs order
+  int device = 0;    // index within the platform
+  std::string platform_name, device_name, device_version, driver_version;
+  bool gpu = false;
+  std::string type;  // "GPU", "CPU", "accelerator", "other"
+  uint64_t max_alloc = 0, global_mem = 0;
+  unsigned compute_units = 0;
+  size_t max_work_group = 0;
+  bool fp64 = false;
+  cl_platform_id platform_id = nullptr;
+  cl_device_id device_id = nullptr;
+};
+
+// Every device of every OpenCL platform; empty when there is no platform (no ICD). Never throws.
+std::vector<ClDeviceInfo> cl_list_devices();
+// Human-readable table of cl_list_devices() for --list-devices (says so when there is none).
+std::string cl_describe_devices();
+
+// The backend choice of a tool.
+struct DeviceOptions {
+  std::string device = "cpu";  // cpu | opencl | auto
+  int platform = -1;           // --cl-platform; -1 = choose
+  int device_index = -1;       // --cl-device (within the platform); -1 = choose
+  int work_group = 0;          // --work-group; 0 = each kernel's default (64)
+};
+
+// Default work-group size of every kernel (fixed, so PoCL's per-size kernel cache is reused).
+constexpr int kDefaultWorkGroup = 64;
+
+// RAII cl_mem.
+class ClBuffer {
+ public:
+  ClBuffer() = default;
+  explicit ClBuffer(cl_mem m, size_t bytes) : m_(m), bytes_(bytes) {}
+  ClBuffer(ClBuffer&& o) noexcept : m_(o.m_), bytes_(o.bytes_) { o.m_ = nullptr; o.bytes_ = 0; }
+  ClBuffer& operator=(ClBuffer&& o) noexcept;
+  ClBuffer(const ClBuffer&) = delete;
+  ClBuffer& operator=(const ClBuffer&) = delete;
+  ~ClBuffer();
+  cl_mem get() const { return m_; }
+  const cl_mem* ptr() const { return &m_; }
+  size_t bytes() const { return bytes_; }
+
+ private:
+  cl_mem m_ = nullptr;
+  size_t bytes_ = 0;
+};
+
+struct ClSceneBuffers;  // cl_backend.cpp: the baked scene uploaded once per context
+
+class ClContext {
+ public:
+  // Opens a context and queue on `dev`. work_group 0 = kDefaultWorkGroup.
+  ClContext(const ClDeviceInfo& dev, int work_group);
+  ~ClContext();
+  ClContext(const ClContext&) = delete;
+  ClContext& operator=(const ClContext&) = delete;
+
+  const ClDeviceInfo& info() const { return info_; }
+  // "<device name> (<platform name>, GPU|CPU)"
+  std::string name() const;
+  cl_context context() const { return ctx_; }
+  cl_command_queue queue() const { return queue_; }
+
+  // Kernel `kernel` of kernels/<program>.cl; the program is built on first use (InputError with a
+  // saved build log on failure) and cached.
+  cl_kernel kernel(const std::string& program, const std::string& kernel);
+  // Builds every embedded program now (benchmarks time this apart from the work).
+  void build_all();
+  double build_seconds() const { return build_seconds_; }
+
+  // Largest single buffer this context will create.
+  uint64_t max_alloc() const { return max_alloc_; }
+  void set_max_alloc(uint64_t bytes);
+  int work_group() const { return work_group_; }
+
+  // Items of `item_bytes` each that fit one buffer (at least 1), capped at `total`.
+  size_t batch_items(size_t item_bytes, size_t total) const;
+
+  // A buffer of `bytes` (at least 1 byte is allocated), optionally initialised from `host`.
+  // Throws InputError when bytes exceed max_alloc() (callers batch before that).
+  ClBuffer buffer(size_t bytes, const void* host = nullptr, cl_mem_flags flags = CL_MEM_READ_WRITE);
+  // A work buffer kept by the context under `key` and reused by later calls (reallocated only
+  // when it must grow): per-call allocation would fault in and zero fresh pages every pass.
+  const ClBuffer& scratch(const std::string& key, size_t bytes);
+  void write(const ClBuffer& b, size_t bytes, const void* host, size_t offset = 0);
+  void read(const ClBuffer& b, size_t bytes, void* host, size_t offset = 0);
+  void fill_zero(const ClBuffer& b, size_t bytes);
+  // Maps `bytes` of b for reading (blocking); unmap() when done.
+  const void* map_read(const ClBuffer& b, size_t bytes);
+  void unmap(const ClBuffer& b, const void* p);
+
+  // Sets the arguments in order (cl_mem via ClBuffer, scalars by value).
+  template <class... A> void args(cl_kernel k, const A&... a) {
+    cl_uint i = 0;
+    (set_arg(k, i++, a), ...);
+  }
+  // Enqueues k over n work-items (global size rounded up to the work-group size; kernels check
+  // their bound) and waits; adds the time to kernel_seconds().
+  void run(cl_kernel k, size_t n);
+  double kernel_seconds() const { return kernel_seconds_; }
+  void reset_kernel_seconds() { kernel_seconds_ = 0; }
+
+  // Scene upload cache (cl_backend.cpp).
+  std::shared_ptr<ClSceneBuffers> scene_cache;
+  const void* scene_cache_key = nullptr;
+
+ private:
+  void set_arg(cl_kernel k, cl_uint i, const ClBuffer& b);
+  template <class T> void set_arg(cl_kernel k, cl_uint i, const T& v) { set_raw(k, i, sizeof(T), &v); }
+  void set_raw(cl_kernel k, cl_uint i, size_t size, const void* v);
+  cl_program build(const std::string& program);
+  size_t local_size(cl_kernel k);
+
+  ClDeviceInfo info_;
+  cl_context ctx_ = nullptr;
+  cl_command_queue queue_ = nullptr;
+  std::map<std::string, cl_program> programs_;
+  std::map<std::string, cl_kernel> kernels_;
+  std::map<cl_kernel, size_t> local_;
+  std::map<std::string, ClBuffer> scratch_;
+  uint64_t max_alloc_ = 0;
+  int work_group_ = kDefaultWorkGroup;
+  double build_seconds_ = 0, kernel_seconds_ = 0;
+};
+
+// Opens the backend `opt` asks for and says which on `log` (one line "<tool>: device: ..."):
+//   cpu    → nullptr (the CPU backend), nothing printed;
+//   opencl → the chosen device (--cl-platform/--cl-device, else the first GPU, else the first CPU
+//            device, else the first), InputError when there is none;
+//   auto   → a GPU if one exists, else an OpenCL CPU device (PoCL), else nullptr.
+std::unique_ptr<ClContext> open_device(const DeviceOptions& opt, const std::string& tool);
+
+// "cpu" or "opencl: <device name> (<platform>)" for provenance.
+std::string backend_name(const ClContext* dev);
+
+// Throws InputError unless `code` is CL_SUCCESS; `what` names the call.
+void cl_check(cl_int code, const char* what);
+
+}  // namespace pf

@@ -1,0 +1,246 @@
+// OpenCL backend of the render stages: see cl_backend.h.
+#include "photonflow/cl_backend.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "photonflow/error.h"
+#include "photonflow/surface.h"
+
+namespace pf {
+
+// The baked scene on the device, uploaded once per context (and again when the scene changes).
+struct ClSceneBuffers {
+  ClBuffer tris, hh, nodes, leaf_tris, mats, lights, light_cdf;
+  cl_int node_count = 0, light_count = 0;
+  std::string scene_id;
+  size_t triangle_count = 0;
+};
+
+namespace {
+
+template <class T>
+ClBuffer upload_array(ClContext& dev, const std::vector<T>& v, const char* what) {
+  const size_t bytes = v.size() * sizeof(T);
+  if (bytes > dev.max_alloc())
+    throw input_error("", std::string("the scene's ") + what + " (" + std::to_string(bytes >> 20) +
+                              " MiB) exceed the device's largest allocation (" +
+                              std::to_string(dev.max_alloc() >> 20) + " MiB)",
+                      "use --device cpu");
+  return dev.buffer(bytes, v.empty() ? nullptr : v.data(), CL_MEM_READ_ONLY);
+}
+
+ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
+  ClSceneBuffers* c = dev.scene_cache.get();
+  if (c && dev.scene_cache_key == &scene && c->scene_id == scene.scene_id &&
+      c->triangle_count == scene.triangles.size())
+    return *c;
+  auto s = std::make_shared<ClSceneBuffers>();
+  s->tris = upload_array(dev, scene.triangles, "triangles");
+  s->hh = upload_array(dev, scene.hh, "Havel-Herout planes");
+  s->nodes = upload_array(dev, scene.kd.nodes, "kd-tree nodes");
+  s->leaf_tris = upload_array(dev, scene.kd.leaf_tris, "kd-tree leaf lists");
+  s->mats = upload_array(dev, scene.materials, "materials");
+  s->lights = upload_array(dev, scene.lights, "lights");
+  s->light_cdf = upload_array(dev, scene.light_cdf, "light CDF");
+  s->node_count = cl_int(scene.kd.nodes.size());
+  s->light_count = cl_int(scene.lights.size());
+  s->scene_id = scene.scene_id;
+  s->triangle_count = scene.triangles.size();
+  dev.scene_cache = s;
+  dev.scene_cache_key = &scene;
+  return *s;
+}
+
+// camera.h's CameraFrame, recomputed with the same expressions (its basis is private):
+// eye, forward, right, up, tan_half_x, tan_half_y.
+std::vector<float> camera_frame(const pf_camera& c) {
+  Vec3 eye(c.eye);
+  Vec3 forward = normalize(Vec3(c.look_at) - eye);
+  Vec3 right = normalize(cross(forward, Vec3(c.up)));
+  Vec3 up = cross(right, forward);
+  float tan_half_y = std::tan(0.5f * c.fov_y_deg * 3.14159265358979f / 180.f);
+  float tan_half_x = tan_half_y * float(c.width) / float(c.height);
+  return {eye.x,   eye.y,   eye.z,   forward.x,  forward.y, forward.z, right.x, right.y,
+          right.z, up.x,    up.y,    up.z,       tan_half_x, tan_half_y, 0.f,     0.f};
+}
+
+}  // namespace
+
+// ---- eye pass ----------------------------------------------------------------------------------
+
+EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClContext& dev) {
+  const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
+  const int strata = int(std::ceil(std::sqrt(double(spp))));
+  EyePassResult res;
+  res.width = W;
+  res.height = H;
+  res.radius = opt.radius > 0.f ? opt.radius : default_radius(scene);
+  const size_t npix = size_t(W) * size_t(H);
+  res.emitted.assign(npix * 3, 0.f);
+  res.direct.assign(npix * 3, 0.f);
+  if (npix == 0) return res;
+  if (npix * size_t(spp) > size_t(INT32_MAX))
+    throw input_error("", "too many pixel samples for the OpenCL backend", "use --device cpu");
+  const float eps = ray_epsilon(scene);
+  ClSceneBuffers& sb = scene_buffers(scene, dev);
+  std::vector<float> frame = camera_frame(scene.camera);
+  ClBuffer cam = dev.buffer(frame.size() * sizeof(float), frame.data(), CL_MEM_READ_ONLY);
+  cl_kernel k = dev.kernel("trace_hitpoints", "trace_hitpoints");
+
+  // Batches of pixels: the slot array (spp hitpoints per pixel) is the largest buffer.
+  const size_t batch = dev.batch_items(size_t(spp) * sizeof(pf_hitpoint), npix);
+  const ClBuffer& slots = dev.scratch("eye.slots", batch * size_t(spp) * sizeof(pf_hitpoint));
+  const ClBuffer& used = dev.scratch("eye.used", batch * size_t(spp) * sizeof(cl_int));
+  const ClBuffer& emitted = dev.scratch("eye.emitted", batch * 3 * sizeof(float));
+  const ClBuffer& direct = dev.scratch("eye.direct", batch * 3 * sizeof(float));
+  std::vector<cl_int> flags;
+  res.hitpoints.reserve(npix * size_t(spp));
+  const cl_int shadow = opt.direct == DirectMode::ShadowRays ? 1 : 0;
+  for (size_t off = 0; off < npix; off += batch) {
+    const cl_int count = cl_int(std::min(batch, npix - off));
+    dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.mats, sb.lights,
+             sb.light_cdf, sb.light_count, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(strata),
+             cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
+             cl_uint(opt.seed), eps, cl_int(off), count, slots, used, emitted, direct);
+    dev.run(k, size_t(count));
+    const size_t nslots = size_t(count) * size_t(spp);
+    flags.resize(nslots);
+    dev.read(used, nslots * sizeof(cl_int), flags.data());
+    const auto* hp = static_cast<const pf_hitpoint*>(dev.map_read(slots, nslots * sizeof(pf_hitpoint)));
+    for (size_t i = 0; i < nslots; ++i)
+      if (flags[i]) res.hitpoints.push_back(hp[i]);
+    dev.unmap(slots, hp);
+    dev.read(emitted, size_t(count) * 3 * sizeof(float), &res.emitted[off * 3]);
+    dev.read(direct, size_t(count) * 3 * sizeof(float), &res.direct[off * 3]);
+  }
+  return res;
+}
+
+// ---- photon pass -------------------------------------------------------------------------------
+
+PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
+                               ClContext& dev) {
+  PhotonPassResult res;
+  res.emitted = opt.photons;
+  if (scene.lights.empty() || opt.photons == 0) return res;
+  if (opt.photons > uint32_t(INT32_MAX))
+    throw input_error("", "--photons must be below 2^31 per pass with --device opencl");
+  const float eps = ray_epsilon(scene);
+  ClSceneBuffers& sb = scene_buffers(scene, dev);
+  cl_kernel k = dev.kernel("trace_photons", "trace_photons");
+  const size_t per = size_t(std::max(0, opt.max_bounces)) + 1;  // slots per emitted photon
+  const size_t batch = dev.batch_items(per * sizeof(pf_photon), opt.photons);
+  const ClBuffer& slots = dev.scratch("photon.slots", batch * per * sizeof(pf_photon));
+  const ClBuffer& stored = dev.scratch("photon.stored", batch * sizeof(cl_int));
+  std::vector<cl_int> counts;
+  for (size_t first = 0; first < opt.photons; first += batch) {
+    const cl_int count = cl_int(std::min(batch, size_t(opt.photons) - first));
+    dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.mats, sb.lights,
+             sb.light_cdf, sb.light_count, cl_uint(opt.seed), cl_uint(pass),
+             cl_int(opt.max_bounces), eps, cl_uint(first), count, slots, stored);
+    dev.run(k, size_t(count));
+    counts.resize(size_t(count));
+    dev.read(stored, size_t(count) * sizeof(cl_int), counts.data());
+    size_t total = 0;
+    for (cl_int c : counts) total += size_t(c);
+    res.photons.reserve(res.photons.size() + total);
+    const auto* ph =
+        static_cast<const pf_photon*>(dev.map_read(slots, size_t(count) * per * sizeof(pf_photon)));
+    for (size_t i = 0; i < size_t(count); ++i)  // slot-major: slot k of photon i at k·count + i
+      for (size_t k = 0; k < size_t(counts[i]); ++k) res.photons.push_back(ph[k * size_t(count) + i]);
+    dev.unmap(slots, ph);
+  }
+  return res;
+}
+
+// ---- naive PPM gather ----------------------------------------------------------------------------
+
+void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
+              uint64_t emitted, const PpmOptions& opt, ClContext& dev) {
+  if (!(opt.alpha > 0.f && opt.alpha <= 1.f))
+    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(opt.alpha));
+  const size_t nh = h.hitpoints.size(), np = photons.size();
+  if (nh > size_t(INT32_MAX) || np > size_t(INT32_MAX))
+    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
+  if (nh > 0 && np > 0) {
+    ClSceneBuffers& sb = scene_buffers(scene, dev);
+    cl_kernel gather = dev.kernel("illuminate_naive", "ppm_gather_naive");
+    cl_kernel apply = dev.kernel("illuminate_naive", "ppm_apply");
+    const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
+    const size_t hb = dev.batch_items(std::max(sizeof(pf_hitpoint), 3 * acc), nh);
+    const size_t pb = dev.batch_items(sizeof(pf_photon), np);
+    ClBuffer hps = dev.buffer(hb * sizeof(pf_hitpoint));
+    ClBuffer acc_m = dev.buffer(hb * sizeof(cl_int));
+    ClBuffer acc_tau = dev.buffer(hb * 3 * acc);
+    ClBuffer phs = dev.buffer(pb * sizeof(pf_photon), pb == np ? photons.data() : nullptr,
+                              CL_MEM_READ_ONLY);
+    const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
+    for (size_t hoff = 0; hoff < nh; hoff += hb) {
+      const cl_int hcount = cl_int(std::min(hb, nh - hoff));
+      dev.write(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
+      dev.fill_zero(acc_m, size_t(hcount) * sizeof(cl_int));
+      dev.fill_zero(acc_tau, size_t(hcount) * 3 * acc);
+      for (size_t poff = 0; poff < np; poff += pb) {  // photon index order: the CPU's sum order
+        const cl_int pcount = cl_int(std::min(pb, np - poff));
+        if (pb != np) dev.write(phs, size_t(pcount) * sizeof(pf_photon), &photons[poff]);
+        dev.args(gather, hps, cl_int(0), hcount, phs, pcount, sb.mats, skip_direct, acc_m, acc_tau);
+        dev.run(gather, size_t(hcount));
+      }
+      dev.args(apply, hps, cl_int(0), hcount, acc_m, acc_tau, opt.alpha);
+      dev.run(apply, size_t(hcount));
+      dev.read(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
+    }
+  }
+  h.photons_emitted += emitted;
+  h.passes += 1;
+  h.estimator = "ppm";
+}
+
+// ---- synthesis ---------------------------------------------------------------------------------
+
+Image synthesize(const HitpointSet& h, ClContext& dev) {
+  Image img(h.width, h.height);
+  std::vector<float>& radius = img.layer("radius");
+  std::vector<float>& photons = img.layer("photons");
+  std::vector<float>& count = img.layer("hitpoints");
+  const size_t npix = img.pixel_count();
+  if (npix == 0) return img;
+  if (npix * 3 * sizeof(float) > dev.max_alloc())
+    throw input_error("", "the image (" + std::to_string(npix) + " pixels) exceeds the device's "
+                          "largest allocation", "use --device cpu");
+  ClBuffer em = dev.buffer(npix * 3 * sizeof(float), h.emitted.data(), CL_MEM_READ_ONLY);
+  ClBuffer di = dev.buffer(npix * 3 * sizeof(float), h.direct.data(), CL_MEM_READ_ONLY);
+  ClBuffer rgb = dev.buffer(npix * 3 * sizeof(float));
+  ClBuffer rad = dev.buffer(npix * sizeof(float));
+  ClBuffer pho = dev.buffer(npix * sizeof(float));
+  ClBuffer cnt = dev.buffer(npix * sizeof(float));
+  cl_kernel init = dev.kernel("synthesize", "synth_init");
+  cl_kernel splat = dev.kernel("synthesize", "synth_splat");
+  cl_kernel finish = dev.kernel("synthesize", "synth_finish");
+  dev.args(init, em, di, cl_int(npix), rgb, rad, pho, cnt);
+  dev.run(init, npix);
+  const size_t nh = h.hitpoints.size();
+  if (nh > 0) {
+    const size_t hb = dev.batch_items(sizeof(pf_hitpoint), nh);
+    ClBuffer hps = dev.buffer(hb * sizeof(pf_hitpoint), nullptr, CL_MEM_READ_ONLY);
+    const float n_emitted = float(h.photons_emitted);
+    const cl_int has = h.photons_emitted > 0 ? 1 : 0;
+    for (size_t off = 0; off < nh; off += hb) {
+      const cl_int n = cl_int(std::min(hb, nh - off));
+      dev.write(hps, size_t(n) * sizeof(pf_hitpoint), &h.hitpoints[off]);
+      dev.args(splat, hps, n, cl_int(h.width), n_emitted, has, rgb, rad, pho, cnt);
+      dev.run(splat, size_t(n));
+    }
+  }
+  dev.args(finish, cl_int(npix), rad, pho, cnt);
+  dev.run(finish, npix);
+  dev.read(rgb, npix * 3 * sizeof(float), img.rgb.data());
+  dev.read(rad, npix * sizeof(float), radius.data());
+  dev.read(pho, npix * sizeof(float), photons.data());
+  dev.read(cnt, npix * sizeof(float), count.data());
+  return img;
+}
+
+}  // namespace pf
