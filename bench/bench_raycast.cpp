@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "photonflow/intersect_shared.h"
 #include "photonflow/kdtree.h"
 #include "photonflow/procedural.h"
 #include "photonflow/raycast.h"
@@ -51,6 +52,9 @@ struct BenchScene {
   float fov_y_deg = 60.f;
 };
 
+// Build parameters of the benchmark scenes (defaults unless overridden on the command line).
+pf::KdBuildParams g_kd_params;
+
 BenchScene make_scene(const std::string& name, std::vector<pf_triangle> tris, Vec3 eye,
                       Vec3 look_at) {
   BenchScene b;
@@ -58,7 +62,7 @@ BenchScene make_scene(const std::string& name, std::vector<pf_triangle> tris, Ve
   b.scene.triangles = std::move(tris);
   b.scene.compute_hh();
   b.scene.compute_bounds();
-  b.scene.kd = pf::build_kdtree(b.scene.triangles, {});
+  b.scene.kd = pf::build_kdtree(b.scene.triangles, g_kd_params);
   b.eye = eye;
   b.look_at = look_at;
   return b;
@@ -208,6 +212,123 @@ class EmbreeScene {
 };
 #endif
 
+
+// Work per ray of the two kd traversals, counted by replicas of their loops (same decisions as
+// pf_kd_traverse_ropes and the stack traversal of raycast.cpp): triangle tests, leaves visited
+// (and how many of them were empty) and inner nodes stepped through.
+struct WorkCount {
+  double tests = 0, leaves = 0, inner = 0, empty = 0;
+};
+
+bool leaf_count(const pf::Scene& s, const pf_kd_node& n, const float* o, const float* d,
+                float tmin, pf_ray_hit& hit, WorkCount& c) {
+  c.leaves += 1;
+  if (n.count == 0) c.empty += 1;
+  bool found = false;
+  for (int32_t i = n.first; i < n.first + n.count; ++i) {
+    const int32_t tri = s.kd.leaf_tris[size_t(i)];
+    float t, u, v;
+    c.tests += 1;
+    if (!pf_hh_intersect(&s.hh[size_t(tri)], o, d, tmin, hit.t, &t, &u, &v)) continue;
+    if (t == hit.t && hit.tri >= 0 && tri > hit.tri) continue;
+    hit = {t, tri, u, v};
+    found = true;
+  }
+  return found;
+}
+
+void count_ropes(const pf::Scene& s, const pf::Ray& r, WorkCount& c) {
+  const float o[3] = {r.o.x, r.o.y, r.o.z}, d[3] = {r.d.x, r.d.y, r.d.z};
+  const auto& nodes = s.kd.nodes;
+  pf_ray_hit hit{r.tmax, -1, 0, 0};
+  float inv_d[3];
+  int high[3];
+  for (int k = 0; k < 3; ++k) {
+    inv_d[k] = 1.f / d[k];
+    high[k] = inv_d[k] > 0.f;
+  }
+  float t_entry, t_leave;
+  if (!pf_kd_enter_root(nodes.data(), o, d, inv_d, r.tmin, hit.t, &t_entry, &t_leave)) return;
+  int32_t node = 0;
+  float tie = -1.f;
+  for (size_t step = 0; step < nodes.size(); ++step) {
+    const float p[3] = {o[0] + t_entry * d[0], o[1] + t_entry * d[1], o[2] + t_entry * d[2]};
+    const pf_kd_node* n = &nodes[size_t(node)];
+    while (n->axis != PF_KD_LEAF) {
+      c.inner += 1;
+      const int a = n->axis;
+      const bool go_left = p[a] < n->split || (p[a] == n->split && d[a] * tie > 0.f);
+      node = go_left ? n->left : n->right;
+      n = &nodes[size_t(node)];
+    }
+    leaf_count(s, *n, o, d, r.tmin, hit, c);
+    float t_exit = INFINITY;
+    int face = -1;
+    for (int k = 0; k < 3; ++k) {
+      const float te = ((high[k] ? n->hi[k] : n->lo[k]) - o[k]) * inv_d[k];
+      if (te < t_exit && d[k] != 0.f) t_exit = te, face = 2 * k + high[k];
+    }
+    if (face < 0 || hit.t < t_exit) break;
+    node = n->ropes[face];
+    if (node < 0) break;
+    tie = 1.f;
+    t_entry = std::max(t_exit, t_entry);
+  }
+}
+
+void count_stack(const pf::Scene& s, const pf::Ray& r, WorkCount& c) {
+  const float o[3] = {r.o.x, r.o.y, r.o.z}, d[3] = {r.d.x, r.d.y, r.d.z};
+  const auto& nodes = s.kd.nodes;
+  pf_ray_hit hit{r.tmax, -1, 0, 0};
+  const float inv_d[3] = {1.f / d[0], 1.f / d[1], 1.f / d[2]};
+  float t0, t1;
+  if (!pf_kd_enter_root(nodes.data(), o, d, inv_d, r.tmin, hit.t, &t0, &t1)) return;
+  struct Todo {
+    int32_t node;
+    float t0, t1;
+  } stack[pf::kKdMaxDepth + 1];
+  int top = 0;
+  int32_t node = 0;
+  for (;;) {
+    if (hit.t < t0) break;
+    const pf_kd_node& n = nodes[size_t(node)];
+    if (n.axis != PF_KD_LEAF) {
+      c.inner += 1;
+      const int a = n.axis;
+      const bool left_first = o[a] < n.split || (o[a] == n.split && d[a] <= 0.f);
+      const int32_t near = left_first ? n.left : n.right, far = left_first ? n.right : n.left;
+      const float tp = d[a] != 0.f ? (n.split - o[a]) * inv_d[a] : INFINITY;
+      if (tp > t1 || tp <= 0.f) {
+        node = near;
+      } else if (tp < t0) {
+        node = far;
+      } else {
+        stack[top++] = {far, tp, t1};
+        node = near;
+        t1 = tp;
+      }
+      continue;
+    }
+    leaf_count(s, n, o, d, r.tmin, hit, c);
+    if (top == 0) break;
+    --top;
+    node = stack[top].node;
+    t0 = stack[top].t0;
+    t1 = stack[top].t1;
+  }
+}
+
+// "tests / leaves / inner" per ray for one traversal.
+std::string work_per_ray(const pf::Scene& s, const std::vector<pf::Ray>& rays, bool ropes) {
+  WorkCount c;
+  for (const pf::Ray& r : rays) (ropes ? count_ropes : count_stack)(s, r, c);
+  const double n = double(rays.size());
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%.1f | %.2f | %.1f | %.2f", c.tests / n, c.leaves / n,
+                c.inner / n, c.empty / n);
+  return buf;
+}
+
 // Million rays per second: two decimals, or three significant digits below 1 (brute force).
 std::string mrays(double rays, double seconds) {
   const double m = rays / seconds / 1e6;
@@ -286,6 +407,13 @@ int main(int argc, char** argv) {
      cxxopts::value<std::vector<size_t>>()->default_value("10000,100000,1000000"))
     ("mesh", "optional mesh file (e.g. /work/shared/scenes/stanford-bunny.obj) placed in the room",
      cxxopts::value<std::string>()->default_value(""))
+    ("cost-traversal", "kd build: C_ts (default: KdBuildParams)", cxxopts::value<float>())
+    ("cost-intersect", "kd build: C_i (default: KdBuildParams)", cxxopts::value<float>())
+    ("empty-bonus", "kd build: empty-space bonus (default: KdBuildParams)",
+     cxxopts::value<float>())
+    ("max-leaf-size", "kd build: never split this many triangles or fewer",
+     cxxopts::value<int>())
+    ("max-depth", "kd build: depth limit (0 = automatic)", cxxopts::value<int>())
     ("h,help", "print this help");
   // clang-format on
   const auto args = opts.parse(argc, argv);
@@ -299,6 +427,11 @@ int main(int argc, char** argv) {
   const int runs = std::max(1, args["runs"].as<int>());
   const auto threads = args["threads"].as<std::vector<int>>();
   const std::string mesh = args["mesh"].as<std::string>();
+  if (args.count("cost-traversal")) g_kd_params.cost_traversal = args["cost-traversal"].as<float>();
+  if (args.count("cost-intersect")) g_kd_params.cost_intersect = args["cost-intersect"].as<float>();
+  if (args.count("empty-bonus")) g_kd_params.empty_bonus = args["empty-bonus"].as<float>();
+  if (args.count("max-depth")) g_kd_params.max_depth = args["max-depth"].as<int>();
+  if (args.count("max-leaf-size")) g_kd_params.max_leaf_size = args["max-leaf-size"].as<int>();
 
   std::vector<BenchScene> scenes;
   scenes.push_back(make_scene("Cornell room", pf::make_cornell_room(400), {0.5f, 0.5f, 0.99f},
@@ -322,7 +455,7 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::ostringstream table;
+  std::ostringstream table, work;
   table << "### Closest-hit throughput (million rays/s, median of " << runs << " runs)\n\n"
         << "| scene | rays | method |";
   for (int t : threads) table << " " << t << (t == 1 ? " thread" : " threads") << " |";
@@ -331,21 +464,43 @@ int main(int argc, char** argv) {
   table << "\n";
   for (const BenchScene& b : scenes) {
     std::cerr << "rays: " << b.name << "\n";
-    bench_rays(b, "primary " + std::to_string(image) + "²", primary_rays(b, image), brute_rays,
-               threads, runs, table);
-    bench_rays(b, "random " + std::to_string(n_rays), random_rays(b, n_rays, 1), brute_rays,
-               threads, runs, table);
+    const auto primary = primary_rays(b, image);
+    const auto random = random_rays(b, n_rays, 1);
+    bench_rays(b, "primary " + std::to_string(image) + "²", primary, brute_rays, threads, runs,
+               table);
+    bench_rays(b, "random " + std::to_string(n_rays), random, brute_rays, threads, runs, table);
+    for (bool ropes : {true, false}) {
+      const char* tr = ropes ? "ropes" : "stack";
+      work << "| " << b.name << " | primary " << image << "² | " << tr << " | "
+           << work_per_ray(b.scene, primary, ropes) << " |\n";
+      work << "| " << b.name << " | random " << n_rays << " | " << tr << " | "
+           << work_per_ray(b.scene, random, ropes) << " |\n";
+    }
   }
+  table << "\n### Work per closest-hit ray\n\n"
+        << "| scene | rays | traversal | triangle tests | leaves | inner-node steps |"
+        << " empty leaves |\n"
+        << "|---|---|---|---:|---:|---:|---:|\n"
+        << work.str();
 
   table << "\n### Scenes and kd-trees\n\n"
-        << "| scene | triangles | nodes | leaf refs | depth | tree memory (MiB) |\n"
-        << "|---|---:|---:|---:|---:|---:|\n";
+        << "| scene | triangles | nodes | leaf refs | depth | tree memory (MiB) |"
+        << " host copy (MiB) |\n"
+        << "|---|---:|---:|---:|---:|---:|---:|\n";
   for (const BenchScene& b : scenes) {
     const pf::KdTree& kd = b.scene.kd;
-    char mem[32];
+    // raycast.cpp's host copy: 8-byte nodes, 208-byte packets of four triangles per leaf, and
+    // one int per leaf reference (first packet of a leaf).
+    size_t packets = 0;
+    for (const pf_kd_node& n : kd.nodes)
+      if (n.axis == PF_KD_LEAF) packets += size_t(n.count + 3) / 4;
+    const double host = double(kd.nodes.size() * 8 + packets * 208 + kd.leaf_tris.size() * 4);
+    char mem[32], hmem[32];
     std::snprintf(mem, sizeof mem, "%.2f", double(kd.memory_bytes()) / (1 << 20));
+    std::snprintf(hmem, sizeof hmem, "%.2f", host / (1 << 20));
     table << "| " << b.name << " | " << b.scene.triangles.size() << " | " << kd.nodes.size()
-          << " | " << kd.leaf_tris.size() << " | " << kd.depth << " | " << mem << " |\n";
+          << " | " << kd.leaf_tris.size() << " | " << kd.depth << " | " << mem << " | " << hmem
+          << " |\n";
   }
 
   table << "\n### kd-tree build (procedural blob; seconds, median of runs)\n\n"
@@ -355,12 +510,13 @@ int main(int argc, char** argv) {
   for (size_t i = 0; i < threads.size(); ++i) table << "---:|";
   table << "---:|---:|---:|\n";
   for (size_t n : args["build-sizes"].as<std::vector<size_t>>()) {
+    if (n == 0) continue;  // --build-sizes 0: no build table
     std::cerr << "build: " << n << "\n";
     const auto tris = pf::make_blob({0, 0, 0}, 1.f, n, 0.3f, 3);
     table << "| " << tris.size() << " |";
     pf::KdTree tree;
     for (int t : threads) {
-      pf::KdBuildParams p;
+      pf::KdBuildParams p = g_kd_params;
       p.threads = t;
       std::vector<double> sec;
       for (int r = 0; r < (n >= 1000000 ? std::min(runs, 3) : runs); ++r) {

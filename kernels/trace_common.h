@@ -13,15 +13,97 @@
 #pragma OPENCL FP_CONTRACT OFF
 
 #include "photonflow/shared_types.h"
+
+/* The rope traversal's leaf test, vectorised: intersect_shared.h's pf_kd_leaf_intersect runs one
+ * Havel–Herout test per triangle through the leaf's index list; this one reads a leaf-ordered copy
+ * of the planes in groups of four (transposed: 12 float4 of plane coefficients + the 4 triangle
+ * indices, built by cl_backend.cpp) and tests four triangles per vector operation — the same
+ * operations in the same order per lane, so the same bits — then applies the scalar rules
+ * (interval (tmin, t], ties to the lower triangle index, any-hit at the first hit in leaf order)
+ * lane by lane. The traversal passes it the group table as `leaf_tris` (group of each leaf's
+ * first index) and the groups as `hh`. */
+static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int* group_of_first,
+                         __global const pf_hh_triangle* groups, const float* o, const float* d,
+                         float tmin, int any_hit, float* hit_t, int* hit_tri, float* hit_u,
+                         float* hit_v);
+#define PF_KD_LEAF_TEST(n, lt, h, o, d, tmin, any, hit) \
+  pf_leaf_test4(n, lt, h, o, d, tmin, any, &(hit)->t, &(hit)->tri, &(hit)->u, &(hit)->v)
+
 #include "photonflow/intersect_shared.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling_shared.h"
+
+#define PF_LEAF_GROUP_FLOAT4 13 /* float4 per group: n, n1, n2 (x, y, z, w each), triangle ids */
+
+static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int* group_of_first,
+                         __global const pf_hh_triangle* groups, const float* o, const float* d,
+                         float tmin, int any_hit, float* hit_t, int* hit_tri, float* hit_u,
+                         float* hit_v) {
+  const int count = leaf->count;
+  if (count <= 0) return 0;
+  __global const float4* g =
+      (__global const float4*)groups + (size_t)group_of_first[leaf->first] * PF_LEAF_GROUP_FLOAT4;
+  float best_t = *hit_t, best_u = *hit_u, best_v = *hit_v;
+  int best_tri = *hit_tri, found = 0;
+  const float4 ox = (float4)(o[0]), oy = (float4)(o[1]), oz = (float4)(o[2]);
+  const float4 dx = (float4)(d[0]), dy = (float4)(d[1]), dz = (float4)(d[2]);
+  for (int base = 0; base < count; base += 4, g += PF_LEAF_GROUP_FLOAT4) {
+    /* pf_hh_intersect, four lanes (see intersect_shared.h for the equations) */
+    const float4 det = dx * g[0] + dy * g[1] + dz * g[2];
+    const float4 tp = -(g[3] + ox * g[0] + oy * g[1] + oz * g[2]);
+    const float4 sgn = select((float4)(1.0f), (float4)(-1.0f), det < (float4)(0.0f));
+    const float4 adet = det * sgn;
+    const float4 st = tp * sgn;
+    const float4 px = det * ox + tp * dx;
+    const float4 py = det * oy + tp * dy;
+    const float4 pz = det * oz + tp * dz;
+    const float4 su = (px * g[4] + py * g[5] + pz * g[6] + det * g[7]) * sgn;
+    const float4 sv = (px * g[8] + py * g[9] + pz * g[10] + det * g[11]) * sgn;
+    const float4 slack = PF_HH_EDGE_EPS * adet;
+    const int4 inside = (st >= (float4)(0.0f)) & (su >= -slack) & (sv >= -slack) &
+                        (su + sv <= adet + slack) & (adet > (float4)(0.0f));
+    if (!any(inside)) continue;
+    const float4 t4 = tp / det, u4 = su / adet, v4 = sv / adet;
+    int in[4], tri[4];
+    float t[4], u[4], v[4], st_[4], adet_[4];
+    vstore4(inside, 0, in);
+    vstore4(as_int4(g[12]), 0, tri);
+    vstore4(t4, 0, t);
+    vstore4(u4, 0, u);
+    vstore4(v4, 0, v);
+    vstore4(st, 0, st_);
+    vstore4(adet, 0, adet_);
+    const int lanes = count - base < 4 ? count - base : 4;
+    for (int k = 0; k < lanes; ++k) {
+      /* the scalar test's remaining conditions against the current closest hit */
+      if (!in[k] || !(st_[k] <= adet_[k] * best_t)) continue;
+      if (!(t[k] > tmin && t[k] <= best_t)) continue;
+      if (t[k] == best_t && best_tri >= 0 && tri[k] > best_tri) continue;
+      best_t = t[k];
+      best_tri = tri[k];
+      best_u = u[k];
+      best_v = v[k];
+      found = 1;
+      if (any_hit) break;
+    }
+    if (found && any_hit) break;
+  }
+  if (found) {
+    *hit_t = best_t;
+    *hit_tri = best_tri;
+    *hit_u = best_u;
+    *hit_v = best_v;
+  }
+  return found && any_hit;
+}
 
 /* The baked scene on the device (scene.h arrays, unchanged layouts). */
 typedef struct {
   __global const pf_triangle* tris;
   __global const pf_hh_triangle* hh;
   __global const pf_kd_node* nodes;
+  __global const pf_int* group_of_first; /* leaf-ordered plane groups (pf_leaf_test4) */
+  __global const float4* leaf_groups;
   __global const pf_int* leaf_tris;
   __global const pf_material* mats;
   __global const pf_light* lights;
@@ -34,6 +116,7 @@ typedef struct {
 #define PF_SCENE_PARAMS                                                                    \
   __global const pf_triangle *tris, __global const pf_hh_triangle *hh,                     \
       __global const pf_kd_node *nodes, int node_count, __global const pf_int *leaf_tris,  \
+      __global const pf_int *group_of_first, __global const float4 *leaf_groups,           \
       __global const pf_material *mats, __global const pf_light *lights,                   \
       __global const float *light_cdf, int light_count
 
@@ -43,6 +126,8 @@ typedef struct {
   s.hh = hh;               \
   s.nodes = nodes;         \
   s.leaf_tris = leaf_tris; \
+  s.group_of_first = group_of_first; \
+  s.leaf_groups = leaf_groups; \
   s.mats = mats;           \
   s.lights = lights;       \
   s.light_cdf = light_cdf; \
@@ -56,8 +141,10 @@ static inline int pf_trace(const pf_scene_view* s, const float* o, const float* 
   hit->tri = -1;
   hit->u = 0.0f;
   hit->v = 0.0f;
-  return pf_kd_traverse_ropes(s->nodes, s->node_count, s->leaf_tris, s->hh, o, d, tmin, any_hit,
-                              hit);
+  /* PF_KD_LEAF_TEST = pf_leaf_test4: the groups travel in the leaf_tris / hh arguments */
+  return pf_kd_traverse_ropes(s->nodes, s->node_count, s->group_of_first,
+                              (__global const pf_hh_triangle*)s->leaf_groups, o, d, tmin,
+                              any_hit, hit);
 }
 
 /* surface.h's SurfaceHit. */

@@ -14,7 +14,9 @@
 #include <vector>
 
 #include "photonflow/cl_backend.h"
+#include "photonflow/raycast.h"
 #include "photonflow/render_driver.h"
+#include "photonflow/rng.h"
 #include "photonflow/synthesize.h"
 #include "support.h"
 
@@ -262,6 +264,10 @@ TEST_CASE("OpenCL: buffers over the allocation limit are processed in batches", 
                                scene.hh.size() * sizeof(pf_hh_triangle),
                                scene.kd.nodes.size() * sizeof(pf_kd_node),
                                scene.kd.leaf_tris.size() * sizeof(int32_t)});
+  size_t groups = 0;  // the kernels' leaf-ordered plane groups: 13 float4 per 4 triangles
+  for (const pf_kd_node& n : scene.kd.nodes)
+    if (n.axis == PF_KD_LEAF) groups += size_t((n.count + 3) / 4) * 13 * 16;
+  scene_max = std::max(scene_max, groups);
   ClContext small(dev->info(), 0);
   small.set_max_alloc(scene_max + 1024);
   INFO("forced allocation limit " << small.max_alloc() << " bytes");
@@ -289,4 +295,44 @@ TEST_CASE("OpenCL: buffers over the allocation limit are processed in batches", 
   CHECK(std::memcmp(h2.hitpoints.data(), h1.hitpoints.data(),
                     h1.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
   CHECK(i2.rgb == i1.rgb);
+}
+
+TEST_CASE("OpenCL: the kernels' rope traversal returns the host's hits bit for bit",
+          "[opencl][raycast]") {
+  auto dev = test_device();
+  if (!dev) return;
+  // The room with a glass sphere (many small triangles), and the furnace sphere seen from inside.
+  for (int which = 0; which < 2; ++which) {
+    Scene scene = which == 0 ? test::room_scene(PF_MAT_GLASS, 8, 8) : test::furnace_scene(0.5f, 1.f, 8);
+    std::vector<float> rays;
+    std::vector<Ray> host;
+    const Vec3 lo = scene.bounds.lo, ext = scene.bounds.extent();
+    for (uint32_t i = 0; i < 20000; ++i) {
+      Ray r;
+      r.o = Vec3(lo.x + ext.x * (0.05f + 0.9f * pf_rng_float(9, 0, i, 0)),
+                 lo.y + ext.y * (0.05f + 0.9f * pf_rng_float(9, 0, i, 1)),
+                 lo.z + ext.z * (0.05f + 0.9f * pf_rng_float(9, 0, i, 2)));
+      r.d = Vec3(pf_rng_float(9, 0, i, 3) - 0.5f, pf_rng_float(9, 0, i, 4) - 0.5f,
+                 pf_rng_float(9, 0, i, 5) - 0.5f);
+      if (i % 7 == 0) r.d.x = 0.f;  // axis-parallel components
+      r.tmax = i % 4 == 0 ? 0.3f : INFINITY;
+      host.push_back(r);
+      rays.insert(rays.end(), {r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, r.tmin, r.tmax});
+    }
+    std::vector<ClRayHit> closest = cast_rays(scene, rays, false, *dev);
+    std::vector<ClRayHit> any = cast_rays(scene, rays, true, *dev);
+    size_t differ = 0, any_differ = 0, hits = 0;
+    for (size_t i = 0; i < host.size(); ++i) {
+      Hit h;
+      bool hit = intersect_closest(scene, host[i], h, Traversal::Ropes);
+      hits += hit;
+      const ClRayHit& c = closest[i];
+      differ += hit ? !(c.tri == h.tri && c.t == h.t && c.u == h.u && c.v == h.v) : c.tri != -1;
+      any_differ += intersect_any(scene, host[i], Traversal::Ropes) != (any[i].tri >= 0);
+    }
+    INFO("scene " << which << ": " << hits << " of " << host.size() << " rays hit");
+    CHECK(hits > host.size() / 2);
+    CHECK(differ == 0);
+    CHECK(any_differ == 0);
+  }
 }

@@ -264,3 +264,124 @@ TEST_CASE("closed meshes are watertight from inside", "[raycast]") {
     }
   }
 }
+
+TEST_CASE("rays aimed exactly at vertices and edges never slip through, from many origins",
+          "[raycast]") {
+  // Splits sit at vertex coordinates, so vertices lie on split planes and often at corners where
+  // several leaves meet; a ray aimed at such a vertex passes a corner of the leaf arrangement,
+  // where both traversals must still reach a leaf listing one of the triangles around it.
+  const auto sphere = pf::make_sphere({0.f, 0.f, 0.f}, 1.f, 3000);
+  const auto lumpy = pf::make_blob({0.2f, 0.1f, -0.1f}, 1.f, 5000, 0.3f, 5);
+  const auto coarse = pf::make_sphere({0.5f, 0.5f, 0.5f}, 0.25f, 60);
+  for (const auto* tris : {&sphere, &lumpy, &coarse}) {
+    const pf::Scene s = make_scene(*tris);
+    const Vec3 c = s.bounds.center();
+    const Vec3 e = s.bounds.extent();
+    std::vector<Vec3> origins = {c};
+    for (int k = 0; k < 3; ++k) {  // origins on the axes through the centre (on split planes)
+      Vec3 o = c;
+      o[k] += 0.1f * e[k];
+      origins.push_back(o);
+      o[k] = c[k] - 0.13f * e[k];
+      origins.push_back(o);
+    }
+    std::vector<pf::Ray> rays;
+    for (const Vec3& o : origins)
+      for (const pf_triangle& t : *tris)
+        for (const Vec3& target : {Vec3(t.v0), Vec3(t.v1), Vec3(t.v2),
+                                   (Vec3(t.v0) + Vec3(t.v1)) * 0.5f,
+                                   (Vec3(t.v1) + Vec3(t.v2)) * 0.5f}) {
+          pf::Ray r;
+          r.o = o;
+          r.d = target - o;
+          rays.push_back(r);
+        }
+    for (pf::Traversal trav : {pf::Traversal::Ropes, pf::Traversal::Stack}) {
+      std::vector<pf::Hit> hits;
+      pf::intersect_closest_batch(s, rays, hits, trav);
+      size_t missed = 0;
+      for (const pf::Hit& h : hits) missed += h.hit() ? 0 : 1;
+      INFO(pf::traversal_name(trav) << ", " << tris->size() << " triangles, " << rays.size()
+                                    << " rays");
+      CHECK(missed == 0);
+    }
+  }
+}
+
+TEST_CASE("stack and ropes give the same triangle, t and barycentrics, bit for bit", "[raycast]") {
+  // The host-only stack traversal (compact nodes, four-wide triangle tests) must return exactly
+  // what the shared rope traversal (the GPU kernels' code) returns, so either can serve the CPU.
+  for (const pf::Scene* s : {&room(), &soup(), &blob()}) {
+    for (uint32_t seed : {9u, 10u}) {
+      const auto rays = random_rays(*s, 100000, seed);
+      std::vector<pf::Hit> ropes, stack;
+      pf::intersect_closest_batch(*s, rays, ropes, pf::Traversal::Ropes);
+      pf::intersect_closest_batch(*s, rays, stack, pf::Traversal::Stack);
+      size_t differ = 0, scalar_differ = 0;
+      for (size_t i = 0; i < rays.size(); ++i) {
+        const pf::Hit& a = ropes[i];
+        const pf::Hit& b = stack[i];
+        const bool same = a.tri == b.tri && (!a.hit() || (a.t == b.t && a.u == b.u && a.v == b.v));
+        if (!same && differ++ < 5)
+          WARN("ray " << i << ": ropes tri " << a.tri << " t " << a.t << ", stack tri " << b.tri
+                      << " t " << b.t);
+        if (!a.hit()) continue;
+        // Both use a four-wide leaf test; the scalar shared test on the hit triangle alone must
+        // give the same bits.
+        pf::Scene one;
+        one.hh = {s->hh[size_t(a.tri)]};
+        pf::Hit h;
+        const bool scalar = pf::intersect_closest(one, rays[i], h, pf::Traversal::Brute);
+        if (!(scalar && h.t == a.t && h.u == a.u && h.v == a.v) && scalar_differ++ < 5)
+          WARN("ray " << i << ": tri " << a.tri << " t " << a.t << ", scalar test t " << h.t);
+      }
+      INFO(s->triangles.size() << " triangles, seed " << seed);
+      CHECK(differ == 0);
+      CHECK(scalar_differ == 0);
+    }
+  }
+}
+
+TEST_CASE("a tree stored in another node order gives the same hits", "[raycast]") {
+  // The host copy of the tree renumbers nodes into left-first preorder; a valid tree stored
+  // right-first (as another writer of scene.h5 might) must cast exactly like the original.
+  const pf::Scene& s = room();
+  pf::Scene p = s;
+  const auto& nodes = s.kd.nodes;
+  std::vector<int32_t> order, index(nodes.size());
+  for (std::vector<int32_t> todo = {0}; !todo.empty();) {
+    const int32_t i = todo.back();
+    todo.pop_back();
+    index[size_t(i)] = int32_t(order.size());
+    order.push_back(i);
+    if (nodes[size_t(i)].axis != PF_KD_LEAF) {
+      todo.push_back(nodes[size_t(i)].left);  // right child first
+      todo.push_back(nodes[size_t(i)].right);
+    }
+  }
+  pf::KdTree t = s.kd;
+  for (size_t i = 0; i < order.size(); ++i) {
+    pf_kd_node n = nodes[size_t(order[i])];
+    if (n.axis != PF_KD_LEAF) {
+      n.left = index[size_t(n.left)];
+      n.right = index[size_t(n.right)];
+    }
+    for (int32_t& r : n.ropes)
+      if (r >= 0) r = index[size_t(r)];
+    t.nodes[i] = n;
+  }
+  p.kd = t;
+  REQUIRE(pf::validate_kdtree(p.kd, p.triangles.size()) == "");
+  REQUIRE(p.kd.nodes[0].left != 1);
+  const auto rays = random_rays(s, 20000, 12);
+  for (pf::Traversal trav : {pf::Traversal::Ropes, pf::Traversal::Stack}) {
+    std::vector<pf::Hit> a, b;
+    pf::intersect_closest_batch(s, rays, a, trav);
+    pf::intersect_closest_batch(p, rays, b, trav);
+    size_t differ = 0;
+    for (size_t i = 0; i < rays.size(); ++i)
+      differ += (a[i].tri != b[i].tri || (a[i].hit() && a[i].t != b[i].t)) ? 1 : 0;
+    INFO(pf::traversal_name(trav));
+    CHECK(differ == 0);
+  }
+}

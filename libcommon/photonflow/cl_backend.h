@@ -43,4 +43,15 @@ void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& 
 
 Image synthesize(const HitpointSet& h, ClContext& dev);
 
+// Casts rays (8 floats each: origin, direction, tmin, tmax) with the kernels' rope traversal
+// (kernels/raycast.cl); returns per ray t, triangle (−1 = none) and barycentrics as the host's
+// intersect_closest/intersect_any report them. For tests and benchmarks.
+struct ClRayHit {
+  float t;
+  int32_t tri;
+  float u, v;
+};
+std::vector<ClRayHit> cast_rays(const Scene& scene, const std::vector<float>& rays, bool any_hit,
+                                ClContext& dev);
+
 }  // namespace pf

@@ -37,6 +37,8 @@ struct ClDeviceInfo {
 };
 
 // Every device of every OpenCL platform; empty when there is no platform (no ICD). Never throws.
+// The first call sets POCL_WORK_GROUP_METHOD=loops unless the environment has it (PoCL's
+// vectorising default is slower for these divergent kernels).
 std::vector<ClDeviceInfo> cl_list_devices();
 // Human-readable table of cl_list_devices() for --list-devices (says so when there is none).
 std::string cl_describe_devices();

@@ -152,16 +152,33 @@ PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
   return found && any_hit;
 }
 
+/* The leaf test of the rope traversal below. An OpenCL kernel may define PF_KD_LEAF_TEST before
+ * including this header to substitute a test with the same signature and the same result
+ * (kernels/trace_common.h: four triangles per vector operation over a leaf-ordered copy of the
+ * planes, reached through the leaf_tris and hh arguments). The host does the same with SSE
+ * (raycast.cpp); both are tested to return this function's bits. */
+#ifndef PF_KD_LEAF_TEST
+#define PF_KD_LEAF_TEST pf_kd_leaf_intersect
+#endif
+
 /* Stackless kd-tree traversal with ropes (Popov et al. 2007; thesis ch. 4.3).
  *
  * `hit` must come in with hit->t = tmax and hit->tri = −1; on return it holds the closest hit
  * with t in (tmin, tmax] (or, with any_hit, the first one found). Returns 1 when there is a hit.
  *
  * Loop: locate the leaf holding the entry point P = o + t_entry·d by descending from the current
- * node (points exactly on a split plane go to the side the ray moves into), test its triangles,
+ * node, test its triangles,
  * find the face through which the ray leaves the leaf, and follow that face's rope. Triangles are
  * accepted anywhere along the ray, so the loop may stop as soon as the closest hit lies before the
- * leaf's exit. t_entry never decreases, and at most `node_count` leaves are visited (a safety net
+ * leaf's exit. In the descents after a rope, a point exactly on a split plane goes to the side the
+ * ray comes from (the low side when d > 0, the high side when d < 0): the ray then leaves that
+ * leaf at once through the plane (t_exit == t_entry) into the other side, so both leaves are
+ * visited. Triangles touching the plane are listed on their own side only (kdtree.h), and a ray
+ * aimed exactly at a vertex on a corner of the leaf arrangement would otherwise skip the leaf that
+ * holds the vertex's triangles. In the first descent (at the origin or the root entry) a point on
+ * a plane goes to the side the ray moves into: behind it there is nothing to find (t > tmin), and
+ * eye rays from a point on split planes would pay a useless leaf per plane.
+ * t_entry never decreases, and at most `node_count` leaves are visited (a safety net
  * against rounding cycles at leaf corners; a correct tree never needs it). */
 PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int node_count,
                                    PF_GLOBAL const pf_int* leaf_tris,
@@ -180,29 +197,37 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
       !pf_kd_enter_root(nodes, o, d, inv_d, tmin, hit->t, &t_entry, &t_leave_root))
     return 0;
   pf_int node = 0;
+  float tie = -1.0f; /* first descent: ties go where the ray moves (d·tie > 0 picks the left) */
   for (pf_int step = 0; step < node_count; ++step) {
     const float p[3] = {o[0] + t_entry * d[0], o[1] + t_entry * d[1], o[2] + t_entry * d[2]};
     PF_GLOBAL const pf_kd_node* n = &nodes[node];
     while (n->axis != PF_KD_LEAF) {
       const int a = n->axis;
-      const int go_left = (p[a] < n->split) | ((p[a] == n->split) & (d[a] < 0.0f));
+      const int go_left = (p[a] < n->split) | ((p[a] == n->split) & (d[a] * tie > 0.0f));
       node = go_left ? n->left : n->right;
       n = &nodes[node];
     }
-    if (pf_kd_leaf_intersect(n, leaf_tris, hh, o, d, tmin, any_hit, hit)) return 1;
-    /* Exit face: the nearest of the three faces the ray moves towards. */
+    if (PF_KD_LEAF_TEST(n, leaf_tris, hh, o, d, tmin, any_hit, hit)) return 1;
+    /* Exit face: the nearest of the three faces the ray moves towards. An axis the ray does not
+     * move along is skipped: its face gives +inf or NaN from inside the slab, but −inf when the
+     * ray runs outside it, in the margin of the root box (pf_kd_enter_root) where it may still
+     * hit triangles by the edge tolerance. */
     float t_exit = INFINITY;
     int face = -1;
     for (int k = 0; k < 3; ++k) {
       const float te = ((high[k] ? n->hi[k] : n->lo[k]) - o[k]) * inv_d[k];
-      if (te < t_exit) {
+      if (te < t_exit && d[k] != 0.0f) {
         t_exit = te;
         face = 2 * k + high[k];
       }
     }
-    if (face < 0 || hit->t <= t_exit) break; /* closest hit lies in this leaf, or tmax reached */
+    /* The closest hit lies in this leaf, or tmax is reached. A hit exactly on the exit plane goes
+     * on into the next leaf, which may hold a triangle hit at the same t with a lower index (the
+     * tie rule of pf_kd_leaf_intersect; the stack traversal of raycast.cpp does the same). */
+    if (face < 0 || hit->t < t_exit) break;
     node = n->ropes[face];
     if (node < 0) break; /* left the scene box */
+    tie = 1.0f; /* later descents: ties go to the side the ray comes from */
     t_entry = t_exit > t_entry ? t_exit : t_entry;
   }
   return hit->tri >= 0;

@@ -11,12 +11,16 @@
 // kept sorted from parent to child (Wald & Havran 2006). Triangles that straddle a split are
 // clipped to each child's box as polygons ("split clipping"), so every reference's bounds are those
 // of the part of the triangle inside the node. A triangle that only touches a split plane (with a
-// vertex or an edge) is kept on both sides: splits sit at vertex coordinates, and a ray through
-// such a vertex is caught by the widened triangle test (PF_HH_EDGE_EPS, intersect_shared.h) at a
-// point a rounding error away on either side. Subtrees are built in parallel and spliced in a
-// fixed order: the arrays are the same bytes for any thread count.
+// vertex or an edge) stays on its own side; rays through such a vertex are caught because the
+// widened triangle test (PF_HH_EDGE_EPS, intersect_shared.h) accepts hits anywhere along the ray
+// and both traversals visit the leaves on both sides of a leaf corner the ray passes exactly
+// through (tested by aiming rays at every vertex, test_raycast.cpp). Subtrees are built in
+// parallel and spliced in a fixed order: the arrays are the same bytes for any thread count.
 #pragma once
+#include <atomic>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -32,9 +36,11 @@ constexpr int kKdBins = 64;
 // Nodes with fewer triangle references than this are split by the exact event sweep.
 constexpr size_t kKdExactMaxTriangles = 1024;
 
-// Defaults measured with bench/bench_raycast.cpp: one traversal step of the rope loop (descent,
-// exit face, cache miss on the node) costs about three Havel–Herout tests, and larger ratios
-// C_i/C_ts only deepen the tree (slower build, more memory) without faster rays.
+// Defaults measured with bench/bench_raycast.cpp (--cost-traversal, --cost-intersect, ...): one
+// traversal step of the rope loop (descent, exit face, cache miss on a 72-byte node) costs about
+// three Havel–Herout tests, and larger ratios C_i/C_ts (up to pbrt's 80) deepen the tree (3–5×
+// the nodes, slower build) for 15–27 % fewer triangle tests but more node steps and no faster
+// rays, with the rope traversal slower on the 100k-triangle scene (docs/BENCHMARKS.md).
 struct KdBuildParams {
   float cost_traversal = 3.0f;  // C_ts of eq. 4.8 (cost of one traversal step)
   float cost_intersect = 1.0f;  // C_L, C_R weight per triangle of eq. 4.8
@@ -44,6 +50,25 @@ struct KdBuildParams {
   int threads = 0;              // 0 = all cores; the tree is identical for any thread count
 };
 
+// Slot for derived, host-only traversal data (raycast.cpp: compact 8-byte nodes and the triangle
+// planes in leaf order), built from the arrays on first use. It is no part of the tree's bytes or
+// of scene.h5: copies and assignments start without it. raycast.cpp rebuilds it when the arrays
+// it was built from were replaced (other data pointers or sizes); arrays changed in place after
+// rays were cast need a fresh tree (assign the KdTree).
+class KdHostCache {
+ public:
+  KdHostCache() = default;
+  KdHostCache(const KdHostCache&) {}
+  KdHostCache& operator=(const KdHostCache&) {
+    current.store(nullptr, std::memory_order_release);
+    return *this;
+  }
+  // The cached object (nullptr if none) and the lock and owner list used to install one.
+  mutable std::atomic<const void*> current{nullptr};
+  mutable std::mutex mutex;
+  mutable std::vector<std::shared_ptr<const void>> owned;  // freed with the tree
+};
+
 struct KdTree {
   std::vector<pf_kd_node> nodes;  // nodes[0] is the root
   std::vector<int32_t> leaf_tris; // triangle indices referenced by leaves
@@ -51,6 +76,7 @@ struct KdTree {
   KdBuildParams params;
   double build_seconds = 0;
   int depth = 0;                  // deepest leaf
+  KdHostCache host_cache;         // derived host traversal data (raycast.cpp), not serialised
   bool empty() const { return nodes.empty(); }
   // Bytes of the two arrays (what a device upload needs).
   size_t memory_bytes() const {

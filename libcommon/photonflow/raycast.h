@@ -1,7 +1,11 @@
 // raycast.h — ray casting over a baked scene: closest hit and any hit (shadow rays), single rays
 // and multithreaded batches, with three traversals:
-//   Ropes — stackless kd-tree traversal along ropes (Popov et al. 2007), what the GPU kernels use;
-//   Stack — classic recursive kd-tree traversal with an explicit stack;
+//   Ropes — stackless kd-tree traversal along ropes (Popov et al. 2007): the shared C routine of
+//           intersect_shared.h, the code the GPU kernels run;
+//   Stack — classic kd-tree traversal with an explicit stack over a host-only compact copy of the
+//           tree (8-byte nodes, triangle planes in leaf order, four triangles per SSE test), built
+//           on first use; the default on the CPU: it returns the same triangle, t and barycentrics
+//           as Ropes, bit for bit (tested), 1.1–1.7× faster;
 //   Brute — every triangle (the reference).
 // Triangles are tested with the Havel–Herout test (thesis eq. 4.3–4.7).
 #pragma once
@@ -33,17 +37,17 @@ const char* traversal_name(Traversal t);
 
 // Closest hit with t in (tmin, tmax]. Returns hit.hit().
 bool intersect_closest(const Scene& scene, const Ray& ray, Hit& hit,
-                       Traversal trav = Traversal::Ropes);
+                       Traversal trav = Traversal::Stack);
 // True if any triangle is hit with t in (tmin, tmax] (shadow rays; the same interval as
 // intersect_closest, so a ray is occluded exactly when it has a closest hit).
-bool intersect_any(const Scene& scene, const Ray& ray, Traversal trav = Traversal::Ropes);
+bool intersect_any(const Scene& scene, const Ray& ray, Traversal trav = Traversal::Stack);
 
 // Batches over all cores (threads = 0) or the given count; results do not depend on threads.
 void intersect_closest_batch(const Scene& scene, const std::vector<Ray>& rays,
-                             std::vector<Hit>& hits, Traversal trav = Traversal::Ropes,
+                             std::vector<Hit>& hits, Traversal trav = Traversal::Stack,
                              int threads = 0);
 void intersect_any_batch(const Scene& scene, const std::vector<Ray>& rays,
-                         std::vector<uint8_t>& occluded, Traversal trav = Traversal::Ropes,
+                         std::vector<uint8_t>& occluded, Traversal trav = Traversal::Stack,
                          int threads = 0);
 
 }  // namespace pf

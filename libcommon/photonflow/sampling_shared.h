@@ -108,7 +108,23 @@ PF_INLINE void pf_to_world(const float* loc, const float* n, float* out) {
   for (int k = 0; k < 3; ++k) out[k] = t[k] * loc[0] + b[k] * loc[1] + n[k] * loc[2];
 }
 
-/* Uniform point on the unit disc, concentric mapping (Shirley & Chiu 1997). */
+/* sin and cos of x in [−π/4, π/4] by the single-precision minimax polynomials of Cephes' sinf and
+ * cosf (S. Moshier; relative error about 1e-7): plain arithmetic, so host and device compute the
+ * same bits (library sin/cos differ between libm and OpenCL implementations in the last bit, and
+ * PoCL's are several times slower than these for arguments that need no reduction). */
+PF_INLINE float pf_sin_pi4(float x) {
+  const float z = x * x;
+  return x + x * z * (-1.6666654611e-1f + z * (8.3321608736e-3f + z * -1.9515295891e-4f));
+}
+PF_INLINE float pf_cos_pi4(float x) {
+  const float z = x * x;
+  return 1.0f - 0.5f * z +
+         z * z * (4.166664568298827e-2f + z * (-1.388731625493765e-3f + z * 2.443315711809948e-5f));
+}
+
+/* Uniform point on the unit disc, concentric mapping (Shirley & Chiu 1997). The angle is
+ * φ = (π/4)·(b/a) in the first case and φ = π/2 − (π/4)·(a/b) in the second, where
+ * cos φ = sin θ and sin φ = cos θ with θ = (π/4)·(a/b); both θ lie in [−π/4, π/4]. */
 PF_INLINE void pf_sample_concentric_disc(float u1, float u2, float* x, float* y) {
   const float a = 2.0f * u1 - 1.0f;
   const float b = 2.0f * u2 - 1.0f;
@@ -117,16 +133,15 @@ PF_INLINE void pf_sample_concentric_disc(float u1, float u2, float* x, float* y)
     *y = 0.0f;
     return;
   }
-  float r, phi;
   if (PF_S_FABS(a) > PF_S_FABS(b)) {
-    r = a;
-    phi = (PF_S_PI / 4.0f) * (b / a);
+    const float phi = (PF_S_PI / 4.0f) * (b / a);
+    *x = a * pf_cos_pi4(phi);
+    *y = a * pf_sin_pi4(phi);
   } else {
-    r = b;
-    phi = (PF_S_PI / 2.0f) - (PF_S_PI / 4.0f) * (a / b);
+    const float theta = (PF_S_PI / 4.0f) * (a / b);
+    *x = b * pf_sin_pi4(theta);
+    *y = b * pf_cos_pi4(theta);
   }
-  *x = r * PF_S_COS(phi);
-  *y = r * PF_S_SIN(phi);
 }
 
 /* Cosine-weighted direction around unit normal n (Malley's method). Density cosθ/π. */

@@ -12,7 +12,7 @@ namespace pf {
 
 // The baked scene on the device, uploaded once per context (and again when the scene changes).
 struct ClSceneBuffers {
-  ClBuffer tris, hh, nodes, leaf_tris, mats, lights, light_cdf;
+  ClBuffer tris, hh, nodes, leaf_tris, group_of_first, leaf_groups, mats, lights, light_cdf;
   cl_int node_count = 0, light_count = 0;
   std::string scene_id;
   size_t triangle_count = 0;
@@ -24,9 +24,9 @@ template <class T>
 ClBuffer upload_array(ClContext& dev, const std::vector<T>& v, const char* what) {
   const size_t bytes = v.size() * sizeof(T);
   if (bytes > dev.max_alloc())
-    throw input_error("", std::string("the scene's ") + what + " (" + std::to_string(bytes >> 20) +
-                              " MiB) exceed the device's largest allocation (" +
-                              std::to_string(dev.max_alloc() >> 20) + " MiB)",
+    throw input_error("", std::string("the scene's ") + what + " (" + std::to_string(bytes) +
+                              " bytes) exceed the device's largest allocation (" +
+                              std::to_string(dev.max_alloc()) + " bytes)",
                       "use --device cpu");
   return dev.buffer(bytes, v.empty() ? nullptr : v.data(), CL_MEM_READ_ONLY);
 }
@@ -41,6 +41,38 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
   s->hh = upload_array(dev, scene.hh, "Havel-Herout planes");
   s->nodes = upload_array(dev, scene.kd.nodes, "kd-tree nodes");
   s->leaf_tris = upload_array(dev, scene.kd.leaf_tris, "kd-tree leaf lists");
+  {  // Leaf-ordered planes in groups of four for the kernels' vector leaf test (trace_common.h):
+     // per group 12 float4 (n, n1, n2 transposed: x of 4 triangles, y, z, w) + 4 triangle ids.
+    std::vector<int32_t> group_of_first(scene.kd.leaf_tris.size() + 1, 0);
+    std::vector<int32_t> longest(scene.kd.leaf_tris.size() + 1, 0);
+    for (const pf_kd_node& n : scene.kd.nodes)  // leaves starting at one index share its groups
+      if (n.axis == PF_KD_LEAF && n.count > 0)
+        longest[size_t(n.first)] = std::max(longest[size_t(n.first)], n.count);
+    std::vector<float> groups;
+    int32_t next = 0;
+    for (size_t f = 0; f < longest.size(); ++f) {
+      if (longest[f] <= 0) continue;
+      group_of_first[f] = next;
+      for (int32_t b = 0; b < longest[f]; b += 4, ++next) {
+        float g[52] = {};
+        int32_t ids[4] = {-1, -1, -1, -1};
+        for (int k = 0; k < 4 && b + k < longest[f]; ++k) {
+          const int32_t tri = scene.kd.leaf_tris[f + size_t(b + k)];
+          const pf_hh_triangle& h = scene.hh[size_t(tri)];
+          ids[k] = tri;
+          for (int c = 0; c < 4; ++c) {
+            g[c * 4 + k] = h.n[c];
+            g[16 + c * 4 + k] = h.n1[c];
+            g[32 + c * 4 + k] = h.n2[c];
+          }
+        }
+        std::memcpy(&g[48], ids, sizeof ids);
+        groups.insert(groups.end(), g, g + 52);
+      }
+    }
+    s->group_of_first = upload_array(dev, group_of_first, "kd-tree leaf groups");
+    s->leaf_groups = upload_array(dev, groups, "leaf-ordered triangle planes");
+  }
   s->mats = upload_array(dev, scene.materials, "materials");
   s->lights = upload_array(dev, scene.lights, "lights");
   s->light_cdf = upload_array(dev, scene.light_cdf, "light CDF");
@@ -100,7 +132,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
   const cl_int shadow = opt.direct == DirectMode::ShadowRays ? 1 : 0;
   for (size_t off = 0; off < npix; off += batch) {
     const cl_int count = cl_int(std::min(batch, npix - off));
-    dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.mats, sb.lights,
+    dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
+             sb.leaf_groups, sb.mats, sb.lights,
              sb.light_cdf, sb.light_count, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(strata),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              cl_uint(opt.seed), eps, cl_int(off), count, slots, used, emitted, direct);
@@ -137,7 +170,8 @@ PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPa
   std::vector<cl_int> counts;
   for (size_t first = 0; first < opt.photons; first += batch) {
     const cl_int count = cl_int(std::min(batch, size_t(opt.photons) - first));
-    dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.mats, sb.lights,
+    dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
+             sb.leaf_groups, sb.mats, sb.lights,
              sb.light_cdf, sb.light_count, cl_uint(opt.seed), cl_uint(pass),
              cl_int(opt.max_bounces), eps, cl_uint(first), count, slots, stored);
     dev.run(k, size_t(count));
@@ -171,11 +205,11 @@ void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& 
     const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
     const size_t hb = dev.batch_items(std::max(sizeof(pf_hitpoint), 3 * acc), nh);
     const size_t pb = dev.batch_items(sizeof(pf_photon), np);
-    ClBuffer hps = dev.buffer(hb * sizeof(pf_hitpoint));
-    ClBuffer acc_m = dev.buffer(hb * sizeof(cl_int));
-    ClBuffer acc_tau = dev.buffer(hb * 3 * acc);
-    ClBuffer phs = dev.buffer(pb * sizeof(pf_photon), pb == np ? photons.data() : nullptr,
-                              CL_MEM_READ_ONLY);
+    const ClBuffer& hps = dev.scratch("ppm.hitpoints", hb * sizeof(pf_hitpoint));
+    const ClBuffer& acc_m = dev.scratch("ppm.acc_m", hb * sizeof(cl_int));
+    const ClBuffer& acc_tau = dev.scratch("ppm.acc_tau", hb * 3 * acc);
+    const ClBuffer& phs = dev.scratch("ppm.photons", pb * sizeof(pf_photon));
+    if (pb == np) dev.write(phs, np * sizeof(pf_photon), photons.data());
     const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
     for (size_t hoff = 0; hoff < nh; hoff += hb) {
       const cl_int hcount = cl_int(std::min(hb, nh - hoff));
@@ -210,12 +244,16 @@ Image synthesize(const HitpointSet& h, ClContext& dev) {
   if (npix * 3 * sizeof(float) > dev.max_alloc())
     throw input_error("", "the image (" + std::to_string(npix) + " pixels) exceeds the device's "
                           "largest allocation", "use --device cpu");
-  ClBuffer em = dev.buffer(npix * 3 * sizeof(float), h.emitted.data(), CL_MEM_READ_ONLY);
-  ClBuffer di = dev.buffer(npix * 3 * sizeof(float), h.direct.data(), CL_MEM_READ_ONLY);
-  ClBuffer rgb = dev.buffer(npix * 3 * sizeof(float));
-  ClBuffer rad = dev.buffer(npix * sizeof(float));
-  ClBuffer pho = dev.buffer(npix * sizeof(float));
-  ClBuffer cnt = dev.buffer(npix * sizeof(float));
+  if (h.emitted.size() < npix * 3 || h.direct.size() < npix * 3)
+    throw input_error("", "hitpoint state without emitted/direct layers of the image size");
+  const ClBuffer& em = dev.scratch("synth.emitted", npix * 3 * sizeof(float));
+  const ClBuffer& di = dev.scratch("synth.direct", npix * 3 * sizeof(float));
+  const ClBuffer& rgb = dev.scratch("synth.rgb", npix * 3 * sizeof(float));
+  const ClBuffer& rad = dev.scratch("synth.radius", npix * sizeof(float));
+  const ClBuffer& pho = dev.scratch("synth.photons", npix * sizeof(float));
+  const ClBuffer& cnt = dev.scratch("synth.count", npix * sizeof(float));
+  dev.write(em, npix * 3 * sizeof(float), h.emitted.data());
+  dev.write(di, npix * 3 * sizeof(float), h.direct.data());
   cl_kernel init = dev.kernel("synthesize", "synth_init");
   cl_kernel splat = dev.kernel("synthesize", "synth_splat");
   cl_kernel finish = dev.kernel("synthesize", "synth_finish");
@@ -224,7 +262,7 @@ Image synthesize(const HitpointSet& h, ClContext& dev) {
   const size_t nh = h.hitpoints.size();
   if (nh > 0) {
     const size_t hb = dev.batch_items(sizeof(pf_hitpoint), nh);
-    ClBuffer hps = dev.buffer(hb * sizeof(pf_hitpoint), nullptr, CL_MEM_READ_ONLY);
+    const ClBuffer& hps = dev.scratch("synth.hitpoints", hb * sizeof(pf_hitpoint));
     const float n_emitted = float(h.photons_emitted);
     const cl_int has = h.photons_emitted > 0 ? 1 : 0;
     for (size_t off = 0; off < nh; off += hb) {
@@ -241,6 +279,31 @@ Image synthesize(const HitpointSet& h, ClContext& dev) {
   dev.read(pho, npix * sizeof(float), photons.data());
   dev.read(cnt, npix * sizeof(float), count.data());
   return img;
+}
+
+// ---- ray casting (tests) -------------------------------------------------------------------------
+
+std::vector<ClRayHit> cast_rays(const Scene& scene, const std::vector<float>& rays, bool any_hit,
+                                ClContext& dev) {
+  static_assert(sizeof(ClRayHit) == 16, "ClRayHit mirrors pf_ray_hit");
+  const size_t n = rays.size() / 8;
+  std::vector<ClRayHit> hits(n);
+  if (n == 0) return hits;
+  ClSceneBuffers& sb = scene_buffers(scene, dev);
+  cl_kernel k = dev.kernel("raycast", "cast_rays");
+  const size_t batch = dev.batch_items(8 * sizeof(float), n);
+  const ClBuffer& rb = dev.scratch("cast.rays", batch * 8 * sizeof(float));
+  const ClBuffer& hb = dev.scratch("cast.hits", batch * sizeof(ClRayHit));
+  for (size_t off = 0; off < n; off += batch) {
+    const cl_int count = cl_int(std::min(batch, n - off));
+    dev.write(rb, size_t(count) * 8 * sizeof(float), &rays[off * 8]);
+    dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
+             sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, rb, count,
+             cl_int(any_hit ? 1 : 0), hb);
+    dev.run(k, size_t(count));
+    dev.read(hb, size_t(count) * sizeof(ClRayHit), &hits[off]);
+  }
+  return hits;
 }
 
 }  // namespace pf

@@ -147,7 +147,20 @@ void cl_check(cl_int code, const char* what) {
 
 // ---- devices -----------------------------------------------------------------------------------
 
+// PoCL's default work-group method ("loopvec") vectorises the loop over a work-group's items; our
+// kernels diverge (rope traversal, bounce loops), and the masked vector code ran 1.3–1.9× slower
+// than plain work-item loops ("loops") on the benchmark (docs/BENCHMARKS.md). Set before the
+// platform is first queried; a POCL_WORK_GROUP_METHOD from the user's environment wins, and other
+// drivers ignore the variable.
+void pocl_defaults() {
+  static bool done = false;
+  if (done) return;
+  done = true;
+  setenv("POCL_WORK_GROUP_METHOD", "loops", 0);
+}
+
 std::vector<ClDeviceInfo> cl_list_devices() {
+  pocl_defaults();
   std::vector<ClDeviceInfo> out;
   cl_uint np = 0;
   if (clGetPlatformIDs(0, nullptr, &np) != CL_SUCCESS || np == 0) return out;

@@ -33,28 +33,22 @@ void check_alpha(float alpha) {
     throw input_error("", "alpha must be in (0, 1], got " + std::to_string(alpha));
 }
 
-// One gathered photon: its sort key (the photon's index in the pass's original order) and its
-// BRDF-weighted flux f_r·Φ_p, each channel one float product as eq. 3.17 sums it.
-struct Contribution {
-  int32_t key;
-  float c[3];
-};
-
-// Sums the contributions in key order (photon index order: the same order for every gather
-// method and thread count, so the sums are reproducible) and applies eq. 3.14–3.18.
-inline void apply_update(pf_hitpoint& hp, const Contribution* e, size_t m, float alpha) {
+// Eq. 3.17 over the m accepted photons photon(0), ..., photon(m−1), which the caller lists in
+// increasing original photon index (the same order for every gather method and thread count, so
+// the sums are reproducible and the grid and FLANN gathers agree to the bit): τ_M = Σ f_r·Φ_p,
+// each term one float product summed in double; then eq. 3.14, 3.16, 3.18.
+template <class PhotonAt>
+inline void gather_update(pf_hitpoint& hp, const Vec3& fr, size_t m, PhotonAt&& photon,
+                          float alpha) {
   double tau[3] = {0, 0, 0};
   for (size_t k = 0; k < m; ++k) {
-    tau[0] += double(e[k].c[0]);
-    tau[1] += double(e[k].c[1]);
-    tau[2] += double(e[k].c[2]);
+    const pf_photon& p = photon(k);
+    tau[0] += double(fr.x * p.flux[0]);
+    tau[1] += double(fr.y * p.flux[1]);
+    tau[2] += double(fr.z * p.flux[2]);
   }
   const float tau_m[3] = {float(tau[0]), float(tau[1]), float(tau[2])};
   pf_ppm_update(&hp, int(m), tau_m, alpha);  // eq. 3.14, 3.16, 3.18
-}
-
-inline Contribution contribution(int32_t key, const Vec3& fr, const pf_photon& p) {
-  return {key, {fr.x * p.flux[0], fr.y * p.flux[1], fr.z * p.flux[2]}};
 }
 
 // Sorts distinct keys ascending. The lists are short (tens of photons) and made of a few
@@ -98,7 +92,6 @@ void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, u
     // Per-thread work space, kept from pass to pass.
     thread_local std::vector<int32_t> cand;   // sorted-array indices of the accepted photons
     thread_local std::vector<uint64_t> keys;  // (original index << 32) | sorted index: sum order
-    thread_local std::vector<Contribution> buf;
 #pragma omp for schedule(dynamic, 256)
     for (int64_t hi = 0; hi < count; ++hi) {
       pf_hitpoint& hp = h.hitpoints[size_t(hi)];
@@ -147,13 +140,9 @@ void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, u
       for (size_t j = 0; j < m; ++j)
         k[j] = (uint64_t(uint32_t(order[cand[j]])) << 32) | uint32_t(cand[j]);
       sort_keys(k, m);
-      if (buf.size() < m) buf.resize(2 * m);
-      const Vec3 fr = brdf(scene, hp);
-      for (size_t j = 0; j < m; ++j) {
-        const int32_t i = int32_t(uint32_t(k[j]));
-        buf[j] = contribution(int32_t(k[j] >> 32), fr, photons[i]);
-      }
-      apply_update(hp, buf.data(), m, alpha);
+      gather_update(hp, brdf(scene, hp), m,
+                    [&](size_t j) -> const pf_photon& { return photons[uint32_t(k[j])]; },
+                    alpha);
     }
   }
   finish_pass(h, emitted);
@@ -184,18 +173,16 @@ void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& 
 #pragma omp parallel num_threads(thread_count(opt.threads))
   {
     thread_local std::vector<int32_t> idx;  // per-thread work space, kept from pass to pass
-    thread_local std::vector<Contribution> buf;
 #pragma omp for schedule(dynamic, 256)
     for (int64_t i = 0; i < count; ++i) {
       pf_hitpoint& hp = h.hitpoints[size_t(i)];
-      const Vec3 fr = brdf(scene, hp);
       map.gather_radius(hp.position, hp.radius, hp.mesh, idx);  // increasing photon index
-      buf.clear();
-      for (int32_t j : idx) {
-        const pf_photon& p = photons[size_t(j)];
-        if (photon_accepted(hp, p, skip_direct)) buf.push_back(contribution(j, fr, p));
-      }
-      apply_update(hp, buf.data(), buf.size(), alpha);
+      size_t m = 0;
+      for (int32_t j : idx)  // keep the accepted ones, in order
+        if (photon_accepted(hp, photons[size_t(j)], skip_direct)) idx[m++] = j;
+      gather_update(hp, brdf(scene, hp), m,
+                    [&](size_t k) -> const pf_photon& { return photons[size_t(idx[k])]; },
+                    alpha);
     }
   }
   finish_pass(h, emitted);

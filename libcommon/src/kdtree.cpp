@@ -273,8 +273,8 @@ class Builder {
         while (i < ev.size() && ev[i].pos == pos && ev_type(ev[i]) == kEnd) ++n_end, ++i;
         while (i < ev.size() && ev[i].pos == pos && ev_type(ev[i]) == kPlanar) ++n_planar, ++i;
         while (i < ev.size() && ev[i].pos == pos && ev_type(ev[i]) == kStart) ++n_start, ++i;
-        // References touching the plane from one side go to both children (see classify).
-        const size_t left = nl + n_start, right = nr - n_planar;
+        // References touching the plane from one side stay on that side (see classify).
+        const size_t left = nl, right = nr - n_planar - n_end;
         if (pos > box.lo[k] && pos < box.hi[k]) {
           const float cl = sah(box, k, pos, left + n_planar, right, inv_area);
           const float cr = sah(box, k, pos, left, right + n_planar, inv_area);
@@ -289,33 +289,23 @@ class Builder {
   }
 
   // Side of split s for a reference with bounds b. A reference that only touches the plane (a
-  // vertex or an edge on it) goes to both sides: splits sit at vertex coordinates, and a ray
-  // through such a vertex is accepted by the Havel–Herout test only thanks to PF_HH_EDGE_EPS, at
-  // a point that may lie a rounding error on either side of the plane.
+  // vertex or an edge on it) stays on its own side: the Havel–Herout test accepts hits anywhere
+  // along the ray, and both traversals visit the leaves on either side of a plane that the ray
+  // crosses exactly at a corner or edge of the leaf arrangement (the stack traversal visits
+  // zero-length intervals; the rope descent goes to the side the ray comes from on a tie, see
+  // pf_kd_traverse_ropes), so a ray through a vertex on a split plane still meets the leaf that
+  // holds the vertex's triangles. (Keeping touching references on both sides instead doubled
+  // the triangle tests per ray on meshes whose vertices lie on split planes.)
   static Side classify(const Box& b, const Split& s) {
     const float lo = b.lo[s.axis], hi = b.hi[s.axis];
     if (lo == s.pos && hi == s.pos) return s.planar;
-    if (hi < s.pos) return kLeft;
-    if (lo > s.pos) return kRight;
+    if (hi <= s.pos) return kLeft;
+    if (lo >= s.pos) return kRight;
     return kBoth;
   }
 
-  // Bounds of reference r inside child box `child` (r straddles, touches or lies in the plane).
-  bool clip_ref(const Ref& r, const Split& s, const Box& child, Box& out) const {
-    const float lo = r.box.lo[s.axis], hi = r.box.hi[s.axis];
-    if (lo == hi) {  // lies in the plane: already inside both
-      out = r.box;
-      return true;
-    }
-    if (hi == s.pos || lo == s.pos) {
-      // Touches the plane from one side. Into the far child goes only what lies on the plane; its
-      // bounds are the reference's bounds squashed onto the plane (conservative, and cheap).
-      // The near child holds the whole reference.
-      out = r.box;
-      const bool far = (hi == s.pos) == (child.lo[s.axis] == s.pos);
-      if (far) out.lo[s.axis] = out.hi[s.axis] = s.pos;
-      return true;
-    }
+  // Bounds of reference r inside child box `child` (r straddles the plane).
+  bool clip_ref(const Ref& r, const Box& child, Box& out) const {
     if (clip_triangle_bounds(tris_[size_t(r.tri)], child, out)) return true;
     // The polygon vanished in rounding: keep the (conservative) box overlap instead.
     for (int k = 0; k < 3; ++k) {
@@ -335,8 +325,8 @@ class Builder {
         rrefs.push_back(r);
       } else {
         Ref c{r.tri, {}};
-        if (clip_ref(r, s, lbox, c.box)) lrefs.push_back(c);
-        if (clip_ref(r, s, rbox, c.box)) rrefs.push_back(c);
+        if (clip_ref(r, lbox, c.box)) lrefs.push_back(c);
+        if (clip_ref(r, rbox, c.box)) rrefs.push_back(c);
       }
     }
   }
@@ -394,8 +384,8 @@ class Builder {
       if (side[i] != kBoth) continue;
       const Ref& r = node.refs[i];
       Ref c{r.tri, {}};
-      if (clip_ref(r, s, lbox, c.box)) left.refs.push_back(c);
-      if (clip_ref(r, s, rbox, c.box)) right.refs.push_back(c);
+      if (clip_ref(r, lbox, c.box)) left.refs.push_back(c);
+      if (clip_ref(r, rbox, c.box)) right.refs.push_back(c);
     }
     std::array<std::vector<Event>, 3> lnew, rnew;
     add_all_events(left.refs, l_one, lnew);

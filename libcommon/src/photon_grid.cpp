@@ -44,7 +44,8 @@ int bins_along(float extent, float d, int max_bins) {
   return std::clamp(static_cast<int>(std::ceil(extent / d)), 1, max_bins);
 }
 
-// Photons per work block (a block never spans two input spans).
+// Photons per work block (a block never spans two input spans). Worker w (a loop index, not a
+// thread id: any team size, nested regions included, runs every worker) owns a contiguous run.
 constexpr size_t kBlock = 8192;
 // Below this many photons the build runs on the calling thread only.
 constexpr size_t kParallelMin = 32768;
@@ -160,9 +161,8 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
   sc.first_bad.assign(size_t(workers), SIZE_MAX);
 
   // 1. Bounds and count of each mesh's photons; the first invalid photon.
-#pragma omp parallel num_threads(workers)
-  {
-    const int w = omp_get_thread_num();
+#pragma omp parallel for schedule(static, 1) num_threads(workers)
+  for (int w = 0; w < workers; ++w) {
     std::vector<MeshAcc>& acc = sc.acc[size_t(w)];
     reset_acc(acc, mesh_count);
     for (int b = block_begin(w); b < block_begin(w + 1); ++b) {
@@ -189,7 +189,8 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
     size_t i = sc.first_bad[size_t(w)];
     if (i == SIZE_MAX) continue;
     for (const Block& blk : sc.blocks)
-      if (i >= blk.base && i < blk.base + blk.size) throw_bad_photon(blk.data[i - blk.base], i, mesh_count);
+      if (i >= blk.base && i < blk.base + blk.size)
+        throw_bad_photon(blk.data[i - blk.base], i, mesh_count);
   }
   std::vector<MeshAcc>& total = sc.acc[0];
   for (int w = 1; w < workers; ++w) {  // in worker order: earlier photons win ties, as in order
@@ -245,9 +246,8 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
   resize_for_overwrite(grid.photons, n);
   resize_for_overwrite(grid.order, n);
   const pf_mesh_grid* mg = grid.mesh_grid.data();
-#pragma omp parallel num_threads(workers)
-  {
-    const int w = omp_get_thread_num();
+#pragma omp parallel for schedule(static, 1) num_threads(workers)
+  for (int w = 0; w < workers; ++w) {
     std::vector<int32_t>& hist = sc.hist[size_t(w)];
     resize_for_overwrite(hist, entries);
     std::fill(hist.begin(), hist.end(), 0);
@@ -291,9 +291,8 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
   // 4. Stable scatter: every worker writes its photons, in order, from its cursors.
   pf_photon* out = grid.photons.data();
   int32_t* order = grid.order.data();
-#pragma omp parallel num_threads(workers)
-  {
-    const int w = omp_get_thread_num();
+#pragma omp parallel for schedule(static, 1) num_threads(workers)
+  for (int w = 0; w < workers; ++w) {
     int32_t* cursor = sc.hist[size_t(w)].data();
     const int32_t* key = sc.key.data();
     for (int b = block_begin(w); b < block_begin(w + 1); ++b) {

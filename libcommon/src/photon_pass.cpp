@@ -64,11 +64,14 @@ std::vector<LightInfo> light_info(const Scene& scene) {
 // the threads' load at the end of a pass.
 constexpr uint32_t kChunk = PhotonBuffers::kChunk;
 
-// Appends to a chunk buffer, growing it by a fixed step instead of doubling: a pass that stores a
-// few more photons than any before adds a step, so a long run's buffers stay close to the
-// largest pass (doubling could leave them twice that).
+// Appends to a chunk buffer. A buffer starts with room for 4 stored photons per emitted one
+// (pages not written are not resident, so unused room costs address space only) and grows by a
+// quarter: in a long run a pass that stores a few more photons than any before almost never
+// reallocates, so the buffers do not leave freed blocks behind (heap fragmentation) pass after
+// pass, and the run's memory stays where its first passes put it.
 inline void append(std::vector<pf_photon>& out, const pf_photon& ph) {
-  if (out.size() == out.capacity()) out.reserve(out.capacity() + 2 * kChunk);
+  if (out.size() == out.capacity())
+    out.reserve(std::max<size_t>(4 * kChunk, out.capacity() + out.capacity() / 4));
   out.push_back(ph);
 }
 
@@ -106,8 +109,9 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
                             PhotonBuffers& out_buffers) {
   // Fixed-size chunks of photon indices, kept in chunk order: the output order does not depend on
   // the thread count or on scheduling.
-  const uint32_t nchunks =
-      (scene.lights.empty() || opt.photons == 0) ? 0 : (opt.photons + kChunk - 1) / kChunk;
+  const uint32_t nchunks = (scene.lights.empty() || opt.photons == 0)
+                               ? 0
+                               : uint32_t((uint64_t(opt.photons) + kChunk - 1) / kChunk);
   std::vector<std::vector<pf_photon>>& parts = out_buffers.chunks;
   parts.resize(nchunks);  // keeps the capacity of the chunks a previous pass grew
   for (auto& p : parts) p.clear();
@@ -120,7 +124,7 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (uint32_t c = 0; c < nchunks; ++c) {
     std::vector<pf_photon>& out = parts[c];
-    const uint32_t end = std::min(opt.photons, (c + 1) * kChunk);
+    const uint32_t end = uint32_t(std::min<uint64_t>(opt.photons, uint64_t(c + 1) * kChunk));
     for (uint32_t i = c * kChunk; i < end; ++i) {
       pf_rng rng{key, i, 0};  // = pf_rng_start(opt.seed, pass, i), key computed once
       Ray ray;

@@ -1,11 +1,32 @@
 // raycast.cpp — closest-hit and any-hit ray casting over a baked scene (raycast.h).
 //
-// All three traversals test triangles with the one Havel–Herout routine of intersect_shared.h
-// (thesis eq. 4.3–4.7); the rope traversal is the shared routine itself, the same code the OpenCL
-// kernels compile.
+// All three traversals test triangles with the Havel–Herout routine of intersect_shared.h (thesis
+// eq. 4.3–4.7); the rope traversal is the shared routine itself, the same code the OpenCL kernels
+// compile. Like the kernels (kernels/trace_common.h), the host substitutes the rope traversal's
+// leaf test (PF_KD_LEAF_TEST) by one that tests four triangles per SSE operation over a
+// leaf-ordered copy of the planes: the same operations in the same order per lane, so the same
+// bits as pf_kd_leaf_intersect. The stack traversal uses the same leaf test over compact nodes.
 #include "photonflow/raycast.h"
 
 #include <omp.h>
+
+#include <cstring>
+#include <memory>
+#ifdef __SSE2__
+#include <immintrin.h>
+#endif
+#include <mutex>
+
+#include "photonflow/shared_types.h"
+
+// The rope traversal's leaf test on the host (see above; defined below). `group_of_first` maps a
+// leaf's first leaf_tris index to its first packet; `groups` is the packet array.
+static int pf_host_leaf_test4(const pf_kd_node* leaf, const pf_int* group_of_first,
+                              const pf_hh_triangle* groups, const float* o, const float* d,
+                              float tmin, int any_hit, float* hit_t, pf_int* hit_tri, float* hit_u,
+                              float* hit_v);
+#define PF_KD_LEAF_TEST(n, lt, h, o, d, tmin, any, hit) \
+  pf_host_leaf_test4(n, lt, h, o, d, tmin, any, &(hit)->t, &(hit)->tri, &(hit)->u, &(hit)->v)
 
 #include "photonflow/intersect_shared.h"
 
@@ -27,33 +48,271 @@ bool traverse_brute(const Scene& scene, const float* o, const float* d, float tm
   return hit.tri >= 0;
 }
 
-// Classic front-to-back kd traversal with an explicit stack (pbrt's KdTreeAccel): each node is
-// visited with the parametric interval [t0, t1] of the ray inside it; the near child is entered
-// first and the far child pushed with its interval.
-bool traverse_stack(const Scene& scene, const float* o, const float* d, float tmin, bool any_hit,
+// Host-only copy of the kd-tree, derived from the shared arrays on first use
+// (KdTree::host_cache): 8-byte nodes in depth-first preorder (the builder's order, so node i is
+// nodes[i]; the left child of an inner node is i + 1) for the stack traversal, and the
+// Havel–Herout planes of the leaf references in leaf order, transposed in packets of four, for
+// the leaf test of both kd traversals (no leaf_tris indirection, one SSE test per four
+// triangles). The stack traversal makes the same decisions on the same floats as over
+// pf_kd_node; it touches 8 instead of 72 bytes per node.
+struct CompactNode {
+  uint32_t w0;  // inner: the split's float bits; leaf: first packet
+  uint32_t w1;  // inner: right child << 2 | axis; leaf: triangle count << 2 | 3
+};
+
+// Four triangles' Havel–Herout planes in structure-of-arrays form ([component][lane]), tested
+// together with SSE. A leaf's triangles fill consecutive packets in leaf order; unused lanes hold
+// zero planes (det = 0, never a hit).
+struct alignas(16) HHPacket {
+  float n[4][4];
+  float n1[4][4];
+  float n2[4][4];
+  int32_t tri[4];
+};
+static_assert(sizeof(HHPacket) == 208, "HHPacket layout (bench_raycast reports its memory)");
+
+struct HostKd {
+  // What it was built from (rebuilt when any of these changed).
+  const void* key_nodes;
+  size_t n_nodes;
+  const void* key_refs;
+  size_t n_refs;
+  const void* key_hh;
+  size_t n_hh;
+  std::vector<CompactNode> nodes;
+  std::vector<HHPacket> packets;        // hh[leaf_tris[i]], leaf by leaf
+  std::vector<int32_t> group_of_first;  // per leaf_tris index: packet of a leaf's first reference
+  float root_lo[3], root_hi[3];         // the root box as pf_kd_enter_root widens it
+
+  bool matches(const Scene& s) const {
+    return key_nodes == s.kd.nodes.data() && n_nodes == s.kd.nodes.size() &&
+           key_refs == s.kd.leaf_tris.data() && n_refs == s.kd.leaf_tris.size() &&
+           key_hh == s.hh.data() && n_hh == s.hh.size();
+  }
+};
+
+std::shared_ptr<const HostKd> make_host_kd(const Scene& s) {
+  auto h = std::make_shared<HostKd>();
+  const KdTree& kd = s.kd;
+  h->key_nodes = kd.nodes.data();
+  h->n_nodes = kd.nodes.size();
+  h->key_refs = kd.leaf_tris.data();
+  h->n_refs = kd.leaf_tris.size();
+  h->key_hh = s.hh.data();
+  h->n_hh = s.hh.size();
+  h->nodes.resize(kd.nodes.size());
+  h->group_of_first.assign(kd.leaf_tris.size(), 0);
+  // Depth-first preorder with the left child first: the builder's order (the identity), or a
+  // renumbering for a valid tree stored in another order (validate_kdtree does not demand it).
+  std::vector<int32_t> order, new_index(kd.nodes.size(), 0);
+  order.reserve(kd.nodes.size());
+  for (std::vector<int32_t> todo = {0}; !kd.nodes.empty() && !todo.empty();) {
+    const int32_t i = todo.back();
+    todo.pop_back();
+    new_index[size_t(i)] = int32_t(order.size());
+    order.push_back(i);
+    const pf_kd_node& n = kd.nodes[size_t(i)];
+    if (n.axis != PF_KD_LEAF) {
+      todo.push_back(n.right);
+      todo.push_back(n.left);
+    }
+  }
+  for (size_t i = 0; i < order.size(); ++i) {
+    const pf_kd_node& n = kd.nodes[size_t(order[i])];
+    CompactNode& c = h->nodes[i];
+    if (n.axis == PF_KD_LEAF) {
+      if (n.count > 0) h->group_of_first[size_t(n.first)] = int32_t(h->packets.size());
+      c.w0 = uint32_t(h->packets.size());
+      c.w1 = uint32_t(n.count) << 2 | 3u;
+      for (int32_t j = 0; j < n.count; ++j) {
+        if (j % 4 == 0) h->packets.push_back(HHPacket{});
+        HHPacket& p = h->packets.back();
+        const int32_t tri = kd.leaf_tris[size_t(n.first + j)];
+        const pf_hh_triangle& t = s.hh[size_t(tri)];
+        for (int k = 0; k < 4; ++k) {
+          p.n[k][j % 4] = t.n[k];
+          p.n1[k][j % 4] = t.n1[k];
+          p.n2[k][j % 4] = t.n2[k];
+        }
+        p.tri[j % 4] = tri;
+      }
+    } else {
+      std::memcpy(&c.w0, &n.split, 4);
+      c.w1 = uint32_t(new_index[size_t(n.right)]) << 2 | uint32_t(n.axis);
+    }
+  }
+  if (!kd.nodes.empty()) {  // the same arithmetic as pf_kd_enter_root
+    const pf_kd_node& root = kd.nodes[0];
+    float ext = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+      const float e = root.hi[k] - root.lo[k];
+      ext = e > ext ? e : ext;
+    }
+    const float margin = PF_HH_EDGE_EPS * ext;
+    for (int k = 0; k < 3; ++k) {
+      h->root_lo[k] = root.lo[k] - margin;
+      h->root_hi[k] = root.hi[k] + margin;
+    }
+  }
+  return h;
+}
+
+// The scene's HostKd, built once (thread-safe; later calls are one atomic load and a key check).
+const HostKd& host_kd(const Scene& s) {
+  const KdHostCache& cache = s.kd.host_cache;
+  auto* h = static_cast<const HostKd*>(cache.current.load(std::memory_order_acquire));
+  if (h && h->matches(s)) return *h;
+  std::lock_guard<std::mutex> lock(cache.mutex);
+  h = static_cast<const HostKd*>(cache.current.load(std::memory_order_acquire));
+  if (h && h->matches(s)) return *h;
+  std::shared_ptr<const HostKd> fresh = make_host_kd(s);
+  cache.owned.push_back(fresh);  // earlier versions stay alive for threads still using them
+  cache.current.store(fresh.get(), std::memory_order_release);
+  return *fresh;
+}
+
+// A ray's origin and direction broadcast to four lanes.
+struct RayLanes {
+  const float* o;
+  const float* d;
+#ifdef __SSE2__
+  __m128 o4[3], d4[3];
+#endif
+  RayLanes(const float* o_, const float* d_) : o(o_), d(d_) {
+#ifdef __SSE2__
+    for (int k = 0; k < 3; ++k) {
+      o4[k] = _mm_set1_ps(o[k]);
+      d4[k] = _mm_set1_ps(d[k]);
+    }
+#endif
+  }
+};
+
+// Tests the `count` triangles of a leaf stored from `p` on, keeping the closest hit in `best`
+// (best.t is the current tmax); with any_hit returns true at the first hit. Bit for bit the result
+// of pf_kd_leaf_intersect over the same triangles in the same order: every lane evaluates
+// pf_hh_intersect's expressions in the same order (no contraction: baseline x86-64 has no FMA),
+// and the lanes that pass are then finished one by one in leaf order, each against the tmax of
+// that moment, exactly as the scalar loop does.
+inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r, float tmin,
+                           bool any_hit, pf_ray_hit& best) {
+#ifdef __SSE2__
+  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), minus_one = _mm_set1_ps(-1.0f);
+  const __m128 sign = _mm_set1_ps(-0.0f), eps = _mm_set1_ps(PF_HH_EDGE_EPS);
+  for (uint32_t first = 0; first < count; first += 4, ++p) {
+    const __m128 n0 = _mm_load_ps(p->n[0]), n1 = _mm_load_ps(p->n[1]);
+    const __m128 n2 = _mm_load_ps(p->n[2]), n3 = _mm_load_ps(p->n[3]);
+    const __m128 det = _mm_add_ps(_mm_add_ps(_mm_mul_ps(r.d4[0], n0), _mm_mul_ps(r.d4[1], n1)),
+                                  _mm_mul_ps(r.d4[2], n2));
+    const __m128 tp = _mm_xor_ps(
+        _mm_add_ps(_mm_add_ps(_mm_add_ps(n3, _mm_mul_ps(r.o4[0], n0)), _mm_mul_ps(r.o4[1], n1)),
+                   _mm_mul_ps(r.o4[2], n2)),
+        sign);
+    const __m128 neg = _mm_cmplt_ps(det, zero);
+    const __m128 sgn = _mm_or_ps(_mm_and_ps(neg, minus_one), _mm_andnot_ps(neg, one));
+    const __m128 adet = _mm_mul_ps(det, sgn);
+    const __m128 st = _mm_mul_ps(tp, sgn);
+    const __m128 px = _mm_add_ps(_mm_mul_ps(det, r.o4[0]), _mm_mul_ps(tp, r.d4[0]));
+    const __m128 py = _mm_add_ps(_mm_mul_ps(det, r.o4[1]), _mm_mul_ps(tp, r.d4[1]));
+    const __m128 pz = _mm_add_ps(_mm_mul_ps(det, r.o4[2]), _mm_mul_ps(tp, r.d4[2]));
+    const __m128 su = _mm_mul_ps(
+        _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(px, _mm_load_ps(p->n1[0])),
+                                         _mm_mul_ps(py, _mm_load_ps(p->n1[1]))),
+                              _mm_mul_ps(pz, _mm_load_ps(p->n1[2]))),
+                   _mm_mul_ps(det, _mm_load_ps(p->n1[3]))),
+        sgn);
+    const __m128 sv = _mm_mul_ps(
+        _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(px, _mm_load_ps(p->n2[0])),
+                                         _mm_mul_ps(py, _mm_load_ps(p->n2[1]))),
+                              _mm_mul_ps(pz, _mm_load_ps(p->n2[2]))),
+                   _mm_mul_ps(det, _mm_load_ps(p->n2[3]))),
+        sgn);
+    const __m128 slack = _mm_mul_ps(eps, adet);
+    const __m128 nslack = _mm_xor_ps(slack, sign);
+    const __m128 tmax = _mm_mul_ps(adet, _mm_set1_ps(best.t));
+    __m128 in = _mm_and_ps(_mm_cmpge_ps(st, zero), _mm_cmple_ps(st, tmax));
+    in = _mm_and_ps(in, _mm_and_ps(_mm_cmpge_ps(su, nslack), _mm_cmpge_ps(sv, nslack)));
+    in = _mm_and_ps(in, _mm_cmple_ps(_mm_add_ps(su, sv), _mm_add_ps(adet, slack)));
+    in = _mm_and_ps(in, _mm_cmpgt_ps(adet, zero));
+    int mask = _mm_movemask_ps(in);
+    if (!mask) continue;
+    alignas(16) float a_st[4], a_adet[4], a_tp[4], a_det[4], a_su[4], a_sv[4];
+    _mm_store_ps(a_st, st);
+    _mm_store_ps(a_adet, adet);
+    _mm_store_ps(a_tp, tp);
+    _mm_store_ps(a_det, det);
+    _mm_store_ps(a_su, su);
+    _mm_store_ps(a_sv, sv);
+    for (; mask; mask &= mask - 1) {
+      const int l = __builtin_ctz(unsigned(mask));
+      if (!(a_st[l] <= a_adet[l] * best.t)) continue;  // tmax has shrunk within the packet
+      const float t = a_tp[l] / a_det[l];
+      if (!(t > tmin && t <= best.t)) continue;
+      const int32_t tri = p->tri[l];
+      if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
+      best = {t, tri, a_su[l] / a_adet[l], a_sv[l] / a_adet[l]};
+      if (any_hit) return true;
+    }
+  }
+  return false;
+#else
+  for (uint32_t i = 0; i < count; ++i) {
+    const HHPacket& q = p[i / 4];
+    const int l = int(i % 4);
+    pf_hh_triangle h;
+    for (int k = 0; k < 4; ++k) {
+      h.n[k] = q.n[k][l];
+      h.n1[k] = q.n1[k][l];
+      h.n2[k] = q.n2[k][l];
+    }
+    float t, u, v;
+    if (!pf_hh_intersect(&h, r.o, r.d, tmin, best.t, &t, &u, &v)) continue;
+    if (t == best.t && best.tri >= 0 && q.tri[l] > best.tri) continue;
+    best = {t, q.tri[l], u, v};
+    if (any_hit) return true;
+  }
+  return false;
+#endif
+}
+
+// The same for one leaf of the rope traversal (PF_KD_LEAF_TEST).
+bool leaf_intersect_packets(const HHPacket* p, uint32_t count, const float* o, const float* d,
+                            float tmin, bool any_hit, pf_ray_hit& best) {
+  const RayLanes r(o, d);
+  return leaf_intersect(p, count, r, tmin, any_hit, best);
+}
+
+// Classic front-to-back kd traversal with an explicit stack (pbrt's KdTreeAccel) over the compact
+// copy: each node is visited with the parametric interval [t0, t1] of the ray inside it; the near
+// child is entered first and the far child pushed with its interval.
+bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin, bool any_hit,
                     pf_ray_hit& hit) {
-  const KdTree& kd = scene.kd;
   if (kd.nodes.empty()) return false;
   const float inv_d[3] = {1.f / d[0], 1.f / d[1], 1.f / d[2]};
   float t0, t1;
-  if (!pf_kd_enter_root(kd.nodes.data(), o, d, inv_d, tmin, hit.t, &t0, &t1)) return false;
+  if (!pf_ray_box(kd.root_lo, kd.root_hi, o, d, inv_d, tmin, hit.t, &t0, &t1)) return false;
   struct Todo {
-    int32_t node;
+    uint32_t node;
     float t0, t1;
   };
   Todo stack[kKdMaxDepth + 1];
   int top = 0;
-  int32_t node = 0;
+  uint32_t node = 0;
+  const CompactNode* nodes = kd.nodes.data();
+  pf_ray_hit best = hit;
+  const RayLanes r(o, d);
   for (;;) {
-    if (hit.t < t0) break;  // closest hit lies before this node (stack intervals only grow)
-    const pf_kd_node& n = kd.nodes[size_t(node)];
-    if (n.axis != PF_KD_LEAF) {
-      const int a = n.axis;
+    if (best.t < t0) break;  // closest hit lies before this node (stack intervals only grow)
+    const CompactNode n = nodes[node];
+    const uint32_t a = n.w1 & 3u;
+    if (a != 3u) {
+      float split;
+      std::memcpy(&split, &n.w0, 4);
       // The child holding the ray's origin side is near; on the plane, the side it moves into.
-      const bool left_first = o[a] < n.split || (o[a] == n.split && d[a] <= 0.f);
-      const int32_t near = left_first ? n.left : n.right;
-      const int32_t far = left_first ? n.right : n.left;
-      const float t_plane = d[a] != 0.f ? (n.split - o[a]) * inv_d[a] : INFINITY;
+      const bool left_first = o[a] < split || (o[a] == split && d[a] <= 0.f);
+      const uint32_t near = left_first ? node + 1 : n.w1 >> 2;
+      const uint32_t far = left_first ? n.w1 >> 2 : node + 1;
+      const float t_plane = d[a] != 0.f ? (split - o[a]) * inv_d[a] : INFINITY;
       if (t_plane > t1 || t_plane <= 0.f) {
         node = near;  // never reaches the plane within the node (or moves away from it)
       } else if (t_plane < t0) {
@@ -65,14 +324,18 @@ bool traverse_stack(const Scene& scene, const float* o, const float* d, float tm
       }
       continue;
     }
-    if (pf_kd_leaf_intersect(&n, kd.leaf_tris.data(), scene.hh.data(), o, d, tmin, any_hit, &hit))
+    // Leaf: pf_kd_leaf_intersect's loop, four triangles at a time.
+    if (leaf_intersect(kd.packets.data() + n.w0, n.w1 >> 2, r, tmin, any_hit, best)) {
+      hit = best;
       return true;
+    }
     if (top == 0) break;
     --top;
     node = stack[top].node;
     t0 = stack[top].t0;
     t1 = stack[top].t1;
   }
+  hit = best;
   return hit.tri >= 0;
 }
 
@@ -81,12 +344,16 @@ bool cast(const Scene& scene, const Ray& ray, bool any_hit, Traversal trav, pf_r
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   hit = {ray.tmax, -1, 0.f, 0.f};
   switch (trav) {
-    case Traversal::Ropes:
+    case Traversal::Ropes: {
+      // The packets travel in the leaf_tris / hh arguments (PF_KD_LEAF_TEST above).
+      const HostKd& h = host_kd(scene);
       return pf_kd_traverse_ropes(scene.kd.nodes.data(), pf_int(scene.kd.nodes.size()),
-                                  scene.kd.leaf_tris.data(), scene.hh.data(), o, d, ray.tmin,
-                                  any_hit, &hit) != 0;
+                                  h.group_of_first.data(),
+                                  reinterpret_cast<const pf_hh_triangle*>(h.packets.data()), o, d,
+                                  ray.tmin, any_hit, &hit) != 0;
+    }
     case Traversal::Stack:
-      return traverse_stack(scene, o, d, ray.tmin, any_hit, hit);
+      return traverse_stack(host_kd(scene), o, d, ray.tmin, any_hit, hit);
     case Traversal::Brute:
       return traverse_brute(scene, o, d, ray.tmin, any_hit, hit);
   }
@@ -140,3 +407,19 @@ void intersect_any_batch(const Scene& scene, const std::vector<Ray>& rays,
 }
 
 }  // namespace pf
+
+static int pf_host_leaf_test4(const pf_kd_node* leaf, const pf_int* group_of_first,
+                              const pf_hh_triangle* groups, const float* o, const float* d,
+                              float tmin, int any_hit, float* hit_t, pf_int* hit_tri, float* hit_u,
+                              float* hit_v) {
+  if (leaf->count <= 0) return 0;
+  const auto* p = reinterpret_cast<const pf::HHPacket*>(groups) + group_of_first[leaf->first];
+  pf_ray_hit best = {*hit_t, *hit_tri, *hit_u, *hit_v};
+  const bool stop = pf::leaf_intersect_packets(p, uint32_t(leaf->count), o, d, tmin, any_hit != 0,
+                                               best);
+  *hit_t = best.t;
+  *hit_tri = best.tri;
+  *hit_u = best.u;
+  *hit_v = best.v;
+  return stop ? 1 : 0;
+}
