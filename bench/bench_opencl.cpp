@@ -132,15 +132,7 @@ pf::Scene make_scene(const std::string& scene_h5, const std::string& dae, Size s
 }
 
 pf::HitpointSet state_of(const pf::Scene& scene, pf::EyePassResult r) {
-  pf::HitpointSet h;
-  h.hitpoints = std::move(r.hitpoints);
-  h.emitted = std::move(r.emitted);
-  h.direct = std::move(r.direct);
-  h.width = r.width;
-  h.height = r.height;
-  h.radius0 = r.radius;
-  h.scene_id = scene.scene_id;
-  return h;
+  return pf::make_hitpoint_set(std::move(r), pf::DirectMode::Photons, scene.scene_id);
 }
 
 std::string fmt(double ms) {

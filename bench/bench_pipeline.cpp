@@ -140,17 +140,7 @@ pf::Scene make_scene(const std::string& scene_h5, const std::string& dae, Size s
 }
 
 pf::HitpointSet fresh_state(const pf::Scene& scene, const pf::EyePassOptions& eye) {
-  pf::EyePassResult r = pf::trace_hitpoints(scene, eye);
-  pf::HitpointSet h;
-  h.hitpoints = std::move(r.hitpoints);
-  h.emitted = std::move(r.emitted);
-  h.direct = std::move(r.direct);
-  h.width = r.width;
-  h.height = r.height;
-  h.direct_mode = eye.direct;
-  h.radius0 = r.radius;
-  h.scene_id = scene.scene_id;
-  return h;
+  return pf::make_hitpoint_set(pf::trace_hitpoints(scene, eye), eye.direct, scene.scene_id);
 }
 
 std::string fmt(double ms) {

@@ -84,15 +84,7 @@ TEST_CASE("hitpoints, photons and grid files round-trip every dataset", "[format
   Scene s = test::room_scene(PF_MAT_MIRROR, 24, 16);
   EyePassOptions eo;
   eo.direct = DirectMode::ShadowRays;
-  EyePassResult e = trace_hitpoints(s, eo);
-  HitpointSet h;
-  h.hitpoints = e.hitpoints;
-  h.emitted = e.emitted;
-  h.direct = e.direct;
-  h.width = e.width;
-  h.height = e.height;
-  h.direct_mode = eo.direct;
-  h.radius0 = e.radius;
+  HitpointSet h = make_hitpoint_set(trace_hitpoints(s, eo), eo.direct, s.scene_id);
   h.estimator = "ppm";
   h.photons_emitted = 123456789012ull;
   h.passes = 7;

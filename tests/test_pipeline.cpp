@@ -16,17 +16,7 @@ using namespace pf;
 
 namespace {
 HitpointSet eye_state(const Scene& s, const EyePassOptions& opt) {
-  EyePassResult r = trace_hitpoints(s, opt);
-  HitpointSet h;
-  h.hitpoints = r.hitpoints;
-  h.emitted = r.emitted;
-  h.direct = r.direct;
-  h.width = r.width;
-  h.height = r.height;
-  h.direct_mode = opt.direct;
-  h.radius0 = r.radius;
-  h.scene_id = s.scene_id;
-  return h;
+  return make_hitpoint_set(trace_hitpoints(s, opt), opt.direct, s.scene_id);
 }
 
 // Mean and worst relative deviation of the image's channels from `expected`.

@@ -34,6 +34,9 @@ struct Scene {
   // Builds lights[] and light_cdf[] from emissive triangles (area lights) plus point lights
   // already in lights[] (kept), sampled in proportion to power.
   void compute_light_cdf();
+  // Picks a light in proportion to power for a uniform u in [0, 1): the first i with
+  // u < light_cdf[i]. Sets p_light to its probability. The scene must have lights.
+  size_t pick_light(float u, float& p_light) const;
   // scene_id = SHA-256 over triangles, materials, lights and camera: two bakes of the same input
   // with the same options have the same id; any change of geometry, material, light or camera
   // changes it.

@@ -56,6 +56,9 @@ struct GridSet {
   std::string scene_id;
 };
 
+// The fresh hitpoint state of an eye pass (estimator "none", no photons yet).
+HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id);
+
 void save_hitpoints(const HitpointSet& h, const std::string& path, const Provenance& prov);
 HitpointSet load_hitpoints(const std::string& path);
 void save_photons(const PhotonSet& p, const std::string& path, const Provenance& prov);

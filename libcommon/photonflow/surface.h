@@ -1,6 +1,8 @@
 // surface.h — what a ray hit: position, normals, side and material, and safe ray offsets.
 #pragma once
 #include "photonflow/raycast.h"
+#include "photonflow/rng.h"
+#include "photonflow/sampling.h"
 #include "photonflow/scene.h"
 #include "photonflow/vec.h"
 
@@ -38,6 +40,27 @@ inline float ray_epsilon(const Scene& s) { return 1e-5f * length(s.bounds.extent
 // Origin for a ray leaving `sh` in direction `d`: pushed off the surface on d's side.
 inline Vec3 offset_origin(const SurfaceHit& sh, const Vec3& d, float eps) {
   return sh.p + sh.ng * (dot(d, sh.ng) >= 0.f ? eps : -eps);
+}
+
+// Perfect specular scattering of a ray (direction d, unit) at a mirror or glass surface.
+// Returns the new direction and multiplies `weight` by the material's colour when a mirror reflects
+// or glass transmits. Glass reflects with the Fresnel probability F (one random number drawn from
+// `rng`, and only for glass, so the kernels' draw order matches) and refracts otherwise; total
+// internal reflection reflects. Choosing by probability needs no weight correction:
+// F/F = (1 − F)/(1 − F) = 1.
+inline Vec3 specular_bounce(const pf_material& m, const SurfaceHit& sh, const Vec3& d,
+                            pf_rng* rng, Vec3& weight) {
+  Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
+  if (m.type == PF_MAT_MIRROR) {
+    weight = weight * Vec3(m.color);
+    return reflect(d, n);
+  }
+  float eta_i = sh.front ? 1.f : m.ior, eta_t = sh.front ? m.ior : 1.f;
+  float F = fresnel_dielectric(-dot(d, n), eta_i, eta_t);
+  Vec3 t;
+  if (pf_rng_next(rng) < F || !refract(d, n, eta_i / eta_t, t)) return reflect(d, n);
+  weight = weight * Vec3(m.color);
+  return normalize(t);
 }
 
 }  // namespace pf

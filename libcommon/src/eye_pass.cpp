@@ -44,11 +44,8 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
   Vec3 sum;
   for (int s = 0; s < samples; ++s) {
     float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
-    size_t li = size_t(std::upper_bound(scene.light_cdf.begin(), scene.light_cdf.end(), ul) -
-                       scene.light_cdf.begin());
-    li = std::min(li, scene.lights.size() - 1);
-    const pf_light& l = scene.lights[li];
-    float p_light = scene.light_cdf[li] - (li ? scene.light_cdf[li - 1] : 0.f);
+    float p_light;
+    const pf_light& l = scene.lights[scene.pick_light(ul, p_light)];
     if (p_light <= 0.f) continue;
     Vec3 q, contrib;
     float g;  // geometry term / pdf, without visibility
@@ -142,26 +139,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
                                          opt.shadow_samples, opt.seed, 0, index);
             break;
           }
-          Vec3 n = sh.front ? sh.ns : -sh.ns;
-          Vec3 d = normalize(ray.d);
-          if (m.type == PF_MAT_MIRROR) {
-            T = T * mat_color(m);
-            d = reflect(d, n);
-          } else if (m.type == PF_MAT_GLASS) {
-            // Fresnel choice by probability F: reflect with F, refract with 1 − F; the weight
-            // correction F/F = (1−F)/(1−F) = 1 leaves the throughput unchanged.
-            float eta_i = sh.front ? 1.f : m.ior, eta_t = sh.front ? m.ior : 1.f;
-            float F = fresnel_dielectric(-dot(d, n), eta_i, eta_t);
-            Vec3 t;
-            if (pf_rng_next(&rng) < F || !refract(d, n, eta_i / eta_t, t)) {
-              d = reflect(d, n);
-            } else {
-              d = normalize(t);
-              T = T * mat_color(m);
-            }
-          } else {
-            break;  // an emitter that does not reflect
-          }
+          if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) break;  // black emitter
+          Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
           if (luminance(T) <= 0.f) break;
           ray = Ray{offset_origin(sh, d, eps), d};
         }

@@ -25,11 +25,9 @@ bool emit(const Scene& scene, const std::vector<LightInfo>& info, pf_rng& rng, R
           Vec3& flux, float eps) {
   float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
   float u3 = pf_rng_next(&rng), u4 = pf_rng_next(&rng);
-  size_t li = size_t(std::upper_bound(scene.light_cdf.begin(), scene.light_cdf.end(), ul) -
-                     scene.light_cdf.begin());
-  li = std::min(li, scene.lights.size() - 1);
+  float p_light;
+  size_t li = scene.pick_light(ul, p_light);
   const pf_light& l = scene.lights[li];
-  float p_light = scene.light_cdf[li] - (li ? scene.light_cdf[li - 1] : 0.f);
   if (p_light <= 0.f) return false;
   if (l.type == PF_LIGHT_AREA) {
     const LightInfo& t = info[li];
@@ -162,19 +160,8 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
           const float u2 = pf_rng_next(&rng);
           d = sample_cosine_hemisphere(n, u1, u2);
           specular_only = false;
-        } else if (m.type == PF_MAT_MIRROR) {
-          flux = flux * color;
-          d = reflect(d, n);
-        } else if (m.type == PF_MAT_GLASS) {
-          float eta_i = sh.front ? 1.f : m.ior, eta_t = sh.front ? m.ior : 1.f;
-          float F = fresnel_dielectric(-dot(d, n), eta_i, eta_t);
-          Vec3 t;
-          if (pf_rng_next(&rng) < F || !refract(d, n, eta_i / eta_t, t)) {
-            d = reflect(d, n);
-          } else {
-            d = normalize(t);
-            flux = flux * color;
-          }
+        } else if (m.type == PF_MAT_MIRROR || m.type == PF_MAT_GLASS) {
+          d = specular_bounce(m, sh, d, &rng, flux);
         } else {
           break;  // black emitter absorbs
         }

@@ -10,16 +10,7 @@ namespace pf {
 namespace {
 HitpointSet fresh_state(const Scene& scene, const EyePassOptions& eye, ClContext* device) {
   EyePassResult r = device ? trace_hitpoints(scene, eye, *device) : trace_hitpoints(scene, eye);
-  HitpointSet h;
-  h.hitpoints = std::move(r.hitpoints);
-  h.emitted = std::move(r.emitted);
-  h.direct = std::move(r.direct);
-  h.width = r.width;
-  h.height = r.height;
-  h.direct_mode = eye.direct;
-  h.radius0 = r.radius;
-  h.scene_id = scene.scene_id;
-  return h;
+  return make_hitpoint_set(std::move(r), eye.direct, scene.scene_id);
 }
 }  // namespace
 

@@ -1,6 +1,7 @@
 // Baked scene: derived data (planes, bounds, lights, identity) and scene.h5 reading/writing.
 #include "photonflow/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 
@@ -63,6 +64,13 @@ void Scene::compute_light_cdf() {
     light_cdf[i] = total > 0 ? float(acc / total) : float(i + 1) / float(lights.size());
   }
   if (!light_cdf.empty()) light_cdf.back() = 1.f;
+}
+
+size_t Scene::pick_light(float u, float& p_light) const {
+  size_t i = size_t(std::upper_bound(light_cdf.begin(), light_cdf.end(), u) - light_cdf.begin());
+  i = std::min(i, lights.size() - 1);
+  p_light = light_cdf[i] - (i ? light_cdf[i - 1] : 0.f);
+  return i;
 }
 
 void Scene::compute_scene_id() {

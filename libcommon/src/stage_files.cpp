@@ -51,6 +51,19 @@ void require_scene(const std::string& path, const std::string& scene_id,
 
 // ---- hitpoints.h5 ---------------------------------------------------------------------------
 
+HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id) {
+  HitpointSet h;
+  h.hitpoints = std::move(eye.hitpoints);
+  h.emitted = std::move(eye.emitted);
+  h.direct = std::move(eye.direct);
+  h.width = eye.width;
+  h.height = eye.height;
+  h.direct_mode = mode;
+  h.radius0 = eye.radius;
+  h.scene_id = scene_id;
+  return h;
+}
+
 void save_hitpoints(const HitpointSet& h, const std::string& path, const Provenance& prov) {
   h5::Writer w(path, kHitpointsFormat, kHitpointsVersion);
   w.attr("/", "scene_id", h.scene_id);

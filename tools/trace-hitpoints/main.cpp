@@ -64,15 +64,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "trace-hitpoints");
     pf::EyePassResult r = dev ? pf::trace_hitpoints(scene, opt, *dev) : pf::trace_hitpoints(scene, opt);
 
-    pf::HitpointSet h;
-    h.hitpoints = std::move(r.hitpoints);
-    h.emitted = std::move(r.emitted);
-    h.direct = std::move(r.direct);
-    h.width = r.width;
-    h.height = r.height;
-    h.direct_mode = opt.direct;
-    h.radius0 = r.radius;
-    h.scene_id = scene.scene_id;
+    pf::HitpointSet h = pf::make_hitpoint_set(std::move(r), opt.direct, scene.scene_id);
 
     pf::Provenance prov;
     prov.tool = "trace-hitpoints";
