@@ -16,15 +16,11 @@
 #ifndef PHOTONFLOW_INTERSECT_SHARED_H
 #define PHOTONFLOW_INTERSECT_SHARED_H
 
+#include "photonflow/cl_compat.h"
 #include "photonflow/shared_types.h"
 
-#ifdef __OPENCL_VERSION__
-#define PF_GLOBAL __global
-#define PF_INLINE static inline
-#else
+#ifndef __OPENCL_VERSION__
 #include <math.h>
-#define PF_GLOBAL
-#define PF_INLINE static inline
 #endif
 
 /* Tolerance of the barycentric sign tests, in barycentric units (fraction of the triangle's

@@ -12,25 +12,8 @@
 #ifndef PHOTONFLOW_PPM_H
 #define PHOTONFLOW_PPM_H
 
+#include "photonflow/cl_compat.h"
 #include "photonflow/shared_types.h"
-
-/* Function qualifier for code shared by host and kernels (also defined, identically, by rng.h). */
-#ifndef PF_INLINE
-#ifdef __OPENCL_VERSION__
-#define PF_INLINE static inline
-#else
-#define PF_INLINE inline
-#endif
-#endif
-
-/* Address space of buffers that kernels update in place (empty on the host). */
-#ifndef PF_GLOBAL
-#ifdef __OPENCL_VERSION__
-#define PF_GLOBAL __global
-#else
-#define PF_GLOBAL
-#endif
-#endif
 
 /* Square root: the OpenCL built-in, std::sqrt (float overload) on the host. */
 #ifdef __OPENCL_VERSION__

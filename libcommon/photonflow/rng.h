@@ -22,18 +22,8 @@
 #ifndef PHOTONFLOW_RNG_H
 #define PHOTONFLOW_RNG_H
 
+#include "photonflow/cl_compat.h"
 #include "photonflow/shared_types.h"
-
-/* Function qualifier for code shared by host and kernels (also defined, identically, by ppm.h).
- * OpenCL C 1.2 follows C99 inline semantics, so kernels need `static inline` to avoid an external
- * symbol; in C++ plain `inline` gives one definition across translation units. */
-#ifndef PF_INLINE
-#ifdef __OPENCL_VERSION__
-#define PF_INLINE static inline
-#else
-#define PF_INLINE inline
-#endif
-#endif
 
 /* "lowbias32" 32-bit integer hash (bijective). */
 PF_INLINE pf_uint pf_hash32(pf_uint x) {

@@ -16,15 +16,8 @@
 #ifndef PHOTONFLOW_SAMPLING_SHARED_H
 #define PHOTONFLOW_SAMPLING_SHARED_H
 
+#include "photonflow/cl_compat.h"
 #include "photonflow/shared_types.h"
-
-#ifndef PF_INLINE
-#ifdef __OPENCL_VERSION__
-#define PF_INLINE static inline
-#else
-#define PF_INLINE inline
-#endif
-#endif
 
 #ifdef __OPENCL_VERSION__
 #pragma OPENCL FP_CONTRACT OFF
