@@ -49,20 +49,16 @@
 #include "photonflow/scene.h"
 #include "photonflow/scene_import.h"
 #include "photonflow/synthesize.h"
+#include "bench_common.h"
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  size_t n = v.size();
-  if (n == 0) return 0;
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using pf::bench::make_scene;
+using pf::bench::median;
+using pf::bench::now;
+using pf::bench::parse_size;
+using pf::bench::parse_sizes;
+using pf::bench::Size;
 
 struct Timing {
   double wall_ms = 0, kernel_ms = 0;
@@ -99,37 +95,7 @@ std::pair<Timing, Timing> pair_ms(int runs, const std::function<void()>& cpu,
   return {Timing{median(wc), 0}, Timing{median(wg), median(kg)}};
 }
 
-struct Size {
-  int w, h;
-};
 
-std::vector<Size> parse_sizes(const std::string& s) {
-  std::vector<Size> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    int w = 0, h = 0;
-    if (std::sscanf(item.c_str(), "%dx%d", &w, &h) != 2 || w <= 0 || h <= 0)
-      throw std::runtime_error("bad size '" + item + "' (want WxH)");
-    out.push_back({w, h});
-  }
-  return out;
-}
-
-pf::Scene make_scene(const std::string& scene_h5, const std::string& dae, Size sz) {
-  if (!scene_h5.empty()) {
-    pf::Scene s = pf::load_scene(scene_h5);
-    s.camera.width = sz.w;
-    s.camera.height = sz.h;
-    return s;
-  }
-  pf::BakeOptions bo;
-  bo.input = dae;
-  bo.width = sz.w;
-  bo.height = sz.h;
-  pf::BakeReport rep;
-  return pf::bake_scene(bo, rep);
-}
 
 pf::HitpointSet state_of(const pf::Scene& scene, pf::EyePassResult r) {
   return pf::make_hitpoint_set(std::move(r), pf::DirectMode::Photons, scene.scene_id);

@@ -53,20 +53,16 @@
 #include "photonflow/scene.h"
 #include "photonflow/scene_import.h"
 #include "photonflow/synthesize.h"
+#include "bench_common.h"
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  size_t n = v.size();
-  if (n == 0) return 0;
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using pf::bench::make_scene;
+using pf::bench::median;
+using pf::bench::now;
+using pf::bench::parse_size;
+using pf::bench::parse_sizes;
+using pf::bench::Size;
 
 // Median wall time in ms of `runs` calls of f, after one untimed warm-up call (first-touch page
 // faults, the allocator's first growth, lazily built caches); prep() runs untimed before each.
@@ -102,16 +98,6 @@ bool reset_peak() {
   return bool(out);
 }
 
-struct Size {
-  int w = 0, h = 0;
-};
-
-Size parse_size(const std::string& s) {
-  Size z;
-  if (std::sscanf(s.c_str(), "%dx%d", &z.w, &z.h) != 2 || z.w <= 0 || z.h <= 0)
-    throw std::runtime_error("bad size '" + s + "' (want WxH)");
-  return z;
-}
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
@@ -122,22 +108,6 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-// The benchmark scene at a resolution: scene.h5 if given (camera size overridden), else the .dae
-// baked in-process with width/height overrides.
-pf::Scene make_scene(const std::string& scene_h5, const std::string& dae, Size sz) {
-  if (!scene_h5.empty()) {
-    pf::Scene s = pf::load_scene(scene_h5);
-    s.camera.width = sz.w;
-    s.camera.height = sz.h;
-    return s;
-  }
-  pf::BakeOptions bo;
-  bo.input = dae;
-  bo.width = sz.w;
-  bo.height = sz.h;
-  pf::BakeReport rep;
-  return pf::bake_scene(bo, rep);
-}
 
 pf::HitpointSet fresh_state(const pf::Scene& scene, const pf::EyePassOptions& eye) {
   return pf::make_hitpoint_set(pf::trace_hitpoints(scene, eye), eye.direct, scene.scene_id);

@@ -30,19 +30,14 @@
 #include <embree3/rtcore.h>
 #endif
 
+#include "bench_common.h"
+
 namespace {
 
 using pf::Vec3;
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using pf::bench::median;
+using pf::bench::now;
 
 // A benchmark scene: triangles, baked acceleration data, and a pinhole camera.
 struct BenchScene {

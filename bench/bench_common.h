@@ -1,0 +1,70 @@
+// bench_common.h — helpers shared by the benchmarks: clocks, medians, image sizes, the benchmark
+// scene at a given resolution. Benchmarks only (not part of libcommon).
+#pragma once
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "photonflow/scene.h"
+#include "photonflow/scene_import.h"
+
+namespace pf::bench {
+
+// Seconds on a monotonic clock.
+inline double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+// Median of the values (mean of the middle two for an even count; 0 for none).
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  size_t n = v.size();
+  if (n == 0) return 0;
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Size {
+  int w = 0, h = 0;
+};
+
+// "WxH" → Size; throws on anything else.
+inline Size parse_size(const std::string& s) {
+  Size z;
+  if (std::sscanf(s.c_str(), "%dx%d", &z.w, &z.h) != 2 || z.w <= 0 || z.h <= 0)
+    throw std::runtime_error("bad size '" + s + "' (want WxH)");
+  return z;
+}
+
+// "W1xH1,W2xH2,..." → sizes.
+inline std::vector<Size> parse_sizes(const std::string& list) {
+  std::vector<Size> out;
+  std::stringstream ss(list);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(parse_size(item));
+  return out;
+}
+
+// The benchmark scene at a resolution: scene.h5 if given (camera size overridden), else the scene
+// file baked in-process with width/height overrides.
+inline Scene make_scene(const std::string& scene_h5, const std::string& source, Size sz) {
+  if (!scene_h5.empty()) {
+    Scene s = load_scene(scene_h5);
+    s.camera.width = sz.w;
+    s.camera.height = sz.h;
+    return s;
+  }
+  BakeOptions bo;
+  bo.input = source;
+  bo.width = sz.w;
+  bo.height = sz.h;
+  BakeReport rep;
+  return bake_scene(bo, rep);
+}
+
+}  // namespace pf::bench
