@@ -1,0 +1,112 @@
+// clusters.h — hitpoints grouped into work-group clusters (thesis ch. 7.3, Tables 7.4/7.5), the
+// `cluster` stage and its file clusters.h5 (format "photonflow.clusters", docs/FORMATS.md).
+//
+// A cluster is a set of hitpoints of ONE mesh (the gather is per mesh, photon_grid.h) that a single
+// work-group illuminates together: all its work-items share one centre and one radius R, so they
+// read the same grid bins. The hitpoint indices of all clusters lie in one ORDER array, clusters
+// contiguous; each cluster's run is padded with FILLER entries (index −1) to a multiple of the
+// work-group size ("filler hitpoints", thesis ch. 7.3), so work-group g handles exactly the
+// entries order[g·wg … (g+1)·wg) and never straddles two clusters:
+//
+//   order[first … first+count)                 hitpoint indices (ascending), real work
+//   order[first+count … first+padded_count)    −1, fillers (idle work-items)
+//   padded_count = ceil(count / wg_size) · wg_size,  first = Σ padded_count of earlier clusters.
+//
+// Shared radius rule: R = max over the cluster's hitpoints i of (|x_i − centre| + r_i), computed in
+// double and rounded up to float, i.e. the smallest sphere around `centre` that contains every
+// member's gather sphere; any photon a member can gather lies within R of the centre.
+//
+// Rebuild vs refresh (PPM radii shrink every pass, eq. 3.16):
+//   - Refresh (update_cluster_radii): each pass, after the radii change; O(hitpoints), keeps the
+//     membership and centres and recomputes R from the current radii, so R only tightens.
+//   - Rebuild (cluster_kmeans / cluster_grid): never needed for correctness — radii only shrink,
+//     so an old R stays conservative (update_cluster_radii keeps it exact). Rebuild only when the
+//     hitpoints themselves change (a new eye pass: other positions, pixels, meshes, image size);
+//     load_clusters refuses a file whose hitpoints_sha256 does not match the hitpoints.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "photonflow/provenance.h"
+#include "photonflow/shared_types.h"
+#include "photonflow/stage_files.h"
+
+/* One cluster (C layout, 4-byte fields only, so a kernel can read it unchanged). */
+typedef struct {
+  pf_float centre[3];  /* world units */
+  pf_float radius;     /* shared gather radius R (see the file comment), world units */
+  pf_int mesh;         /* mesh id of every member */
+  pf_int first;        /* index of the cluster's first entry in the order array */
+  pf_int count;        /* member hitpoints (> 0) */
+  pf_int padded_count; /* count rounded up to a multiple of the work-group size */
+} pf_cluster;
+
+static_assert(sizeof(pf_cluster) == 32, "pf_cluster layout");
+
+namespace pf {
+
+constexpr const char* kClustersFormat = "photonflow.clusters";
+
+struct ClusterSet {
+  std::vector<pf_cluster> clusters;  // ordered by mesh, then as the method made them
+  std::vector<int32_t> order;        // Σ padded_count entries: hitpoint index or −1 (filler)
+  int wg_size = 0;                   // work-group size
+  std::string method;                // "kmeans" or "grid"
+  std::string scene_id;
+  uint64_t hitpoint_count = 0;       // hitpoints of the set the clusters were made for
+  std::string hitpoints_sha256;      // hitpoints_hash() of that set
+};
+
+struct ClusterStats {
+  size_t clusters = 0;
+  size_t hitpoints = 0;               // Σ count
+  size_t fillers = 0;                 // Σ (padded_count − count)
+  size_t hitpoints_with_fillers = 0;  // Σ padded_count (Table 7.5)
+  double mean_radius = 0;             // mean of the clusters' R, world units
+};
+
+// K-means per mesh (thesis: K = hitpoints / work-group size): K = ceil(hitpoints_of_mesh /
+// wg_size). Seeding: the mesh's hitpoints in Morton (Z-curve) order over their bounding box, cut
+// into K runs of nearly equal size, centre = mean of each run. Then `iterations` Lloyd steps
+// (nearest centre through a uniform grid over the centres; ties to the lower centre index; means
+// summed in double in hitpoint order), then a final assignment. Empty clusters are dropped;
+// members are listed in ascending hitpoint index and the centre is their mean. The result depends
+// on the hitpoints, wg_size, iterations and seed only (not on `threads`, 0 = all cores). The
+// Morton seeding is deterministic and does not use `seed` yet (it is recorded in the file's
+// provenance and reserved for randomised seeding / the evolutionary clustering of issue 6).
+ClusterSet cluster_kmeans(const HitpointSet& h, int wg_size, int iterations, uint32_t seed,
+                          int threads = 0);
+
+// Grid clusters: per mesh, the uniform grid of eq. 7.1 over the mesh's hitpoints (box lo…hi of
+// their positions, bin size d = max(longest extent / max_bins, R0) with R0 = h.radius0 if > 0,
+// bins per axis clamp(ceil(extent/d), 1, max_bins), cell c = clamp(⌊(p − lo)/d⌋, 0, n − 1)).
+// Each non-empty cell's hitpoints (ascending index) are cut into chunks of at most wg_size, one
+// cluster per chunk, clusters in cell offset order (x + y·nx + z·nx·ny). Centre = chunk mean.
+ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins);
+
+// The grid header cluster_grid uses for the hitpoints of `mesh` (nx = ny = nz = 0 when it has
+// none); reuses pf_mesh_grid (first_bin, first_photon = 0, photon_count = hitpoints of the mesh).
+pf_mesh_grid hitpoint_mesh_grid(const HitpointSet& h, int mesh, int max_bins);
+
+ClusterStats stats(const ClusterSet& c);
+
+// "" when `c` is a valid clustering of `h`, else what is wrong (one phrase): clusters contiguous
+// in order, counts > 0, padded_count = ceil(count/wg)·wg, fillers only at cluster tails, every
+// hitpoint exactly once, every member of the cluster's mesh. Radii are not checked here.
+std::string check_clusters(const ClusterSet& c, const HitpointSet& h);
+
+// Recomputes every cluster's R from the current hitpoint radii (same rule, same centre and
+// members). Cheap; call it after each PPM pass. Never grows R when hitpoint radii shrink.
+void update_cluster_radii(ClusterSet& c, const HitpointSet& h);
+
+// SHA-256 over width, height, hitpoint count and each hitpoint's position, pixel and mesh (not its
+// radius or PPM state, which change between passes without invalidating the clusters).
+std::string hitpoints_hash(const HitpointSet& h);
+
+void save_clusters(const ClusterSet& c, const std::string& path, const Provenance& prov);
+// Loads clusters.h5 and refuses (InputError, one line) a file made for another scene or other
+// hitpoints than `h`, or one that is not a valid clustering of `h`.
+ClusterSet load_clusters(const std::string& path, const HitpointSet& h);
+
+}  // namespace pf
