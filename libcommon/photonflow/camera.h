@@ -29,6 +29,10 @@ class CameraFrame {
   }
   const Vec3& eye() const { return eye_; }
   const Vec3& forward() const { return forward_; }
+  const Vec3& right() const { return right_; }
+  const Vec3& up() const { return up_; }
+  float tan_half_x() const { return tan_half_x_; }
+  float tan_half_y() const { return tan_half_y_; }
   int width() const { return width_; }
   int height() const { return height_; }
   // Area of the image plane at distance 1 covered by one pixel (for pixel footprints).

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "photonflow/camera.h"
 #include "photonflow/error.h"
 #include "photonflow/surface.h"
 
@@ -85,17 +86,13 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
   return *s;
 }
 
-// camera.h's CameraFrame, recomputed with the same expressions (its basis is private):
-// eye, forward, right, up, tan_half_x, tan_half_y.
+// The camera basis the eye-pass kernel reads (16 floats): eye, forward, right, up, tan_half_x,
+// tan_half_y, padding — taken from camera.h's CameraFrame, so both backends use one frame.
 std::vector<float> camera_frame(const pf_camera& c) {
-  Vec3 eye(c.eye);
-  Vec3 forward = normalize(Vec3(c.look_at) - eye);
-  Vec3 right = normalize(cross(forward, Vec3(c.up)));
-  Vec3 up = cross(right, forward);
-  float tan_half_y = std::tan(0.5f * c.fov_y_deg * 3.14159265358979f / 180.f);
-  float tan_half_x = tan_half_y * float(c.width) / float(c.height);
-  return {eye.x,   eye.y,   eye.z,   forward.x,  forward.y, forward.z, right.x, right.y,
-          right.z, up.x,    up.y,    up.z,       tan_half_x, tan_half_y, 0.f,     0.f};
+  CameraFrame f(c);
+  const Vec3 &e = f.eye(), &fw = f.forward(), &r = f.right(), &u = f.up();
+  return {e.x, e.y, e.z, fw.x, fw.y, fw.z, r.x, r.y, r.z, u.x, u.y, u.z,
+          f.tan_half_x(), f.tan_half_y(), 0.f, 0.f};
 }
 
 }  // namespace
