@@ -2,6 +2,7 @@
 // hit interval, barycentrics, and watertightness on closed meshes.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "photonflow/procedural.h"
@@ -384,4 +385,120 @@ TEST_CASE("a tree stored in another node order gives the same hits", "[raycast]"
     INFO(pf::traversal_name(trav));
     CHECK(differ == 0);
   }
+}
+
+// The shared rope loops compiled here without the host's leaf-test substitutes (the default
+// scalar pf_kd_leaf_intersect / pf_kd_cleaf_intersect), in a namespace of their own so that they
+// do not collide with libcommon's (inline) instances.
+namespace shared_plain {
+#include "photonflow/intersect_shared.h"
+}  // namespace shared_plain
+
+namespace {
+
+// Left-first depth-first preorder of a tree and its inverse (what pf_kd_compact_build expects).
+void preorder(const std::vector<pf_kd_node>& nodes, std::vector<int32_t>& order,
+              std::vector<int32_t>& index) {
+  order.clear();
+  index.assign(nodes.size(), 0);
+  for (std::vector<int32_t> todo = {0}; !todo.empty();) {
+    const int32_t i = todo.back();
+    todo.pop_back();
+    index[size_t(i)] = int32_t(order.size());
+    order.push_back(i);
+    if (nodes[size_t(i)].axis != PF_KD_LEAF) {
+      todo.push_back(nodes[size_t(i)].right);
+      todo.push_back(nodes[size_t(i)].left);
+    }
+  }
+}
+
+// Casts `rays` with pf_kd_traverse_ropes over `ref` and with pf_kd_traverse_ropes_compact over the
+// compact copy of `tree` (the same tree, possibly stored in another node order); returns the
+// number of rays (closest or any hit) whose return value, triangle, t, u or v differ.
+size_t compact_differences(const pf::Scene& s, const std::vector<pf_kd_node>& ref,
+                           const std::vector<pf_kd_node>& tree, const std::vector<pf::Ray>& rays,
+                           size_t& hits) {
+  std::vector<int32_t> order, index;
+  preorder(tree, order, index);
+  size_t n_leaves = 0;
+  for (const pf_kd_node& n : tree) n_leaves += n.axis == PF_KD_LEAF ? 1 : 0;
+  std::vector<shared_plain::pf_kd_cnode> cnodes(tree.size());
+  std::vector<shared_plain::pf_kd_cleaf> cleaves(n_leaves);
+  float root_box[6];
+  REQUIRE(order.size() == tree.size());
+  REQUIRE(shared_plain::pf_kd_compact_build(tree.data(), int32_t(tree.size()), order.data(),
+                                            index.data(), cnodes.data(), cleaves.data(),
+                                            root_box) == int32_t(n_leaves));
+  size_t differ = 0;
+  hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const pf::Ray& r = rays[i];
+    const float o[3] = {r.o.x, r.o.y, r.o.z}, d[3] = {r.d.x, r.d.y, r.d.z};
+    for (int any = 0; any < 2; ++any) {
+      shared_plain::pf_ray_hit a = {r.tmax, -1, 0.f, 0.f}, b = a;
+      const int ra = shared_plain::pf_kd_traverse_ropes(ref.data(), int32_t(ref.size()),
+                                                        s.kd.leaf_tris.data(), s.hh.data(), o, d,
+                                                        r.tmin, any, &a);
+      const int rb = shared_plain::pf_kd_traverse_ropes_compact(
+          cnodes.data(), int32_t(cnodes.size()), cleaves.data(), root_box, s.kd.leaf_tris.data(),
+          s.hh.data(), o, d, r.tmin, any, &b);
+      hits += ra && !any ? 1 : 0;
+      const bool same = ra == rb && a.tri == b.tri && std::memcmp(&a.t, &b.t, 4) == 0 &&
+                        std::memcmp(&a.u, &b.u, 4) == 0 && std::memcmp(&a.v, &b.v, 4) == 0;
+      if (!same && differ++ < 5)
+        WARN("ray " << i << " any " << any << ": ropes " << ra << " tri " << a.tri << " t " << a.t
+                    << ", compact " << rb << " tri " << b.tri << " t " << b.t);
+    }
+  }
+  return differ;
+}
+
+}  // namespace
+
+TEST_CASE("the compact rope loop equals pf_kd_traverse_ropes bit for bit", "[raycast]") {
+  // pf_kd_traverse_ropes_compact (8-byte nodes, leaf records; Traversal::Ropes on the host) must
+  // visit the same leaves as the original rope loop over the flat pf_kd_node array (the kernels'
+  // code): same return value, triangle, t, u, v, for closest and any hit.
+  for (const pf::Scene* s : {&room(), &soup(), &blob()}) {
+    const auto rays = random_rays(*s, s->triangles.size() > 50000 ? 200000 : 50000, 21);
+    size_t hits = 0;
+    const size_t differ = compact_differences(*s, s->kd.nodes, s->kd.nodes, rays, hits);
+    INFO(s->triangles.size() << " triangles, " << hits << " closest hits");
+    CHECK(hits > rays.size() / 4);
+    CHECK(differ == 0);
+  }
+}
+
+TEST_CASE("the compact rope copy of a tree stored right-first casts the same", "[raycast]") {
+  // pf_kd_compact_build renumbers nodes (children and ropes) into left-first preorder.
+  const pf::Scene& s = room();
+  const auto& nodes = s.kd.nodes;
+  std::vector<int32_t> order, index(nodes.size());
+  for (std::vector<int32_t> todo = {0}; !todo.empty();) {
+    const int32_t i = todo.back();
+    todo.pop_back();
+    index[size_t(i)] = int32_t(order.size());
+    order.push_back(i);
+    if (nodes[size_t(i)].axis != PF_KD_LEAF) {
+      todo.push_back(nodes[size_t(i)].left);  // right child first
+      todo.push_back(nodes[size_t(i)].right);
+    }
+  }
+  std::vector<pf_kd_node> moved(nodes.size());
+  for (size_t i = 0; i < order.size(); ++i) {
+    pf_kd_node n = nodes[size_t(order[i])];
+    if (n.axis != PF_KD_LEAF) {
+      n.left = index[size_t(n.left)];
+      n.right = index[size_t(n.right)];
+    }
+    for (int32_t& r : n.ropes)
+      if (r >= 0) r = index[size_t(r)];
+    moved[i] = n;
+  }
+  REQUIRE(moved[0].left != 1);
+  const auto rays = random_rays(s, 50000, 22);
+  size_t hits = 0;
+  CHECK(compact_differences(s, nodes, moved, rays, hits) == 0);
+  CHECK(hits > rays.size() / 4);
 }

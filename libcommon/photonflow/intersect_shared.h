@@ -151,8 +151,9 @@ PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
 /* The leaf test of the rope traversal below. An OpenCL kernel may define PF_KD_LEAF_TEST before
  * including this header to substitute a test with the same signature and the same result
  * (kernels/trace_common.h: four triangles per vector operation over a leaf-ordered copy of the
- * planes, reached through the leaf_tris and hh arguments). The host does the same with SSE
- * (raycast.cpp); both are tested to return this function's bits. */
+ * planes, reached through the leaf_tris and hh arguments). The host does the same with SSE in the
+ * compact rope loop below (PF_KD_CLEAF_TEST, raycast.cpp); both are tested to return this
+ * function's bits. */
 #ifndef PF_KD_LEAF_TEST
 #define PF_KD_LEAF_TEST pf_kd_leaf_intersect
 #endif
@@ -228,5 +229,166 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
   }
   return hit->tri >= 0;
 }
+
+/* ---- Compact rope traversal ------------------------------------------------------------------
+ *
+ * The same stackless rope loop as pf_kd_traverse_ropes over a compact copy of the tree, derived
+ * from the pf_kd_node array (pf_kd_compact_build below; the host caches it, raycast.cpp) so that a
+ * descent reads 8 bytes per inner node instead of 72, and only leaves carry their box and ropes:
+ *   - pf_kd_cnode: nodes in depth-first preorder with the left child first (the left child of
+ *     node i is i + 1). Inner: `split` and code = right child << 2 | axis. Leaf: code =
+ *     leaf record index << 2 | PF_KD_LEAF (`split` unused, 0).
+ *   - pf_kd_cleaf: one 64-byte record per leaf: box (lo, hi), ropes (indices into the compact
+ *     node array, −1 on the scene bounds), the leaf's range of leaf_tris, and `aux`, free for a
+ *     substituted leaf test (the host: first packet of the leaf-ordered planes).
+ *   - root_box: the root box widened as pf_kd_enter_root widens it (lo[3], hi[3]).
+ * Every decision is made on the same floats with the same expressions as pf_kd_traverse_ropes, so
+ * the leaves are visited in the same order and the hits are the same bits; empty leaves cost only
+ * their exit face (no leaf test). */
+typedef struct {
+  pf_float split;
+  pf_int code;
+} pf_kd_cnode;
+
+typedef struct {
+  pf_float box[6]; /* lo[3], hi[3] */
+  pf_int ropes[6];
+  pf_int first;
+  pf_int count;
+  pf_int aux;
+  pf_int pad;
+} pf_kd_cleaf;
+
+/* pf_kd_leaf_intersect for a compact leaf record (the same loop over leaf_tris[first, +count)). */
+PF_INLINE int pf_kd_cleaf_intersect(PF_GLOBAL const pf_kd_cleaf* leaf,
+                                    PF_GLOBAL const pf_int* leaf_tris,
+                                    PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                    const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
+  pf_ray_hit best = *hit;
+  const pf_int end = leaf->first + leaf->count;
+  int found = 0;
+  for (pf_int i = leaf->first; i < end; ++i) {
+    const pf_int tri = leaf_tris[i];
+    float t, u, v;
+    if (!pf_hh_intersect(&hh[tri], o, d, tmin, best.t, &t, &u, &v)) continue;
+    if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
+    best.t = t;
+    best.tri = tri;
+    best.u = u;
+    best.v = v;
+    found = 1;
+    if (any_hit) break;
+  }
+  if (found) *hit = best;
+  return found && any_hit;
+}
+
+/* The compact loop's leaf test; substitutable like PF_KD_LEAF_TEST (same signature as
+ * pf_kd_cleaf_intersect, same result). Called for non-empty leaves only. */
+#ifndef PF_KD_CLEAF_TEST
+#define PF_KD_CLEAF_TEST pf_kd_cleaf_intersect
+#endif
+
+/* pf_kd_traverse_ropes over the compact copy: same arguments and result (node_count = the number
+ * of compact nodes, the number of pf_kd_node). */
+PF_INLINE int pf_kd_traverse_ropes_compact(PF_GLOBAL const pf_kd_cnode* cnodes, pf_int node_count,
+                                           PF_GLOBAL const pf_kd_cleaf* leaves,
+                                           PF_GLOBAL const float* root_box,
+                                           PF_GLOBAL const pf_int* leaf_tris,
+                                           PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                           const float* d, float tmin, int any_hit,
+                                           pf_ray_hit* hit) {
+  float inv_d[3];
+  int high[3], exit_face[3]; /* exit_face[k]: index into box[] of the face the ray leaves by */
+  for (int k = 0; k < 3; ++k) {
+    inv_d[k] = 1.0f / d[k];
+    high[k] = inv_d[k] > 0.0f;
+    exit_face[k] = 3 * high[k] + k;
+  }
+  if (node_count <= 0) return 0;
+  float t_entry, t_leave_root;
+  {
+    const float lo[3] = {root_box[0], root_box[1], root_box[2]};
+    const float hi[3] = {root_box[3], root_box[4], root_box[5]};
+    if (!pf_ray_box(lo, hi, o, d, inv_d, tmin, hit->t, &t_entry, &t_leave_root)) return 0;
+  }
+  pf_int node = 0;
+  float tie = -1.0f; /* as in pf_kd_traverse_ropes */
+  for (pf_int step = 0; step < node_count; ++step) {
+    const float p[3] = {o[0] + t_entry * d[0], o[1] + t_entry * d[1], o[2] + t_entry * d[2]};
+    pf_kd_cnode n = cnodes[node];
+    while ((n.code & 3) != PF_KD_LEAF) {
+      const int a = n.code & 3;
+      const int go_left = (p[a] < n.split) | ((p[a] == n.split) & (d[a] * tie > 0.0f));
+      node = go_left ? node + 1 : (n.code >> 2);
+      n = cnodes[node];
+    }
+    PF_GLOBAL const pf_kd_cleaf* leaf = &leaves[n.code >> 2];
+    if (leaf->count > 0 && PF_KD_CLEAF_TEST(leaf, leaf_tris, hh, o, d, tmin, any_hit, hit))
+      return 1;
+    float t_exit = INFINITY;
+    int face = -1;
+    for (int k = 0; k < 3; ++k) {
+      const float te = (leaf->box[exit_face[k]] - o[k]) * inv_d[k];
+      if (te < t_exit && d[k] != 0.0f) {
+        t_exit = te;
+        face = 2 * k + high[k];
+      }
+    }
+    if (face < 0 || hit->t < t_exit) break;
+    node = leaf->ropes[face];
+    if (node < 0) break;
+    tie = 1.0f;
+    t_entry = t_exit > t_entry ? t_exit : t_entry;
+  }
+  return hit->tri >= 0;
+}
+
+#ifndef __OPENCL_VERSION__
+/* Host: fills the compact copy of a valid tree. order[i] is the pf_kd_node placed at compact
+ * position i (a depth-first preorder with the left child first; the identity for the builder's
+ * trees), new_index its inverse. cnodes has node_count entries, leaves room for every leaf.
+ * Returns the number of leaf records written (leaf j's aux = 0). */
+PF_INLINE pf_int pf_kd_compact_build(const pf_kd_node* nodes, pf_int node_count,
+                                     const pf_int* order, const pf_int* new_index,
+                                     pf_kd_cnode* cnodes, pf_kd_cleaf* leaves, float* root_box) {
+  pf_int n_leaves = 0;
+  for (pf_int i = 0; i < node_count; ++i) {
+    const pf_kd_node* n = &nodes[order[i]];
+    pf_kd_cnode* c = &cnodes[i];
+    if (n->axis == PF_KD_LEAF) {
+      pf_kd_cleaf* l = &leaves[n_leaves];
+      for (int k = 0; k < 3; ++k) {
+        l->box[k] = n->lo[k];
+        l->box[3 + k] = n->hi[k];
+      }
+      for (int f = 0; f < 6; ++f) l->ropes[f] = n->ropes[f] < 0 ? -1 : new_index[n->ropes[f]];
+      l->first = n->first;
+      l->count = n->count;
+      l->aux = 0;
+      l->pad = 0;
+      c->split = 0.0f;
+      c->code = n_leaves << 2 | PF_KD_LEAF;
+      ++n_leaves;
+    } else {
+      c->split = n->split;
+      c->code = new_index[n->right] << 2 | n->axis;
+    }
+  }
+  if (node_count > 0) { /* the arithmetic of pf_kd_enter_root */
+    float ext = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+      const float e = nodes[0].hi[k] - nodes[0].lo[k];
+      ext = e > ext ? e : ext;
+    }
+    const float margin = PF_HH_EDGE_EPS * ext;
+    for (int k = 0; k < 3; ++k) {
+      root_box[k] = nodes[0].lo[k] - margin;
+      root_box[3 + k] = nodes[0].hi[k] + margin;
+    }
+  }
+  return n_leaves;
+}
+#endif
 
 #endif /* PHOTONFLOW_INTERSECT_SHARED_H */

@@ -50,8 +50,10 @@ struct KdBuildParams {
   int threads = 0;              // 0 = all cores; the tree is identical for any thread count
 };
 
-// Slot for derived, host-only traversal data (raycast.cpp: compact 8-byte nodes and the triangle
-// planes in leaf order), built from the arrays on first use. It is no part of the tree's bytes or
+// Slot for derived, host-only traversal data (raycast.cpp: compact 8-byte nodes for the stack
+// traversal, 8-byte nodes plus 64-byte leaf records for the compact rope loop
+// pf_kd_traverse_ropes_compact of intersect_shared.h, and the triangle planes in leaf order), built
+// from the arrays on first use. It is no part of the tree's bytes or
 // of scene.h5: copies and assignments start without it. raycast.cpp rebuilds it when the arrays
 // it was built from were replaced (other data pointers or sizes); arrays changed in place after
 // rays were cast need a fresh tree (assign the KdTree).

@@ -1,11 +1,13 @@
 // raycast.cpp — closest-hit and any-hit ray casting over a baked scene (raycast.h).
 //
 // All three traversals test triangles with the Havel–Herout routine of intersect_shared.h (thesis
-// eq. 4.3–4.7); the rope traversal is the shared routine itself, the same code the OpenCL kernels
-// compile. Like the kernels (kernels/trace_common.h), the host substitutes the rope traversal's
-// leaf test (PF_KD_LEAF_TEST) by one that tests four triangles per SSE operation over a
-// leaf-ordered copy of the planes: the same operations in the same order per lane, so the same
-// bits as pf_kd_leaf_intersect. The stack traversal uses the same leaf test over compact nodes.
+// eq. 4.3–4.7); the rope traversal is the shared compact rope loop (pf_kd_traverse_ropes_compact),
+// which the OpenCL kernels can compile too, over a host copy of the tree (8-byte inner nodes,
+// 64-byte leaf records) that visits the same leaves as pf_kd_traverse_ropes over pf_kd_node. Like
+// the kernels (kernels/trace_common.h), the host substitutes its leaf test (PF_KD_CLEAF_TEST) by
+// one that tests four triangles per SSE operation over a leaf-ordered copy of the planes: the same
+// operations in the same order per lane, so the same bits as pf_kd_leaf_intersect. The stack
+// traversal uses the same leaf test over the 8-byte nodes.
 #include "photonflow/raycast.h"
 
 #include <omp.h>
@@ -19,14 +21,13 @@
 
 #include "photonflow/shared_types.h"
 
-// The rope traversal's leaf test on the host (see above; defined below). `group_of_first` maps a
-// leaf's first leaf_tris index to its first packet; `groups` is the packet array.
-static int pf_host_leaf_test4(const pf_kd_node* leaf, const pf_int* group_of_first,
-                              const pf_hh_triangle* groups, const float* o, const float* d,
-                              float tmin, int any_hit, float* hit_t, pf_int* hit_tri, float* hit_u,
-                              float* hit_v);
-#define PF_KD_LEAF_TEST(n, lt, h, o, d, tmin, any, hit) \
-  pf_host_leaf_test4(n, lt, h, o, d, tmin, any, &(hit)->t, &(hit)->tri, &(hit)->u, &(hit)->v)
+// The compact rope loop's leaf test (PF_KD_CLEAF_TEST): a leaf record's aux is its first packet.
+static int pf_host_cleaf_test4(int first_packet, int count, const pf_hh_triangle* groups,
+                               const float* o, const float* d, float tmin, int any_hit,
+                               float* hit_t, pf_int* hit_tri, float* hit_u, float* hit_v);
+#define PF_KD_CLEAF_TEST(leaf, lt, h, o, d, tmin, any, hit)                                     \
+  ((void)(lt), pf_host_cleaf_test4((leaf)->aux, (leaf)->count, h, o, d, tmin, any, &(hit)->t,  \
+                                   &(hit)->tri, &(hit)->u, &(hit)->v))
 
 #include "photonflow/intersect_shared.h"
 
@@ -70,6 +71,7 @@ struct alignas(16) HHPacket {
   int32_t tri[4];
 };
 static_assert(sizeof(HHPacket) == 208, "HHPacket layout (bench_raycast reports its memory)");
+static_assert(sizeof(pf_kd_cnode) == 8 && sizeof(pf_kd_cleaf) == 64, "compact rope layout");
 
 struct HostKd {
   // What it was built from (rebuilt when any of these changed).
@@ -81,8 +83,12 @@ struct HostKd {
   size_t n_hh;
   std::vector<CompactNode> nodes;
   std::vector<HHPacket> packets;        // hh[leaf_tris[i]], leaf by leaf
-  std::vector<int32_t> group_of_first;  // per leaf_tris index: packet of a leaf's first reference
   float root_lo[3], root_hi[3];         // the root box as pf_kd_enter_root widens it
+  // The compact copy of the rope traversal (pf_kd_traverse_ropes_compact): 8-byte nodes (same
+  // numbering as `nodes`), 64-byte leaf records (aux = first packet), the widened root box.
+  std::vector<pf_kd_cnode> cnodes;
+  std::vector<pf_kd_cleaf> cleaves;
+  float root_box[6] = {0, 0, 0, 0, 0, 0};
 
   bool matches(const Scene& s) const {
     return key_nodes == s.kd.nodes.data() && n_nodes == s.kd.nodes.size() &&
@@ -101,7 +107,6 @@ std::shared_ptr<const HostKd> make_host_kd(const Scene& s) {
   h->key_hh = s.hh.data();
   h->n_hh = s.hh.size();
   h->nodes.resize(kd.nodes.size());
-  h->group_of_first.assign(kd.leaf_tris.size(), 0);
   // Depth-first preorder with the left child first: the builder's order (the identity), or a
   // renumbering for a valid tree stored in another order (validate_kdtree does not demand it).
   std::vector<int32_t> order, new_index(kd.nodes.size(), 0);
@@ -121,7 +126,6 @@ std::shared_ptr<const HostKd> make_host_kd(const Scene& s) {
     const pf_kd_node& n = kd.nodes[size_t(order[i])];
     CompactNode& c = h->nodes[i];
     if (n.axis == PF_KD_LEAF) {
-      if (n.count > 0) h->group_of_first[size_t(n.first)] = int32_t(h->packets.size());
       c.w0 = uint32_t(h->packets.size());
       c.w1 = uint32_t(n.count) << 2 | 3u;
       for (int32_t j = 0; j < n.count; ++j) {
@@ -139,6 +143,20 @@ std::shared_ptr<const HostKd> make_host_kd(const Scene& s) {
     } else {
       std::memcpy(&c.w0, &n.split, 4);
       c.w1 = uint32_t(new_index[size_t(n.right)]) << 2 | uint32_t(n.axis);
+    }
+  }
+  // The compact rope copy, in the same order; leaf records get their first packet.
+  {
+    size_t n_leaves = 0;
+    for (const pf_kd_node& n : kd.nodes) n_leaves += n.axis == PF_KD_LEAF ? 1 : 0;
+    h->cnodes.resize(kd.nodes.size());
+    h->cleaves.resize(n_leaves);
+    if (!kd.nodes.empty()) {
+      pf_kd_compact_build(kd.nodes.data(), pf_int(kd.nodes.size()), order.data(),
+                          new_index.data(), h->cnodes.data(), h->cleaves.data(), h->root_box);
+      for (size_t i = 0; i < h->cnodes.size(); ++i)
+        if ((h->cnodes[i].code & 3) == PF_KD_LEAF)
+          h->cleaves[size_t(h->cnodes[i].code >> 2)].aux = int32_t(h->nodes[i].w0);
     }
   }
   if (!kd.nodes.empty()) {  // the same arithmetic as pf_kd_enter_root
@@ -275,7 +293,7 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
 #endif
 }
 
-// The same for one leaf of the rope traversal (PF_KD_LEAF_TEST).
+// The same for one leaf of the rope traversal (PF_KD_CLEAF_TEST).
 bool leaf_intersect_packets(const HHPacket* p, uint32_t count, const float* o, const float* d,
                             float tmin, bool any_hit, pf_ray_hit& best) {
   const RayLanes r(o, d);
@@ -345,12 +363,13 @@ bool cast(const Scene& scene, const Ray& ray, bool any_hit, Traversal trav, pf_r
   hit = {ray.tmax, -1, 0.f, 0.f};
   switch (trav) {
     case Traversal::Ropes: {
-      // The packets travel in the leaf_tris / hh arguments (PF_KD_LEAF_TEST above).
+      // The shared rope loop over the compact copy (the same bits as pf_kd_traverse_ropes over
+      // the pf_kd_node array, tested); the packets travel in the hh argument (PF_KD_CLEAF_TEST).
       const HostKd& h = host_kd(scene);
-      return pf_kd_traverse_ropes(scene.kd.nodes.data(), pf_int(scene.kd.nodes.size()),
-                                  h.group_of_first.data(),
-                                  reinterpret_cast<const pf_hh_triangle*>(h.packets.data()), o, d,
-                                  ray.tmin, any_hit, &hit) != 0;
+      return pf_kd_traverse_ropes_compact(
+                 h.cnodes.data(), pf_int(h.cnodes.size()), h.cleaves.data(), h.root_box, nullptr,
+                 reinterpret_cast<const pf_hh_triangle*>(h.packets.data()), o, d, ray.tmin,
+                 any_hit, &hit) != 0;
     }
     case Traversal::Stack:
       return traverse_stack(host_kd(scene), o, d, ray.tmin, any_hit, hit);
@@ -408,15 +427,13 @@ void intersect_any_batch(const Scene& scene, const std::vector<Ray>& rays,
 
 }  // namespace pf
 
-static int pf_host_leaf_test4(const pf_kd_node* leaf, const pf_int* group_of_first,
-                              const pf_hh_triangle* groups, const float* o, const float* d,
-                              float tmin, int any_hit, float* hit_t, pf_int* hit_tri, float* hit_u,
-                              float* hit_v) {
-  if (leaf->count <= 0) return 0;
-  const auto* p = reinterpret_cast<const pf::HHPacket*>(groups) + group_of_first[leaf->first];
+static int pf_host_cleaf_test4(int first_packet, int count, const pf_hh_triangle* groups,
+                               const float* o, const float* d, float tmin, int any_hit,
+                               float* hit_t, pf_int* hit_tri, float* hit_u, float* hit_v) {
+  const auto* p = reinterpret_cast<const pf::HHPacket*>(groups) + first_packet;
   pf_ray_hit best = {*hit_t, *hit_tri, *hit_u, *hit_v};
-  const bool stop = pf::leaf_intersect_packets(p, uint32_t(leaf->count), o, d, tmin, any_hit != 0,
-                                               best);
+  const bool stop =
+      pf::leaf_intersect_packets(p, uint32_t(count), o, d, tmin, any_hit != 0, best);
   *hit_t = best.t;
   *hit_tri = best.tri;
   *hit_u = best.u;
