@@ -122,17 +122,17 @@ PF_INLINE int pf_kd_enter_root(PF_GLOBAL const pf_kd_node* root, const float* o,
   return pf_ray_box(lo, hi, o, d, inv_d, tmin, tmax, t_enter, t_leave);
 }
 
-/* Tests the triangles of one kd leaf, keeping the closest hit in `hit` (hit->t is the current
- * tmax). Equal t are resolved towards the lower triangle index so the result does not depend on
- * the order in which leaves are visited. With any_hit, returns 1 at the first hit. */
-PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
-                                   PF_GLOBAL const pf_int* leaf_tris,
-                                   PF_GLOBAL const pf_hh_triangle* hh, const float* o,
-                                   const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
+/* Tests the triangles leaf_tris[first, first+count), keeping the closest hit in `hit` (hit->t is
+ * the current tmax). Equal t are resolved towards the lower triangle index so the result does not
+ * depend on the order in which leaves are visited. With any_hit, returns 1 at the first hit. */
+PF_INLINE int pf_leaf_range_intersect(pf_int first, pf_int count,
+                                      PF_GLOBAL const pf_int* leaf_tris,
+                                      PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                      const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
   pf_ray_hit best = *hit; /* a private copy: stores through `hit` could alias the scene arrays */
-  const pf_int end = leaf->first + leaf->count;
+  const pf_int end = first + count;
   int found = 0;
-  for (pf_int i = leaf->first; i < end; ++i) {
+  for (pf_int i = first; i < end; ++i) {
     const pf_int tri = leaf_tris[i];
     float t, u, v;
     if (!pf_hh_intersect(&hh[tri], o, d, tmin, best.t, &t, &u, &v)) continue;
@@ -146,6 +146,15 @@ PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
   }
   if (found) *hit = best;
   return found && any_hit;
+}
+
+/* The triangles of one kd leaf (pf_leaf_range_intersect over its range). */
+PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
+                                   PF_GLOBAL const pf_int* leaf_tris,
+                                   PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                   const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
+  return pf_leaf_range_intersect(leaf->first, leaf->count, leaf_tris, hh, o, d, tmin, any_hit,
+                                 hit);
 }
 
 /* The leaf test of the rope traversal below. An OpenCL kernel may define PF_KD_LEAF_TEST before
@@ -259,28 +268,13 @@ typedef struct {
   pf_int pad;
 } pf_kd_cleaf;
 
-/* pf_kd_leaf_intersect for a compact leaf record (the same loop over leaf_tris[first, +count)). */
+/* pf_kd_leaf_intersect for a compact leaf record (the same range test). */
 PF_INLINE int pf_kd_cleaf_intersect(PF_GLOBAL const pf_kd_cleaf* leaf,
                                     PF_GLOBAL const pf_int* leaf_tris,
                                     PF_GLOBAL const pf_hh_triangle* hh, const float* o,
                                     const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
-  pf_ray_hit best = *hit;
-  const pf_int end = leaf->first + leaf->count;
-  int found = 0;
-  for (pf_int i = leaf->first; i < end; ++i) {
-    const pf_int tri = leaf_tris[i];
-    float t, u, v;
-    if (!pf_hh_intersect(&hh[tri], o, d, tmin, best.t, &t, &u, &v)) continue;
-    if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
-    best.t = t;
-    best.tri = tri;
-    best.u = u;
-    best.v = v;
-    found = 1;
-    if (any_hit) break;
-  }
-  if (found) *hit = best;
-  return found && any_hit;
+  return pf_leaf_range_intersect(leaf->first, leaf->count, leaf_tris, hh, o, d, tmin, any_hit,
+                                 hit);
 }
 
 /* The compact loop's leaf test; substitutable like PF_KD_LEAF_TEST (same signature as
