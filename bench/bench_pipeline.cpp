@@ -12,8 +12,8 @@
 //   ray tracing         trace_hitpoints (eye pass, DirectMode::Photons, 1 spp)
 //   photon tracing      trace_photons (pass 0, --photons emitted; photons returned in one array)
 //   grid build          build_photon_grid_into over pass 0's photons (part of "grid gather")
-//   grid gather         ppm_pass(Gather::Grid): grid build + eq. 3.14–3.18 for every hitpoint
-//   FLANN gather        ppm_pass(Gather::Flann): kd-tree build + the same update
+//   grid gather         ppm_pass(GatherMethod::Grid): grid build + eq. 3.14–3.18 for every hitpoint
+//   FLANN gather        ppm_pass(GatherMethod::Flann): kd-tree build + the same update
 //   synthesis           synthesize (eq. 3.19 into the frame buffer)
 //   PPM pass            what ProgressiveRenderer::run_iteration does (trace_photons_into, grid
 //                       built from the photon chunks, ppm_pass_grid), buffers warm as in every
@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
       po.threads = t;
       pf::PpmOptions grid_opt, flann_opt;
       grid_opt.threads = flann_opt.threads = t;
-      flann_opt.gather = pf::Gather::Flann;
+      flann_opt.method = pf::GatherMethod::Flann;
 
       pf::HitpointSet fresh;
       double t_eye = time_ms(runs, [&] { fresh = fresh_state(scene, eye); });

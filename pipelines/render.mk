@@ -11,8 +11,10 @@
 # running it again resumes from the checkpoint.
 #
 # Variables (defaults below): SCENE, OUT, BIN, WIDTH, HEIGHT, PASSES, PHOTONS, ALPHA, SEED, SPP,
-# DIRECT (photons | shadow-rays), RADIUS (0 = automatic), GATHER (grid | flann), MAX_BINS,
-# EXPOSURE, BAKE_FLAGS (extra scene-bake options), THREADS.
+# DIRECT (photons | shadow-rays), RADIUS (0 = automatic), METHOD (grid | flann on DEVICE=cpu; an
+# OpenCL gather of gather_method.h, e.g. grid-kmeans, with DEVICE=opencl), DEVICE (cpu | opencl |
+# auto), MAX_BINS, WG (work-group size of the clusters), EXPOSURE, BAKE_FLAGS (extra scene-bake
+# options), THREADS. The clustered OpenCL methods add the cluster stage to the DAG (clusters.h5).
 BIN        ?= build/bin
 SCENE      ?= cornell-box
 OUT        ?= out
@@ -25,7 +27,9 @@ SEED       ?= 1
 SPP        ?= 1
 DIRECT     ?= photons
 RADIUS     ?= 0
-GATHER     ?= grid
+METHOD     ?= grid
+DEVICE     ?= cpu
+WG         ?= 64
 MAX_BINS   ?= 64
 EXPOSURE   ?= 0
 BAKE_FLAGS ?=
@@ -46,7 +50,11 @@ BAKE_P  := --width $(WIDTH) --height $(HEIGHT) $(BAKE_FLAGS)
 EYE_P   := --spp $(SPP) --direct $(DIRECT) --radius $(RADIUS) --seed $(SEED)
 PHOT_P  := --passes $(PASSES) --photons $(PHOTONS) --seed $(SEED)
 GRID_P  := --max-bins $(MAX_BINS)
-ILL_P   := --alpha $(ALPHA) --gather $(GATHER) --max-bins $(MAX_BINS)
+ILL_P   := --alpha $(ALPHA) --method $(METHOD) --max-bins $(MAX_BINS) --device $(DEVICE) \
+           $(if $(filter-out cpu,$(DEVICE)),--work-group $(WG))
+# Clusters read by the clustered methods (gather_method.h).
+CLUSTER_KIND := $(if $(filter kmeans-clusters grid-kmeans,$(METHOD)),kmeans,$(if $(filter grid-gridclusters,$(METHOD)),grid))
+CLU_P   := --method $(CLUSTER_KIND) --wg-size $(WG) --max-bins $(MAX_BINS)
 SYN_P   := --exposure $(EXPOSURE)
 T       := --threads $(THREADS)
 
@@ -68,12 +76,18 @@ $(DIR)/hitpoints.h5: $(DIR)/scene.h5 $(BIN)/trace-hitpoints $(call param_stamp,$
 $(DIR)/photons.h5: $(DIR)/scene.h5 $(BIN)/trace-photons $(call param_stamp,$(DIR)/photons.params,$(PHOT_P))
 	$(BIN)/trace-photons --scene $< -o $@ $(PHOT_P) $(T)
 
-ifeq ($(GATHER),grid)
+ifeq ($(METHOD),grid)
 $(DIR)/grid.h5: $(DIR)/photons.h5 $(DIR)/hitpoints.h5 $(BIN)/build-grid $(call param_stamp,$(DIR)/grid.params,$(GRID_P))
 	$(BIN)/build-grid --scene $(DIR)/scene.h5 --photons $(DIR)/photons.h5 --hitpoints $(DIR)/hitpoints.h5 -o $@ $(GRID_P)
 
 $(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/grid.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
 	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --grid $(DIR)/grid.h5 -o $@ $(ILL_P) $(T)
+else ifneq ($(CLUSTER_KIND),)
+$(DIR)/clusters.h5: $(DIR)/hitpoints.h5 $(BIN)/cluster $(call param_stamp,$(DIR)/cluster.params,$(CLU_P))
+	$(BIN)/cluster --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 -o $@ $(CLU_P) $(T)
+
+$(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/photons.h5 $(DIR)/clusters.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
+	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --photons $(DIR)/photons.h5 --clusters $(DIR)/clusters.h5 -o $@ $(ILL_P) $(T)
 else
 $(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/photons.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
 	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --photons $(DIR)/photons.h5 -o $@ $(ILL_P) $(T)

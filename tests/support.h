@@ -3,12 +3,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include "photonflow/image.h"
 #include "photonflow/procedural.h"
 #include "photonflow/scene.h"
 
@@ -120,6 +122,17 @@ inline Scene room_scene(int sphere_material_type, int width, int height) {
   s.camera = pf_camera{{0.5f, 0.5f, 0.97f}, {0.5f, 0.45f, 0.f}, {0, 1, 0}, 70.f, width, height};
   finish_scene(s);
   return s;
+}
+
+// RMSE of a against the reference b over all RGB values, relative to b's RMS.
+inline double relative_rmse(const Image& a, const Image& b) {
+  double se = 0, ref = 0;
+  for (size_t i = 0; i < a.rgb.size(); ++i) {
+    double d = double(a.rgb[i]) - double(b.rgb[i]);
+    se += d * d;
+    ref += double(b.rgb[i]) * double(b.rgb[i]);
+  }
+  return ref > 0 ? std::sqrt(se / ref) : std::sqrt(se);
 }
 
 }  // namespace pf::test

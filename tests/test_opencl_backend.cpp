@@ -19,21 +19,12 @@
 #include "photonflow/rng.h"
 #include "photonflow/synthesize.h"
 #include "support.h"
+#include "support_cl.h"
 
 using namespace pf;
+using namespace pf::test;
 
 namespace {
-
-// The test device: the one --device auto would pick; nullptr (and a WARN) when there is none.
-std::unique_ptr<ClContext> test_device() {
-  if (cl_list_devices().empty()) {
-    WARN("SKIPPED: no OpenCL platform with a device (install pocl-opencl-icd to run this test)");
-    return nullptr;
-  }
-  DeviceOptions o;
-  o.device = "opencl";
-  return open_device(o, "test");
-}
 
 float scene_diag(const Scene& s) { return length(s.bounds.extent()); }
 
@@ -101,16 +92,6 @@ Agreement compare_photons(const std::vector<pf_photon>& a, const std::vector<pf_
     if (!found) ++i, ++j;
   }
   return r;
-}
-
-double relative_rmse(const Image& a, const Image& b) {
-  double se = 0, ref = 0;
-  for (size_t i = 0; i < a.rgb.size(); ++i) {
-    double d = double(a.rgb[i]) - double(b.rgb[i]);
-    se += d * d;
-    ref += double(b.rgb[i]) * double(b.rgb[i]);
-  }
-  return ref > 0 ? std::sqrt(se / ref) : std::sqrt(se);
 }
 
 }  // namespace
@@ -221,6 +202,7 @@ TEST_CASE("OpenCL: image after 10 PPM passes equals the CPU backend's", "[opencl
   Provenance prov;
   HitpointSet cpu = render_progressive(scene, opt, false, prov);
   opt.device = dev.get();
+  opt.ppm.method = default_gather_method(true);  // grid-kmeans, clusters made by the driver
   HitpointSet gpu = render_progressive(scene, opt, false, prov);
   CHECK(gpu.passes == 10);
   CHECK(gpu.photons_emitted == cpu.photons_emitted);
@@ -245,6 +227,7 @@ TEST_CASE("OpenCL: buffers over the allocation limit are processed in batches", 
   ph.photons = 3000;
   ph.seed = 11;
   PpmOptions ppm;
+  ppm.method = GatherMethod::Naive;  // the method that batches
 
   // One batch each.
   EyePassResult e1 = trace_hitpoints(scene, eye, *dev);

@@ -16,16 +16,6 @@ using namespace pf::test;
 
 namespace {
 
-double relative_rmse(const Image& a, const Image& b) {
-  double se = 0, ref = 0;
-  for (size_t i = 0; i < a.rgb.size(); ++i) {
-    double d = double(a.rgb[i]) - double(b.rgb[i]);
-    se += d * d;
-    ref += double(b.rgb[i]) * double(b.rgb[i]);
-  }
-  return ref > 0 ? std::sqrt(se / ref) : std::sqrt(se);
-}
-
 size_t lines(const std::string& s) {
   size_t n = 0;
   for (char c : s) n += c == '\n';

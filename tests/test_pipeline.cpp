@@ -151,7 +151,7 @@ TEST_CASE("grid gather equals FLANN gather", "[pipeline][gather]") {
   PhotonPassOptions po;
   po.photons = 20000;
   PpmOptions grid, flann;
-  flann.gather = Gather::Flann;
+  flann.method = GatherMethod::Flann;
   for (uint32_t pass = 0; pass < 3; ++pass) {
     PhotonPassResult r = trace_photons(s, pass, po);
     ppm_pass(s, g, r.photons, r.emitted, grid);

@@ -129,11 +129,11 @@ TEST_CASE("the staged route gives the render driver's image", "[tools][staged]")
       REQUIRE(run_tool("build-grid", "--scene " + scene + " --photons " + (tmp / "ph01.h5") + " --hitpoints " + (tmp / "hp.h5") + " -o " + (tmp / "grid01.h5"), tmp).exit_code == 0);
       REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --grid " + (tmp / "grid01.h5") + " -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
     } else {
-      REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --photons " + (tmp / "ph01.h5") + " --gather flann -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
+      REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --photons " + (tmp / "ph01.h5") + " --method flann -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
     }
-    REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "s2.h5") + " --photons " + (tmp / "ph2.h5") + " --gather " + gather + " -o " + (tmp / "s3.h5"), tmp).exit_code == 0);
+    REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "s2.h5") + " --photons " + (tmp / "ph2.h5") + " --method " + gather + " -o " + (tmp / "s3.h5"), tmp).exit_code == 0);
     REQUIRE(run_tool("synthesize", "--hitpoints " + (tmp / "s3.h5") + " -o " + (tmp / "staged.exr"), tmp).exit_code == 0);
-    REQUIRE(run_tool("render", "--scene " + scene + " -o " + (tmp / "driver.exr") + " --spp 2 --photons 5000 --passes 3 --gather " + gather, tmp).exit_code == 0);
+    REQUIRE(run_tool("render", "--scene " + scene + " -o " + (tmp / "driver.exr") + " --spp 2 --photons 5000 --passes 3 --method " + gather, tmp).exit_code == 0);
     Image staged = read_exr(tmp / "staged.exr"), driver = read_exr(tmp / "driver.exr");
     INFO("gather " << gather);
     CHECK(same_pixels(staged, driver));

@@ -7,9 +7,10 @@
 //                     chain, stackless kd-tree traversal with ropes (intersect_shared.h);
 //   trace_photons   — kernels/trace_photons.cl: one work-item per photon, fixed bounce limit,
 //                     per-photon slots compacted on the host into the CPU's order;
-//   ppm_pass        — kernels/illuminate_naive.cl: the naive gather (every hitpoint loops over all
-//                     photons of the pass; thesis Table 7.1 "Hitpoint Illumination"), same
-//                     acceptance rule and summation order as the CPU gathers;
+//   ppm_pass        — kernels/illuminate_methods.cl (cl_gather.cpp): the naive gather (every
+//                     hitpoint loops over all photons; thesis Table 7.1 "Hitpoint Illumination",
+//                     the CPU's summation order) and the accelerated variants of thesis ch. 7.3
+//                     (gather_method.h), all with the CPU's acceptance rule;
 //   synthesize      — kernels/synthesize.cl: atomic float adds (compare-and-swap loop).
 //
 // Both backends use the same counter-based random numbers (rng.h) in the same dimension order and
@@ -21,6 +22,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "photonflow/cl_gather.h"
 #include "photonflow/cl_runtime.h"
 #include "photonflow/eye_pass.h"
 #include "photonflow/illuminate.h"
@@ -36,10 +38,13 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
                                ClContext& dev);
 
-// One PPM iteration (eq. 3.14–3.18) by the naive device gather; opt.gather/max_bins are ignored
-// (every gather selects the same photons). Adds `emitted` to h.photons_emitted, counts the pass.
-void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
-              uint64_t emitted, const PpmOptions& opt, ClContext& dev);
+// One PPM iteration (eq. 3.14–3.18) on the device with opt.method (a device method of
+// gather_method.h; InputError for grid/flann). Every method selects the photons the CPU gathers
+// select; naive sums them in the CPU's order (bit-identical states), the others in their own
+// fixed order (equal to float rounding). Adds `emitted` to h.photons_emitted, counts the pass,
+// and returns where the time went.
+GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
+                     uint64_t emitted, const PpmOptions& opt, ClContext& dev);
 
 Image synthesize(const HitpointSet& h, ClContext& dev);
 

@@ -32,6 +32,7 @@ struct ClDeviceInfo {
   unsigned compute_units = 0;
   size_t max_work_group = 0;
   bool fp64 = false;
+  uint64_t local_mem = 0;  // CL_DEVICE_LOCAL_MEM_SIZE, bytes
   cl_platform_id platform_id = nullptr;
   cl_device_id device_id = nullptr;
 };
@@ -71,6 +72,11 @@ class ClBuffer {
  private:
   cl_mem m_ = nullptr;
   size_t bytes_ = 0;
+};
+
+// A __local kernel argument of `bytes` bytes (dynamic local memory).
+struct ClLocal {
+  size_t bytes;
 };
 
 struct ClSceneBuffers;  // cl_backend.cpp: the baked scene uploaded once per context
@@ -125,6 +131,10 @@ class ClContext {
   // Enqueues k over n work-items (global size rounded up to the work-group size; kernels check
   // their bound) and waits; adds the time to kernel_seconds().
   void run(cl_kernel k, size_t n);
+  // The same with an explicit work-group size `local` (kernels whose work-groups are laid out by
+  // the host, e.g. clusters of a given size); InputError when the kernel cannot run groups that
+  // large on this device.
+  void run(cl_kernel k, size_t n, size_t local);
   double kernel_seconds() const { return kernel_seconds_; }
   void reset_kernel_seconds() { kernel_seconds_ = 0; }
 
@@ -134,10 +144,12 @@ class ClContext {
 
  private:
   void set_arg(cl_kernel k, cl_uint i, const ClBuffer& b);
+  void set_arg(cl_kernel k, cl_uint i, const ClLocal& l) { set_raw(k, i, l.bytes, nullptr); }
   template <class T> void set_arg(cl_kernel k, cl_uint i, const T& v) { set_raw(k, i, sizeof(T), &v); }
   void set_raw(cl_kernel k, cl_uint i, size_t size, const void* v);
   cl_program build(const std::string& program);
   size_t local_size(cl_kernel k);
+  void check_local(cl_kernel k, size_t wg);
 
   ClDeviceInfo info_;
   cl_context ctx_ = nullptr;

@@ -32,17 +32,7 @@
 #include "photonflow/shared_types.h"
 #include "photonflow/stage_files.h"
 
-/* One cluster (C layout, 4-byte fields only, so a kernel can read it unchanged). */
-typedef struct {
-  pf_float centre[3];  /* world units */
-  pf_float radius;     /* shared gather radius R (see the file comment), world units */
-  pf_int mesh;         /* mesh id of every member */
-  pf_int first;        /* index of the cluster's first entry in the order array */
-  pf_int count;        /* member hitpoints (> 0) */
-  pf_int padded_count; /* count rounded up to a multiple of the work-group size */
-} pf_cluster;
-
-static_assert(sizeof(pf_cluster) == 32, "pf_cluster layout");
+/* pf_cluster, one cluster, lives in shared_types.h (kernels read it). */
 
 namespace pf {
 
@@ -90,6 +80,12 @@ ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins);
 pf_mesh_grid hitpoint_mesh_grid(const HitpointSet& h, int mesh, int max_bins);
 
 ClusterStats stats(const ClusterSet& c);
+
+// "Hitpoint sorting" (thesis ch. 7.3, Table 7.5 "plain"): the hitpoint indices grouped by mesh
+// (meshes ascending, indices ascending within a mesh), each mesh's run padded with fillers (−1)
+// to a multiple of wg_size, so that no work-group straddles two meshes. Its size is Table 7.5's
+// hitpoint count with fillers for hitpoint sorting.
+std::vector<int32_t> mesh_sorted_order(const HitpointSet& h, int wg_size);
 
 // "" when `c` is a valid clustering of `h`, else what is wrong (one phrase): clusters contiguous
 // in order, counts > 0, padded_count = ceil(count/wg)·wg, fillers only at cluster tails, every

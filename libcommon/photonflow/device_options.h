@@ -1,5 +1,6 @@
 // device_options.h — the backend options every render-stage tool shares (issue 4):
-//   --device cpu|opencl|auto, --cl-platform, --cl-device, --work-group, --list-devices.
+//   --device cpu|opencl|auto, --cl-platform, --cl-device, --work-group, --list-devices;
+// and --method, the gather method of the tools that illuminate hitpoints (issue 5).
 // Header-only so that only the tools (which link cxxopts) see cxxopts.
 #pragma once
 #include <cxxopts.hpp>
@@ -8,6 +9,8 @@
 #include <string>
 
 #include "photonflow/cl_runtime.h"
+#include "photonflow/error.h"
+#include "photonflow/gather_method.h"
 #include "photonflow/provenance.h"
 
 namespace pf {
@@ -40,6 +43,25 @@ inline bool list_devices_requested(const cxxopts::ParseResult& a) {
   if (!a.count("list-devices")) return false;
   std::cout << cl_describe_devices();
   return true;
+}
+
+inline void add_method_option(cxxopts::Options& o) {
+  o.add_options()
+    ("method", "PPM hitpoint illumination (gather_method.h; every method gathers the same "
+     "photons): auto (grid on the cpu backend, grid-kmeans on opencl) | " + gather_method_choices(),
+     cxxopts::value<std::string>()->default_value("auto"));
+}
+
+// The --method for the backend that was opened (dev == nullptr: CPU); InputError when the method
+// belongs to the other backend.
+inline GatherMethod method_option(const cxxopts::ParseResult& a, const ClContext* dev) {
+  const std::string s = a["method"].as<std::string>();
+  const GatherMethod m = s == "auto" ? default_gather_method(dev != nullptr) : parse_gather_method(s);
+  if (gather_method_info(m).device && !dev)
+    throw input_error("", "--method " + s + " runs on the OpenCL backend", "add --device opencl");
+  if (!gather_method_info(m).device && dev)
+    throw input_error("", "--method " + s + " runs on the CPU backend", "use --device cpu");
+  return m;
 }
 
 // Records the backend actually used (the option says only what was asked for).

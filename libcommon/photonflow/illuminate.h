@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "photonflow/gather_method.h"
 #include "photonflow/photon_grid.h"
 #include "photonflow/photon_map.h"
 #include "photonflow/scene.h"
@@ -19,18 +20,29 @@
 
 namespace pf {
 
-enum class Gather { Grid, Flann };
-const char* gather_name(Gather g);
+struct ClusterSet;  // clusters.h
 
 struct PpmOptions {
   float alpha = 0.7f;  // fraction of new photons kept, eq. 3.14 (0 < α ≤ 1)
-  Gather gather = Gather::Grid;
+  // How photons are found (gather_method.h): grid | flann on the CPU backend, the thesis's
+  // variants and hash-grid on the OpenCL backend (cl_backend.h). All select the same photons.
+  GatherMethod method = GatherMethod::Grid;
   int max_bins = 64;   // grid bins along a mesh's longest extent (eq. 7.1)
   int threads = 0;     // 0 = all cores
+  // Device cluster methods (kmeans-clusters, grid-kmeans, grid-gridclusters): the clusters of
+  // these hitpoints (from the cluster stage or made once by the caller). ppm_pass refreshes their
+  // radii from the hitpoints' current radii (update_cluster_radii) before it gathers. nullptr:
+  // ppm_pass makes them for this pass only (cluster_kmeans with cluster_iterations Lloyd steps,
+  // or cluster_grid with max_bins) with the context's work-group size.
+  ClusterSet* clusters = nullptr;
+  int cluster_iterations = 10;
+  // hash-grid: slots of the hash table, a power of two; 0 = the smallest >= max(1024, 2·photons).
+  // Fewer slots mean more cells per slot (more photons read and skipped), never a wrong result.
+  int hash_slots = 0;
 };
 
 // One PPM iteration (eq. 3.14–3.18) of every hitpoint over one pass's photons, gathering through
-// a grid (built here) or FLANN. Adds `emitted` to h.photons_emitted and counts the pass.
+// a grid (built here) or FLANN (opt.method grid | flann; InputError for a device method). Adds `emitted` to h.photons_emitted and counts the pass.
 void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
               uint64_t emitted, const PpmOptions& opt);
 // The grid parameters ppm_pass builds its grid with for `h`: opt.max_bins, and the initial

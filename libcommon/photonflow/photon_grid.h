@@ -16,23 +16,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "photonflow/grid_shared.h"
 #include "photonflow/ppm.h"
 #include "photonflow/shared_types.h"
 
-/* Grid header of one mesh (C layout, 4-byte fields only, so it can join shared_types.h).
- * Bin of a point p: per axis c = clamp(floor((p − lo)/bin_size), 0, n−1) (eq. 7.1), linear
- * offset cx + cy·nx + cz·nx·ny. A mesh without photons has nx = ny = nz = 0 and one cell_start
- * entry. */
-typedef struct {
-  pf_float lo[3];      /* minimum corner of the mesh's photons */
-  pf_float bin_size;   /* d = max(longest extent / max_bins, default_radius) */
-  pf_int nx, ny, nz;   /* bins per axis */
-  pf_int first_bin;    /* index of the mesh's first cell_start entry */
-  pf_int first_photon; /* index of the mesh's first photon in the sorted photon array */
-  pf_int photon_count; /* photons of this mesh */
-} pf_mesh_grid;
-
-static_assert(sizeof(pf_mesh_grid) == 40, "pf_mesh_grid layout");
+/* pf_mesh_grid, the header of one mesh's grid, lives in shared_types.h (kernels read it). */
 
 namespace pf {
 
@@ -41,14 +29,20 @@ struct PhotonGridParams {
   float default_radius = 0.f;  // lower bound of the bin size (the initial hitpoint radius); > 0
 };
 
-// Bin coordinate of x along one axis (eq. 7.1), clamped to [0, n−1]. Monotone in x, so the bins
-// overlapping an interval [x0, x1] are those from coord(x0) to coord(x1).
+// Bin coordinate of x along one axis (eq. 7.1), clamped to [0, n−1] (grid_shared.h, the code the
+// kernels run). Monotone in x, so the bins overlapping an interval [x0, x1] are those from
+// coord(x0) to coord(x1).
 inline int grid_coord(float x, float lo, float bin_size, int n) {
-  float c = (x - lo) / bin_size;
-  if (!(c > 0.f)) return 0;  // also maps NaN to 0
-  if (c >= static_cast<float>(n - 1)) return n - 1;
-  return static_cast<int>(c);
+  return pf_grid_coord(x, lo, bin_size, n);
 }
+
+// The header of one mesh's grid from the bounds lo..hi and the count of its photons (eq. 7.1):
+// d = max(longest extent / max_bins, default_radius), per axis clamp(ceil(extent/d), 1, max_bins)
+// bins; first_bin and first_photon are left 0 for the caller. A mesh without photons gets
+// nx = ny = nz = 0, lo = 0 and d = default_radius. The host build and the device build
+// (cl_gather.h) both call this, so they make the same grids.
+pf_mesh_grid mesh_grid_header(const float lo[3], const float hi[3], int32_t count,
+                              const PhotonGridParams& params);
 
 struct PhotonGrid {
   std::vector<pf_mesh_grid> mesh_grid;  // one per mesh id

@@ -8,9 +8,11 @@
 // routes give the same image.
 #pragma once
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "photonflow/cl_runtime.h"
+#include "photonflow/clusters.h"
 #include "photonflow/eye_pass.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/image.h"
@@ -27,7 +29,7 @@ struct RenderOptions {
   int passes = 16;                 // total photon passes of the run
   std::string checkpoint;          // hitpoint-state file ("" = none)
   int checkpoint_every = 10;       // passes between checkpoints
-  ClContext* device = nullptr;     // OpenCL backend (cl_backend.h; naive gather); nullptr = CPU
+  ClContext* device = nullptr;     // OpenCL backend (cl_backend.h, ppm.method); nullptr = CPU
 };
 
 class ProgressiveRenderer {
@@ -53,8 +55,11 @@ class ProgressiveRenderer {
   uint64_t photons_stored_ = 0;
   // Per-pass work space, reused by every pass (the memory of a run does not grow with passes):
   PhotonBuffers photon_chunks_;   // the pass's photons, per chunk as traced
-  PhotonGrid grid_;               // their grid (Gather::Grid), built straight from the chunks
-  std::vector<pf_photon> photons_;  // their concatenation (Gather::Flann)
+  PhotonGrid grid_;               // their grid (GatherMethod::Grid), built straight from the chunks
+  std::vector<pf_photon> photons_;  // their concatenation (GatherMethod::Flann)
+  // Clusters of a clustered device method, made once from the eye pass (or the checkpoint's
+  // hitpoints, which have the same positions) when opt.ppm.clusters is not given.
+  std::unique_ptr<ClusterSet> clusters_;
 };
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the

@@ -142,6 +142,30 @@ typedef struct {
   pf_int flags; /* PF_PHOTON_* */
 } pf_photon;
 
+/* Grid header of one mesh's photons (thesis ch. 7.3, eq. 7.1; photon_grid.h, grid_shared.h).
+ * Bin of a point p: per axis c = clamp(floor((p − lo)/bin_size), 0, n−1) (eq. 7.1), linear
+ * offset cx + cy·nx + cz·nx·ny. A mesh without photons has nx = ny = nz = 0 and one cell_start
+ * entry. */
+typedef struct {
+  pf_float lo[3];      /* minimum corner of the mesh's photons */
+  pf_float bin_size;   /* d = max(longest extent / max_bins, default_radius) */
+  pf_int nx, ny, nz;   /* bins per axis */
+  pf_int first_bin;    /* index of the mesh's first cell_start entry */
+  pf_int first_photon; /* index of the mesh's first photon in the sorted photon array */
+  pf_int photon_count; /* photons of this mesh */
+} pf_mesh_grid;
+
+/* One work-group cluster of hitpoints (clusters.h): every member lies on `mesh`, and every
+ * member's gather sphere lies inside the sphere (centre, radius). */
+typedef struct {
+  pf_float centre[3];  /* world units */
+  pf_float radius;     /* shared gather radius R (clusters.h), world units */
+  pf_int mesh;         /* mesh id of every member */
+  pf_int first;        /* index of the cluster's first entry in the order array */
+  pf_int count;        /* member hitpoints (> 0) */
+  pf_int padded_count; /* count rounded up to a multiple of the work-group size */
+} pf_cluster;
+
 #ifndef __OPENCL_VERSION__
 static_assert(sizeof(pf_material) == 32, "pf_material layout");
 static_assert(sizeof(pf_triangle) == 80, "pf_triangle layout");
@@ -151,6 +175,8 @@ static_assert(sizeof(pf_light) == 40, "pf_light layout");
 static_assert(sizeof(pf_camera) == 48, "pf_camera layout");
 static_assert(sizeof(pf_hitpoint) == 84, "pf_hitpoint layout");
 static_assert(sizeof(pf_photon) == 48, "pf_photon layout");
+static_assert(sizeof(pf_mesh_grid) == 40, "pf_mesh_grid layout");
+static_assert(sizeof(pf_cluster) == 32, "pf_cluster layout");
 #endif
 
 #endif /* PHOTONFLOW_SHARED_TYPES_H */

@@ -186,49 +186,6 @@ PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPa
   return res;
 }
 
-// ---- naive PPM gather ----------------------------------------------------------------------------
-
-void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
-              uint64_t emitted, const PpmOptions& opt, ClContext& dev) {
-  if (!(opt.alpha > 0.f && opt.alpha <= 1.f))
-    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(opt.alpha));
-  const size_t nh = h.hitpoints.size(), np = photons.size();
-  if (nh > size_t(INT32_MAX) || np > size_t(INT32_MAX))
-    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
-  if (nh > 0 && np > 0) {
-    ClSceneBuffers& sb = scene_buffers(scene, dev);
-    cl_kernel gather = dev.kernel("illuminate_naive", "ppm_gather_naive");
-    cl_kernel apply = dev.kernel("illuminate_naive", "ppm_apply");
-    const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
-    const size_t hb = dev.batch_items(std::max(sizeof(pf_hitpoint), 3 * acc), nh);
-    const size_t pb = dev.batch_items(sizeof(pf_photon), np);
-    const ClBuffer& hps = dev.scratch("ppm.hitpoints", hb * sizeof(pf_hitpoint));
-    const ClBuffer& acc_m = dev.scratch("ppm.acc_m", hb * sizeof(cl_int));
-    const ClBuffer& acc_tau = dev.scratch("ppm.acc_tau", hb * 3 * acc);
-    const ClBuffer& phs = dev.scratch("ppm.photons", pb * sizeof(pf_photon));
-    if (pb == np) dev.write(phs, np * sizeof(pf_photon), photons.data());
-    const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
-    for (size_t hoff = 0; hoff < nh; hoff += hb) {
-      const cl_int hcount = cl_int(std::min(hb, nh - hoff));
-      dev.write(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
-      dev.fill_zero(acc_m, size_t(hcount) * sizeof(cl_int));
-      dev.fill_zero(acc_tau, size_t(hcount) * 3 * acc);
-      for (size_t poff = 0; poff < np; poff += pb) {  // photon index order: the CPU's sum order
-        const cl_int pcount = cl_int(std::min(pb, np - poff));
-        if (pb != np) dev.write(phs, size_t(pcount) * sizeof(pf_photon), &photons[poff]);
-        dev.args(gather, hps, cl_int(0), hcount, phs, pcount, sb.mats, skip_direct, acc_m, acc_tau);
-        dev.run(gather, size_t(hcount));
-      }
-      dev.args(apply, hps, cl_int(0), hcount, acc_m, acc_tau, opt.alpha);
-      dev.run(apply, size_t(hcount));
-      dev.read(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
-    }
-  }
-  h.photons_emitted += emitted;
-  h.passes += 1;
-  h.estimator = "ppm";
-}
-
 // ---- synthesis ---------------------------------------------------------------------------------
 
 Image synthesize(const HitpointSet& h, ClContext& dev) {

@@ -193,6 +193,7 @@ std::vector<ClDeviceInfo> cl_list_devices() {
       i.compute_units = num_info<cl_uint>(devs[d], CL_DEVICE_MAX_COMPUTE_UNITS);
       i.max_work_group = num_info<size_t>(devs[d], CL_DEVICE_MAX_WORK_GROUP_SIZE);
       i.fp64 = num_info<cl_device_fp_config>(devs[d], CL_DEVICE_DOUBLE_FP_CONFIG) != 0;
+      i.local_mem = num_info<cl_ulong>(devs[d], CL_DEVICE_LOCAL_MEM_SIZE);
       out.push_back(i);
     }
   }
@@ -347,13 +348,10 @@ cl_kernel ClContext::kernel(const std::string& program, const std::string& kerne
   return k;
 }
 
-size_t ClContext::local_size(cl_kernel k) {
-  auto it = local_.find(k);
-  if (it != local_.end()) return it->second;
+void ClContext::check_local(cl_kernel k, size_t wg) {
   size_t max_k = 0;
   clGetKernelWorkGroupInfo(k, info_.device_id, CL_KERNEL_WORK_GROUP_SIZE, sizeof max_k, &max_k,
                            nullptr);
-  size_t wg = size_t(work_group_);
   if (max_k > 0 && wg > max_k) {
     char name[128] = {};
     clGetKernelInfo(k, CL_KERNEL_FUNCTION_NAME, sizeof name - 1, name, nullptr);
@@ -361,6 +359,13 @@ size_t ClContext::local_size(cl_kernel k) {
                               std::to_string(max_k) + " of kernel " + name + " on this device",
                       "pass a smaller --work-group");
   }
+}
+
+size_t ClContext::local_size(cl_kernel k) {
+  auto it = local_.find(k);
+  if (it != local_.end()) return it->second;
+  const size_t wg = size_t(work_group_);
+  check_local(k, wg);
   local_[k] = wg;
   return wg;
 }
@@ -429,9 +434,11 @@ void ClContext::set_raw(cl_kernel k, cl_uint i, size_t size, const void* v) {
   cl_check(clSetKernelArg(k, i, size, v), "clSetKernelArg");
 }
 
-void ClContext::run(cl_kernel k, size_t n) {
+void ClContext::run(cl_kernel k, size_t n) { run(k, n, local_size(k)); }
+
+void ClContext::run(cl_kernel k, size_t n, size_t local) {
   if (n == 0) return;
-  const size_t local = local_size(k);
+  if (local != size_t(work_group_)) check_local(k, local);
   const size_t global = (n + local - 1) / local * local;
   auto t0 = std::chrono::steady_clock::now();
   cl_check(clEnqueueNDRangeKernel(queue_, k, 1, nullptr, &global, &local, 0, nullptr, nullptr),

@@ -325,6 +325,18 @@ void kmeans_mesh(ClusterSet& out, int mesh, const std::vector<int32_t>& idx, con
 
 }  // namespace
 
+std::vector<int32_t> mesh_sorted_order(const HitpointSet& h, int wg_size) {
+  if (wg_size < 1) throw std::invalid_argument("clusters: work-group size must be >= 1");
+  std::vector<int32_t> order;
+  for (const std::vector<int32_t>& idx : split_by_mesh(h)) {
+    if (idx.empty()) continue;
+    order.insert(order.end(), idx.begin(), idx.end());
+    const size_t padded = (idx.size() + size_t(wg_size) - 1) / size_t(wg_size) * size_t(wg_size);
+    order.insert(order.end(), padded - idx.size(), -1);
+  }
+  return order;
+}
+
 std::string hitpoints_hash(const HitpointSet& h) {
   Sha256 s;
   int64_t head[3] = {h.width, h.height, int64_t(h.hitpoints.size())};

@@ -11,8 +11,6 @@
 
 namespace pf {
 
-const char* gather_name(Gather g) { return g == Gather::Grid ? "grid" : "flann"; }
-
 namespace {
 
 int thread_count(int t) { return t > 0 ? t : omp_get_max_threads(); }
@@ -158,7 +156,10 @@ PhotonGridParams ppm_grid_params(const HitpointSet& h, const PpmOptions& opt) {
 void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
               uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
-  if (opt.gather == Gather::Grid) {
+  if (opt.method != GatherMethod::Grid && opt.method != GatherMethod::Flann)
+    throw input_error("", std::string("--method ") + gather_method_name(opt.method) +
+                              " runs on the OpenCL backend", "add --device opencl, or use --method grid or flann");
+  if (opt.method == GatherMethod::Grid) {
     const PhotonGridParams gp = ppm_grid_params(h, opt);
     // The calling thread's grid, reused by its next pass (no reallocation in a stream of passes).
     thread_local PhotonGrid grid;

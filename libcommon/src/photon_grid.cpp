@@ -116,6 +116,25 @@ std::vector<int32_t> PhotonGrid::gather(int mesh, const float q[3], float radius
   return out;
 }
 
+pf_mesh_grid mesh_grid_header(const float lo[3], const float hi[3], int32_t count,
+                              const PhotonGridParams& params) {
+  pf_mesh_grid g{};
+  g.photon_count = count;
+  if (count == 0) {
+    g.bin_size = params.default_radius;
+    return g;
+  }
+  Vec3 ext = Vec3(hi) - Vec3(lo);
+  float longest = std::max(ext.x, std::max(ext.y, ext.z));
+  float d = std::max(longest / static_cast<float>(params.max_bins), params.default_radius);
+  for (int k = 0; k < 3; ++k) g.lo[k] = lo[k];
+  g.bin_size = d;
+  g.nx = bins_along(ext.x, d, params.max_bins);
+  g.ny = bins_along(ext.y, d, params.max_bins);
+  g.nz = bins_along(ext.z, d, params.max_bins);
+  return g;
+}
+
 PhotonGrid build_photon_grid(const std::vector<pf_photon>& photons, int mesh_count,
                              const PhotonGridParams& params) {
   PhotonGrid grid;
@@ -213,25 +232,10 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
   for (int m = 0; m < mesh_count; ++m) {
     pf_mesh_grid& g = grid.mesh_grid[size_t(m)];
     const MeshAcc& a = total[size_t(m)];
+    g = mesh_grid_header(a.lo, a.hi, a.count, params);
     g.first_bin = static_cast<pf_int>(total_entries);
     g.first_photon = first_photon;
-    g.photon_count = a.count;
-    if (a.count == 0) {
-      g.lo[0] = g.lo[1] = g.lo[2] = 0.f;
-      g.bin_size = params.default_radius;
-      g.nx = g.ny = g.nz = 0;
-      total_entries += 1;
-    } else {
-      Vec3 ext = Vec3(a.hi) - Vec3(a.lo);
-      float longest = std::max(ext.x, std::max(ext.y, ext.z));
-      float d = std::max(longest / static_cast<float>(params.max_bins), params.default_radius);
-      for (int k = 0; k < 3; ++k) g.lo[k] = a.lo[k];
-      g.bin_size = d;
-      g.nx = bins_along(ext.x, d, params.max_bins);
-      g.ny = bins_along(ext.y, d, params.max_bins);
-      g.nz = bins_along(ext.z, d, params.max_bins);
-      total_entries += static_cast<int64_t>(g.nx) * g.ny * g.nz + 1;
-    }
+    total_entries += a.count == 0 ? 1 : static_cast<int64_t>(g.nx) * g.ny * g.nz + 1;
     if (total_entries > std::numeric_limits<int32_t>::max())
       throw std::invalid_argument("photon grid: more than 2^31-1 bins (lower max_bins)");
     first_photon += a.count;

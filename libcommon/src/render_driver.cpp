@@ -22,7 +22,12 @@ ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions
     : scene_(scene), opt_(opt), state_(std::move(state)) {}
 
 void ProgressiveRenderer::run_iteration() {
-  if (opt_.device) {  // OpenCL backend (issue 4): device photon tracing and naive gather
+  if (opt_.device) {  // OpenCL backend: device photon tracing and opt.ppm.method's gather
+    if (gather_method_info(opt_.ppm.method).clusters && !opt_.ppm.clusters) {
+      clusters_ = std::make_unique<ClusterSet>(
+          clusters_for_method(opt_.ppm.method, state_, opt_.device->work_group(), opt_.ppm));
+      opt_.ppm.clusters = clusters_.get();
+    }
     PhotonPassResult pass =
         trace_photons(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
     photons_stored_ += pass.photons.size();
@@ -34,7 +39,7 @@ void ProgressiveRenderer::run_iteration() {
   const uint64_t emitted =
       trace_photons_into(scene_, uint32_t(state_.passes), opt_.photons, photon_chunks_);
   photons_stored_ += photon_chunks_.size();
-  if (opt_.ppm.gather == Gather::Grid) {
+  if (opt_.ppm.method == GatherMethod::Grid) {
     const std::vector<PhotonSpan> spans = photon_chunks_.spans();
     build_photon_grid_into(grid_, spans.data(), spans.size(), int(scene_.mesh_names.size()),
                            ppm_grid_params(state_, opt_.ppm), opt_.ppm.threads);

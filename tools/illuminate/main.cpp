@@ -1,10 +1,13 @@
 // illuminate — hitpoint illumination. --estimator ppm: progressive photon mapping, one iteration
 // per photon pass in the photons file (thesis eq. 3.14–3.18), writing the updated hitpoint state
-// so that illuminate can be called pass after pass. --estimator classic: classic photon mapping
-// (k nearest global photons + fixed-radius caustic estimate, thesis eq. 3.10).
+// so that illuminate can be called pass after pass, with any --method of gather_method.h (the CPU
+// grid/FLANN gathers or the OpenCL variants of thesis ch. 7.3; --clusters feeds the clustered
+// ones). --estimator classic: classic photon mapping (k nearest global photons + fixed-radius
+// caustic estimate, thesis eq. 3.10).
 #include <iostream>
 
 #include "photonflow/cl_backend.h"
+#include "photonflow/clusters.h"
 #include "photonflow/device_options.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/options.h"
@@ -19,15 +22,16 @@ int main(int argc, char** argv) {
       ("hitpoints", "hitpoint state (from trace-hitpoints or an earlier illuminate)",
        cxxopts::value<std::string>())
       ("photons", "photons file (from trace-photons)", cxxopts::value<std::string>())
-      ("grid", "prebuilt photon grids (from build-grid; PPM with --gather grid)",
+      ("grid", "prebuilt photon grids (from build-grid; PPM with --method grid)",
        cxxopts::value<std::string>())
       ("o,output", "output hitpoint state (.h5)", cxxopts::value<std::string>())
       ("estimator", "ppm | classic", cxxopts::value<std::string>()->default_value("ppm"))
       ("alpha", "PPM: fraction of new photons kept, in (0, 1] (eq. 3.14)",
        cxxopts::value<float>()->default_value("0.7"))
-      ("gather", "PPM: grid (per-mesh uniform grid) | flann (kd-tree radius search); both gather "
-       "the same photons", cxxopts::value<std::string>()->default_value("grid"))
-      ("max-bins", "PPM grid: bins along a mesh's longest extent",
+      ("clusters", "PPM, --method kmeans-clusters | grid-kmeans | grid-gridclusters: hitpoint "
+       "clusters of these hitpoints (clusters.h5 from the cluster stage); without it they are "
+       "made once here", cxxopts::value<std::string>())
+      ("max-bins", "PPM grid: bins along a mesh's longest extent (photon grids, grid clusters)",
        cxxopts::value<int>()->default_value("64"))
       ("k", "classic: nearest global photons per estimate",
        cxxopts::value<int>()->default_value("100"))
@@ -37,6 +41,7 @@ int main(int argc, char** argv) {
        cxxopts::value<float>()->default_value("0"))
       ("threads", "worker threads, 0 = all cores", cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
+    pf::add_method_option(o);
     pf::add_device_options(o);
     auto a = o.parse(argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
@@ -44,12 +49,10 @@ int main(int argc, char** argv) {
     if (!a.count("scene") || !a.count("hitpoints") || !a.count("output") ||
         (!a.count("photons") && !a.count("grid")))
       throw pf::input_error("", "--scene, --hitpoints, --photons (or --grid) and --output are required");
-    std::string estimator = a["estimator"].as<std::string>(), gather = a["gather"].as<std::string>();
+    std::string estimator = a["estimator"].as<std::string>();
     pf::require_choice("estimator", estimator, {"ppm", "classic"});
-    pf::require_choice("gather", gather, {"grid", "flann"});
     pf::PpmOptions ppm;
     ppm.alpha = a["alpha"].as<float>();
-    ppm.gather = gather == "grid" ? pf::Gather::Grid : pf::Gather::Flann;
     ppm.max_bins = a["max-bins"].as<int>();
     ppm.threads = a["threads"].as<int>();
     pf::require_in_unit_interval("alpha", ppm.alpha);
@@ -63,20 +66,28 @@ int main(int argc, char** argv) {
     if (!(classic.caustic_radius >= 0.f) || !(classic.eps >= 0.f))
       throw pf::input_error("", "--caustic-radius and --eps must be >= 0");
 
-    // The OpenCL backend gathers PPM passes from --photons with the naive kernel (every hitpoint
-    // loops over all photons; the same photons as --gather grid/flann). Classic estimates and
-    // prebuilt grids stay on the CPU.
+    // The OpenCL backend gathers PPM passes from --photons with a device --method (the same
+    // photons as the CPU's grid/flann). Classic estimates and prebuilt grids stay on the CPU.
     pf::DeviceOptions devopt = pf::device_options(a);
     const bool device_path = estimator == "ppm" && !a.count("grid");
     if (!device_path && devopt.device == "opencl")
-      throw pf::input_error("", "--device opencl supports --estimator ppm with --photons (naive "
-                            "gather); classic estimates and --grid run with --device cpu");
+      throw pf::input_error("", "--device opencl supports --estimator ppm with --photons; "
+                            "classic estimates and --grid run with --device cpu");
     if (!device_path && devopt.device == "auto") {
       std::cerr << "illuminate: device: cpu backend (auto: no OpenCL path for "
                 << (estimator == "ppm" ? "--grid" : "--estimator classic") << ")\n";
       devopt.device = "cpu";
     }
     std::unique_ptr<pf::ClContext> dev = pf::open_device(devopt, "illuminate");
+    if (estimator == "ppm") ppm.method = pf::method_option(a, dev.get());
+    if (estimator == "classic" && a.count("method"))
+      throw pf::input_error("", "--method applies to --estimator ppm (classic estimates use FLANN k-NN)");
+    if (a.count("grid") && ppm.method != pf::GatherMethod::Grid)
+      throw pf::input_error("", "--grid is read by --method grid only");
+    const char* cluster_kind = pf::gather_method_info(ppm.method).clusters;
+    if (a.count("clusters") && (estimator != "ppm" || !cluster_kind))
+      throw pf::input_error("", "--clusters is read by --method kmeans-clusters, grid-kmeans and "
+                            "grid-gridclusters only");
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>(), hp_path = a["hitpoints"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
@@ -88,6 +99,26 @@ int main(int argc, char** argv) {
     if (estimator == "ppm" && h.estimator == "classic")
       throw pf::input_error(hp_path, "holds a classic estimate; PPM continues only a PPM state",
                             "start from trace-hitpoints' output");
+    // Clusters of the clustered device methods: from the cluster stage (bound to these
+    // hitpoints) or made once here; ppm_pass refreshes their radii every pass (clusters.h).
+    pf::ClusterSet clusters;
+    if (estimator == "ppm" && cluster_kind && dev) {
+      if (a.count("clusters")) {
+        std::string cpath = a["clusters"].as<std::string>();
+        clusters = pf::load_clusters(cpath, h);
+        if (clusters.method != cluster_kind && clusters.method != "ga")
+          throw pf::input_error(cpath, "holds " + clusters.method + " clusters, --method " +
+                                pf::gather_method_name(ppm.method) + " reads " + cluster_kind +
+                                " clusters", "give the matching method or clusters file");
+        prov.add_input("clusters", cpath, pf::kClustersFormat, clusters.scene_id);
+      } else {
+        pf::Stopwatch made;
+        clusters = pf::clusters_for_method(ppm.method, h, dev->work_group(), ppm);
+        std::cerr << "illuminate: " << clusters.clusters.size() << " " << cluster_kind
+                  << " clusters made in " << made.seconds() << " s (the cluster stage caches them)\n";
+      }
+      ppm.clusters = &clusters;
+    }
 
     if (a.count("grid") && estimator == "ppm") {
       std::string grid_path = a["grid"].as<std::string>();
@@ -130,6 +161,7 @@ int main(int argc, char** argv) {
     }
     prov.tool = "illuminate";
     pf::record_options(prov, a);
+    if (estimator == "ppm") prov.parameters["method"] = pf::gather_method_name(ppm.method);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.wall_time_s = clock.seconds();

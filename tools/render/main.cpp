@@ -23,7 +23,6 @@ int main(int argc, char** argv) {
       ("photons", "photons emitted per pass", cxxopts::value<int64_t>()->default_value("100000"))
       ("alpha", "fraction of new photons kept, in (0, 1] (eq. 3.14)",
        cxxopts::value<float>()->default_value("0.7"))
-      ("gather", "grid | flann", cxxopts::value<std::string>()->default_value("grid"))
       ("max-bins", "grid bins along a mesh's longest extent", cxxopts::value<int>()->default_value("64"))
       ("spp", "eye samples per pixel", cxxopts::value<int>()->default_value("1"))
       ("max-depth", "specular bounces of eye paths", cxxopts::value<int>()->default_value("16"))
@@ -41,6 +40,7 @@ int main(int argc, char** argv) {
       ("exposure", "PNG exposure in stops", cxxopts::value<float>()->default_value("0"))
       ("threads", "worker threads, 0 = all cores", cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
+    pf::add_method_option(o);
     pf::add_device_options(o);
     auto a = o.parse(argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
@@ -54,8 +54,7 @@ int main(int argc, char** argv) {
     pf::require_positive("passes", opt.passes);
     pf::require_positive("photons", double(photons));
     if (photons > int64_t(UINT32_MAX)) throw pf::input_error("", "--photons must be below 2^32");
-    std::string gather = a["gather"].as<std::string>(), direct = a["direct"].as<std::string>();
-    pf::require_choice("gather", gather, {"grid", "flann"});
+    std::string direct = a["direct"].as<std::string>();
     pf::require_choice("direct", direct, {"photons", "shadow-rays"});
     int threads = a["threads"].as<int>();
     uint32_t seed = a["seed"].as<uint32_t>();
@@ -71,7 +70,6 @@ int main(int argc, char** argv) {
     opt.photons.max_bounces = a["max-bounces"].as<int>();
     opt.photons.threads = threads;
     opt.ppm.alpha = a["alpha"].as<float>();
-    opt.ppm.gather = gather == "grid" ? pf::Gather::Grid : pf::Gather::Flann;
     opt.ppm.max_bins = a["max-bins"].as<int>();
     opt.ppm.threads = threads;
     opt.checkpoint = a["checkpoint"].as<std::string>();
@@ -90,9 +88,11 @@ int main(int argc, char** argv) {
     prov.tool = "render";
     prov.seed = seed;
     pf::record_options(prov, a);
-    // OpenCL backend: device eye pass, photon passes, naive gather and synthesis.
+    // OpenCL backend: device eye pass, photon passes, --method gather and synthesis.
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "render");
     opt.device = dev.get();
+    opt.ppm.method = pf::method_option(a, dev.get());
+    prov.parameters["method"] = pf::gather_method_name(opt.ppm.method);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);

@@ -1,0 +1,411 @@
+/*
+ * illuminate_methods.cl — hitpoint illumination of progressive photon mapping on the device: the
+ * naive gather (thesis ch. 7.2, Table 7.1) and the accelerated variants of thesis ch. 7.3
+ * (Table 7.3), plus a hashed grid. gather_method.h lists them; cl_gather.cpp launches them.
+ *
+ * Every kernel selects exactly the photons illuminate.h's rule selects (same mesh; not
+ * PF_PHOTON_DIRECT when direct light came from shadow rays; dot(photon.dir, normal) < 0;
+ * pf_ppm_in_radius(pf_ppm_dist2(x, x_p), R)) and adds m and Σ f_r·Φ_p (eq. 3.17) into
+ * per-hitpoint accumulators acc_m / acc_tau (double where the device has fp64, PF_FP64);
+ * ppm_apply then applies eq. 3.14, 3.16, 3.18 once per pass. Only the order of the sum differs
+ * between kernels (each kernel's order is fixed, so every kernel is deterministic).
+ *
+ * Distance tests. The thesis's kernels up to "hitpoint sorting + local memory" used OpenCL's
+ * built-in distance(); "manual distance" replaced it by dx·dx + dy·dy + dz·dz. The kernels of
+ * those rows call distance() too (pf_in_radius with builtin = 1), but only as a prefilter
+ * distance <= 1.0001·R that the exact squared-distance rule then confirms: distance() may differ
+ * from the exact value by a few ulps, far below the 1e-4 slack, so the prefilter never rejects
+ * a photon the rule accepts and the selected set stays exact.
+ *
+ * Work-group layout. Kernels with local memory stage photons in tiles of the work-group size L.
+ * Hitpoint orders (hitpoint sorting, clusters) come from the host (cl_gather.cpp): entry s of
+ * `order` is a hitpoint index or −1 (a filler, idle), and work-group g covers entries
+ * g·L … (g+1)·L − 1, all of one mesh (per-mesh runs and clusters are padded to multiples of L).
+ */
+#pragma OPENCL FP_CONTRACT OFF
+#include "photonflow/shared_types.h"
+#include "photonflow/ppm.h"
+#include "photonflow/grid_shared.h"
+
+#if defined(PF_FP64) && PF_FP64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+typedef double pf_acc;
+#else
+typedef float pf_acc;
+#endif
+
+#define PF_K_INV_PI 0.318309886183790671538f
+/* Relative slack of conservative tests (built-in distance prefilter, cluster spheres, bin boxes):
+ * float rounding of a squared distance is ~1e-7 relative. */
+#define PF_SLACK 1.0001f
+
+/* A hitpoint's gather state in private memory. */
+typedef struct {
+  float x, y, z, nx, ny, nz, r;
+  int mesh;
+  float fr0, fr1, fr2;  /* f_r = albedo/π, eq. 3.17 */
+  int m;
+  pf_acc t0, t1, t2;
+} pf_gather_hp;
+
+/* Loads hitpoint hi and resumes its accumulators (zero at the start of a pass; the naive
+ * kernel's photon batches continue the same sum). A hitpoint with a negative or NaN radius
+ * gathers nothing (mesh −1 matches no photon), as on the CPU. */
+static inline void pf_gather_load(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
+                                  __global const pf_material* mats, __global const int* acc_m,
+                                  __global const pf_acc* acc_tau) {
+  __global const pf_hitpoint* hp = &hps[hi];
+  h->x = hp->position[0];
+  h->y = hp->position[1];
+  h->z = hp->position[2];
+  h->nx = hp->normal[0];
+  h->ny = hp->normal[1];
+  h->nz = hp->normal[2];
+  h->r = hp->radius;
+  h->mesh = hp->radius >= 0.0f ? hp->mesh : -1;
+  __global const pf_material* mat = &mats[hp->material];
+  h->fr0 = mat->color[0] * PF_K_INV_PI;
+  h->fr1 = mat->color[1] * PF_K_INV_PI;
+  h->fr2 = mat->color[2] * PF_K_INV_PI;
+  h->m = acc_m[hi];
+  h->t0 = acc_tau[3 * hi];
+  h->t1 = acc_tau[3 * hi + 1];
+  h->t2 = acc_tau[3 * hi + 2];
+}
+
+/* The distance part of the rule (see the file comment for `builtin`). */
+static inline int pf_in_radius(const pf_gather_hp* h, float px, float py, float pz,
+                               const int builtin) {
+  if (builtin && !(distance((float3)(h->x, h->y, h->z), (float3)(px, py, pz)) <= h->r * PF_SLACK))
+    return 0;
+  return pf_ppm_in_radius(pf_ppm_dist2(h->x, h->y, h->z, px, py, pz), h->r);
+}
+
+/* The whole rule for one photon's fields; adds it when accepted. */
+static inline void pf_gather_photon(pf_gather_hp* h, float px, float py, float pz, float dx,
+                                    float dy, float dz, int mesh, int flags, float f0, float f1,
+                                    float f2, const int skip_direct, const int builtin) {
+  if (mesh != h->mesh) return;
+  if (skip_direct && (flags & PF_PHOTON_DIRECT)) return;
+  if (!(dx * h->nx + dy * h->ny + dz * h->nz < 0.0f)) return;
+  if (!pf_in_radius(h, px, py, pz, builtin)) return;
+  h->m += 1;
+  h->t0 += (pf_acc)(h->fr0 * f0);
+  h->t1 += (pf_acc)(h->fr1 * f1);
+  h->t2 += (pf_acc)(h->fr2 * f2);
+}
+
+static inline void pf_gather_global(pf_gather_hp* h, __global const pf_photon* p,
+                                    const int skip_direct, const int builtin) {
+  pf_gather_photon(h, p->position[0], p->position[1], p->position[2], p->dir[0], p->dir[1],
+                   p->dir[2], p->mesh, p->flags, p->flux[0], p->flux[1], p->flux[2], skip_direct,
+                   builtin);
+}
+
+static inline void pf_gather_local(pf_gather_hp* h, __local const pf_photon* p,
+                                   const int skip_direct, const int builtin) {
+  pf_gather_photon(h, p->position[0], p->position[1], p->position[2], p->dir[0], p->dir[1],
+                   p->dir[2], p->mesh, p->flags, p->flux[0], p->flux[1], p->flux[2], skip_direct,
+                   builtin);
+}
+
+/* Stores a hitpoint's accumulators. */
+static inline void pf_gather_store(const pf_gather_hp* h, int hi, __global int* acc_m,
+                                   __global pf_acc* acc_tau) {
+  acc_m[hi] = h->m;
+  acc_tau[3 * hi] = h->t0;
+  acc_tau[3 * hi + 1] = h->t1;
+  acc_tau[3 * hi + 2] = h->t2;
+}
+
+/* ---- naive: one work-item per hitpoint, every photon of the batch, index order ---------------- */
+__kernel void gather_naive(__global const pf_hitpoint* hps, int count,
+                           __global const pf_photon* photons, int photon_count,
+                           __global const pf_material* mats, int skip_direct,
+                           __global int* acc_m, __global pf_acc* acc_tau) {
+  const int hi = (int)get_global_id(0);
+  if (hi >= count) return;
+  pf_gather_hp h;
+  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  for (int j = 0; j < photon_count; ++j) pf_gather_global(&h, &photons[j], skip_direct, 1);
+  pf_gather_store(&h, hi, acc_m, acc_tau);
+}
+
+/* ---- local memory: the work-group stages all photons through local memory, L at a time ------ */
+__kernel void gather_local_memory(__global const pf_hitpoint* hps, int count,
+                                  __global const pf_photon* photons, int photon_count,
+                                  __global const pf_material* mats, int skip_direct,
+                                  __global int* acc_m, __global pf_acc* acc_tau,
+                                  __local pf_photon* tile) {
+  const int hi = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
+  const int active = hi < count;
+  pf_gather_hp h;
+  if (active) pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  for (int base = 0; base < photon_count; base += L) {
+    if (base + lid < photon_count) tile[lid] = photons[base + lid];
+    barrier(CLK_LOCAL_MEM_FENCE);
+    const int n = min(L, photon_count - base);
+    if (active)
+      for (int j = 0; j < n; ++j) pf_gather_local(&h, &tile[j], skip_direct, 1);
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  if (active) pf_gather_store(&h, hi, acc_m, acc_tau);
+}
+
+/* ---- photon sorting: one work-item per hitpoint, its mesh's photons only ------------------ */
+__kernel void gather_photon_sort(__global const pf_hitpoint* hps, int count,
+                                 __global const pf_photon* sorted, __global const int* mesh_start,
+                                 int mesh_count, __global const pf_material* mats,
+                                 int skip_direct, __global int* acc_m, __global pf_acc* acc_tau) {
+  const int hi = (int)get_global_id(0);
+  if (hi >= count) return;
+  pf_gather_hp h;
+  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  if (h.mesh >= 0 && h.mesh < mesh_count) {
+    const int end = mesh_start[h.mesh + 1];
+    for (int j = mesh_start[h.mesh]; j < end; ++j)
+      pf_gather_global(&h, &sorted[j], skip_direct, 1);
+  }
+  pf_gather_store(&h, hi, acc_m, acc_tau);
+}
+
+/* ---- hitpoint sorting: work-groups of one mesh (fillers idle), global photon reads ---------- */
+__kernel void gather_hitpoint_sort(__global const pf_hitpoint* hps, __global const int* order,
+                                   int order_count, __global const pf_photon* sorted,
+                                   __global const int* mesh_start, int mesh_count,
+                                   __global const pf_material* mats, int skip_direct,
+                                   __global int* acc_m, __global pf_acc* acc_tau) {
+  const int s = (int)get_global_id(0);
+  if (s >= order_count) return;
+  const int hi = order[s];
+  if (hi < 0) return; /* filler */
+  pf_gather_hp h;
+  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  if (h.mesh >= 0 && h.mesh < mesh_count) {
+    const int end = mesh_start[h.mesh + 1];
+    for (int j = mesh_start[h.mesh]; j < end; ++j)
+      pf_gather_global(&h, &sorted[j], skip_direct, 1);
+  }
+  pf_gather_store(&h, hi, acc_m, acc_tau);
+}
+
+/* ---- hitpoint sorting + local memory (builtin = 1) / manual distance (builtin = 0) ---------- */
+static inline void pf_hitpoint_sort_local(__global const pf_hitpoint* hps,
+                                          __global const int* order, int order_count,
+                                          __global const pf_photon* sorted,
+                                          __global const int* mesh_start, int mesh_count,
+                                          __global const pf_material* mats, int skip_direct,
+                                          __global int* acc_m, __global pf_acc* acc_tau,
+                                          __local pf_photon* tile, const int builtin) {
+  const int s = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
+  const int g0 = (int)get_group_id(0) * L; /* the group's first entry: never a filler */
+  if (g0 >= order_count) return;            /* whole group past the end: uniform */
+  const int mesh = hps[order[g0]].mesh;
+  if (mesh < 0 || mesh >= mesh_count) return; /* uniform */
+  const int hi = s < order_count ? order[s] : -1;
+  pf_gather_hp h;
+  if (hi >= 0) pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  const int begin = mesh_start[mesh], end = mesh_start[mesh + 1];
+  for (int base = begin; base < end; base += L) {
+    if (base + lid < end) tile[lid] = sorted[base + lid];
+    barrier(CLK_LOCAL_MEM_FENCE);
+    const int n = min(L, end - base);
+    if (hi >= 0)
+      for (int j = 0; j < n; ++j) pf_gather_local(&h, &tile[j], skip_direct, builtin);
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  if (hi >= 0) pf_gather_store(&h, hi, acc_m, acc_tau);
+}
+
+__kernel void gather_hitpoint_sort_local(__global const pf_hitpoint* hps,
+                                         __global const int* order, int order_count,
+                                         __global const pf_photon* sorted,
+                                         __global const int* mesh_start, int mesh_count,
+                                         __global const pf_material* mats, int skip_direct,
+                                         __global int* acc_m, __global pf_acc* acc_tau,
+                                         __local pf_photon* tile) {
+  pf_hitpoint_sort_local(hps, order, order_count, sorted, mesh_start, mesh_count, mats,
+                         skip_direct, acc_m, acc_tau, tile, 1);
+}
+
+__kernel void gather_manual_distance(__global const pf_hitpoint* hps, __global const int* order,
+                                     int order_count, __global const pf_photon* sorted,
+                                     __global const int* mesh_start, int mesh_count,
+                                     __global const pf_material* mats, int skip_direct,
+                                     __global int* acc_m, __global pf_acc* acc_tau,
+                                     __local pf_photon* tile) {
+  pf_hitpoint_sort_local(hps, order, order_count, sorted, mesh_start, mesh_count, mats,
+                         skip_direct, acc_m, acc_tau, tile, 0);
+}
+
+/* ---- clusters: the work-group culls photons by its cluster's sphere into a local tile ------- */
+
+/* Appends the photons of sorted[base .. base + L) ∩ [.., end) that lie inside the cluster sphere
+ * (with slack, so no photon a member gathers is lost) to tile[*fill ..], in index order: a
+ * work-group-wide exclusive scan of the keep flags (Hillis–Steele in `scan`, L ints) gives each
+ * kept photon its slot, so the tile's order is deterministic. All work-items must call it. */
+static inline void pf_tile_append(__global const pf_photon* sorted, int base, int end,
+                                  float cx, float cy, float cz, float r2, __local pf_photon* tile,
+                                  __local int* scan, int* fill) {
+  const int lid = (int)get_local_id(0), L = (int)get_local_size(0);
+  const int j = base + lid;
+  int keep = 0;
+  pf_photon p;
+  if (j < end) {
+    p = sorted[j];
+    keep = pf_ppm_dist2(cx, cy, cz, p.position[0], p.position[1], p.position[2]) <= r2;
+  }
+  scan[lid] = keep;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (int off = 1; off < L; off <<= 1) {
+    const int t = lid >= off ? scan[lid - off] : 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    scan[lid] += t;
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  if (keep) tile[*fill + scan[lid] - 1] = p;
+  const int added = scan[L - 1];
+  barrier(CLK_LOCAL_MEM_FENCE);
+  *fill += added;
+}
+
+/* Every member gathers from tile[0 .. fill). All work-items must call it. */
+static inline void pf_tile_flush(pf_gather_hp* h, int active, __local const pf_photon* tile,
+                                 int fill, int skip_direct) {
+  if (active)
+    for (int j = 0; j < fill; ++j) pf_gather_local(h, &tile[j], skip_direct, 0);
+  barrier(CLK_LOCAL_MEM_FENCE);
+}
+
+/* Loads the work-group's cluster and this work-item's member (hi < 0: filler). */
+static inline int pf_cluster_member(__global const pf_hitpoint* hps, __global const int* order,
+                                    __global const pf_material* mats, __global const int* acc_m,
+                                    __global const pf_acc* acc_tau, pf_gather_hp* h) {
+  const int hi = order[get_global_id(0)];
+  if (hi >= 0) pf_gather_load(h, hps, hi, mats, acc_m, acc_tau);
+  return hi;
+}
+
+/* k-means clusters over the per-mesh photon arrays: the tile (2L photons of local memory) keeps
+ * only photons inside the cluster's sphere; members gather when it holds L or more. */
+__kernel void gather_clusters(__global const pf_hitpoint* hps, __global const int* order,
+                              __global const int* group_cluster,
+                              __global const pf_cluster* clusters,
+                              __global const pf_photon* sorted, __global const int* mesh_start,
+                              int mesh_count, __global const pf_material* mats, int skip_direct,
+                              __global int* acc_m, __global pf_acc* acc_tau,
+                              __local pf_photon* tile, __local int* scan) {
+  const int L = (int)get_local_size(0);
+  __global const pf_cluster* c = &clusters[group_cluster[get_group_id(0)]];
+  const int mesh = c->mesh;
+  if (mesh < 0 || mesh >= mesh_count) return; /* uniform */
+  pf_gather_hp h;
+  const int hi = pf_cluster_member(hps, order, mats, acc_m, acc_tau, &h);
+  const float cx = c->centre[0], cy = c->centre[1], cz = c->centre[2];
+  const float rc = c->radius * PF_SLACK, r2 = rc * rc;
+  const int begin = mesh_start[mesh], end = mesh_start[mesh + 1];
+  int fill = 0;
+  for (int base = begin; base < end; base += L) {
+    pf_tile_append(sorted, base, end, cx, cy, cz, r2, tile, scan, &fill);
+    if (fill >= L) {
+      pf_tile_flush(&h, hi >= 0, tile, fill, skip_direct);
+      fill = 0;
+    }
+  }
+  pf_tile_flush(&h, hi >= 0, tile, fill, skip_direct);
+  if (hi >= 0) pf_gather_store(&h, hi, acc_m, acc_tau);
+}
+
+/* Grid + clusters (k-means or grid clusters): the work-group reads only the bins of its cluster
+ * sphere's box in the mesh's grid (eq. 7.1; the same padded box as PhotonGrid::for_each_in_radius,
+ * around the cluster centre), row by row (bins lo..hi of a row are contiguous), through the tile. */
+__kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global const int* order,
+                                   __global const int* group_cluster,
+                                   __global const pf_cluster* clusters,
+                                   __global const pf_photon* sorted,
+                                   __global const pf_mesh_grid* mesh_grid,
+                                   __global const int* cell_start, int mesh_count,
+                                   __global const pf_material* mats, int skip_direct,
+                                   __global int* acc_m, __global pf_acc* acc_tau,
+                                   __local pf_photon* tile, __local int* scan) {
+  const int L = (int)get_local_size(0);
+  __global const pf_cluster* c = &clusters[group_cluster[get_group_id(0)]];
+  const int mesh = c->mesh;
+  if (mesh < 0 || mesh >= mesh_count) return; /* uniform */
+  __global const pf_mesh_grid* g = &mesh_grid[mesh];
+  if (g->photon_count == 0) return;
+  pf_gather_hp h;
+  const int hi = pf_cluster_member(hps, order, mats, acc_m, acc_tau, &h);
+  const float cx = c->centre[0], cy = c->centre[1], cz = c->centre[2];
+  const float rc = c->radius * PF_SLACK, r2 = rc * rc;
+  const float pad = rc * PF_SLACK;
+  const int x0 = pf_grid_coord(cx - pad, g->lo[0], g->bin_size, g->nx);
+  const int x1 = pf_grid_coord(cx + pad, g->lo[0], g->bin_size, g->nx);
+  const int y0 = pf_grid_coord(cy - pad, g->lo[1], g->bin_size, g->ny);
+  const int y1 = pf_grid_coord(cy + pad, g->lo[1], g->bin_size, g->ny);
+  const int z0 = pf_grid_coord(cz - pad, g->lo[2], g->bin_size, g->nz);
+  const int z1 = pf_grid_coord(cz + pad, g->lo[2], g->bin_size, g->nz);
+  int fill = 0;
+  for (int z = z0; z <= z1; ++z) {
+    for (int y = y0; y <= y1; ++y) {
+      const int row = g->first_bin + (y + z * g->ny) * g->nx;
+      const int begin = cell_start[row + x0], end = cell_start[row + x1 + 1];
+      for (int base = begin; base < end; base += L) {
+        pf_tile_append(sorted, base, end, cx, cy, cz, r2, tile, scan, &fill);
+        if (fill >= L) {
+          pf_tile_flush(&h, hi >= 0, tile, fill, skip_direct);
+          fill = 0;
+        }
+      }
+    }
+  }
+  pf_tile_flush(&h, hi >= 0, tile, fill, skip_direct);
+  if (hi >= 0) pf_gather_store(&h, hi, acc_m, acc_tau);
+}
+
+/* ---- hashed grid over all meshes: one work-item per hitpoint --------------------------------
+ * Cells of side `cell` (≥ 2·max R, so a sphere's box covers at most 2 cells per axis) hashed into
+ * mask + 1 slots; slot k holds sorted[slot_start[k] .. slot_start[k+1]). Cells that share a slot
+ * share a run, so each photon is taken only from its own cell (its cell recomputed from its
+ * position, the same pf_hash_cell_coord as the build): no photon is counted twice. */
+__kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
+                               __global const pf_photon* sorted, __global const int* slot_start,
+                               float ox, float oy, float oz, float cell, uint mask,
+                               __global const pf_material* mats, int skip_direct,
+                               __global int* acc_m, __global pf_acc* acc_tau) {
+  const int hi = (int)get_global_id(0);
+  if (hi >= count) return;
+  pf_gather_hp h;
+  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  if (h.r >= 0.0f) {
+    const float pad = h.r * PF_SLACK;
+    const int x0 = pf_hash_cell_coord(h.x - pad, ox, cell), x1 = pf_hash_cell_coord(h.x + pad, ox, cell);
+    const int y0 = pf_hash_cell_coord(h.y - pad, oy, cell), y1 = pf_hash_cell_coord(h.y + pad, oy, cell);
+    const int z0 = pf_hash_cell_coord(h.z - pad, oz, cell), z1 = pf_hash_cell_coord(h.z + pad, oz, cell);
+    for (int z = z0; z <= z1; ++z)
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const uint k = pf_hash_cell(x, y, z, mask);
+          const int end = slot_start[k + 1];
+          for (int j = slot_start[k]; j < end; ++j) {
+            __global const pf_photon* p = &sorted[j];
+            if (pf_hash_cell_coord(p->position[0], ox, cell) != x ||
+                pf_hash_cell_coord(p->position[1], oy, cell) != y ||
+                pf_hash_cell_coord(p->position[2], oz, cell) != z)
+              continue; /* another cell of the same slot */
+            pf_gather_global(&h, p, skip_direct, 0);
+          }
+        }
+  }
+  pf_gather_store(&h, hi, acc_m, acc_tau);
+}
+
+/* Eq. 3.14, 3.16, 3.18 for hitpoints 0 .. count − 1 with the accumulated m and τ_M. */
+__kernel void ppm_apply(__global pf_hitpoint* hps, int count, __global const int* acc_m,
+                        __global const pf_acc* acc_tau, float alpha) {
+  const int hi = (int)get_global_id(0);
+  if (hi >= count) return;
+  const float tau_m[3] = {(float)acc_tau[3 * hi], (float)acc_tau[3 * hi + 1],
+                          (float)acc_tau[3 * hi + 2]};
+  pf_ppm_update(&hps[hi], acc_m[hi], tau_m, alpha);
+}

@@ -1,0 +1,90 @@
+/*
+ * grid_shared.h — grid arithmetic shared by the host (photon_grid.h, clusters.h, cl_gather.cpp)
+ * and the OpenCL kernels (kernels/build_grid.cl, kernels/illuminate_methods.cl), compiled as C++
+ * and as OpenCL C 1.2 so that both sides put every photon into the same bin, bit for bit:
+ *
+ *   - pf_grid_coord / pf_grid_bin: the per-mesh uniform grid of thesis eq. 7.1,
+ *       c = clamp(floor((x − lo)/d), 0, n − 1) per axis, offset = cx + cy·nx + cz·nx·ny;
+ *   - pf_hash_cell_coord / pf_hash_cell: the hashed grid of the `hash-grid` gather (one grid over
+ *     all meshes, unbounded integer cell coordinates, cells hashed into a power-of-two table with
+ *     the three-prime hash of Teschner et al. 2003, "Optimized Spatial Hashing for Collision
+ *     Detection of Deformable Objects");
+ *   - pf_float_ordered / pf_ordered_float: a monotone map of floats to signed ints, so that
+ *     atomic_min/atomic_max on ints compute float minima/maxima on the device (grid bounds).
+ *
+ * Division must be correctly rounded on the device for the bins to agree with the host; the
+ * runtime builds kernels with -cl-fp32-correctly-rounded-divide-sqrt where the device offers it
+ * (cl_runtime.cpp).
+ */
+#ifndef PHOTONFLOW_GRID_SHARED_H
+#define PHOTONFLOW_GRID_SHARED_H
+
+#include "photonflow/cl_compat.h"
+#include "photonflow/shared_types.h"
+
+#ifndef __OPENCL_VERSION__
+#include <cmath>
+#include <cstring>
+#endif
+
+/* Bin coordinate of x along one axis (eq. 7.1), clamped to [0, n−1]. Monotone in x, so the bins
+ * overlapping an interval [x0, x1] are those from coord(x0) to coord(x1). NaN maps to 0. */
+PF_INLINE pf_int pf_grid_coord(pf_float x, pf_float lo, pf_float bin_size, pf_int n) {
+  pf_float c = (x - lo) / bin_size;
+  if (!(c > 0.0f)) return 0;
+  if (c >= (pf_float)(n - 1)) return n - 1;
+  return (pf_int)c;
+}
+
+/* Linear bin offset of point p in the grid of g (eq. 7.1): x + y·nx + z·nx·ny. */
+PF_INLINE pf_int pf_grid_bin(const PF_GLOBAL pf_mesh_grid* g, pf_float px, pf_float py,
+                             pf_float pz) {
+  pf_int x = pf_grid_coord(px, g->lo[0], g->bin_size, g->nx);
+  pf_int y = pf_grid_coord(py, g->lo[1], g->bin_size, g->ny);
+  pf_int z = pf_grid_coord(pz, g->lo[2], g->bin_size, g->nz);
+  return x + (y + z * g->ny) * g->nx;
+}
+
+/* Cells of the hashed grid are cubes of side `cell` from `origin`; coordinates are clamped to
+ * ±2^24 so that the float→int conversion is defined for any finite input. */
+#define PF_HASH_COORD_LIMIT 16777216.0f
+PF_INLINE pf_int pf_hash_cell_coord(pf_float x, pf_float origin, pf_float cell) {
+  pf_float c = (x - origin) / cell;
+  if (!(c > -PF_HASH_COORD_LIMIT)) c = -PF_HASH_COORD_LIMIT; /* also NaN */
+  if (c > PF_HASH_COORD_LIMIT) c = PF_HASH_COORD_LIMIT;
+#ifdef __OPENCL_VERSION__
+  return (pf_int)floor(c);
+#else
+  return (pf_int)std::floor(c);
+#endif
+}
+
+/* Table slot of cell (x, y, z) in a table of mask + 1 slots (a power of two). */
+PF_INLINE pf_uint pf_hash_cell(pf_int x, pf_int y, pf_int z, pf_uint mask) {
+  pf_uint h = ((pf_uint)x * 73856093u) ^ ((pf_uint)y * 19349663u) ^ ((pf_uint)z * 83492791u);
+  return h & mask;
+}
+
+/* Monotone float → int: a < b (floats, not NaN) ⇔ pf_float_ordered(a) < pf_float_ordered(b),
+ * with −0 ordered just below +0. pf_ordered_float inverts it. */
+PF_INLINE pf_int pf_float_ordered(pf_float f) {
+#ifdef __OPENCL_VERSION__
+  pf_int i = as_int(f);
+#else
+  pf_int i;
+  std::memcpy(&i, &f, sizeof i);
+#endif
+  return i >= 0 ? i : (pf_int)(i ^ 0x7fffffff);
+}
+PF_INLINE pf_float pf_ordered_float(pf_int i) {
+  pf_int b = i >= 0 ? i : (pf_int)(i ^ 0x7fffffff);
+#ifdef __OPENCL_VERSION__
+  return as_float(b);
+#else
+  pf_float f;
+  std::memcpy(&f, &b, sizeof f);
+  return f;
+#endif
+}
+
+#endif /* PHOTONFLOW_GRID_SHARED_H */

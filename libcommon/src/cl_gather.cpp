@@ -1,0 +1,504 @@
+// Hitpoint illumination on the OpenCL device: see cl_gather.h, gather_method.h and
+// kernels/illuminate_methods.cl, kernels/build_grid.cl.
+#include "photonflow/cl_gather.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "photonflow/cl_backend.h"
+#include "photonflow/clusters.h"
+#include "photonflow/error.h"
+#include "photonflow/gather_method.h"
+#include "photonflow/grid_shared.h"
+#include "photonflow/illuminate.h"
+#include "photonflow/provenance.h"
+
+namespace pf {
+
+namespace {
+
+constexpr size_t kChunk = 256;     // PF_CHUNK of build_grid.cl
+constexpr float kSlack = 1.0001f;  // PF_SLACK of illuminate_methods.cl
+
+// The host-side checks of the CPU grid build (photon_grid.cpp), so the device never indexes a
+// mesh table out of range: every photon's mesh in [0, mesh_count), every position finite.
+void check_photons(const std::vector<pf_photon>& photons, int mesh_count) {
+  if (mesh_count < 0) throw std::invalid_argument("photon grid: negative mesh count");
+  if (photons.size() > size_t(std::numeric_limits<int32_t>::max()))
+    throw std::invalid_argument("photon grid: more than 2^31-1 photons");
+  for (size_t i = 0; i < photons.size(); ++i) {
+    const pf_photon& p = photons[i];
+    if (p.mesh < 0 || p.mesh >= mesh_count)
+      throw std::invalid_argument("photon grid: photon " + std::to_string(i) + " has mesh id " +
+                                  std::to_string(p.mesh) + " outside [0, " +
+                                  std::to_string(mesh_count) + ")");
+    if (!std::isfinite(p.position[0]) || !std::isfinite(p.position[1]) ||
+        !std::isfinite(p.position[2]))
+      throw std::invalid_argument("photon grid: photon " + std::to_string(i) +
+                                  " has a non-finite position");
+  }
+}
+
+// A device buffer for `count` items of `item` bytes, or InputError naming the batched method.
+void require_one_buffer(const ClContext& dev, size_t count, size_t item, const char* what,
+                        GatherMethod m) {
+  if (count * item > dev.max_alloc())
+    throw input_error("", std::string("the pass's ") + what + " (" + std::to_string(count * item) +
+                              " bytes) exceed the device's largest allocation for --method " +
+                              gather_method_name(m),
+                      "use --method naive, which works in batches");
+}
+
+// Exclusive prefix sum of data[0 .. n) in place (build_grid.cl's scan_blocks / scan_add); the
+// block sums of each level are scanned recursively.
+void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level = 0) {
+  if (n == 0) return;
+  if (n > size_t(INT_MAX)) throw std::invalid_argument("device scan: more than 2^31-1 entries");
+  const size_t L = size_t(dev.work_group());
+  const size_t per_group = 4 * L;
+  const size_t groups = (n + per_group - 1) / per_group;
+  const ClBuffer& sums = dev.scratch("scan.sums." + std::to_string(level), groups * sizeof(cl_int));
+  cl_kernel k = dev.kernel("build_grid", "scan_blocks");
+  dev.args(k, data, cl_int(n), sums, ClLocal{L * sizeof(cl_int)});
+  dev.run(k, groups * L);
+  if (groups > 1) {
+    exclusive_scan(dev, sums, groups, level + 1);
+    cl_kernel add = dev.kernel("build_grid", "scan_add");
+    dev.args(add, data, cl_int(n), sums);
+    dev.run(add, n);
+  }
+}
+
+// Counting sort of photon indices by key (key[i] in [0, ranges)): counts → exclusive scan (the
+// start table, ranges + 1 entries, the last = n) → scatter with atomic cursors → each range sorted
+// ascending, so the order equals a stable sort. `start` and `order` are the results.
+void sort_by_key(ClContext& dev, const ClBuffer& key, const ClBuffer& counts, size_t n,
+                 size_t ranges, const ClBuffer& order) {
+  exclusive_scan(dev, counts, ranges + 1);
+  const ClBuffer& cursor = dev.scratch("sort.cursor", (ranges + 1) * sizeof(cl_int));
+  dev.fill_zero(cursor, (ranges + 1) * sizeof(cl_int));
+  cl_kernel scatter = dev.kernel("build_grid", "scatter_keys");
+  dev.args(scatter, key, cl_int(n), counts, cursor, order);
+  dev.run(scatter, n);
+  cl_kernel sort = dev.kernel("build_grid", "sort_ranges");
+  dev.args(sort, counts, cl_int(ranges), cl_int(n), order);
+  dev.run(sort, ranges);
+}
+
+void permute(ClContext& dev, const ClBuffer& in, const ClBuffer& order, size_t n,
+             const ClBuffer& out) {
+  cl_kernel k = dev.kernel("build_grid", "permute_photons");
+  dev.args(k, in, order, cl_int(n), out);
+  dev.run(k, n);
+}
+
+// The per-mesh grid of eq. 7.1 over the n photons in `photons`, on the device.
+struct DeviceGrid {
+  std::vector<pf_mesh_grid> headers;
+  size_t entries = 0;
+  const ClBuffer* sorted = nullptr;      // photons by (mesh, bin, index)
+  const ClBuffer* order = nullptr;       // input index of each sorted photon
+  const ClBuffer* cell_start = nullptr;  // entries + 1 ints
+  const ClBuffer* mesh_grid = nullptr;   // headers on the device
+};
+
+DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int mesh_count,
+                       const PhotonGridParams& params) {
+  if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
+    throw std::invalid_argument("photon grid: default_radius must be positive and finite");
+  if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
+  DeviceGrid g;
+  const size_t meshes = size_t(mesh_count);
+  // 1. Per-mesh bounds and counts (local reduction, then one atomic per mesh and work-group).
+  std::vector<cl_int> bounds(8 * std::max<size_t>(meshes, 1), 0);
+  for (size_t m = 0; m < meshes; ++m)
+    for (int f = 0; f < 7; ++f) bounds[8 * m + size_t(f)] = f < 3 ? INT_MAX : (f < 6 ? INT_MIN : 0);
+  const ClBuffer& bb = dev.scratch("grid.bounds", bounds.size() * sizeof(cl_int));
+  dev.write(bb, bounds.size() * sizeof(cl_int), bounds.data());
+  if (n > 0 && meshes > 0) {
+    const size_t local_ints = std::max<uint64_t>(dev.info().local_mem, 1024) / 2 / sizeof(cl_int);
+    const size_t span = std::clamp<size_t>(local_ints / 7, 1, meshes);
+    cl_kernel k = dev.kernel("build_grid", "grid_bounds");
+    for (size_t m0 = 0; m0 < meshes; m0 += span) {
+      const size_t s = std::min(span, meshes - m0);
+      dev.args(k, photons, cl_int(n), cl_int(m0), cl_int(s), bb, ClLocal{7 * s * sizeof(cl_int)});
+      dev.run(k, n);
+    }
+    dev.read(bb, bounds.size() * sizeof(cl_int), bounds.data());
+  }
+  // 2. Headers: the CPU's function on the reduced bounds, so both builds make the same grids.
+  g.headers.resize(meshes);
+  int64_t entries = 0;
+  int32_t first_photon = 0;
+  for (size_t m = 0; m < meshes; ++m) {
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = pf_ordered_float(bounds[8 * m + size_t(a)]);
+      hi[a] = pf_ordered_float(bounds[8 * m + 3 + size_t(a)]);
+    }
+    const int32_t count = bounds[8 * m + 6];
+    pf_mesh_grid& h = g.headers[m];
+    h = mesh_grid_header(lo, hi, count, params);
+    h.first_bin = pf_int(entries);
+    h.first_photon = first_photon;
+    entries += count == 0 ? 1 : int64_t(h.nx) * h.ny * h.nz + 1;
+    if (entries > std::numeric_limits<int32_t>::max() - 1)
+      throw std::invalid_argument("photon grid: more than 2^31-1 bins (lower max_bins)");
+    first_photon += count;
+  }
+  g.entries = size_t(entries);
+  const ClBuffer& mg = dev.scratch("grid.headers", std::max<size_t>(meshes, 1) * sizeof(pf_mesh_grid));
+  dev.write(mg, meshes * sizeof(pf_mesh_grid), g.headers.data());
+  // 3. Keys and counts with atomic counters; 4. the bin-start table and the sorted order.
+  const ClBuffer& counts = dev.scratch("grid.cell_start", (g.entries + 1) * sizeof(cl_int));
+  dev.fill_zero(counts, (g.entries + 1) * sizeof(cl_int));
+  const ClBuffer& key = dev.scratch("grid.key", n * sizeof(cl_int));
+  const ClBuffer& order = dev.scratch("grid.order", n * sizeof(cl_int));
+  const ClBuffer& sorted = dev.scratch("grid.photons", n * sizeof(pf_photon));
+  if (n > 0) {
+    cl_kernel k = dev.kernel("build_grid", "key_grid_bin");
+    dev.args(k, photons, cl_int(n), mg, key, counts);
+    dev.run(k, n);
+  }
+  sort_by_key(dev, key, counts, n, g.entries, order);
+  permute(dev, photons, order, n, sorted);
+  g.sorted = &sorted;
+  g.order = &order;
+  g.cell_start = &counts;
+  g.mesh_grid = &mg;
+  return g;
+}
+
+// Photons stably sorted by mesh (the per-mesh arrays of "photon sorting"), on the device.
+struct DeviceMeshSort {
+  const ClBuffer* sorted = nullptr;
+  const ClBuffer* order = nullptr;
+  const ClBuffer* mesh_start = nullptr;  // mesh_count + 1 ints
+};
+
+DeviceMeshSort device_mesh_sort(ClContext& dev, const ClBuffer& photons, size_t n,
+                                int mesh_count) {
+  DeviceMeshSort s;
+  const size_t meshes = size_t(mesh_count);
+  const ClBuffer& start = dev.scratch("msort.start", (meshes + 1) * sizeof(cl_int));
+  const ClBuffer& order = dev.scratch("msort.order", n * sizeof(cl_int));
+  const ClBuffer& sorted = dev.scratch("msort.photons", n * sizeof(pf_photon));
+  s.sorted = &sorted;
+  s.order = &order;
+  s.mesh_start = &start;
+  if (n == 0 || meshes == 0) {
+    dev.fill_zero(start, (meshes + 1) * sizeof(cl_int));
+    return s;
+  }
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  if (chunks * meshes > size_t(INT_MAX))
+    throw std::invalid_argument("photon sort: meshes × photon chunks exceed 2^31-1");
+  const ClBuffer& offsets = dev.scratch("msort.offsets", chunks * meshes * sizeof(cl_int));
+  dev.fill_zero(offsets, chunks * meshes * sizeof(cl_int));
+  cl_kernel count = dev.kernel("build_grid", "mesh_chunk_count");
+  dev.args(count, photons, cl_int(n), cl_int(chunks), offsets);
+  dev.run(count, chunks);
+  exclusive_scan(dev, offsets, chunks * meshes);
+  cl_kernel starts = dev.kernel("build_grid", "mesh_starts");
+  dev.args(starts, offsets, cl_int(chunks), cl_int(meshes), cl_int(n), start);
+  dev.run(starts, meshes + 1);
+  cl_kernel scatter = dev.kernel("build_grid", "mesh_chunk_scatter");
+  dev.args(scatter, photons, cl_int(n), cl_int(chunks), offsets, order);
+  dev.run(scatter, chunks);
+  permute(dev, photons, order, n, sorted);
+  return s;
+}
+
+// The hashed grid of `hash-grid` over the n photons: cells of side `cell` from `origin`, table of
+// mask + 1 slots; slot_start has mask + 2 entries.
+struct DeviceHashGrid {
+  const ClBuffer* sorted = nullptr;
+  const ClBuffer* slot_start = nullptr;
+  float origin[3] = {0, 0, 0};
+  float cell = 1.f;
+  cl_uint mask = 0;
+};
+
+DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t n,
+                                const float origin[3], float cell, int slots) {
+  DeviceHashGrid g;
+  for (int a = 0; a < 3; ++a) g.origin[a] = origin[a];
+  g.cell = cell;
+  size_t table = 1024;
+  while (table < 2 * n && table < (size_t(1) << 30)) table <<= 1;
+  if (slots > 0) {
+    if (slots & (slots - 1)) throw input_error("", "hash-grid slots must be a power of two");
+    table = size_t(slots);
+  }
+  g.mask = cl_uint(table - 1);
+  const ClBuffer& counts = dev.scratch("hash.start", (table + 1) * sizeof(cl_int));
+  dev.fill_zero(counts, (table + 1) * sizeof(cl_int));
+  const ClBuffer& key = dev.scratch("hash.key", n * sizeof(cl_int));
+  const ClBuffer& order = dev.scratch("hash.order", n * sizeof(cl_int));
+  const ClBuffer& sorted = dev.scratch("hash.photons", n * sizeof(pf_photon));
+  if (n > 0) {
+    cl_kernel k = dev.kernel("build_grid", "key_hash_cell");
+    dev.args(k, photons, cl_int(n), origin[0], origin[1], origin[2], cell, g.mask, key, counts);
+    dev.run(k, n);
+  }
+  sort_by_key(dev, key, counts, n, table, order);
+  permute(dev, photons, order, n, sorted);
+  g.sorted = &sorted;
+  g.slot_start = &counts;
+  return g;
+}
+
+// Work-group → cluster table of a cluster set (work-group g covers order[g·wg, (g+1)·wg)).
+std::vector<cl_int> group_clusters(const ClusterSet& cs) {
+  std::vector<cl_int> t(cs.order.size() / size_t(cs.wg_size));
+  for (size_t c = 0; c < cs.clusters.size(); ++c) {
+    const pf_cluster& k = cs.clusters[c];
+    for (int g = k.first / cs.wg_size; g < (k.first + k.padded_count) / cs.wg_size; ++g)
+      t[size_t(g)] = cl_int(c);
+  }
+  return t;
+}
+
+double since(ClContext& dev, double t0) { return dev.kernel_seconds() - t0; }
+
+}  // namespace
+
+ClusterSet clusters_for_method(GatherMethod m, const HitpointSet& h, int wg_size,
+                               const PpmOptions& opt) {
+  const char* kind = gather_method_info(m).clusters;
+  if (!kind) throw std::invalid_argument(std::string("method ") + gather_method_name(m) + " reads no clusters");
+  return std::string(kind) == "kmeans" ? cluster_kmeans(h, wg_size, opt.cluster_iterations, 1, opt.threads)
+                                       : cluster_grid(h, wg_size, opt.max_bins);
+}
+
+PhotonGrid build_photon_grid(const std::vector<pf_photon>& photons, int mesh_count,
+                             const PhotonGridParams& params, ClContext& dev) {
+  check_photons(photons, mesh_count);
+  const size_t n = photons.size();
+  if (n * sizeof(pf_photon) > dev.max_alloc())
+    throw input_error("", "the photons (" + std::to_string(n * sizeof(pf_photon)) +
+                              " bytes) exceed the device's largest allocation", "use --device cpu");
+  const ClBuffer& in = dev.scratch("ppm.photons", n * sizeof(pf_photon));
+  dev.write(in, n * sizeof(pf_photon), photons.data());
+  DeviceGrid d = device_grid(dev, in, n, mesh_count, params);
+  PhotonGrid g;
+  g.params = params;
+  g.mesh_grid = d.headers;
+  g.cell_start.resize(d.entries);
+  g.photons.resize(n);
+  g.order.resize(n);
+  dev.read(*d.cell_start, d.entries * sizeof(cl_int), g.cell_start.data());
+  dev.read(*d.sorted, n * sizeof(pf_photon), g.photons.data());
+  dev.read(*d.order, n * sizeof(cl_int), g.order.data());
+  return g;
+}
+
+void sort_photons_by_mesh(const std::vector<pf_photon>& photons, int mesh_count, ClContext& dev,
+                          std::vector<pf_photon>& sorted, std::vector<int32_t>& mesh_start) {
+  check_photons(photons, mesh_count);
+  const size_t n = photons.size();
+  const ClBuffer& in = dev.scratch("ppm.photons", n * sizeof(pf_photon));
+  dev.write(in, n * sizeof(pf_photon), photons.data());
+  DeviceMeshSort s = device_mesh_sort(dev, in, n, mesh_count);
+  sorted.resize(n);
+  mesh_start.resize(size_t(mesh_count) + 1);
+  dev.read(*s.sorted, n * sizeof(pf_photon), sorted.data());
+  dev.read(*s.mesh_start, mesh_start.size() * sizeof(cl_int), mesh_start.data());
+}
+
+// ---- ppm_pass (declared in cl_backend.h) ------------------------------------------------------
+
+GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
+                     uint64_t emitted, const PpmOptions& opt, ClContext& dev) {
+  Stopwatch wall;
+  GatherTimes times;
+  if (!(opt.alpha > 0.f && opt.alpha <= 1.f))
+    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(opt.alpha));
+  const GatherMethodInfo& mi = gather_method_info(opt.method);
+  if (!mi.device)
+    throw input_error("", std::string("--method ") + mi.name + " runs on the CPU backend",
+                      "use --device cpu, or an OpenCL method such as grid-kmeans");
+  const size_t nh = h.hitpoints.size(), np = photons.size();
+  if (nh > size_t(INT32_MAX) || np > size_t(INT32_MAX))
+    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
+  const int mesh_count = int(scene.mesh_names.size());
+  const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
+  const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
+  const size_t L = size_t(dev.work_group());
+
+  if (nh > 0 && np > 0) {
+    const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
+    dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
+    cl_kernel apply = dev.kernel("illuminate_methods", "ppm_apply");
+
+    if (opt.method == GatherMethod::Naive) {
+      // Batches of hitpoints × batches of photons under the allocation limit, photons in index
+      // order: the CPU's summation order, so the result equals the CPU gathers bit for bit.
+      cl_kernel gather = dev.kernel("illuminate_methods", "gather_naive");
+      const size_t hb = dev.batch_items(std::max(sizeof(pf_hitpoint), 3 * acc), nh);
+      const size_t pb = dev.batch_items(sizeof(pf_photon), np);
+      const ClBuffer& hps = dev.scratch("ppm.hitpoints", hb * sizeof(pf_hitpoint));
+      const ClBuffer& acc_m = dev.scratch("ppm.acc_m", hb * sizeof(cl_int));
+      const ClBuffer& acc_tau = dev.scratch("ppm.acc_tau", hb * 3 * acc);
+      const ClBuffer& phs = dev.scratch("ppm.photons", pb * sizeof(pf_photon));
+      if (pb == np) dev.write(phs, np * sizeof(pf_photon), photons.data());
+      for (size_t hoff = 0; hoff < nh; hoff += hb) {
+        const cl_int hcount = cl_int(std::min(hb, nh - hoff));
+        dev.write(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
+        dev.fill_zero(acc_m, size_t(hcount) * sizeof(cl_int));
+        dev.fill_zero(acc_tau, size_t(hcount) * 3 * acc);
+        for (size_t poff = 0; poff < np; poff += pb) {
+          const cl_int pcount = cl_int(std::min(pb, np - poff));
+          if (pb != np) dev.write(phs, size_t(pcount) * sizeof(pf_photon), &photons[poff]);
+          dev.args(gather, hps, hcount, phs, pcount, mats, skip_direct, acc_m, acc_tau);
+          const double t0 = dev.kernel_seconds();
+          dev.run(gather, size_t(hcount));
+          times.gather += since(dev, t0);
+        }
+        const double t0 = dev.kernel_seconds();
+        dev.args(apply, hps, hcount, acc_m, acc_tau, opt.alpha);
+        dev.run(apply, size_t(hcount));
+        times.apply += since(dev, t0);
+        dev.read(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
+      }
+      times.work_items = nh;
+    } else {
+      require_one_buffer(dev, nh, sizeof(pf_hitpoint), "hitpoints", opt.method);
+      require_one_buffer(dev, np, sizeof(pf_photon), "photons", opt.method);
+      check_photons(photons, mesh_count);
+      const ClBuffer& hps = dev.scratch("ppm.hitpoints", nh * sizeof(pf_hitpoint));
+      const ClBuffer& acc_m = dev.scratch("ppm.acc_m", nh * sizeof(cl_int));
+      const ClBuffer& acc_tau = dev.scratch("ppm.acc_tau", nh * 3 * acc);
+      const ClBuffer& phs = dev.scratch("ppm.photons", np * sizeof(pf_photon));
+      dev.write(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
+      dev.write(phs, np * sizeof(pf_photon), photons.data());
+      dev.fill_zero(acc_m, nh * sizeof(cl_int));
+      dev.fill_zero(acc_tau, nh * 3 * acc);
+      const size_t tile_bytes = 2 * L * sizeof(pf_photon) + L * sizeof(cl_int);
+      if (tile_bytes > dev.info().local_mem)
+        throw input_error("", "work-group size " + std::to_string(L) + " needs " +
+                                  std::to_string(tile_bytes) + " bytes of local memory, the device has " +
+                                  std::to_string(dev.info().local_mem), "pass a smaller --work-group");
+      double t0 = dev.kernel_seconds();
+      const GatherMethod m = opt.method;
+      if (m == GatherMethod::LocalMemory) {
+        cl_kernel k = dev.kernel("illuminate_methods", "gather_local_memory");
+        dev.args(k, hps, cl_int(nh), phs, cl_int(np), mats, skip_direct, acc_m, acc_tau,
+                 ClLocal{L * sizeof(pf_photon)});
+        dev.run(k, nh);
+        times.work_items = (nh + L - 1) / L * L;
+      } else if (m == GatherMethod::PhotonSort || m == GatherMethod::HitpointSort ||
+                 m == GatherMethod::HitpointSortLocal || m == GatherMethod::ManualDistance) {
+        DeviceMeshSort s = device_mesh_sort(dev, phs, np, mesh_count);
+        times.order = since(dev, t0);
+        t0 = dev.kernel_seconds();
+        if (m == GatherMethod::PhotonSort) {
+          cl_kernel k = dev.kernel("illuminate_methods", "gather_photon_sort");
+          dev.args(k, hps, cl_int(nh), *s.sorted, *s.mesh_start, cl_int(mesh_count), mats,
+                   skip_direct, acc_m, acc_tau);
+          dev.run(k, nh);
+          times.work_items = nh;
+        } else {
+          const std::vector<int32_t> order = mesh_sorted_order(h, int(L));
+          const ClBuffer& ob = dev.scratch("ppm.order", order.size() * sizeof(cl_int));
+          dev.write(ob, order.size() * sizeof(cl_int), order.data());
+          t0 = dev.kernel_seconds();
+          const char* name = m == GatherMethod::HitpointSort        ? "gather_hitpoint_sort"
+                             : m == GatherMethod::HitpointSortLocal ? "gather_hitpoint_sort_local"
+                                                                    : "gather_manual_distance";
+          cl_kernel k = dev.kernel("illuminate_methods", name);
+          if (m == GatherMethod::HitpointSort)
+            dev.args(k, hps, ob, cl_int(order.size()), *s.sorted, *s.mesh_start,
+                     cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau);
+          else
+            dev.args(k, hps, ob, cl_int(order.size()), *s.sorted, *s.mesh_start,
+                     cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau,
+                     ClLocal{L * sizeof(pf_photon)});
+          dev.run(k, order.size());
+          times.work_items = order.size();
+        }
+      } else if (m == GatherMethod::HashGrid) {
+        float rmax = 0.f;
+        for (const pf_hitpoint& hp : h.hitpoints)
+          if (std::isfinite(hp.radius)) rmax = std::max(rmax, hp.radius);
+        const Vec3 ext = scene.bounds.hi - scene.bounds.lo;
+        float floor_cell = std::max({ext.x, ext.y, ext.z, 1e-6f}) * 1e-6f;
+        if (!std::isfinite(floor_cell)) floor_cell = 1e-6f;
+        const float cell = std::max(2.f * rmax * kSlack * kSlack, floor_cell);
+        float origin[3] = {scene.bounds.lo.x, scene.bounds.lo.y, scene.bounds.lo.z};
+        for (float& o : origin)
+          if (!std::isfinite(o)) o = 0.f;  // an empty scene: any origin will do
+        DeviceHashGrid g = device_hash_grid(dev, phs, np, origin, cell, opt.hash_slots);
+        times.order = since(dev, t0);
+        t0 = dev.kernel_seconds();
+        cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
+        dev.args(k, hps, cl_int(nh), *g.sorted, *g.slot_start, g.origin[0], g.origin[1],
+                 g.origin[2], g.cell, g.mask, mats, skip_direct, acc_m, acc_tau);
+        dev.run(k, nh);
+        times.work_items = nh;
+      } else {  // kmeans-clusters, grid-kmeans, grid-gridclusters
+        ClusterSet made;
+        ClusterSet* cs = opt.clusters;
+        if (!cs) {
+          made = clusters_for_method(m, h, int(L), opt);
+          cs = &made;
+        } else if (cs->hitpoint_count != nh) {
+          throw input_error("", "the clusters were made for " + std::to_string(cs->hitpoint_count) +
+                                    " hitpoints, the state has " + std::to_string(nh),
+                            "run the cluster stage on these hitpoints");
+        }
+        update_cluster_radii(*cs, h);  // R only tightens as PPM shrinks radii (clusters.h)
+        const size_t wg = size_t(cs->wg_size);
+        const size_t cl_tile = 2 * wg * sizeof(pf_photon) + wg * sizeof(cl_int);
+        if (cl_tile > dev.info().local_mem)
+          throw input_error("", "clusters of work-group size " + std::to_string(wg) +
+                                    " need more local memory than the device has",
+                            "make clusters with a smaller --wg-size");
+        const std::vector<cl_int> groups = group_clusters(*cs);
+        const ClBuffer& ob = dev.scratch("ppm.order", cs->order.size() * sizeof(cl_int));
+        const ClBuffer& gb = dev.scratch("ppm.group_cluster", groups.size() * sizeof(cl_int));
+        const ClBuffer& cb = dev.scratch("ppm.clusters", cs->clusters.size() * sizeof(pf_cluster));
+        dev.write(ob, cs->order.size() * sizeof(cl_int), cs->order.data());
+        dev.write(gb, groups.size() * sizeof(cl_int), groups.data());
+        dev.write(cb, cs->clusters.size() * sizeof(pf_cluster), cs->clusters.data());
+        const ClLocal tile{2 * wg * sizeof(pf_photon)}, scan{wg * sizeof(cl_int)};
+        t0 = dev.kernel_seconds();
+        if (m == GatherMethod::KmeansClusters) {
+          DeviceMeshSort s = device_mesh_sort(dev, phs, np, mesh_count);
+          times.order = since(dev, t0);
+          t0 = dev.kernel_seconds();
+          cl_kernel k = dev.kernel("illuminate_methods", "gather_clusters");
+          dev.args(k, hps, ob, gb, cb, *s.sorted, *s.mesh_start, cl_int(mesh_count), mats,
+                   skip_direct, acc_m, acc_tau, tile, scan);
+          dev.run(k, cs->order.size(), wg);
+        } else {
+          DeviceGrid g = device_grid(dev, phs, np, mesh_count, ppm_grid_params(h, opt));
+          times.order = since(dev, t0);
+          t0 = dev.kernel_seconds();
+          cl_kernel k = dev.kernel("illuminate_methods", "gather_grid_clusters");
+          dev.args(k, hps, ob, gb, cb, *g.sorted, *g.mesh_grid, *g.cell_start,
+                   cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau, tile, scan);
+          dev.run(k, cs->order.size(), wg);
+        }
+        times.work_items = cs->order.size();
+      }
+      times.gather = since(dev, t0);
+      t0 = dev.kernel_seconds();
+      dev.args(apply, hps, cl_int(nh), acc_m, acc_tau, opt.alpha);
+      dev.run(apply, nh);
+      times.apply = since(dev, t0);
+      dev.read(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
+    }
+  }
+  h.photons_emitted += emitted;
+  h.passes += 1;
+  h.estimator = "ppm";
+  times.total = wall.seconds();
+  return times;
+}
+
+}  // namespace pf
