@@ -318,7 +318,10 @@ __kernel void gather_clusters(__global const pf_hitpoint* hps, __global const in
 
 /* Grid + clusters (k-means or grid clusters): the work-group reads only the bins of its cluster
  * sphere's box in the mesh's grid (eq. 7.1; the same padded box as PhotonGrid::for_each_in_radius,
- * around the cluster centre), row by row (bins lo..hi of a row are contiguous), through the tile. */
+ * around the cluster centre), row by row (bins lo..hi of a row are contiguous). Every work-item of
+ * the group walks the same bins in the same order, so their global reads hit the same addresses
+ * (one fetch serves the group: a broadcast on a GPU, one cache line on a CPU); staging them through
+ * local memory, as the mesh-wide variants do, only adds barriers here (the runs are short). */
 __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global const int* order,
                                    __global const int* group_cluster,
                                    __global const pf_cluster* clusters,
@@ -326,48 +329,41 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
                                    __global const pf_mesh_grid* mesh_grid,
                                    __global const int* cell_start, int mesh_count,
                                    __global const pf_material* mats, int skip_direct,
-                                   __global int* acc_m, __global pf_acc* acc_tau,
-                                   __local pf_photon* tile, __local int* scan) {
-  const int L = (int)get_local_size(0);
+                                   __global int* acc_m, __global pf_acc* acc_tau) {
   __global const pf_cluster* c = &clusters[group_cluster[get_group_id(0)]];
   const int mesh = c->mesh;
-  if (mesh < 0 || mesh >= mesh_count) return; /* uniform */
+  if (mesh < 0 || mesh >= mesh_count) return;
   __global const pf_mesh_grid* g = &mesh_grid[mesh];
   if (g->photon_count == 0) return;
+  const int hi = order[get_global_id(0)];
+  if (hi < 0) return; /* filler */
   pf_gather_hp h;
-  const int hi = pf_cluster_member(hps, order, mats, acc_m, acc_tau, &h);
+  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
   const float cx = c->centre[0], cy = c->centre[1], cz = c->centre[2];
-  const float rc = c->radius * PF_SLACK, r2 = rc * rc;
-  const float pad = rc * PF_SLACK;
+  const float pad = c->radius * PF_SLACK * PF_SLACK;
   const int x0 = pf_grid_coord(cx - pad, g->lo[0], g->bin_size, g->nx);
   const int x1 = pf_grid_coord(cx + pad, g->lo[0], g->bin_size, g->nx);
   const int y0 = pf_grid_coord(cy - pad, g->lo[1], g->bin_size, g->ny);
   const int y1 = pf_grid_coord(cy + pad, g->lo[1], g->bin_size, g->ny);
   const int z0 = pf_grid_coord(cz - pad, g->lo[2], g->bin_size, g->nz);
   const int z1 = pf_grid_coord(cz + pad, g->lo[2], g->bin_size, g->nz);
-  int fill = 0;
   for (int z = z0; z <= z1; ++z) {
     for (int y = y0; y <= y1; ++y) {
       const int row = g->first_bin + (y + z * g->ny) * g->nx;
-      const int begin = cell_start[row + x0], end = cell_start[row + x1 + 1];
-      for (int base = begin; base < end; base += L) {
-        pf_tile_append(sorted, base, end, cx, cy, cz, r2, tile, scan, &fill);
-        if (fill >= L) {
-          pf_tile_flush(&h, hi >= 0, tile, fill, skip_direct);
-          fill = 0;
-        }
-      }
+      const int end = cell_start[row + x1 + 1];
+      for (int j = cell_start[row + x0]; j < end; ++j)
+        pf_gather_global(&h, &sorted[j], skip_direct, 0);
     }
   }
-  pf_tile_flush(&h, hi >= 0, tile, fill, skip_direct);
-  if (hi >= 0) pf_gather_store(&h, hi, acc_m, acc_tau);
+  pf_gather_store(&h, hi, acc_m, acc_tau);
 }
 
 /* ---- hashed grid over all meshes: one work-item per hitpoint --------------------------------
  * Cells of side `cell` (≥ 2·max R, so a sphere's box covers at most 2 cells per axis) hashed into
- * mask + 1 slots; slot k holds sorted[slot_start[k] .. slot_start[k+1]). Cells that share a slot
- * share a run, so each photon is taken only from its own cell (its cell recomputed from its
- * position, the same pf_hash_cell_coord as the build): no photon is counted twice. */
+ * mask + 1 slots; slot k holds sorted[slot_start[k] .. slot_start[k+1]) in photon-index order.
+ * The hitpoint reads each distinct slot of its box's cells once. That is exact: a photon within R
+ * lies in a cell of the box, so its slot is read, once; photons of other cells that share a slot
+ * lie outside the box, farther than R, and the rule rejects them. */
 __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
                                __global const pf_photon* sorted, __global const int* slot_start,
                                float ox, float oy, float oz, float cell, uint mask,
@@ -377,7 +373,7 @@ __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
   if (hi >= count) return;
   pf_gather_hp h;
   pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
-  if (h.r >= 0.0f) {
+  if (h.mesh >= 0) {
     const float pad = h.r * PF_SLACK;
     const int x0 = pf_hash_cell_coord(h.x - pad, ox, cell), x1 = pf_hash_cell_coord(h.x + pad, ox, cell);
     const int y0 = pf_hash_cell_coord(h.y - pad, oy, cell), y1 = pf_hash_cell_coord(h.y + pad, oy, cell);
@@ -386,15 +382,17 @@ __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
       for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) {
           const uint k = pf_hash_cell(x, y, z, mask);
+          /* Skip a slot an earlier cell of the box already read (cells in x, y, z order). */
+          int seen = 0;
+          for (int zz = z0; zz <= z && !seen; ++zz)
+            for (int yy = y0; yy <= y1 && !seen; ++yy)
+              for (int xx = x0; xx <= x1; ++xx) {
+                if (zz == z && (yy > y || (yy == y && xx >= x))) break;
+                if (pf_hash_cell(xx, yy, zz, mask) == k) { seen = 1; break; }
+              }
+          if (seen) continue;
           const int end = slot_start[k + 1];
-          for (int j = slot_start[k]; j < end; ++j) {
-            __global const pf_photon* p = &sorted[j];
-            if (pf_hash_cell_coord(p->position[0], ox, cell) != x ||
-                pf_hash_cell_coord(p->position[1], oy, cell) != y ||
-                pf_hash_cell_coord(p->position[2], oz, cell) != z)
-              continue; /* another cell of the same slot */
-            pf_gather_global(&h, p, skip_direct, 0);
-          }
+          for (int j = slot_start[k]; j < end; ++j) pf_gather_global(&h, &sorted[j], skip_direct, 0);
         }
   }
   pf_gather_store(&h, hi, acc_m, acc_tau);

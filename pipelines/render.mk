@@ -54,7 +54,7 @@ ILL_P   := --alpha $(ALPHA) --method $(METHOD) --max-bins $(MAX_BINS) --device $
            $(if $(filter-out cpu,$(DEVICE)),--work-group $(WG))
 # Clusters read by the clustered methods (gather_method.h).
 CLUSTER_KIND := $(if $(filter kmeans-clusters grid-kmeans,$(METHOD)),kmeans,$(if $(filter grid-gridclusters,$(METHOD)),grid))
-CLU_P   := --method $(CLUSTER_KIND) --wg-size $(WG) --max-bins $(MAX_BINS)
+CLU_P   := --method $(CLUSTER_KIND) --wg-size $(WG)
 SYN_P   := --exposure $(EXPOSURE)
 T       := --threads $(THREADS)
 

@@ -332,3 +332,23 @@ TEST_CASE("the cluster tool writes loadable clusters and refuses a foreign scene
   CHECK(help.exit_code == 0);
   CHECK_THAT(help.out, Catch::Contains("wg-size") && Catch::Contains("default: 64"));
 }
+
+TEST_CASE("automatic grid-cluster bins keep fillers low", "[clusters][fillers]") {
+  HitpointSet h = room_hitpoints(160, 120);
+  const int wg = 64;
+  ClusterSet fixed = cluster_grid(h, wg, 64), automatic = cluster_grid(h, wg, 0);
+  REQUIRE(check_clusters(automatic, h) == "");
+  const ClusterStats f = stats(fixed), a = stats(automatic);
+  INFO("fillers: 64 bins " << f.fillers << ", automatic " << a.fillers << " of "
+                           << h.hitpoints.size() << " hitpoints");
+  CHECK(a.fillers < f.fillers);
+  // Each mesh's bins were halved until cells hold >= 2 work-groups on average (or one bin is
+  // left), so a mesh's fillers (< wg per cell) stay below half its hitpoints.
+  std::map<int, size_t> members, fillers;
+  for (const pf_cluster& c : automatic.clusters) {
+    members[c.mesh] += size_t(c.count);
+    fillers[c.mesh] += size_t(c.padded_count - c.count);
+  }
+  for (auto& kv : members)
+    if (kv.second >= size_t(4 * wg)) CHECK(2 * fillers[kv.first] <= kv.second);
+}

@@ -44,7 +44,8 @@ struct PpmOptions;
 
 // The clusters a clustered device method reads (gather_method.h: kmeans-clusters and grid-kmeans
 // read k-means clusters, grid-gridclusters grid clusters), made for `h` with work-group size
-// wg_size, opt.cluster_iterations Lloyd steps (seed 1) or opt.max_bins bins. The method must be
+// wg_size, opt.cluster_iterations Lloyd steps (seed 1) or automatic bins (cluster_grid with
+// max_bins 0; the cluster stage's defaults, so both routes make the same clusters). The method must be
 // one of those three (std::invalid_argument otherwise).
 ClusterSet clusters_for_method(GatherMethod m, const HitpointSet& h, int wg_size,
                                const PpmOptions& opt);

@@ -71,6 +71,9 @@ ClusterSet cluster_kmeans(const HitpointSet& h, int wg_size, int iterations, uin
 // Grid clusters: per mesh, the uniform grid of eq. 7.1 over the mesh's hitpoints (box lo…hi of
 // their positions, bin size d = max(longest extent / max_bins, R0) with R0 = h.radius0 if > 0,
 // bins per axis clamp(ceil(extent/d), 1, max_bins), cell c = clamp(⌊(p − lo)/d⌋, 0, n − 1)).
+// max_bins = 0 chooses per mesh: 64 bins, halved while the non-empty cells hold fewer than
+// 2·wg_size hitpoints on average (bins much smaller than a work-group's worth of hitpoints make
+// one padded cluster each: mostly fillers, thesis Table 7.5).
 // Each non-empty cell's hitpoints (ascending index) are cut into chunks of at most wg_size, one
 // cluster per chunk, clusters in cell offset order (x + y·nx + z·nx·ny). Centre = chunk mean.
 ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins);

@@ -272,7 +272,7 @@ ClusterSet clusters_for_method(GatherMethod m, const HitpointSet& h, int wg_size
   const char* kind = gather_method_info(m).clusters;
   if (!kind) throw std::invalid_argument(std::string("method ") + gather_method_name(m) + " reads no clusters");
   return std::string(kind) == "kmeans" ? cluster_kmeans(h, wg_size, opt.cluster_iterations, 1, opt.threads)
-                                       : cluster_grid(h, wg_size, opt.max_bins);
+                                       : cluster_grid(h, wg_size, 0);
 }
 
 PhotonGrid build_photon_grid(const std::vector<pf_photon>& photons, int mesh_count,
@@ -481,7 +481,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
           t0 = dev.kernel_seconds();
           cl_kernel k = dev.kernel("illuminate_methods", "gather_grid_clusters");
           dev.args(k, hps, ob, gb, cb, *g.sorted, *g.mesh_grid, *g.cell_start,
-                   cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau, tile, scan);
+                   cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau);
           dev.run(k, cs->order.size(), wg);
         }
         times.work_items = cs->order.size();

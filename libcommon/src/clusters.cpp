@@ -18,6 +18,9 @@ namespace pf {
 
 namespace {
 constexpr int kClustersVersion = 1;
+// Automatic grid-cluster bins (cluster_grid with max_bins = 0).
+constexpr int kAutoBins = 64;
+constexpr int kAutoFill = 2;
 
 // The hitpoint indices of each mesh, ascending (mesh ids 0 … max).
 std::vector<std::vector<int32_t>> split_by_mesh(const HitpointSet& h) {
@@ -371,15 +374,38 @@ pf_mesh_grid hitpoint_mesh_grid(const HitpointSet& h, int mesh, int max_bins) {
   return grid_header(box_of(h, idx), idx.size(), max_bins, h.radius0);
 }
 
+// Non-empty cells of grid g over the hitpoints idx.
+size_t occupied_cells(const pf_mesh_grid& g, const HitpointSet& h, const std::vector<int32_t>& idx) {
+  std::vector<uint8_t> used(size_t(g.nx) * size_t(g.ny) * size_t(g.nz), 0);
+  size_t n = 0;
+  for (int32_t i : idx) {
+    uint8_t& u = used[size_t(cell_of(g, h.hitpoints[size_t(i)].position))];
+    n += u == 0;
+    u = 1;
+  }
+  return n;
+}
+
 ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins) {
-  if (max_bins < 1) throw std::invalid_argument("clusters: max_bins must be >= 1");
+  if (max_bins < 0) throw std::invalid_argument("clusters: max_bins must be >= 0");
   ClusterSet c = empty_set(h, wg_size, "grid");
   auto per_mesh = split_by_mesh(h);
   c.order.reserve(h.hitpoints.size() + h.hitpoints.size() / 8);
   for (size_t m = 0; m < per_mesh.size(); ++m) {
     const auto& idx = per_mesh[m];
     if (idx.empty()) continue;
-    pf_mesh_grid g = grid_header(box_of(h, idx), idx.size(), max_bins, h.radius0);
+    const Box box = box_of(h, idx);
+    pf_mesh_grid g;
+    if (max_bins > 0) {
+      g = grid_header(box, idx.size(), max_bins, h.radius0);
+    } else {  // automatic: halve from kAutoBins until cells hold kAutoFill work-groups on average
+      int bins = kAutoBins;
+      g = grid_header(box, idx.size(), bins, h.radius0);
+      while (bins > 1 && idx.size() < size_t(kAutoFill) * size_t(wg_size) * occupied_cells(g, h, idx)) {
+        bins /= 2;
+        g = grid_header(box, idx.size(), bins, h.radius0);
+      }
+    }
     const size_t cells = size_t(g.nx) * size_t(g.ny) * size_t(g.nz);
     std::vector<int32_t> key(idx.size()), start(cells + 1, 0);
     for (size_t t = 0; t < idx.size(); ++t) {

@@ -27,7 +27,9 @@ int main(int argc, char** argv) {
       ("iterations", "k-means: Lloyd iterations (count; stops early when nothing moves)",
        cxxopts::value<int>()->default_value("10"))
       ("max-bins", "grid: bins along a mesh's longest extent, at most (count); bin size is at "
-       "least the hitpoints' initial radius R0", cxxopts::value<int>()->default_value("64"))
+       "least the hitpoints' initial radius R0; 0 = automatic per mesh (64, halved while cells "
+       "hold fewer than 2 work-groups of hitpoints on average)",
+       cxxopts::value<int>()->default_value("0"))
       ("seed", "k-means: random seed (recorded; the Morton seeding is deterministic)",
        cxxopts::value<uint32_t>()->default_value("1"))
       ("threads", "worker threads (count; 0 = all cores); results do not depend on it",
@@ -42,7 +44,7 @@ int main(int argc, char** argv) {
     const int max_bins = a["max-bins"].as<int>(), threads = a["threads"].as<int>();
     pf::require_choice("method", method, {"kmeans", "grid"});
     pf::require_positive("wg-size", wg);
-    pf::require_positive("max-bins", max_bins);
+    if (max_bins < 0) throw pf::input_error("", "--max-bins must be >= 0 (0 = automatic)");
     if (iterations < 0) throw pf::input_error("", "--iterations must be >= 0");
     if (threads < 0) throw pf::input_error("", "--threads must be >= 0");
 

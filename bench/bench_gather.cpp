@@ -1,0 +1,293 @@
+// bench_gather — the thesis's Tables 7.3, 7.4 and 7.5 (ch. 7.3) on this machine: every gather
+// method of gather_method.h for one PPM pass, k-means against grid clusters, and hitpoint counts
+// with fillers (docs/BENCHMARKS.md, "Accelerated gathers (issue 5)").
+//
+//   bench_gather [--dae data/cornell-box.dae | --scene scene.h5] [--sizes 320x280,1920x1080]
+//                [--cluster-sizes 320x280,854x480,1280x720,1920x1080] [--photons 100000]
+//                [--runs 5] [--methods all] [--sample 0] [--cl-platform -1 --cl-device -1]
+//                [--work-group 64]
+//
+// Table 7.3: one PPM pass (eq. 3.14–3.18) from the fresh eye-pass state (R = R0, where hitpoints
+// gather the most photons) over the pass-0 photons, median of --runs. "pass" is the wall time of
+// ppm_pass (uploads, photon ordering, gather, eq. 3.14–3.18, read-back, host work such as the
+// cluster-radius refresh); "kernels" the device time of its kernels (enqueue to clFinish). The
+// CPU rows (grid, flann) run on all cores. Clusters are made once per size, as the cluster stage
+// does, and not counted in the pass. Every method's result is checked against the CPU grid
+// gather: the photon counts M of all hitpoints must agree ("same photons").
+//
+// The methods that read every photon of a mesh (naive … manual-distance) cost O(hitpoints ×
+// photons): with --sample N > 1 (0 = automatic: 1 at <= 320×280, 16 above) they run on every N-th
+// hitpoint and their times are multiplied by N (marked ×N); their cost per hitpoint does not depend
+// on the other hitpoints.
+//
+// Table 7.4: creation time of k-means clusters (cluster_kmeans, 10 Lloyd steps) and grid clusters
+// (cluster_grid, --max-bins 64), and the grid-kmeans / grid-gridclusters pass times.
+// Table 7.5: hitpoints, and hitpoints with fillers for hitpoint sorting, k-means and grid clusters.
+#include <omp.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cxxopts.hpp>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "photonflow/cl_backend.h"
+#include "photonflow/clusters.h"
+#include "photonflow/eye_pass.h"
+#include "photonflow/gather_method.h"
+#include "photonflow/illuminate.h"
+#include "photonflow/photon_pass.h"
+#include "bench_common.h"
+
+namespace {
+
+using pf::bench::make_scene;
+using pf::bench::median;
+using pf::bench::now;
+using pf::bench::parse_sizes;
+using pf::bench::Size;
+
+std::string fmt(double ms) {
+  char b[64];
+  if (ms >= 100)
+    std::snprintf(b, sizeof b, "%.0f", ms);
+  else if (ms >= 1)
+    std::snprintf(b, sizeof b, "%.1f", ms);
+  else
+    std::snprintf(b, sizeof b, "%.2f", ms);
+  return b;
+}
+
+// The methods whose work-items read all photons of a mesh (or all photons).
+bool reads_whole_meshes(pf::GatherMethod m) {
+  using M = pf::GatherMethod;
+  return m == M::Naive || m == M::LocalMemory || m == M::PhotonSort || m == M::HitpointSort ||
+         m == M::HitpointSortLocal || m == M::ManualDistance;
+}
+
+struct Row {
+  double pass_ms = 0, kernel_ms = 0;
+  int sample = 1;
+  bool same = true;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // OpenMP workers must not spin while PoCL's threads run (see bench_opencl.cpp).
+  if (!std::getenv("OMP_WAIT_POLICY")) {
+    setenv("OMP_WAIT_POLICY", "passive", 1);
+    execv("/proc/self/exe", argv);
+  }
+  cxxopts::Options o("bench_gather", "Gather methods per pass (thesis Tables 7.3-7.5)");
+  o.add_options()
+    ("scene", "baked scene.h5 (camera resolution overridden per size); default: bake --dae",
+     cxxopts::value<std::string>()->default_value(""))
+    ("dae", "scene file baked in-process", cxxopts::value<std::string>()->default_value("data/cornell-box.dae"))
+    ("sizes", "image sizes of Table 7.3", cxxopts::value<std::string>()->default_value("320x280,1920x1080"))
+    ("cluster-sizes", "image sizes of Tables 7.4 and 7.5",
+     cxxopts::value<std::string>()->default_value("320x280,854x480,1280x720,1920x1080"))
+    ("photons", "photons emitted per pass", cxxopts::value<uint32_t>()->default_value("100000"))
+    ("runs", "runs per method (median)", cxxopts::value<int>()->default_value("5"))
+    ("methods", "comma-separated methods, or all", cxxopts::value<std::string>()->default_value("all"))
+    ("sample", "whole-mesh methods on every N-th hitpoint, time x N; 0 = automatic",
+     cxxopts::value<int>()->default_value("0"))
+    ("cl-platform", "OpenCL platform index", cxxopts::value<int>()->default_value("-1"))
+    ("cl-device", "OpenCL device index", cxxopts::value<int>()->default_value("-1"))
+    ("work-group", "work-group size (and cluster size)", cxxopts::value<int>()->default_value("0"))
+    ("h,help", "print this help");
+  auto a = o.parse(argc, argv);
+  if (a.count("help")) {
+    std::cout << o.help() << "\n";
+    return 0;
+  }
+  try {
+    pf::DeviceOptions dopt;
+    dopt.device = "opencl";
+    dopt.platform = a["cl-platform"].as<int>();
+    dopt.device_index = a["cl-device"].as<int>();
+    dopt.work_group = a["work-group"].as<int>();
+    std::unique_ptr<pf::ClContext> dev = pf::open_device(dopt, "bench_gather");
+    dev->build_all();
+    const int wg = dev->work_group();
+    const int runs = a["runs"].as<int>();
+    const uint32_t photons = a["photons"].as<uint32_t>();
+    const std::string scene_h5 = a["scene"].as<std::string>(), dae = a["dae"].as<std::string>();
+
+    std::vector<pf::GatherMethod> methods;
+    {
+      const std::string list = a["methods"].as<std::string>();
+      if (list == "all") {
+        for (const pf::GatherMethodInfo& i : pf::gather_methods()) methods.push_back(i.method);
+      } else {
+        size_t p = 0;
+        while (p <= list.size()) {
+          size_t q = list.find(',', p);
+          if (q == std::string::npos) q = list.size();
+          if (q > p) methods.push_back(pf::parse_gather_method(list.substr(p, q - p)));
+          p = q + 1;
+        }
+      }
+    }
+    std::printf("# bench_gather: %s, %u photons/pass, median of %d runs\n",
+                scene_h5.empty() ? dae.c_str() : scene_h5.c_str(), photons, runs);
+    std::printf("# CPU rows: %d OpenMP threads; OpenCL: %s, work-group %d\n\n",
+                omp_get_max_threads(), dev->name().c_str(), wg);
+
+    // ---- Table 7.3 ----
+    const std::vector<Size> sizes = parse_sizes(a["sizes"].as<std::string>());
+    std::map<std::pair<int, int>, Row> table;  // (method, size index)
+    std::vector<size_t> hitpoints_of(sizes.size());
+    for (size_t si = 0; si < sizes.size(); ++si) {
+      const Size sz = sizes[si];
+      pf::Scene scene = make_scene(scene_h5, dae, sz);
+      pf::EyePassOptions eye;
+      const pf::HitpointSet fresh = pf::make_hitpoint_set(pf::trace_hitpoints(scene, eye),
+                                                          pf::DirectMode::Photons, scene.scene_id);
+      hitpoints_of[si] = fresh.hitpoints.size();
+      pf::PhotonPassOptions ph;
+      ph.photons = photons;
+      const pf::PhotonPassResult pass0 = pf::trace_photons(scene, 0, ph);
+      pf::HitpointSet ref = fresh;
+      pf::PpmOptions ref_opt;
+      pf::ppm_pass(scene, ref, pass0.photons, pass0.emitted, ref_opt);
+      int sample = a["sample"].as<int>();
+      if (sample <= 0) sample = size_t(sz.w) * size_t(sz.h) <= 320 * 280 ? 1 : 16;
+      std::fprintf(stderr, "bench_gather: %dx%d, %zu hitpoints, %zu photons stored\n", sz.w, sz.h,
+                   fresh.hitpoints.size(), pass0.photons.size());
+      for (pf::GatherMethod m : methods) {
+        const pf::GatherMethodInfo& info = pf::gather_method_info(m);
+        Row row;
+        row.sample = info.device && reads_whole_meshes(m) ? sample : 1;
+        pf::HitpointSet start = fresh;
+        std::vector<size_t> index;  // hitpoints of the sample, as indices into fresh
+        for (size_t i = 0; i < fresh.hitpoints.size(); i += size_t(row.sample)) index.push_back(i);
+        if (row.sample > 1) {
+          start.hitpoints.clear();
+          for (size_t i : index) start.hitpoints.push_back(fresh.hitpoints[i]);
+        }
+        pf::PpmOptions opt;
+        opt.method = m;
+        pf::ClusterSet clusters;
+        if (info.clusters) {
+          clusters = pf::clusters_for_method(m, start, wg, opt);
+          opt.clusters = &clusters;
+        }
+        pf::HitpointSet work = start;
+        if (info.device) {  // first call untimed: kernel code generation per local size
+          pf::ppm_pass(scene, work, pass0.photons, pass0.emitted, opt, *dev);
+        }
+        std::vector<double> wall, kern, order_ms, gather_ms;
+        for (int r = 0; r < runs; ++r) {
+          work = start;
+          dev->reset_kernel_seconds();
+          const double t0 = now();
+          if (info.device) {
+            const pf::GatherTimes t = pf::ppm_pass(scene, work, pass0.photons, pass0.emitted, opt, *dev);
+            order_ms.push_back(t.order * 1e3 * row.sample);
+            gather_ms.push_back(t.gather * 1e3 * row.sample);
+          } else
+            pf::ppm_pass(scene, work, pass0.photons, pass0.emitted, opt);
+          wall.push_back((now() - t0) * 1e3 * row.sample);
+          kern.push_back(dev->kernel_seconds() * 1e3 * row.sample);
+        }
+        row.pass_ms = median(wall);
+        row.kernel_ms = info.device ? median(kern) : 0;
+        for (size_t k = 0; k < index.size(); ++k)
+          row.same &= work.hitpoints[k].n_photons == ref.hitpoints[index[k]].n_photons;
+        table[{int(m), int(si)}] = row;
+        std::fprintf(stderr, "  %-20s %10s ms (ordering %s, gather %s)%s\n", info.name,
+                     fmt(row.pass_ms).c_str(), fmt(median(order_ms)).c_str(),
+                     fmt(median(gather_ms)).c_str(), row.same ? "" : "  (DIFFERENT PHOTONS)");
+      }
+    }
+    std::printf("## Table 7.3: one PPM pass per method (ms; %u photons)\n\n", photons);
+    std::printf("| method | backend |");
+    for (const Size& s : sizes) std::printf(" %dx%d pass | kernels | × naive |", s.w, s.h);
+    std::printf(" same photons |\n|---|---|");
+    for (size_t i = 0; i < sizes.size(); ++i) std::printf("---:|---:|---:|");
+    std::printf("---|\n");
+    for (pf::GatherMethod m : methods) {
+      const pf::GatherMethodInfo& info = pf::gather_method_info(m);
+      std::printf("| %s | %s |", info.name, info.device ? "OpenCL" : "CPU");
+      bool same = true;
+      for (size_t si = 0; si < sizes.size(); ++si) {
+        const Row& r = table[{int(m), int(si)}];
+        auto naive = table.find({int(pf::GatherMethod::Naive), int(si)});
+        std::string speed = naive != table.end() && r.pass_ms > 0
+                                ? fmt(naive->second.pass_ms / r.pass_ms) : "—";
+        std::string mark = r.sample > 1 ? " (×" + std::to_string(r.sample) + ")" : "";
+        std::printf(" %s%s | %s | %s |", fmt(r.pass_ms).c_str(), mark.c_str(),
+                    info.device ? fmt(r.kernel_ms).c_str() : "—", speed.c_str());
+        same &= r.same;
+      }
+      std::printf(" %s |\n", same ? "yes" : "NO");
+    }
+    std::printf("\nhitpoints:");
+    for (size_t si = 0; si < sizes.size(); ++si)
+      std::printf(" %dx%d %zu;", sizes[si].w, sizes[si].h, hitpoints_of[si]);
+    std::printf("\n\n");
+
+    // ---- Tables 7.4 and 7.5 ----
+    const std::vector<Size> csizes = parse_sizes(a["cluster-sizes"].as<std::string>());
+    std::printf("## Table 7.4: k-means vs grid clusters (work-group %d)\n\n", wg);
+    std::printf("| size | k-means creation (s) | grid creation (s) | grid-kmeans pass (ms) | "
+                "grid-gridclusters pass (ms) |\n|---|---:|---:|---:|---:|\n");
+    std::string t75 = "| size | hitpoints | hitpoint sort | k-means | grid clusters |\n"
+                      "|---|---:|---:|---:|---:|\n";
+    for (const Size& sz : csizes) {
+      pf::Scene scene = make_scene(scene_h5, dae, sz);
+      pf::EyePassOptions eye;
+      const pf::HitpointSet fresh = pf::make_hitpoint_set(pf::trace_hitpoints(scene, eye),
+                                                          pf::DirectMode::Photons, scene.scene_id);
+      pf::PhotonPassOptions ph;
+      ph.photons = photons;
+      const pf::PhotonPassResult pass0 = pf::trace_photons(scene, 0, ph);
+      pf::PpmOptions opt;
+      std::vector<double> tk, tg;
+      pf::ClusterSet km, gr;
+      for (int r = 0; r < runs; ++r) {
+        double t0 = now();
+        km = pf::cluster_kmeans(fresh, wg, opt.cluster_iterations, 1);
+        tk.push_back(now() - t0);
+        t0 = now();
+        gr = pf::cluster_grid(fresh, wg, 0);  // automatic bins, as the cluster stage
+        tg.push_back(now() - t0);
+      }
+      auto pass_ms = [&](pf::GatherMethod m, pf::ClusterSet& c) {
+        pf::PpmOptions po;
+        po.method = m;
+        po.clusters = &c;
+        pf::HitpointSet w = fresh;
+        pf::ppm_pass(scene, w, pass0.photons, pass0.emitted, po, *dev);  // untimed first call
+        std::vector<double> t;
+        for (int r = 0; r < runs; ++r) {
+          w = fresh;
+          const double t0 = now();
+          pf::ppm_pass(scene, w, pass0.photons, pass0.emitted, po, *dev);
+          t.push_back((now() - t0) * 1e3);
+        }
+        return median(t);
+      };
+      const double gk = pass_ms(pf::GatherMethod::GridKmeans, km);
+      const double gg = pass_ms(pf::GatherMethod::GridGridClusters, gr);
+      std::printf("| %dx%d | %.3f | %.3f | %s | %s |\n", sz.w, sz.h, median(tk), median(tg),
+                  fmt(gk).c_str(), fmt(gg).c_str());
+      char line[256];
+      std::snprintf(line, sizeof line, "| %dx%d | %zu | %zu | %zu | %zu |\n", sz.w, sz.h,
+                    fresh.hitpoints.size(), pf::mesh_sorted_order(fresh, wg).size(),
+                    pf::stats(km).hitpoints_with_fillers, pf::stats(gr).hitpoints_with_fillers);
+      t75 += line;
+      std::fflush(stdout);
+    }
+    std::printf("\n## Table 7.5: hitpoints with fillers (work-group %d)\n\n%s", wg, t75.c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_gather: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
