@@ -112,3 +112,85 @@ TEST_CASE("OpenCL tools: staged route and render driver on the device", "[opencl
   CHECK(wg.exit_code == 2);
   CHECK(lines(wg.err) == 1);
 }
+
+TEST_CASE("OpenCL tools: --method, --clusters and build-grid on the device", "[opencl][tools][gather]") {
+  if (cl_list_devices().empty()) {
+    WARN("SKIPPED: no OpenCL platform with a device (install pocl-opencl-icd to run this test)");
+    return;
+  }
+  TempDir tmp("clgather");
+  Scene scene = room_scene(PF_MAT_GLASS, 40, 30);
+  const std::string sc = tmp / "scene.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5";
+  Provenance prov;
+  prov.tool = "test";
+  save_scene(scene, sc, prov);
+  REQUIRE(run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp + " --seed 2", tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-photons", "--scene " + sc + " -o " + ph + " --photons 4000 --passes 3 --seed 2",
+                   tmp).exit_code == 0);
+  auto illuminate = [&](const std::string& args, const std::string& out) {
+    return run_tool("illuminate", "--scene " + sc + " --hitpoints " + hp + " -o " + (tmp / out) +
+                                      " " + args, tmp);
+  };
+  auto image = [&](const std::string& state) {
+    REQUIRE(run_tool("synthesize", "--hitpoints " + (tmp / state) + " -o " + (tmp / (state + ".exr")),
+                     tmp).exit_code == 0);
+    return read_exr(tmp / (state + ".exr"));
+  };
+  REQUIRE(illuminate("--photons " + ph, "cpu.h5").exit_code == 0);
+  const Image ref = image("cpu.h5");
+
+  // The cluster stage's k-means clusters feed grid-kmeans; the image is the CPU grid gather's.
+  const std::string km = tmp / "kmeans.h5", gr = tmp / "grid.h5";
+  REQUIRE(run_tool("cluster", "--scene " + sc + " --hitpoints " + hp + " -o " + km + " --method kmeans",
+                   tmp).exit_code == 0);
+  REQUIRE(run_tool("cluster", "--scene " + sc + " --hitpoints " + hp + " -o " + gr + " --method grid",
+                   tmp).exit_code == 0);
+  ToolRun k = illuminate("--photons " + ph + " --device opencl --method grid-kmeans --clusters " + km,
+                         "km.h5");
+  REQUIRE(k.exit_code == 0);
+  CHECK(relative_rmse(image("km.h5"), ref) <= 1e-5);
+  h5::Reader prov_km(tmp / "km.h5", "photonflow.hitpoints", 100);
+  CHECK(prov_km.attr_string("/provenance/parameters", "method") == "grid-kmeans");
+  REQUIRE(illuminate("--photons " + ph + " --device opencl --method grid-gridclusters --clusters " + gr,
+                     "gr.h5").exit_code == 0);
+  CHECK(relative_rmse(image("gr.h5"), ref) <= 1e-5);
+  // Without --clusters the tool makes them (and says so).
+  ToolRun made = illuminate("--photons " + ph + " --device opencl --method kmeans-clusters", "made.h5");
+  REQUIRE(made.exit_code == 0);
+  CHECK(made.err.find("kmeans clusters made in") != std::string::npos);
+  CHECK(relative_rmse(image("made.h5"), ref) <= 1e-5);
+
+  // Refusals: one line, exit 2, no output.
+  auto refused = [&](const std::string& args, const std::string& what) {
+    ToolRun r = illuminate(args, "bad.h5");
+    INFO(args << " → " << r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(lines(r.err) <= 2);  // the device line, then the error
+    CHECK(r.err.find(what) != std::string::npos);
+    CHECK(!std::filesystem::exists(tmp / "bad.h5"));
+  };
+  refused("--photons " + ph + " --method naive", "add --device opencl");
+  refused("--photons " + ph + " --device opencl --method flann", "runs on the CPU backend");
+  refused("--photons " + ph + " --device opencl --method grid-gridclusters --clusters " + km,
+          "holds kmeans clusters");
+  refused("--photons " + ph + " --method grid --clusters " + km, "--clusters is read by");
+  refused("--photons " + ph + " --method warp-speed", "--method must be one of");
+  {  // clusters of other hitpoints
+    const std::string hp2 = tmp / "hp2.h5", km2 = tmp / "km2.h5";
+    REQUIRE(run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp2 + " --seed 9", tmp).exit_code == 0);
+    REQUIRE(run_tool("cluster", "--scene " + sc + " --hitpoints " + hp2 + " -o " + km2, tmp).exit_code == 0);
+    refused("--photons " + ph + " --device opencl --method grid-kmeans --clusters " + km2, km2);
+  }
+
+  // build-grid on the device writes the CPU's grids: --grid from either gives the same state.
+  const std::string g_cpu = tmp / "g-cpu.h5", g_cl = tmp / "g-cl.h5";
+  REQUIRE(run_tool("build-grid", "--scene " + sc + " --photons " + ph + " --hitpoints " + hp + " -o " + g_cpu,
+                   tmp).exit_code == 0);
+  ToolRun bg = run_tool("build-grid", "--scene " + sc + " --photons " + ph + " --hitpoints " + hp +
+                                          " -o " + g_cl + " --device opencl", tmp);
+  REQUIRE(bg.exit_code == 0);
+  CHECK(bg.err.find("build-grid: device: opencl") != std::string::npos);
+  REQUIRE(illuminate("--grid " + g_cpu, "from-cpu-grid.h5").exit_code == 0);
+  REQUIRE(illuminate("--grid " + g_cl, "from-cl-grid.h5").exit_code == 0);
+  CHECK(image("from-cl-grid.h5").rgb == image("from-cpu-grid.h5").rgb);
+}

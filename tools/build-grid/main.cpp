@@ -1,8 +1,12 @@
 // build-grid — per-mesh uniform grids over each pass's photons (thesis ch. 7.3, eq. 7.1):
 // bin size d = max(longest extent / max_bins, default radius); photons reordered by bin with a
-// bin-start table. Writes grid.h5, used by `illuminate --grid`.
+// bin-start table. Writes grid.h5, used by `illuminate --grid`. With --device opencl the grids are
+// built on the device (cl_gather.h: bounds reduction, atomic bin counters, prefix sum, scatter
+// kernel) and are the same arrays as the CPU build's.
 #include <iostream>
 
+#include "photonflow/cl_gather.h"
+#include "photonflow/device_options.h"
 #include "photonflow/options.h"
 #include "photonflow/photon_grid.h"
 #include "photonflow/scene.h"
@@ -23,8 +27,10 @@ int main(int argc, char** argv) {
       ("radius", "default radius in world units (lower bound of the bin size); 0 = R0 of "
        "--hitpoints", cxxopts::value<float>()->default_value("0"))
       ("h,help", "print this help");
+    pf::add_device_options(o);
     auto a = o.parse(argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
+    if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("photons") || !a.count("output"))
       throw pf::input_error("", "--scene, --photons and --output are required");
     pf::PhotonGridParams gp;
@@ -32,6 +38,7 @@ int main(int argc, char** argv) {
     gp.default_radius = a["radius"].as<float>();
     pf::require_positive("max-bins", gp.max_bins);
 
+    std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "build-grid");
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>(), photons_path = a["photons"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
@@ -56,9 +63,11 @@ int main(int argc, char** argv) {
     grids.scene_id = scene.scene_id;
     for (int k = 0; k < photons.pass_count(); ++k)
       grids.grids.push_back(
-          pf::build_photon_grid(photons.pass(k), int(scene.mesh_names.size()), gp));
+          dev ? pf::build_photon_grid(photons.pass(k), int(scene.mesh_names.size()), gp, *dev)
+              : pf::build_photon_grid(photons.pass(k), int(scene.mesh_names.size()), gp));
     prov.tool = "build-grid";
     pf::record_options(prov, a);
+    pf::record_backend(prov, dev.get());
     prov.parameters["radius"] = std::to_string(gp.default_radius);
     prov.command_line = pf::join_command_line(argc, argv);
     prov.wall_time_s = clock.seconds();
