@@ -8,7 +8,8 @@
 //                [--work-group 64]
 //
 // Table 7.3: one PPM pass (eq. 3.14–3.18) from the fresh eye-pass state (R = R0, where hitpoints
-// gather the most photons) over the pass-0 photons, median of --runs. "pass" is the wall time of
+// gather the most photons) over the pass-0 photons, median of --runs rounds (a round runs every
+// method once, so drifting load from other processes hits all rows alike). "pass" is the wall time of
 // ppm_pass (uploads, photon ordering, gather, eq. 3.14–3.18, read-back, host work such as the
 // cluster-radius refresh); "kernels" the device time of its kernels (enqueue to clFinish). The
 // CPU rows (grid, flann) run on all cores. Clusters are made once per size, as the cluster stage
@@ -96,6 +97,8 @@ int main(int argc, char** argv) {
     ("methods", "comma-separated methods, or all", cxxopts::value<std::string>()->default_value("all"))
     ("sample", "whole-mesh methods on every N-th hitpoint, time x N; 0 = automatic",
      cxxopts::value<int>()->default_value("0"))
+    ("hash-cell", "hash-grid cell side in units of the largest radius",
+     cxxopts::value<float>()->default_value("2"))
     ("cl-platform", "OpenCL platform index", cxxopts::value<int>()->default_value("-1"))
     ("cl-device", "OpenCL device index", cxxopts::value<int>()->default_value("-1"))
     ("work-group", "work-group size (and cluster size)", cxxopts::value<int>()->default_value("0"))
@@ -159,50 +162,68 @@ int main(int argc, char** argv) {
       if (sample <= 0) sample = size_t(sz.w) * size_t(sz.h) <= 320 * 280 ? 1 : 16;
       std::fprintf(stderr, "bench_gather: %dx%d, %zu hitpoints, %zu photons stored\n", sz.w, sz.h,
                    fresh.hitpoints.size(), pass0.photons.size());
-      for (pf::GatherMethod m : methods) {
-        const pf::GatherMethodInfo& info = pf::gather_method_info(m);
+      // Per method: its start state (a sample for the whole-mesh methods), clusters, and one
+      // untimed call (PoCL generates code per kernel and local size at the first enqueue).
+      struct Run {
+        pf::GatherMethod m;
         Row row;
-        row.sample = info.device && reads_whole_meshes(m) ? sample : 1;
-        pf::HitpointSet start = fresh;
+        pf::HitpointSet start, work;
         std::vector<size_t> index;  // hitpoints of the sample, as indices into fresh
-        for (size_t i = 0; i < fresh.hitpoints.size(); i += size_t(row.sample)) index.push_back(i);
-        if (row.sample > 1) {
-          start.hitpoints.clear();
-          for (size_t i : index) start.hitpoints.push_back(fresh.hitpoints[i]);
-        }
         pf::PpmOptions opt;
-        opt.method = m;
         pf::ClusterSet clusters;
-        if (info.clusters) {
-          clusters = pf::clusters_for_method(m, start, wg, opt);
-          opt.clusters = &clusters;
-        }
-        pf::HitpointSet work = start;
-        if (info.device) {  // first call untimed: kernel code generation per local size
-          pf::ppm_pass(scene, work, pass0.photons, pass0.emitted, opt, *dev);
-        }
         std::vector<double> wall, kern, order_ms, gather_ms;
-        for (int r = 0; r < runs; ++r) {
-          work = start;
+      };
+      std::vector<Run> set(methods.size());
+      for (size_t k = 0; k < methods.size(); ++k) {
+        Run& u = set[k];
+        u.m = methods[k];
+        const pf::GatherMethodInfo& info = pf::gather_method_info(u.m);
+        u.row.sample = info.device && reads_whole_meshes(u.m) ? sample : 1;
+        u.start = fresh;
+        for (size_t i = 0; i < fresh.hitpoints.size(); i += size_t(u.row.sample)) u.index.push_back(i);
+        if (u.row.sample > 1) {
+          u.start.hitpoints.clear();
+          for (size_t i : u.index) u.start.hitpoints.push_back(fresh.hitpoints[i]);
+        }
+        u.opt.method = u.m;
+        u.opt.hash_cell = a["hash-cell"].as<float>();
+        if (info.clusters) {
+          u.clusters = pf::clusters_for_method(u.m, u.start, wg, u.opt);
+          u.opt.clusters = &u.clusters;
+        }
+        u.work = u.start;
+        if (info.device) pf::ppm_pass(scene, u.work, pass0.photons, pass0.emitted, u.opt, *dev);
+      }
+      // Rounds over all methods (each round runs every method once), so that load from other
+      // processes drifting over time affects every row alike; medians per method.
+      for (int r = 0; r < runs; ++r) {
+        for (Run& u : set) {
+          const bool device = pf::gather_method_info(u.m).device;
+          u.work = u.start;
           dev->reset_kernel_seconds();
           const double t0 = now();
-          if (info.device) {
-            const pf::GatherTimes t = pf::ppm_pass(scene, work, pass0.photons, pass0.emitted, opt, *dev);
-            order_ms.push_back(t.order * 1e3 * row.sample);
-            gather_ms.push_back(t.gather * 1e3 * row.sample);
-          } else
-            pf::ppm_pass(scene, work, pass0.photons, pass0.emitted, opt);
-          wall.push_back((now() - t0) * 1e3 * row.sample);
-          kern.push_back(dev->kernel_seconds() * 1e3 * row.sample);
+          if (device) {
+            const pf::GatherTimes t = pf::ppm_pass(scene, u.work, pass0.photons, pass0.emitted, u.opt, *dev);
+            u.order_ms.push_back(t.order * 1e3 * u.row.sample);
+            u.gather_ms.push_back(t.gather * 1e3 * u.row.sample);
+          } else {
+            pf::ppm_pass(scene, u.work, pass0.photons, pass0.emitted, u.opt);
+          }
+          u.wall.push_back((now() - t0) * 1e3 * u.row.sample);
+          u.kern.push_back(dev->kernel_seconds() * 1e3 * u.row.sample);
         }
-        row.pass_ms = median(wall);
-        row.kernel_ms = info.device ? median(kern) : 0;
-        for (size_t k = 0; k < index.size(); ++k)
-          row.same &= work.hitpoints[k].n_photons == ref.hitpoints[index[k]].n_photons;
-        table[{int(m), int(si)}] = row;
+        std::fprintf(stderr, "  round %d of %d done\n", r + 1, runs);
+      }
+      for (Run& u : set) {
+        const pf::GatherMethodInfo& info = pf::gather_method_info(u.m);
+        u.row.pass_ms = median(u.wall);
+        u.row.kernel_ms = info.device ? median(u.kern) : 0;
+        for (size_t k = 0; k < u.index.size(); ++k)
+          u.row.same &= u.work.hitpoints[k].n_photons == ref.hitpoints[u.index[k]].n_photons;
+        table[{int(u.m), int(si)}] = u.row;
         std::fprintf(stderr, "  %-20s %10s ms (ordering %s, gather %s)%s\n", info.name,
-                     fmt(row.pass_ms).c_str(), fmt(median(order_ms)).c_str(),
-                     fmt(median(gather_ms)).c_str(), row.same ? "" : "  (DIFFERENT PHOTONS)");
+                     fmt(u.row.pass_ms).c_str(), fmt(median(u.order_ms)).c_str(),
+                     fmt(median(u.gather_ms)).c_str(), u.row.same ? "" : "  (DIFFERENT PHOTONS)");
       }
     }
     std::printf("## Table 7.3: one PPM pass per method (ms; %u photons)\n\n", photons);

@@ -25,6 +25,7 @@
 #include "photonflow/grid_shared.h"
 
 #define PF_CHUNK 256
+#define PF_SCAN_ITEMS 16 /* entries per work-item of scan_blocks (kScanItems in cl_gather.cpp) */
 
 /* bounds[8·m + 0..2] = ordered lo, 3..5 = ordered hi, 6 = count (host initialises lo to INT_MAX,
  * hi to INT_MIN, count to 0). Meshes mesh_first .. mesh_first + span − 1 only; `lb` holds 7·span
@@ -72,15 +73,16 @@ __kernel void key_grid_bin(__global const pf_photon* ph, int n, __global const p
   atomic_inc(&counts[k]);
 }
 
-/* key[i] = table slot of photon i's cell in the hashed grid; counts[key]++. */
+/* key[i] = table slot of photon i's cell in the hashed grid (grid_shared.h); counts[key]++. */
 __kernel void key_hash_cell(__global const pf_photon* ph, int n, float ox, float oy, float oz,
-                            float cell, uint mask, __global int* key, __global int* counts) {
+                            float cell, int nx, int ny, int nz, uint mask, __global int* key,
+                            __global int* counts) {
   const int i = (int)get_global_id(0);
   if (i >= n) return;
-  const int cx = pf_hash_cell_coord(ph[i].position[0], ox, cell);
-  const int cy = pf_hash_cell_coord(ph[i].position[1], oy, cell);
-  const int cz = pf_hash_cell_coord(ph[i].position[2], oz, cell);
-  const int k = (int)pf_hash_cell(cx, cy, cz, mask);
+  const int cx = pf_grid_coord(ph[i].position[0], ox, cell, nx);
+  const int cy = pf_grid_coord(ph[i].position[1], oy, cell, ny);
+  const int cz = pf_grid_coord(ph[i].position[2], oz, cell, nz);
+  const int k = (int)pf_hash_slot(cx, cy, cz, (uint)nx, (uint)ny, mask);
   key[i] = k;
   atomic_inc(&counts[k]);
 }
@@ -158,15 +160,15 @@ __kernel void mesh_chunk_scatter(__global const pf_photon* ph, int n, int chunks
 
 /* ---- exclusive prefix sum ----------------------------------------------------------------- */
 
-/* In place over data[0 .. n): each work-group scans 4·L entries (4 per work-item, then a
- * Hillis–Steele scan of the L partial sums in local memory) and writes its total to
- * block_sums[group]; scan_add then adds the scanned block sums. */
+/* In place over data[0 .. n): each work-group scans PF_SCAN_ITEMS·L entries (PF_SCAN_ITEMS
+ * consecutive ones per work-item, then a Hillis–Steele scan of the L partial sums in local memory)
+ * and writes its total to block_sums[group]; scan_add then adds the scanned block sums. */
 __kernel void scan_blocks(__global int* data, int n, __global int* block_sums, __local int* tmp) {
   const int lid = (int)get_local_id(0), L = (int)get_local_size(0);
-  const int base = (int)get_group_id(0) * 4 * L + 4 * lid;
-  int v[4];
+  const int base = ((int)get_group_id(0) * L + lid) * PF_SCAN_ITEMS;
+  int v[PF_SCAN_ITEMS];
   int s = 0;
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < PF_SCAN_ITEMS; ++j) {
     v[j] = base + j < n ? data[base + j] : 0;
     s += v[j];
   }
@@ -178,8 +180,8 @@ __kernel void scan_blocks(__global int* data, int n, __global int* block_sums, _
     tmp[lid] += t;
     barrier(CLK_LOCAL_MEM_FENCE);
   }
-  int run = tmp[lid] - s; /* exclusive prefix of this work-item's 4 entries */
-  for (int j = 0; j < 4; ++j) {
+  int run = tmp[lid] - s; /* exclusive prefix of this work-item's entries */
+  for (int j = 0; j < PF_SCAN_ITEMS; ++j) {
     if (base + j < n) data[base + j] = run;
     run += v[j];
   }
@@ -189,5 +191,5 @@ __kernel void scan_blocks(__global int* data, int n, __global int* block_sums, _
 __kernel void scan_add(__global int* data, int n, __global const int* block_offsets) {
   const int i = (int)get_global_id(0);
   if (i >= n) return;
-  data[i] += block_offsets[i / (4 * (int)get_local_size(0))];
+  data[i] += block_offsets[i / (PF_SCAN_ITEMS * (int)get_local_size(0))];
 }

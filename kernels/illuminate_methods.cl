@@ -359,15 +359,19 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
 }
 
 /* ---- hashed grid over all meshes: one work-item per hitpoint --------------------------------
- * Cells of side `cell` (≥ 2·max R, so a sphere's box covers at most 2 cells per axis) hashed into
- * mask + 1 slots; slot k holds sorted[slot_start[k] .. slot_start[k+1]) in photon-index order.
- * The hitpoint reads each distinct slot of its box's cells once. That is exact: a photon within R
- * lies in a cell of the box, so its slot is read, once; photons of other cells that share a slot
- * lie outside the box, farther than R, and the rule rejects them. */
+ * Cells of side `cell` (a multiple of the largest R, PpmOptions::hash_cell) of an nx × ny × nz grid
+ * over the scene, hashed into mask + 1 slots by their linear index (pf_hash_slot); slot k holds
+ * sorted[slot_start[k] .. slot_start[k+1]) in photon-index order. A hitpoint reads each distinct
+ * slot of its sphere box's cells once, row by row (a row's slots are consecutive modulo the table
+ * size). That is exact: a photon within R lies in a cell of the box, so its slot is read, once;
+ * photons of other cells that share a slot lie outside the box, farther than R, and the rule
+ * rejects them. A slot repeats within the box only when two of its cells' linear indices are
+ * congruent modulo the table size: along a row when the row is longer than the table, across rows
+ * when row offsets are congruent — both tested arithmetically. */
 __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
                                __global const pf_photon* sorted, __global const int* slot_start,
-                               float ox, float oy, float oz, float cell, uint mask,
-                               __global const pf_material* mats, int skip_direct,
+                               float ox, float oy, float oz, float cell, int nx, int ny, int nz,
+                               uint mask, __global const pf_material* mats, int skip_direct,
                                __global int* acc_m, __global pf_acc* acc_tau) {
   const int hi = (int)get_global_id(0);
   if (hi >= count) return;
@@ -375,25 +379,27 @@ __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
   pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
   if (h.mesh >= 0) {
     const float pad = h.r * PF_SLACK;
-    const int x0 = pf_hash_cell_coord(h.x - pad, ox, cell), x1 = pf_hash_cell_coord(h.x + pad, ox, cell);
-    const int y0 = pf_hash_cell_coord(h.y - pad, oy, cell), y1 = pf_hash_cell_coord(h.y + pad, oy, cell);
-    const int z0 = pf_hash_cell_coord(h.z - pad, oz, cell), z1 = pf_hash_cell_coord(h.z + pad, oz, cell);
+    const int x0 = pf_grid_coord(h.x - pad, ox, cell, nx), x1 = pf_grid_coord(h.x + pad, ox, cell, nx);
+    const int y0 = pf_grid_coord(h.y - pad, oy, cell, ny), y1 = pf_grid_coord(h.y + pad, oy, cell, ny);
+    const int z0 = pf_grid_coord(h.z - pad, oz, cell, nz), z1 = pf_grid_coord(h.z + pad, oz, cell, nz);
+    const uint len = (uint)(x1 - x0 + 1); /* cells per row */
     for (int z = z0; z <= z1; ++z)
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-          const uint k = pf_hash_cell(x, y, z, mask);
-          /* Skip a slot an earlier cell of the box already read (cells in x, y, z order). */
-          int seen = 0;
+      for (int y = y0; y <= y1; ++y) {
+        const uint first = pf_hash_slot(x0, y, z, (uint)nx, (uint)ny, mask);
+        for (uint dx = 0; dx < len && dx <= mask; ++dx) { /* dx > mask: repeats within the row */
+          const uint k = (first + dx) & mask;
+          int seen = 0; /* read by an earlier row of the box? */
           for (int zz = z0; zz <= z && !seen; ++zz)
-            for (int yy = y0; yy <= y1 && !seen; ++yy)
-              for (int xx = x0; xx <= x1; ++xx) {
-                if (zz == z && (yy > y || (yy == y && xx >= x))) break;
-                if (pf_hash_cell(xx, yy, zz, mask) == k) { seen = 1; break; }
-              }
+            for (int yy = y0; yy <= y1; ++yy) {
+              if (zz == z && yy >= y) break;
+              const uint f = pf_hash_slot(x0, yy, zz, (uint)nx, (uint)ny, mask);
+              if (((k - f) & mask) < len) { seen = 1; break; }
+            }
           if (seen) continue;
           const int end = slot_start[k + 1];
           for (int j = slot_start[k]; j < end; ++j) pf_gather_global(&h, &sorted[j], skip_direct, 0);
         }
+      }
   }
   pf_gather_store(&h, hi, acc_m, acc_tau);
 }

@@ -10,9 +10,10 @@
 //                                       counted with atomic counters, a prefix sum (the bin-start
 //                                       table), a separate scatter kernel, bins sorted by photon
 //                                       index — the same arrays as the CPU's build_photon_grid;
-//   hash-grid                           one grid of cells 2·max R (times a 1e-4 slack) over all
-//                                       meshes hashed into 2^k ≥ 2·photons slots, built by the
-//                                       same count / scan / scatter / sort kernels.
+//   hash-grid                           one grid of cells hash_cell·max R (default 2, times a
+//                                       1e-4 slack) over the scene, its cells hashed by linear
+//                                       index into 2^k ≥ photons slots, built by the same count /
+//                                       scan / scatter / sort kernels.
 // The host supplies the hitpoint orders: mesh_sorted_order (hitpoint sorting, fillers) and the
 // clusters' order (clusters.h), one work-group per cluster.
 //

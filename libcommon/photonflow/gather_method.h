@@ -22,8 +22,9 @@
 //                                 keep photons inside the cluster sphere
 //   grid-kmeans          opencl   cluster sphere's bins of the mesh grid     grid + k-means
 //   grid-gridclusters    opencl   same with clusters made from grid bins     grid + grid clust.
-//   hash-grid            opencl   ≤ 8 cells of one hashed grid over all      (beyond the thesis)
-//                                 meshes, one work-item per hitpoint
+//   hash-grid            opencl   the cells of its sphere's box in one       (beyond the thesis)
+//                                 hashed grid over all meshes (cells 2·max R:
+//                                 ≤ 2 per axis), one work-item per hitpoint
 //
 // The methods before manual-distance test distances with OpenCL's built-in distance() as the
 // thesis's kernels did, guarded by the exact squared-distance rule so that they select the same

@@ -5,10 +5,10 @@
  *
  *   - pf_grid_coord / pf_grid_bin: the per-mesh uniform grid of thesis eq. 7.1,
  *       c = clamp(floor((x − lo)/d), 0, n − 1) per axis, offset = cx + cy·nx + cz·nx·ny;
- *   - pf_hash_cell_coord / pf_hash_cell: the hashed grid of the `hash-grid` gather (one grid over
- *     all meshes, unbounded integer cell coordinates, cells hashed into a power-of-two table with
- *     the three-prime hash of Teschner et al. 2003, "Optimized Spatial Hashing for Collision
- *     Detection of Deformable Objects");
+ *   - pf_hash_slot: the hashed grid of the `hash-grid` gather (one grid over all meshes, its
+ *     cells hashed into a power-of-two table by their linear index, so that neighbouring cells
+ *     stay neighbours in memory — unlike the XOR-of-primes hash of Teschner et al. 2003, which
+ *     scatters them and made each cell visit a cache miss here);
  *   - pf_float_ordered / pf_ordered_float: a monotone map of floats to signed ints, so that
  *     atomic_min/atomic_max on ints compute float minima/maxima on the device (grid bounds).
  *
@@ -45,24 +45,13 @@ PF_INLINE pf_int pf_grid_bin(const PF_GLOBAL pf_mesh_grid* g, pf_float px, pf_fl
   return x + (y + z * g->ny) * g->nx;
 }
 
-/* Cells of the hashed grid are cubes of side `cell` from `origin`; coordinates are clamped to
- * ±2^24 so that the float→int conversion is defined for any finite input. */
-#define PF_HASH_COORD_LIMIT 16777216.0f
-PF_INLINE pf_int pf_hash_cell_coord(pf_float x, pf_float origin, pf_float cell) {
-  pf_float c = (x - origin) / cell;
-  if (!(c > -PF_HASH_COORD_LIMIT)) c = -PF_HASH_COORD_LIMIT; /* also NaN */
-  if (c > PF_HASH_COORD_LIMIT) c = PF_HASH_COORD_LIMIT;
-#ifdef __OPENCL_VERSION__
-  return (pf_int)floor(c);
-#else
-  return (pf_int)std::floor(c);
-#endif
-}
-
-/* Table slot of cell (x, y, z) in a table of mask + 1 slots (a power of two). */
-PF_INLINE pf_uint pf_hash_cell(pf_int x, pf_int y, pf_int z, pf_uint mask) {
-  pf_uint h = ((pf_uint)x * 73856093u) ^ ((pf_uint)y * 19349663u) ^ ((pf_uint)z * 83492791u);
-  return h & mask;
+/* Table slot of cell (x, y, z) of the hashed grid (cells of a grid of nx × ny × nz cubes over the
+ * scene, coordinates from pf_grid_coord): the linear cell index x + nx·(y + ny·z) modulo the table
+ * size mask + 1 (a power of two; uint arithmetic wraps modulo 2^32, which the table size divides).
+ * Cells next to each other along x get consecutive slots, so a gather sphere's row of cells reads
+ * one contiguous run of slots and photons. */
+PF_INLINE pf_uint pf_hash_slot(pf_int x, pf_int y, pf_int z, pf_uint nx, pf_uint ny, pf_uint mask) {
+  return ((pf_uint)x + nx * ((pf_uint)y + ny * (pf_uint)z)) & mask;
 }
 
 /* Monotone float → int: a < b (floats, not NaN) ⇔ pf_float_ordered(a) < pf_float_ordered(b),

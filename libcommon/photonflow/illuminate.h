@@ -36,9 +36,12 @@ struct PpmOptions {
   // or cluster_grid with max_bins) with the context's work-group size.
   ClusterSet* clusters = nullptr;
   int cluster_iterations = 10;
-  // hash-grid: slots of the hash table, a power of two; 0 = the smallest >= max(1024, 2·photons).
+  // hash-grid: slots of the hash table, a power of two; 0 = the smallest >= max(1024, photons).
   // Fewer slots mean more cells per slot (more photons read and skipped), never a wrong result.
   int hash_slots = 0;
+  // hash-grid: cell side in units of the largest hitpoint radius (> 0). Smaller cells fit the
+  // gather spheres tighter (fewer photons tested) but each sphere's box spans more cells.
+  float hash_cell = 2.f;
 };
 
 // One PPM iteration (eq. 3.14–3.18) of every hitpoint over one pass's photons, gathering through

@@ -22,6 +22,7 @@ namespace pf {
 namespace {
 
 constexpr size_t kChunk = 256;     // PF_CHUNK of build_grid.cl
+constexpr size_t kScanItems = 16;  // PF_SCAN_ITEMS of build_grid.cl
 constexpr float kSlack = 1.0001f;  // PF_SLACK of illuminate_methods.cl
 
 // The host-side checks of the CPU grid build (photon_grid.cpp), so the device never indexes a
@@ -59,7 +60,7 @@ void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level = 
   if (n == 0) return;
   if (n > size_t(INT_MAX)) throw std::invalid_argument("device scan: more than 2^31-1 entries");
   const size_t L = size_t(dev.work_group());
-  const size_t per_group = 4 * L;
+  const size_t per_group = kScanItems * L;
   const size_t groups = (n + per_group - 1) / per_group;
   const ClBuffer& sums = dev.scratch("scan.sums." + std::to_string(level), groups * sizeof(cl_int));
   cl_kernel k = dev.kernel("build_grid", "scan_blocks");
@@ -213,23 +214,28 @@ DeviceMeshSort device_mesh_sort(ClContext& dev, const ClBuffer& photons, size_t 
   return s;
 }
 
-// The hashed grid of `hash-grid` over the n photons: cells of side `cell` from `origin`, table of
-// mask + 1 slots; slot_start has mask + 2 entries.
+// The hashed grid of `hash-grid` over the n photons: n[0] × n[1] × n[2] cells of side `cell` from
+// `origin`, table of mask + 1 slots; slot_start has mask + 2 entries.
 struct DeviceHashGrid {
   const ClBuffer* sorted = nullptr;
   const ClBuffer* slot_start = nullptr;
   float origin[3] = {0, 0, 0};
   float cell = 1.f;
+  cl_int n[3] = {1, 1, 1};
   cl_uint mask = 0;
 };
 
 DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t n,
-                                const float origin[3], float cell, int slots) {
+                                const float origin[3], const float extent[3], float cell, int slots) {
   DeviceHashGrid g;
-  for (int a = 0; a < 3; ++a) g.origin[a] = origin[a];
+  for (int a = 0; a < 3; ++a) {
+    g.origin[a] = origin[a];
+    const double cells = std::ceil(double(extent[a]) / double(cell));
+    g.n[a] = cl_int(std::clamp(cells, 1.0, double(1 << 24)));
+  }
   g.cell = cell;
   size_t table = 1024;
-  while (table < 2 * n && table < (size_t(1) << 30)) table <<= 1;
+  while (table < n && table < (size_t(1) << 30)) table <<= 1;
   if (slots > 0) {
     if (slots & (slots - 1)) throw input_error("", "hash-grid slots must be a power of two");
     table = size_t(slots);
@@ -242,7 +248,8 @@ DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t 
   const ClBuffer& sorted = dev.scratch("hash.photons", n * sizeof(pf_photon));
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "key_hash_cell");
-    dev.args(k, photons, cl_int(n), origin[0], origin[1], origin[2], cell, g.mask, key, counts);
+    dev.args(k, photons, cl_int(n), origin[0], origin[1], origin[2], cell, g.n[0], g.n[1], g.n[2],
+             g.mask, key, counts);
     dev.run(k, n);
   }
   sort_by_key(dev, key, counts, n, table, order);
@@ -428,16 +435,21 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
         const Vec3 ext = scene.bounds.hi - scene.bounds.lo;
         float floor_cell = std::max({ext.x, ext.y, ext.z, 1e-6f}) * 1e-6f;
         if (!std::isfinite(floor_cell)) floor_cell = 1e-6f;
-        const float cell = std::max(2.f * rmax * kSlack * kSlack, floor_cell);
+        if (!(opt.hash_cell > 0.f)) throw input_error("", "hash-grid cell size must be > 0");
+        const float cell = std::max(opt.hash_cell * rmax * kSlack * kSlack, floor_cell);
+        // The grid spans the scene's bounds; photons and spheres beyond them (rounding) fall into
+        // the edge cells, consistently for both (pf_grid_coord clamps monotonically).
         float origin[3] = {scene.bounds.lo.x, scene.bounds.lo.y, scene.bounds.lo.z};
-        for (float& o : origin)
-          if (!std::isfinite(o)) o = 0.f;  // an empty scene: any origin will do
-        DeviceHashGrid g = device_hash_grid(dev, phs, np, origin, cell, opt.hash_slots);
+        float extent[3] = {ext.x, ext.y, ext.z};
+        for (int c = 0; c < 3; ++c)
+          if (!std::isfinite(origin[c]) || !std::isfinite(extent[c])) origin[c] = extent[c] = 0.f;
+        DeviceHashGrid g = device_hash_grid(dev, phs, np, origin, extent, cell, opt.hash_slots);
         times.order = since(dev, t0);
         t0 = dev.kernel_seconds();
         cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
         dev.args(k, hps, cl_int(nh), *g.sorted, *g.slot_start, g.origin[0], g.origin[1],
-                 g.origin[2], g.cell, g.mask, mats, skip_direct, acc_m, acc_tau);
+                 g.origin[2], g.cell, g.n[0], g.n[1], g.n[2], g.mask, mats, skip_direct, acc_m,
+                 acc_tau);
         dev.run(k, nh);
         times.work_items = nh;
       } else {  // kmeans-clusters, grid-kmeans, grid-gridclusters
