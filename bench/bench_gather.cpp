@@ -16,7 +16,7 @@
 // does, and not counted in the pass. Every method's result is checked against the CPU grid
 // gather: the photon counts M of all hitpoints must agree ("same photons").
 //
-// The methods that read every photon of a mesh (naive … manual-distance) cost O(hitpoints ×
+// The methods that read every photon of a mesh (naive … kmeans-clusters) cost O(hitpoints ×
 // photons): with --sample N > 1 (0 = automatic: 1 at <= 320×280, 16 above) they run on every N-th
 // hitpoint and their times are multiplied by N (marked ×N); their cost per hitpoint does not depend
 // on the other hitpoints.
@@ -63,11 +63,13 @@ std::string fmt(double ms) {
   return b;
 }
 
-// The methods whose work-items read all photons of a mesh (or all photons).
+// The methods whose work-groups read all photons of a mesh (or all photons): their cost per
+// hitpoint (per cluster, for kmeans-clusters, whose clusters of a sample are as many times fewer
+// as they are wider) does not depend on the other hitpoints.
 bool reads_whole_meshes(pf::GatherMethod m) {
   using M = pf::GatherMethod;
   return m == M::Naive || m == M::LocalMemory || m == M::PhotonSort || m == M::HitpointSort ||
-         m == M::HitpointSortLocal || m == M::ManualDistance;
+         m == M::HitpointSortLocal || m == M::ManualDistance || m == M::KmeansClusters;
 }
 
 struct Row {

@@ -1,14 +1,14 @@
 # bench.mk — the benchmarks of docs/BENCHMARKS.md, each writing its table to $(OUT)/bench/.
 #
-#   make bench                    all of them (about 15–30 minutes on 2 cores)
-#   make bench BENCH=raycast      one: raycast | pipeline | memory | opencl
+#   make bench                    all of them (about an hour on 2 cores; gather alone ~40 min)
+#   make bench BENCH=raycast      one: raycast | pipeline | memory | opencl | gather
 #
 # Results are measured numbers for this machine; copy them into docs/BENCHMARKS.md by hand with the
 # machine's description (nproc, lscpu model name, OpenCL device). Meshes from ../shared/scenes are
 # used when present (MESH=path overrides; the table says when none was found).
 BIN   ?= build/bin
 OUT   ?= out
-BENCH ?= raycast pipeline memory opencl
+BENCH ?= raycast pipeline memory opencl gather
 MESH  ?= $(firstword $(wildcard ../shared/scenes/stanford-bunny.obj))
 DIR   := $(OUT)/bench
 
@@ -32,3 +32,7 @@ memory: | $(DIR)
 
 opencl: | $(DIR)
 	$(BIN)/bench_opencl | tee $(DIR)/opencl.md
+
+# Thesis Tables 7.3-7.5: every gather method, k-means vs grid clusters, fillers.
+gather: | $(DIR)
+	$(BIN)/bench_gather | tee $(DIR)/gather.md
