@@ -64,4 +64,9 @@ std::vector<uint8_t> encode_png(int w, int h, const std::vector<uint8_t>& rgb8);
 // Writes the sRGB preview PNG of img's RGB (to_srgb8 then encode_png).
 void write_png(const Image& img, const std::string& path, float exposure_stops = 0.f);
 
+// Decodes a PNG file's bytes into an RGB image with values in [0, 1] (8- and 16-bit grey, grey +
+// alpha, RGB, RGBA and palette images, non-interlaced; alpha ignored; zlib inflates the data);
+// `name` names the file in InputError messages. Reads masks (image_metrics.h).
+Image decode_png(const std::string& bytes, const std::string& name);
+
 }  // namespace pf

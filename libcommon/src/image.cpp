@@ -7,9 +7,11 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -245,6 +247,146 @@ std::vector<uint8_t> encode_png(int w, int h, const std::vector<uint8_t>& rgb8) 
 
 void write_png(const Image& img, const std::string& path, float exposure_stops) {
   write_bytes(path, encode_png(img.width, img.height, to_srgb8(img, exposure_stops)));
+}
+
+// ---- PNG decoding (masks) --------------------------------------------------------------------
+
+namespace {
+
+uint32_t be32(const unsigned char* p) {
+  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
+}
+
+// PNG Paeth predictor (PNG spec. §9.4).
+int paeth(int a, int b, int c) {
+  const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+  if (pa <= pb && pa <= pc) return a;
+  return pb <= pc ? b : c;
+}
+
+}  // namespace
+
+Image decode_png(const std::string& bytes, const std::string& name) {
+  static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
+  const size_t n = bytes.size();
+  if (n < 8 || !std::equal(sig, sig + 8, p)) throw input_error(name, "is not a PNG file");
+  uint32_t W = 0, H = 0;
+  int depth = 0, ctype = -1, interlace = 0;
+  std::vector<unsigned char> palette, idat;
+  bool ended = false;
+  for (size_t at = 8; at < n && !ended;) {
+    if (n - at < 12) throw input_error(name, "is a truncated PNG file");
+    const uint32_t len = be32(p + at);
+    if (len > n - at - 12) throw input_error(name, "is a truncated PNG file");
+    const std::string type(reinterpret_cast<const char*>(p + at + 4), 4);
+    const unsigned char* d = p + at + 8;
+    const uint32_t crc = uint32_t(::crc32(::crc32(0L, Z_NULL, 0), p + at + 4, len + 4));
+    if (crc != be32(d + len)) throw input_error(name, "is a damaged PNG file (CRC mismatch)");
+    if (type == "IHDR") {
+      if (len != 13) throw input_error(name, "has a bad PNG header");
+      W = be32(d);
+      H = be32(d + 4);
+      depth = d[8];
+      ctype = d[9];
+      interlace = d[12];
+      if (d[10] != 0 || d[11] != 0) throw input_error(name, "uses an unknown PNG compression");
+    } else if (type == "PLTE") {
+      palette.assign(d, d + len);
+    } else if (type == "IDAT") {
+      idat.insert(idat.end(), d, d + len);
+    } else if (type == "IEND") {
+      ended = true;
+    }
+    at += size_t(len) + 12;
+  }
+  if (ctype < 0 || !ended) throw input_error(name, "is an incomplete PNG file");
+  int channels;
+  switch (ctype) {
+    case 0: channels = 1; break;
+    case 2: channels = 3; break;
+    case 3: channels = 1; break;
+    case 4: channels = 2; break;
+    case 6: channels = 4; break;
+    default: throw input_error(name, "has an unknown PNG colour type");
+  }
+  const bool depth_ok = (ctype == 0 && (depth == 1 || depth == 2 || depth == 4 || depth == 8 ||
+                                        depth == 16)) ||
+                        (ctype == 3 && (depth == 1 || depth == 2 || depth == 4 || depth == 8)) ||
+                        ((ctype == 2 || ctype == 4 || ctype == 6) && (depth == 8 || depth == 16));
+  if (!depth_ok) throw input_error(name, "has an invalid PNG bit depth");
+  if (interlace != 0)
+    throw input_error(name, "is an interlaced PNG", "save the mask without interlacing");
+  if (W == 0 || H == 0 || W > (1u << 16) || H > (1u << 16))
+    throw input_error(name, "has an unsupported PNG size");
+  if (ctype == 3 && palette.size() < 3) throw input_error(name, "has no PNG palette");
+
+  // Inflate (RFC 1950/1951 through zlib) into H filtered scanlines.
+  const size_t row = (size_t(W) * size_t(channels) * size_t(depth) + 7) / 8;
+  const size_t bpp = std::max<size_t>(1, size_t(channels) * size_t(depth) / 8);
+  std::vector<unsigned char> raw(size_t(H) * (row + 1));
+  z_stream zs{};
+  if (inflateInit(&zs) != Z_OK) throw input_error(name, "cannot start zlib");
+  zs.next_in = idat.data();
+  zs.avail_in = uInt(idat.size());
+  zs.next_out = raw.data();
+  zs.avail_out = uInt(raw.size());
+  const int zr = inflate(&zs, Z_FINISH);
+  const size_t got = raw.size() - zs.avail_out;
+  inflateEnd(&zs);
+  if ((zr != Z_STREAM_END && zr != Z_BUF_ERROR) || got != raw.size())
+    throw input_error(name, "has damaged PNG image data");
+
+  // Undo the per-row filters (PNG spec. §9.2) in place.
+  std::vector<unsigned char> prev(row, 0);
+  for (uint32_t y = 0; y < H; ++y) {
+    unsigned char* line = &raw[size_t(y) * (row + 1)];
+    const int f = line[0];
+    unsigned char* cur = line + 1;
+    for (size_t i = 0; i < row; ++i) {
+      const int a = i >= bpp ? cur[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
+      int v = cur[i];
+      switch (f) {
+        case 0: break;
+        case 1: v += a; break;
+        case 2: v += b; break;
+        case 3: v += (a + b) / 2; break;
+        case 4: v += paeth(a, b, c); break;
+        default: throw input_error(name, "has an unknown PNG filter type");
+      }
+      cur[i] = static_cast<unsigned char>(v);
+    }
+    std::copy(cur, cur + row, prev.begin());
+  }
+
+  // Samples to RGB in [0, 1] (alpha dropped).
+  Image img(static_cast<int>(W), static_cast<int>(H));
+  const double maxv = double((1u << depth) - 1);
+  for (uint32_t y = 0; y < H; ++y) {
+    const unsigned char* cur = &raw[size_t(y) * (row + 1) + 1];
+    auto sample = [&](size_t k) -> uint32_t {  // k-th sample of the row
+      if (depth == 16) return (uint32_t(cur[2 * k]) << 8) | cur[2 * k + 1];
+      if (depth == 8) return cur[k];
+      const size_t bit = k * size_t(depth);
+      return (uint32_t(cur[bit / 8]) >> (8 - depth - bit % 8)) & ((1u << depth) - 1);
+    };
+    for (uint32_t x = 0; x < W; ++x) {
+      float rgb[3];
+      const size_t k = size_t(x) * size_t(channels);
+      if (ctype == 3) {
+        const size_t e = sample(k);
+        if (3 * e + 2 >= palette.size())
+          throw input_error(name, "has a PNG palette index out of range");
+        for (int c = 0; c < 3; ++c) rgb[c] = float(palette[3 * e + size_t(c)] / 255.0);
+      } else if (ctype == 0 || ctype == 4) {
+        rgb[0] = rgb[1] = rgb[2] = float(sample(k) / maxv);
+      } else {
+        for (int c = 0; c < 3; ++c) rgb[c] = float(sample(k + size_t(c)) / maxv);
+      }
+      img.set(int(x), int(y), Vec3(rgb));
+    }
+  }
+  return img;
 }
 
 }  // namespace pf

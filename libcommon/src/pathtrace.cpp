@@ -1,0 +1,346 @@
+// Path tracing with next-event estimation: see pathtrace.h.
+#include "photonflow/pathtrace.h"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "photonflow/camera.h"
+#include "photonflow/error.h"
+#include "photonflow/text_file.h"
+#include "photonflow/provenance.h"
+#include "photonflow/raycast.h"
+#include "photonflow/rng.h"
+#include "photonflow/sampling.h"
+#include "photonflow/surface.h"
+#include "photonflow/version.h"
+
+namespace pf {
+
+const char* mis_mode_name(MisMode m) { return m == MisMode::Off ? "off" : "power"; }
+
+namespace {
+
+// Camera paths per pass (at least one sample of every pixel): large enough that the per-pass
+// cost (thread start, callbacks) is small, small enough for a responsive time limit. The image
+// does not depend on it.
+constexpr uint64_t kPathsPerPass = 1u << 16;
+
+float max3(const Vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
+
+// Diffuse as photon mapping defines it (eye_pass.cpp, photon_pass.cpp): Lambertian materials and
+// emitters with a non-black colour under them.
+bool is_diffuse(const pf_material& m) {
+  return m.type == PF_MAT_DIFFUSE ||
+         (m.type == PF_MAT_EMITTER && luminance(Vec3(m.color)) > 0.f);
+}
+
+// Power heuristic, β = 2 (Veach 1997, eq. 9.13): weight of the strategy with density `a` against
+// one with density `b`.
+float power_heuristic(float a, float b) {
+  const float a2 = a * a, b2 = b * b;
+  return a2 + b2 > 0.f ? a2 / (a2 + b2) : 0.f;
+}
+
+// Everything a path needs about the scene, computed once per run.
+class PathTracer {
+ public:
+  PathTracer(const Scene& scene, const PathTraceOptions& opt)
+      : scene_(scene), opt_(opt), eps_(ray_epsilon(scene)) {
+    tri_light_.assign(scene.triangles.size(), -1);
+    light_normal_.resize(scene.lights.size());
+    for (size_t li = 0; li < scene.lights.size(); ++li) {
+      const pf_light& l = scene.lights[li];
+      if (l.type != PF_LIGHT_AREA) continue;
+      const pf_triangle& t = scene.triangles[size_t(l.triangle)];
+      light_normal_[li] = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+      tri_light_[size_t(l.triangle)] = int32_t(li);
+    }
+  }
+
+  // One camera path starting with `ray` (unit direction). Returns its radiance estimate
+  // (W/(sr m²)); `rays` counts the rays it cast.
+  Vec3 radiance(Ray ray, pf_rng& rng, uint64_t& rays) const {
+    Vec3 L, T(1.f, 1.f, 1.f);  // radiance so far; throughput of the path prefix
+    // How the current ray was generated: by the camera or a specular bounce (an emitter it hits
+    // counts fully), or by a diffuse bounce with solid-angle density `bsdf_pdf` (an emitter it hits
+    // counts only with MIS, weighted against the NEE that sampled it at the previous vertex;
+    // `nee_could` is false when NEE there could not have produced this direction).
+    bool specular = true, nee_could = false;
+    float bsdf_pdf = 0.f;
+    for (int depth = 0;; ++depth) {
+      Hit h;
+      ++rays;
+      if (!intersect_closest(scene_, ray, h)) break;  // no environment light
+      const SurfaceHit sh = surface_at(scene_, ray, h);
+      const pf_material& m = scene_.materials[size_t(sh.material)];
+      const Vec3 d = normalize(ray.d);
+
+      // Emitted radiance L_e (the first term of the rendering equation), one-sided.
+      if (m.type == PF_MAT_EMITTER && sh.front) {
+        const Vec3 le(m.emission);
+        if (specular) {
+          L += T * le;
+        } else if (opt_.mis == MisMode::Power) {
+          float w = 1.f;
+          const int32_t li = tri_light_[size_t(sh.tri)];
+          if (nee_could && li >= 0) {
+            // The light-sampling density of this point, per unit solid angle at the previous
+            // vertex: p_l · dist² / (A · cos θ_y).
+            const pf_light& l = scene_.lights[size_t(li)];
+            const float cos_l = -dot(d, light_normal_[size_t(li)]);
+            const float p_pick = pick_probability(size_t(li));
+            const float dist = h.t * length(ray.d);
+            const float light_pdf = cos_l > 0.f ? p_pick * dist * dist / (l.area * cos_l) : 0.f;
+            w = power_heuristic(bsdf_pdf, light_pdf);
+          }
+          L += T * le * w;
+        }
+      }
+      if (depth >= opt_.max_depth) break;
+
+      if (is_diffuse(m)) {
+        const Vec3 n = sh.front ? sh.ns : -sh.ns;   // shading normal facing the arriving ray
+        const Vec3 ng = sh.front ? sh.ng : -sh.ng;  // geometric normal on the same side
+        const Vec3 albedo(m.color);
+        // Next-event estimation: L_direct = f_r · (one light sample), f_r = ρ/π.
+        L += T * albedo * kInvPi * sample_light(sh.p, n, ng, rng, rays);
+        // Continue with f_r·cos/pdf = ρ (cosine sampling around n), after Russian roulette.
+        T = T * albedo;
+        if (!(max3(T) > 0.f) || !roulette(depth, T, rng)) break;
+        const float u1 = pf_rng_next(&rng);
+        const float u2 = pf_rng_next(&rng);
+        const Vec3 wi = sample_cosine_hemisphere(n, u1, u2);
+        const float cos_x = dot(wi, n);
+        if (!(cos_x > 0.f)) break;  // grazing: density 0
+        bsdf_pdf = pdf_cosine_hemisphere(cos_x);
+        nee_could = dot(wi, ng) > 0.f;  // sample_light refuses directions below the surface
+        specular = false;
+        ray = Ray{offset_origin(sh, wi, eps_), wi};
+      } else if (m.type == PF_MAT_MIRROR || m.type == PF_MAT_GLASS) {
+        const Vec3 wo = specular_bounce(m, sh, d, &rng, T);
+        if (!(max3(T) > 0.f)) break;
+        if (!roulette(depth, T, rng)) break;
+        specular = true;
+        ray = Ray{offset_origin(sh, wo, eps_), wo};
+      } else {
+        break;  // a black emitter absorbs
+      }
+    }
+    return L;
+  }
+
+ private:
+  float pick_probability(size_t li) const {
+    return scene_.light_cdf[li] - (li ? scene_.light_cdf[li - 1] : 0.f);
+  }
+
+  // Russian roulette after rr_depth bounces: survive with q = min(1, max channel of T), T /= q.
+  bool roulette(int depth, Vec3& T, pf_rng& rng) const {
+    if (depth < opt_.rr_depth) return true;
+    const float q = std::min(1.f, max3(T));
+    if (!(q > 0.f)) return false;
+    if (q >= 1.f) return true;
+    if (pf_rng_next(&rng) >= q) return false;
+    T = T * (1.f / q);
+    return true;
+  }
+
+  // One light sample for a diffuse point p (shading normal n and geometric normal ng on the side
+  // of the arriving ray): incident radiance times cos θ_x over the sample's density (solid angle),
+  // MIS-weighted for area lights under MisMode::Power. Multiply by f_r for L_direct. The same
+  // estimator as eye_pass.cpp's direct_light (one sample; its shadow ray and cut-offs).
+  Vec3 sample_light(const Vec3& p, const Vec3& n, const Vec3& ng, pf_rng& rng,
+                    uint64_t& rays) const {
+    const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+    if (scene_.lights.empty()) return {};
+    float p_light;
+    const size_t li = scene_.pick_light(ul, p_light);
+    if (!(p_light > 0.f)) return {};
+    const pf_light& l = scene_.lights[li];
+    Vec3 q;
+    float g, w = 1.f;  // cos θ_x / density (solid angle), without visibility; MIS weight
+    if (l.type == PF_LIGHT_AREA) {
+      const pf_triangle& t = scene_.triangles[size_t(l.triangle)];
+      q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
+      Vec3 wl = q - p;
+      const float d2 = dot(wl, wl);
+      if (!(d2 > 0.f)) return {};
+      wl = wl / std::sqrt(d2);
+      const float cos_l = -dot(wl, light_normal_[li]);  // one-sided: light leaves along +n_l
+      const float cos_x = dot(wl, n);
+      if (cos_l <= 0.f || cos_x <= 0.f || dot(wl, ng) <= 0.f) return {};
+      const float pdf = p_light * d2 / (l.area * cos_l);  // per unit solid angle at p
+      g = cos_x / pdf;
+      if (opt_.mis == MisMode::Power) w = power_heuristic(pdf, pdf_cosine_hemisphere(cos_x));
+    } else {
+      q = Vec3(l.position);
+      Vec3 wl = q - p;
+      const float d2 = dot(wl, wl);
+      if (!(d2 > 0.f)) return {};
+      wl = wl / std::sqrt(d2);
+      const float cos_x = dot(wl, n);
+      if (cos_x <= 0.f || dot(wl, ng) <= 0.f) return {};
+      g = cos_x / (d2 * p_light);  // a delta light: NEE is its only strategy
+    }
+    const Vec3 o = p + ng * eps_;
+    ++rays;
+    if (intersect_any(scene_, Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
+    return Vec3(l.radiance) * (g * w);
+  }
+
+  const Scene& scene_;
+  const PathTraceOptions& opt_;
+  const float eps_;
+  std::vector<int32_t> tri_light_;  // light index of an emissive triangle, −1 otherwise
+  std::vector<Vec3> light_normal_;  // unit front normal of each area light
+};
+
+void check_options(const PathTraceOptions& opt) {
+  if (opt.spp < 1) throw input_error("", "--spp must be positive, got " + std::to_string(opt.spp));
+  if (opt.max_depth < 0)
+    throw input_error("", "--max-depth must be >= 0, got " + std::to_string(opt.max_depth));
+  if (opt.rr_depth < 0)
+    throw input_error("", "--rr-depth must be >= 0, got " + std::to_string(opt.rr_depth));
+  if (opt.snapshot_every < 0)
+    throw input_error("", "--snapshot-every must be >= 0, got " +
+                              std::to_string(opt.snapshot_every));
+  if (!(opt.time_limit_s >= 0.0))
+    throw input_error("", "--time-limit must be >= 0, got " + std::to_string(opt.time_limit_s));
+}
+
+}  // namespace
+
+Image pathtrace(const Scene& scene, const PathTraceOptions& opt,
+                const PathTraceCallbacks& callbacks, PathTraceStatus* status_out) {
+  check_options(opt);
+  const int W = scene.camera.width, H = scene.camera.height;
+  const char* why = nullptr;
+  if (!camera_valid(scene.camera, &why)) throw input_error(scene.source, why);
+  const size_t npix = size_t(W) * size_t(H);
+  const CameraFrame cam(scene.camera);
+  const PathTracer tracer(scene, opt);
+  const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+
+  // Per-pixel sums in double: RGB, and luminance and its square (for the variance layer).
+  std::vector<double> sum(3 * npix, 0.0), lum(npix, 0.0), lum2(npix, 0.0);
+  PathTraceStatus st;
+  st.target = opt.spp;
+  Stopwatch clock;
+
+  auto make_image = [&]() {
+    Image img(W, H);
+    std::vector<float>& samples = img.layer("samples");
+    std::vector<float>& var = img.layer("variance");
+    const double n = double(st.samples);
+    for (size_t i = 0; i < npix; ++i) {
+      for (int c = 0; c < 3; ++c) img.rgb[3 * i + size_t(c)] = float(sum[3 * i + size_t(c)] / n);
+      samples[i] = float(st.samples);
+      if (st.samples >= 2) {
+        const double mean = lum[i] / n;
+        const double s2 = std::max(0.0, (lum2[i] - n * mean * mean) / (n - 1.0));
+        var[i] = float(s2 / n);
+      }
+    }
+    return img;
+  };
+
+  const int per_pass = int(std::max<uint64_t>(1, kPathsPerPass / std::max<size_t>(npix, 1)));
+  while (st.samples < opt.spp) {
+    int batch = std::min(per_pass, opt.spp - st.samples);
+    if (opt.snapshot_every > 0)  // end passes on snapshot boundaries
+      batch = std::min(batch, opt.snapshot_every - st.samples % opt.snapshot_every);
+    const int s0 = st.samples;
+    uint64_t rays = 0, nonfinite = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : rays, nonfinite)
+    for (int y = 0; y < H; ++y) {
+      for (int x = 0; x < W; ++x) {
+        const size_t pix = size_t(y) * size_t(W) + size_t(x);
+        for (int s = s0; s < s0 + batch; ++s) {
+          pf_rng rng = pf_rng_start(opt.seed, kPathStream + uint32_t(s), uint32_t(pix));
+          // Box filter: a uniform point in the pixel.
+          const float jx = pf_rng_next(&rng), jy = pf_rng_next(&rng);
+          const Ray ray{cam.eye(), cam.direction(float(x) + jx, float(y) + jy)};
+          Vec3 v = tracer.radiance(ray, rng, rays);
+          if (!finite(v)) {
+            ++nonfinite;
+            v = Vec3();
+          }
+          const double l = double(luminance(v));
+          sum[3 * pix] += v.x;
+          sum[3 * pix + 1] += v.y;
+          sum[3 * pix + 2] += v.z;
+          lum[pix] += l;
+          lum2[pix] += l * l;
+        }
+      }
+    }
+    st.samples += batch;
+    st.paths += uint64_t(batch) * npix;
+    st.rays += rays;
+    st.nonfinite += nonfinite;
+    st.seconds = clock.seconds();
+    if (callbacks.on_progress) callbacks.on_progress(st);
+    if (opt.snapshot_every > 0 && st.samples % opt.snapshot_every == 0 && callbacks.on_snapshot)
+      callbacks.on_snapshot(make_image(), st);
+    if (opt.time_limit_s > 0.0 && st.seconds >= opt.time_limit_s && st.samples < opt.spp) {
+      st.timed_out = true;
+      break;
+    }
+  }
+  if (status_out) *status_out = st;
+  return make_image();
+}
+
+
+std::string pathtrace_record_json(const Provenance& prov,
+                                  const std::vector<PathTraceImageRecord>& images) {
+  std::ostringstream o;
+  o << "{\n  \"tool\": " << json_string(prov.tool)
+    << ",\n  \"version\": " << json_string(PHOTONFLOW_VERSION)
+    << ",\n  \"git_hash\": " << json_string(PHOTONFLOW_GIT_HASH)
+    << ",\n  \"seed\": " << prov.seed
+    << ",\n  \"command_line\": " << json_string(prov.command_line)
+    << ",\n  \"wall_time_s\": " << json_number(prov.wall_time_s) << ",\n  \"parameters\": {";
+  const char* sep = "";
+  for (const auto& [k, v] : prov.parameters) {
+    o << sep << "\n    " << json_string(k) << ": " << json_string(v);
+    sep = ",";
+  }
+  o << "\n  },\n  \"inputs\": [";
+  sep = "";
+  for (const auto& in : prov.inputs) {
+    o << sep << "\n    {\"role\": " << json_string(in.role)
+      << ", \"path\": " << json_string(in.path) << ", \"sha256\": " << json_string(in.sha256) << ", \"format\": " << json_string(in.format)
+      << ", \"scene_id\": " << json_string(in.scene_id) << "}";
+    sep = ",";
+  }
+  o << "\n  ],\n  \"images\": [";
+  sep = "";
+  for (const auto& im : images) {
+    const PathTraceStatus& s = im.status;
+    o << sep << "\n    {\"path\": " << json_string(im.path) << ", \"samples\": " << s.samples
+      << ", \"target\": " << s.target << ", \"seconds\": " << json_number(s.seconds)
+      << ", \"paths\": " << s.paths << ", \"rays\": " << s.rays
+      << ", \"nonfinite\": " << s.nonfinite
+      << ", \"timed_out\": " << (s.timed_out ? "true" : "false") << "}";
+    sep = ",";
+  }
+  o << "\n  ]\n}\n";
+  return o.str();
+}
+
+void write_pathtrace_record(const std::string& path, const Provenance& prov,
+                            const std::vector<PathTraceImageRecord>& images) {
+  const std::string text = pathtrace_record_json(prov, images);
+  write_text_atomic(path, text);
+}
+
+}  // namespace pf

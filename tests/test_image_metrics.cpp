@@ -1,0 +1,463 @@
+// Image metrics (issue 7, image_metrics.h) and the imgcompare tool: hand-computable cases
+// (identical images, constant offsets, flat images' SSIM), SSIM against a direct 2-D
+// implementation written here, masks (EXR and PNG, stored and compressed with every filter
+// type), non-finite pixels, size mismatches refused, JSON output.
+#include <catch2/catch.hpp>
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "photonflow/error.h"
+#include "photonflow/image.h"
+#include "photonflow/image_metrics.h"
+#include "photonflow/rng.h"
+#include "support.h"
+
+using namespace pf;
+using test::TempDir;
+
+namespace {
+
+// An image of values in [lo, hi) from the counter-based generator (independent per channel).
+Image random_image(int w, int h, uint32_t seed, float lo = 0.f, float hi = 1.f) {
+  Image img(w, h);
+  for (size_t i = 0; i < img.rgb.size(); ++i)
+    img.rgb[i] = lo + (hi - lo) * pf_rng_float(seed, 0, uint32_t(i), 0);
+  return img;
+}
+
+Image constant_image(int w, int h, float v) {
+  Image img(w, h);
+  for (float& x : img.rgb) x = v;
+  return img;
+}
+
+// SSIM of Wang et al. (2004) straight from its definition: 2-D Gaussian weights (σ = 1.5) over
+// the 11×11 window, the weighted statistics as sums over the window, eq. 13, and the mean over
+// the centres. `clipped` false: the centres whose window lies inside the image, weights normalised
+// over the window; true: every pixel, the window cut at the border and the weights normalised over
+// what is left. Luminance as in image_metrics.h.
+double ssim_direct(const Image& a, const Image& b, double L, bool clipped = false) {
+  auto Y = [](const Image& img, int x, int y) {
+    Vec3 c = img.get(x, y);
+    return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+  };
+  const double C1 = (0.01 * L) * (0.01 * L), C2 = (0.03 * L) * (0.03 * L);
+  const int m = clipped ? 0 : 5;
+  double total = 0;
+  int n = 0;
+  for (int cy = m; cy < a.height - m; ++cy)
+    for (int cx = m; cx < a.width - m; ++cx) {
+      double sum = 0, mx = 0, my = 0;
+      auto each = [&](auto f) {
+        for (int y = std::max(0, cy - 5); y <= std::min(a.height - 1, cy + 5); ++y)
+          for (int x = std::max(0, cx - 5); x <= std::min(a.width - 1, cx + 5); ++x)
+            f(x, y, std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / (2 * 1.5 * 1.5)));
+      };
+      each([&](int, int, double w) { sum += w; });
+      each([&](int x, int y, double w) {
+        mx += w / sum * Y(a, x, y);
+        my += w / sum * Y(b, x, y);
+      });
+      double vx = 0, vy = 0, cxy = 0;
+      each([&](int x, int y, double w) {
+        const double dx = Y(a, x, y) - mx, dy = Y(b, x, y) - my;
+        vx += w / sum * dx * dx;
+        vy += w / sum * dy * dy;
+        cxy += w / sum * dx * dy;
+      });
+      total += (2 * mx * my + C1) * (2 * cxy + C2) / ((mx * mx + my * my + C1) * (vx + vy + C2));
+      ++n;
+    }
+  return total / n;
+}
+
+void put_be32(std::string& s, uint32_t v) {
+  for (int k = 3; k >= 0; --k) s += char((v >> (8 * k)) & 0xFF);
+}
+
+void put_chunk(std::string& png, const char* type, const std::string& data) {
+  put_be32(png, uint32_t(data.size()));
+  std::string td = std::string(type, 4) + data;
+  png += td;
+  put_be32(png, uint32_t(crc32(0L, reinterpret_cast<const Bytef*>(td.data()), uInt(td.size()))));
+}
+
+int paeth(int a, int b, int c) {
+  int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+  return (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
+}
+
+// A complete PNG (zlib-compressed, as image editors write them) from unfiltered scanlines `rows`
+// (each `row_bytes` long), row y filtered with type y % 5 (None, Sub, Up, Average, Paeth).
+std::string make_png(int w, int h, int depth, int ctype, const std::vector<std::string>& rows,
+                     size_t bpp, const std::string& palette = {}) {
+  std::string raw;
+  std::string prev(rows[0].size(), '\0');
+  for (int y = 0; y < h; ++y) {
+    const std::string& cur = rows[size_t(y)];
+    const int f = y % 5;
+    raw += char(f);
+    for (size_t i = 0; i < cur.size(); ++i) {
+      const int x = uint8_t(cur[i]), a = i >= bpp ? uint8_t(cur[i - bpp]) : 0,
+                b = uint8_t(prev[i]), c = i >= bpp ? uint8_t(prev[i - bpp]) : 0;
+      const int pred = f == 0 ? 0 : f == 1 ? a : f == 2 ? b : f == 3 ? (a + b) / 2 : paeth(a, b, c);
+      raw += char(uint8_t(x - pred));
+    }
+    prev = cur;
+  }
+  uLongf zlen = compressBound(uLong(raw.size()));
+  std::string z(zlen, '\0');
+  REQUIRE(compress2(reinterpret_cast<Bytef*>(&z[0]), &zlen,
+                    reinterpret_cast<const Bytef*>(raw.data()), uLong(raw.size()), 9) == Z_OK);
+  z.resize(zlen);
+  std::string png = "\x89PNG\r\n\x1a\n";
+  std::string ihdr;
+  put_be32(ihdr, uint32_t(w));
+  put_be32(ihdr, uint32_t(h));
+  ihdr += char(depth);
+  ihdr += char(ctype);
+  ihdr += std::string(3, '\0');
+  put_chunk(png, "IHDR", ihdr);
+  if (!palette.empty()) put_chunk(png, "PLTE", palette);
+  put_chunk(png, "IDAT", z);
+  put_chunk(png, "IEND", "");
+  return png;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// The number after "key": in a JSON text (NaN when absent).
+double json_number(const std::string& js, const std::string& key) {
+  const size_t at = js.find("\"" + key + "\": ");
+  return at == std::string::npos ? std::nan("") : std::stod(js.substr(at + key.size() + 4));
+}
+
+}  // namespace
+
+TEST_CASE("image_metrics: identical images: no error, PSNR infinite, SSIM 1", "[image_metrics]") {
+  Image a = random_image(24, 20, 7, 0.f, 3.f);
+  ImageMetrics m = compare_images(a, a);
+  CHECK(m.pixels == 24u * 20u);
+  CHECK(m.mse == 0.0);
+  CHECK(m.rmse == 0.0);
+  CHECK(m.rel_mse == 0.0);
+  CHECK(m.mae == 0.0);
+  CHECK(std::isinf(m.psnr));
+  CHECK(m.psnr > 0);
+  CHECK(m.ssim == Approx(1.0).epsilon(1e-12));
+  CHECK(m.ssim_window == SsimWindow::Valid);
+  CHECK(m.ssim_centres == size_t(24 - 10) * size_t(20 - 10));
+}
+
+TEST_CASE("image_metrics: constant offset: known RMSE, MAE, PSNR, relMSE and SSIM",
+          "[image_metrics]") {
+  SECTION("flat images, value 1 and 1.25") {
+    // MSE = 0.0625, RMSE = MAE = 0.25, relMSE = 0.0625 / (1 + 0.01), PSNR = 10 log10(1/0.0625)
+    // = 12.0412 dB. The reference is flat, so L = 1: C1 = 1e-4, and both images' windows have
+    // σ = 0, so SSIM = (2·1.25·1 + C1)/(1.25² + 1 + C1) · C2/C2 = 2.5001 / 2.5626.
+    Image ref = constant_image(16, 16, 1.f), test = constant_image(16, 16, 1.25f);
+    ImageMetrics m = compare_images(test, ref);
+    CHECK(m.mse == Approx(0.0625).epsilon(1e-12));
+    CHECK(m.rmse == Approx(0.25).epsilon(1e-12));
+    CHECK(m.mae == Approx(0.25).epsilon(1e-12));
+    CHECK(m.rel_mse == Approx(0.0625 / 1.01).epsilon(1e-12));
+    CHECK(m.peak == 1.0);
+    CHECK(m.psnr == Approx(12.041199826559248).epsilon(1e-9));
+    CHECK(m.ssim_range == 1.0);
+    CHECK(m.ssim == Approx(2.5001 / 2.5626).epsilon(1e-9));
+  }
+  SECTION("a textured reference plus 0.25") {
+    // Values in [0, 0.75) with one pixel at exactly 1: peak 1, PSNR = 20 log10(1/0.25).
+    Image ref = random_image(20, 16, 3, 0.f, 0.75f);
+    ref.set(5, 5, Vec3(1.f, 1.f, 1.f));
+    Image test = ref;
+    for (float& v : test.rgb) v += 0.25f;  // rounded to float: differences 0.25 ± 6e-8
+    ImageMetrics m = compare_images(test, ref);
+    CHECK(m.rmse == Approx(0.25).epsilon(1e-6));
+    CHECK(m.mae == Approx(0.25).epsilon(1e-6));
+    CHECK(m.psnr == Approx(20.0 * std::log10(4.0)).epsilon(1e-6));
+    // relMSE = mean of 0.0625 / (b² + 0.01) over the reference's values.
+    double rel = 0;
+    for (float b : ref.rgb) rel += 0.0625 / (double(b) * b + 0.01);
+    CHECK(m.rel_mse == Approx(rel / double(ref.rgb.size())).epsilon(1e-5));
+    // A shift lowers only SSIM's luminance term; the structure and contrast terms stay 1.
+    CHECK(m.ssim < 1.0);
+    CHECK(m.ssim > 0.5);
+  }
+}
+
+TEST_CASE("image_metrics: SSIM equals a direct implementation of Wang et al. 2004",
+          "[image_metrics][ssim]") {
+  Image ref = random_image(27, 23, 11, 0.f, 2.f);
+  Image test = ref;
+  Image noise = random_image(27, 23, 12, -0.3f, 0.3f);
+  for (size_t i = 0; i < test.rgb.size(); ++i) test.rgb[i] += noise.rgb[i];
+  ImageMetrics m = compare_images(test, ref);
+  // L = max − min of the reference's luminance.
+  double ymin = 1e30, ymax = -1e30;
+  for (int y = 0; y < 23; ++y)
+    for (int x = 0; x < 27; ++x) {
+      Vec3 c = ref.get(x, y);
+      double Y = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+      ymin = std::min(ymin, Y);
+      ymax = std::max(ymax, Y);
+    }
+  CHECK(m.ssim_range == Approx(ymax - ymin).epsilon(1e-12));
+  CHECK(m.ssim == Approx(ssim_direct(test, ref, ymax - ymin)).epsilon(1e-10));
+  CHECK(m.ssim < 0.99);
+
+  // More noise, lower SSIM; scaling both images leaves SSIM unchanged (L scales with them).
+  Image worse = ref;
+  for (size_t i = 0; i < worse.rgb.size(); ++i) worse.rgb[i] += 3.f * noise.rgb[i];
+  CHECK(compare_images(worse, ref).ssim < m.ssim);
+  Image ref4 = ref, test4 = test;
+  for (float& v : ref4.rgb) v *= 4.f;
+  for (float& v : test4.rgb) v *= 4.f;
+  CHECK(compare_images(test4, ref4).ssim == Approx(m.ssim).epsilon(1e-9));
+
+  // Inverted structure: a checkerboard against its negative is anti-correlated, SSIM near −1.
+  Image board(16, 16), inverse(16, 16);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) {
+      float v = float((x + y) % 2);
+      board.set(x, y, Vec3(v, v, v));
+      inverse.set(x, y, Vec3(1 - v, 1 - v, 1 - v));
+    }
+  CHECK(compare_images(inverse, board).ssim < -0.9);
+}
+
+TEST_CASE("image_metrics: images under 11x11 use clipped windows", "[image_metrics][ssim]") {
+  Image a = random_image(8, 6, 5);
+  ImageMetrics m = compare_images(a, a);
+  CHECK(m.ssim_window == SsimWindow::Clipped);
+  CHECK(m.ssim_centres == 48u);
+  CHECK(m.ssim == Approx(1.0).epsilon(1e-12));
+  Image b = a;
+  b.rgb[0] += 0.5f;
+  ImageMetrics mb = compare_images(b, a);
+  CHECK(mb.ssim < 1.0);
+  CHECK(mb.ssim == Approx(ssim_direct(b, a, mb.ssim_range, true)).epsilon(1e-10));
+}
+
+TEST_CASE("image_metrics: different sizes are refused", "[image_metrics][badinput]") {
+  Image a(16, 16), b(16, 15);
+  CHECK_THROWS_AS(compare_images(a, b), InputError);
+  try {
+    compare_images(a, b, nullptr, "t.exr", "r.exr");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("16x16") != std::string::npos);
+    CHECK(std::string(e.what()).find("16x15") != std::string::npos);
+  }
+  Image mask(15, 16);
+  CHECK_THROWS_AS(compare_images(a, a, &mask), InputError);
+  Image empty;
+  CHECK_THROWS_AS(compare_images(empty, empty), InputError);
+}
+
+TEST_CASE("image_metrics: a mask excludes pixels", "[image_metrics][mask]") {
+  Image ref = random_image(16, 16, 21), test = ref;
+  // Pixels (2, 3) and (10, 12) differ by 1 in every channel.
+  test.set(2, 3, test.get(2, 3) + Vec3(1, 1, 1));
+  test.set(10, 12, test.get(10, 12) + Vec3(1, 1, 1));
+  Image mask = constant_image(16, 16, 1.f);
+  mask.set(2, 3, Vec3(0, 0, 0));
+  mask.set(10, 12, Vec3(0.2f, 0.6f, 0.6f));  // mean 0.4667 < 0.5: out
+  ImageMetrics m = compare_images(test, ref, &mask);
+  CHECK(m.pixels == 254u);
+  CHECK(m.masked_out == 2u);
+  CHECK(m.rmse == 0.0);
+  CHECK(m.mae == 0.0);
+  // Keep only the four pixels (2..3, 3..4): one differs → MSE = 1/4 (all channels differ by 1).
+  Image four = constant_image(16, 16, 0.f);
+  for (int y = 3; y <= 4; ++y)
+    for (int x = 2; x <= 3; ++x) four.set(x, y, Vec3(0.5f, 0.5f, 0.5f));  // mean 0.5: in
+  ImageMetrics q = compare_images(test, ref, &four);
+  CHECK(q.pixels == 4u);
+  CHECK(q.mse == Approx(0.25).epsilon(1e-6));
+  CHECK(q.mae == Approx(0.25).epsilon(1e-6));
+  // The four pixels lie within 5 pixels of the border (no whole window around them), so SSIM
+  // falls back to clipped windows over them.
+  CHECK(q.ssim_window == SsimWindow::Clipped);
+  CHECK(q.ssim_centres == 4u);
+  // A mask that selects nothing is refused.
+  Image none = constant_image(16, 16, 0.f);
+  CHECK_THROWS_AS(compare_images(test, ref, &none), InputError);
+}
+
+TEST_CASE("image_metrics: non-finite pixels are left out and counted", "[image_metrics]") {
+  Image ref = random_image(12, 12, 31), test = ref;
+  test.rgb[3 * 7 + 1] = std::nanf("");
+  ref.rgb[3 * 20] = INFINITY;
+  ImageMetrics m = compare_images(test, ref);
+  CHECK(m.nonfinite == 2u);
+  CHECK(m.pixels == 142u);
+  CHECK(m.rmse == 0.0);
+  CHECK(std::isfinite(m.ssim));
+}
+
+TEST_CASE("image_metrics: PNG masks: stored and compressed, all filters, grey, RGB16, palette",
+          "[image_metrics][mask][png]") {
+  TempDir tmp("metrics-png");
+  SECTION("the preview writer's PNG (stored deflate blocks) reads back") {
+    Image img(7, 5);
+    for (int y = 0; y < 5; ++y)
+      for (int x = 0; x < 7; ++x) img.set(x, y, Vec3(x / 6.f, y / 4.f, (x + y) % 2 ? 1.f : 0.f));
+    write_png(img, tmp / "m.png");
+    Image back = read_mask(tmp / "m.png");
+    REQUIRE(back.width == 7);
+    REQUIRE(back.height == 5);
+    const std::vector<uint8_t> q = to_srgb8(img, 0.f);
+    for (size_t i = 0; i < q.size(); ++i) CHECK(back.rgb[i] == Approx(q[i] / 255.0).margin(1e-7));
+  }
+  SECTION("8-bit grey, compressed, all five filter types") {
+    // Random values from a small alphabet (0, 85, 170, 255), so that Paeth's ties (equal
+    // distances to two neighbours) occur too.
+    const int w = 64, h = 40;
+    auto val = [](int x, int y) {
+      return 85u * (pf_rng_bits(pf_rng_key(9, 0), uint32_t(y * 64 + x), 0) & 3u);
+    };
+    std::vector<std::string> rows;
+    for (int y = 0; y < h; ++y) {
+      std::string r;
+      for (int x = 0; x < w; ++x) r += char(uint8_t(val(x, y)));
+      rows.push_back(r);
+    }
+    Image m = decode_png(make_png(w, h, 8, 0, rows, 1), "grey.png");
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float v = float(val(x, y) / 255.0);
+        CHECK(m.get(x, y).x == v);
+        CHECK(m.get(x, y).z == v);
+      }
+  }
+  SECTION("16-bit RGB") {
+    const int w = 4, h = 6;
+    std::vector<std::string> rows;
+    auto val = [](int x, int y, int c) {
+      return uint16_t((x * 9001 + y * 517 + c * 20000) % 65536);
+    };
+    for (int y = 0; y < h; ++y) {
+      std::string r;
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) {
+          r += char(val(x, y, c) >> 8);
+          r += char(val(x, y, c) & 0xFF);
+        }
+      rows.push_back(r);
+    }
+    Image m = decode_png(make_png(w, h, 16, 2, rows, 6), "rgb16.png");
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c)
+          CHECK(m.get(x, y)[c] == float(val(x, y, c) / 65535.0));
+  }
+  SECTION("2-bit palette") {
+    const int w = 7, h = 5;  // 14 bits per row: 2 bytes, the last 2 bits padding
+    std::string palette = {char(0), char(0), char(0), char(255), char(255), char(255),
+                           char(255), char(0), char(0), char(0), char(0), char(255)};
+    std::vector<std::string> rows;
+    auto idx = [](int x, int y) { return (x + 2 * y) % 4; };
+    for (int y = 0; y < h; ++y) {
+      std::string r(2, '\0');
+      for (int x = 0; x < w; ++x) r[size_t(x / 4)] |= char(idx(x, y) << (6 - 2 * (x % 4)));
+      rows.push_back(r);
+    }
+    Image m = decode_png(make_png(w, h, 2, 3, rows, 1, palette), "pal.png");
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c)
+          CHECK(m.get(x, y)[c] == float(uint8_t(palette[size_t(3 * idx(x, y) + c)]) / 255.0));
+  }
+  SECTION("damaged or foreign files are refused") {
+    std::vector<std::string> rows(3, std::string(3, '\x7f'));
+    std::string png = make_png(3, 3, 8, 0, rows, 1);
+    std::string bad = png;
+    bad[40] ^= 0x55;  // inside IDAT: CRC mismatch
+    CHECK_THROWS_AS(decode_png(bad, "bad.png"), InputError);
+    CHECK_THROWS_AS(decode_png(png.substr(0, png.size() / 2), "cut.png"), InputError);
+    CHECK_THROWS_AS(decode_png("hello", "text.png"), InputError);
+    std::ofstream(tmp / "text.exr") << "not an image";
+    CHECK_THROWS_AS(read_mask(tmp / "text.exr"), InputError);
+    CHECK_THROWS_AS(read_mask(tmp / "missing.png"), InputError);
+  }
+}
+
+TEST_CASE("image_metrics: JSON output", "[image_metrics][json]") {
+  Image a = constant_image(12, 12, 1.f), b = constant_image(12, 12, 1.25f);
+  const std::string same = metrics_json(compare_images(a, a), "a.exr", "a.exr", "");
+  CHECK(same.find("\"psnr\": null") != std::string::npos);  // +inf has no JSON number
+  CHECK(same.find("\"mask\": null") != std::string::npos);
+  CHECK(same.find("\"rmse\": 0,") != std::string::npos);
+  const std::string diff = metrics_json(compare_images(b, a), "b \"q\".exr", "a.exr", "m.png");
+  CHECK(diff.find("\"rmse\": 0.25,") != std::string::npos);
+  CHECK(diff.find("\"test\": \"b \\\"q\\\".exr\"") != std::string::npos);
+  CHECK(diff.find("\"mask\": \"m.png\"") != std::string::npos);
+  CHECK(diff.find("\"relmse_epsilon\": 0.01") != std::string::npos);
+  for (const char* key : {"\"mae\"", "\"psnr\"", "\"ssim\"", "\"ssim_dynamic_range\"",
+                          "\"psnr_peak\"", "\"pixels\"", "\"ssim_window\""})
+    CHECK(diff.find(key) != std::string::npos);
+}
+
+TEST_CASE("image_metrics: imgcompare tool: metrics printed and written, bad input refused",
+          "[image_metrics][tools]") {
+  TempDir tmp("imgcompare");
+  Image ref = random_image(20, 20, 41), test = ref;
+  for (float& v : test.rgb) v += 0.125f;
+  write_exr(ref, tmp / "ref.exr");
+  write_exr(test, tmp / "test.exr");
+  Image mask = constant_image(20, 20, 1.f);
+  mask.set(0, 0, Vec3(0, 0, 0));
+  write_png(mask, tmp / "mask.png");
+
+  auto r = test::run_tool("imgcompare",
+                          (tmp / "test.exr") + " " + (tmp / "ref.exr") + " --mask " +
+                              (tmp / "mask.png") + " --json " + (tmp / "m.json"),
+                          tmp);
+  INFO("stderr: " << r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.out.find("RMSE") != std::string::npos);
+  CHECK(r.out.find("SSIM") != std::string::npos);
+  const std::string js = slurp(tmp / "m.json");
+  CHECK(js.find("\"pixels\": 399") != std::string::npos);
+  CHECK(json_number(js, "rmse") == Approx(0.125).epsilon(1e-6));
+  CHECK(json_number(js, "mae") == Approx(0.125).epsilon(1e-6));
+
+  auto to_stdout = test::run_tool("imgcompare", (tmp / "test.exr") + " " + (tmp / "ref.exr") +
+                                                    " --json -", tmp);
+  CHECK(to_stdout.exit_code == 0);
+  CHECK(to_stdout.out.rfind("{", 0) == 0);
+
+  auto refused = [&](const std::string& args, const std::string& needle) {
+    std::filesystem::remove(tmp / "out.json");
+    auto rr = test::run_tool("imgcompare", args + " --json " + (tmp / "out.json"), tmp);
+    INFO("stderr: " << rr.err);
+    CHECK(rr.exit_code == 2);
+    CHECK(std::count(rr.err.begin(), rr.err.end(), '\n') == 1);
+    CHECK(rr.err.find(needle) != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(tmp / "out.json"));
+  };
+  write_exr(Image(20, 19), tmp / "small.exr");
+  refused((tmp / "test.exr") + " " + (tmp / "small.exr"), "same size");
+  refused((tmp / "missing.exr") + " " + (tmp / "ref.exr"), "missing.exr");
+  refused((tmp / "test.exr") + " " + (tmp / "ref.exr") + " --mask " + (tmp / "small.exr"),
+          "mask must have the images' size");
+  refused(tmp / "test.exr", "two images");
+  auto help = test::run_tool("imgcompare", "--help", tmp);
+  CHECK(help.exit_code == 0);
+  for (const char* k : {"--mask", "--json", "relMSE", "PSNR", "SSIM", "peak"})
+    CHECK(help.out.find(k) != std::string::npos);
+}
