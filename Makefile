@@ -3,6 +3,7 @@
 #   make render   install missing Debian packages, build (Release), render the default scene
 #   make test     install missing Debian packages, build (Release), run the test suite (ctest)
 #   make bench    build and run the benchmarks (long; results go to docs/BENCHMARKS.md by hand)
+#   make ch6      the thesis's ch. 6 experiments: tables and charts into docs/results/
 #
 # Variables: SCENE (a name in data/, default cornell-box), OUT (default out), BUILD (default build),
 # JOBS (default: all cores).
@@ -12,11 +13,11 @@ SCENE ?= cornell-box
 OUT   ?= out
 BIN   := $(abspath $(BUILD))/bin
 
-.PHONY: all deps configure build render test bench clean help
+.PHONY: all deps configure build render test bench ch6 clean help
 all: build
 
 help:
-	@sed -n '2,9p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,10p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@tools/setup/install-deps.sh
@@ -37,6 +38,9 @@ test: build
 
 bench: build
 	@$(MAKE) --no-print-directory -f pipelines/bench.mk BIN=$(BIN) OUT=$(OUT)
+
+ch6: build
+	@$(MAKE) --no-print-directory -f pipelines/ch6.mk BUILD=$(BUILD) OUT=$(OUT)
 
 clean:
 	rm -rf $(BUILD)
