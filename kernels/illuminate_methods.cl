@@ -367,11 +367,14 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  * photons of other cells that share a slot lie outside the box, farther than R, and the rule
  * rejects them. A slot repeats within the box only when two of its cells' linear indices are
  * congruent modulo the table size: along a row when the row is longer than the table, across rows
- * when row offsets are congruent — both tested arithmetically. */
+ * when row offsets are congruent — both tested arithmetically. When the grid has no more cells
+ * than the table has slots (`unique`, the host's choice of table size makes that the common case)
+ * no two cells share a slot, and a row is one run of photons (two if it wraps around the table). */
 __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
                                __global const pf_photon* sorted, __global const int* slot_start,
                                float ox, float oy, float oz, float cell, int nx, int ny, int nz,
-                               uint mask, __global const pf_material* mats, int skip_direct,
+                               uint mask, int unique, __global const pf_material* mats,
+                               int skip_direct,
                                __global int* acc_m, __global pf_acc* acc_tau) {
   const int hi = (int)get_global_id(0);
   if (hi >= count) return;
@@ -386,6 +389,16 @@ __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
     for (int z = z0; z <= z1; ++z)
       for (int y = y0; y <= y1; ++y) {
         const uint first = pf_hash_slot(x0, y, z, (uint)nx, (uint)ny, mask);
+        if (unique) { /* the row's slots first .. first + len − 1 (mod table): 1 or 2 runs */
+          const uint stop = first + len <= mask + 1 ? first + len : mask + 1;
+          int end = slot_start[stop];
+          for (int j = slot_start[first]; j < end; ++j) pf_gather_global(&h, &sorted[j], skip_direct, 0);
+          if (first + len > mask + 1) {
+            end = slot_start[first + len - (mask + 1)];
+            for (int j = 0; j < end; ++j) pf_gather_global(&h, &sorted[j], skip_direct, 0);
+          }
+          continue;
+        }
         for (uint dx = 0; dx < len && dx <= mask; ++dx) { /* dx > mask: repeats within the row */
           const uint k = (first + dx) & mask;
           int seen = 0; /* read by an earlier row of the box? */

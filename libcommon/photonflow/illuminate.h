@@ -36,7 +36,8 @@ struct PpmOptions {
   // or cluster_grid with max_bins) with the context's work-group size.
   ClusterSet* clusters = nullptr;
   int cluster_iterations = 10;
-  // hash-grid: slots of the hash table, a power of two; 0 = the smallest >= max(1024, photons).
+  // hash-grid: slots of the hash table, a power of two; 0 = the smallest >= max(1024, photons),
+  // or, when up to 4 times that holds every cell of the grid, the smallest that does.
   // Fewer slots mean more cells per slot (more photons read and skipped), never a wrong result.
   int hash_slots = 0;
   // hash-grid: cell side in units of the largest hitpoint radius (> 0). Smaller cells fit the

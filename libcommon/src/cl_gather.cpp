@@ -223,6 +223,7 @@ struct DeviceHashGrid {
   float cell = 1.f;
   cl_int n[3] = {1, 1, 1};
   cl_uint mask = 0;
+  cl_int unique = 0;  // every cell has a slot of its own (cells <= slots)
 };
 
 DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t n,
@@ -234,12 +235,18 @@ DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t 
     g.n[a] = cl_int(std::clamp(cells, 1.0, double(1 << 24)));
   }
   g.cell = cell;
+  // Slots: a power of two >= the photons; up to 4 times that when it then holds every cell (no
+  // two cells share a slot: the gather reads whole rows as runs, see gather_hash_grid).
   size_t table = 1024;
   while (table < n && table < (size_t(1) << 30)) table <<= 1;
+  const double cells = double(g.n[0]) * double(g.n[1]) * double(g.n[2]);
+  if (cells > double(table) && cells <= 4.0 * double(table))
+    while (double(table) < cells) table <<= 1;
   if (slots > 0) {
     if (slots & (slots - 1)) throw input_error("", "hash-grid slots must be a power of two");
     table = size_t(slots);
   }
+  g.unique = cells <= double(table) ? 1 : 0;
   g.mask = cl_uint(table - 1);
   const ClBuffer& counts = dev.scratch("hash.start", (table + 1) * sizeof(cl_int));
   dev.fill_zero(counts, (table + 1) * sizeof(cl_int));
@@ -448,8 +455,8 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
         t0 = dev.kernel_seconds();
         cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
         dev.args(k, hps, cl_int(nh), *g.sorted, *g.slot_start, g.origin[0], g.origin[1],
-                 g.origin[2], g.cell, g.n[0], g.n[1], g.n[2], g.mask, mats, skip_direct, acc_m,
-                 acc_tau);
+                 g.origin[2], g.cell, g.n[0], g.n[1], g.n[2], g.mask, g.unique, mats, skip_direct,
+                 acc_m, acc_tau);
         dev.run(k, nh);
         times.work_items = nh;
       } else {  // kmeans-clusters, grid-kmeans, grid-gridclusters
