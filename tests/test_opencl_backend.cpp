@@ -202,7 +202,7 @@ TEST_CASE("OpenCL: image after 10 PPM passes equals the CPU backend's", "[opencl
   Provenance prov;
   HitpointSet cpu = render_progressive(scene, opt, false, prov);
   opt.device = dev.get();
-  opt.ppm.method = default_gather_method(true);  // grid-kmeans, clusters made by the driver
+  opt.ppm.method = GatherMethod::GridKmeans;  // clusters made once by the driver
   HitpointSet gpu = render_progressive(scene, opt, false, prov);
   CHECK(gpu.passes == 10);
   CHECK(gpu.photons_emitted == cpu.photons_emitted);

@@ -48,7 +48,7 @@ inline bool list_devices_requested(const cxxopts::ParseResult& a) {
 inline void add_method_option(cxxopts::Options& o) {
   o.add_options()
     ("method", "PPM hitpoint illumination (gather_method.h; every method gathers the same "
-     "photons): auto (grid on the cpu backend, grid-kmeans on opencl) | " + gather_method_choices(),
+     "photons): auto (grid on the cpu backend, hash-grid on opencl) | " + gather_method_choices(),
      cxxopts::value<std::string>()->default_value("auto"));
 }
 

@@ -67,7 +67,8 @@ const char* gather_method_name(GatherMethod m);
 GatherMethod parse_gather_method(const std::string& name);
 // "grid | flann | naive | ..." for --help.
 std::string gather_method_choices();
-// The method a backend uses when --method is not given: grid on the CPU, grid-kmeans on OpenCL.
+// The method a backend uses when --method is not given: grid on the CPU, hash-grid on OpenCL (the
+// fastest on PoCL in docs/BENCHMARKS.md, and it needs no clusters).
 GatherMethod default_gather_method(bool device);
 
 }  // namespace pf

@@ -53,7 +53,7 @@ GatherMethod parse_gather_method(const std::string& name) {
 }
 
 GatherMethod default_gather_method(bool device) {
-  return device ? GatherMethod::GridKmeans : GatherMethod::Grid;
+  return device ? GatherMethod::HashGrid : GatherMethod::Grid;
 }
 
 }  // namespace pf
