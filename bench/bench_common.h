@@ -1,9 +1,12 @@
 // bench_common.h — helpers shared by the benchmarks: clocks, medians, image sizes, the benchmark
 // scene at a given resolution. Benchmarks only (not part of libcommon).
 #pragma once
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -26,6 +29,27 @@ inline double median(std::vector<double> v) {
   size_t n = v.size();
   if (n == 0) return 0;
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Milliseconds with 3 significant digits or so: "1234", "12.3", "0.12".
+inline std::string fmt_ms(double ms) {
+  char b[64];
+  if (ms >= 100)
+    std::snprintf(b, sizeof b, "%.0f", ms);
+  else if (ms >= 1)
+    std::snprintf(b, sizeof b, "%.1f", ms);
+  else
+    std::snprintf(b, sizeof b, "%.2f", ms);
+  return b;
+}
+
+// Idle OpenMP threads must not spin while PoCL's threads run an OpenCL measurement on the same
+// cores: libgomp reads OMP_WAIT_POLICY when it is loaded, so a benchmark that times both calls this
+// first thing in main and is re-executed once with the policy set (unless the caller chose one).
+inline void reexec_with_passive_openmp(char** argv) {
+  if (std::getenv("OMP_WAIT_POLICY")) return;
+  setenv("OMP_WAIT_POLICY", "passive", 1);
+  execv("/proc/self/exe", argv);
 }
 
 struct Size {

@@ -52,17 +52,6 @@ using pf::bench::now;
 using pf::bench::parse_sizes;
 using pf::bench::Size;
 
-std::string fmt(double ms) {
-  char b[64];
-  if (ms >= 100)
-    std::snprintf(b, sizeof b, "%.0f", ms);
-  else if (ms >= 1)
-    std::snprintf(b, sizeof b, "%.1f", ms);
-  else
-    std::snprintf(b, sizeof b, "%.2f", ms);
-  return b;
-}
-
 // The methods whose work-groups read all photons of a mesh (or all photons): their cost per
 // hitpoint (per cluster, for kmeans-clusters, whose clusters of a sample are as many times fewer
 // as they are wider) does not depend on the other hitpoints.
@@ -81,11 +70,7 @@ struct Row {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // OpenMP workers must not spin while PoCL's threads run (see bench_opencl.cpp).
-  if (!std::getenv("OMP_WAIT_POLICY")) {
-    setenv("OMP_WAIT_POLICY", "passive", 1);
-    execv("/proc/self/exe", argv);
-  }
+  pf::bench::reexec_with_passive_openmp(argv);
   cxxopts::Options o("bench_gather", "Gather methods per pass (thesis Tables 7.3-7.5)");
   o.add_options()
     ("scene", "baked scene.h5 (camera resolution overridden per size); default: bake --dae",
@@ -224,8 +209,8 @@ int main(int argc, char** argv) {
           u.row.same &= u.work.hitpoints[k].n_photons == ref.hitpoints[u.index[k]].n_photons;
         table[{int(u.m), int(si)}] = u.row;
         std::fprintf(stderr, "  %-20s %10s ms (ordering %s, gather %s)%s\n", info.name,
-                     fmt(u.row.pass_ms).c_str(), fmt(median(u.order_ms)).c_str(),
-                     fmt(median(u.gather_ms)).c_str(), u.row.same ? "" : "  (DIFFERENT PHOTONS)");
+                     pf::bench::fmt_ms(u.row.pass_ms).c_str(), pf::bench::fmt_ms(median(u.order_ms)).c_str(),
+                     pf::bench::fmt_ms(median(u.gather_ms)).c_str(), u.row.same ? "" : "  (DIFFERENT PHOTONS)");
       }
     }
     std::printf("## Table 7.3: one PPM pass per method (ms; %u photons)\n\n", photons);
@@ -242,10 +227,10 @@ int main(int argc, char** argv) {
         const Row& r = table[{int(m), int(si)}];
         auto naive = table.find({int(pf::GatherMethod::Naive), int(si)});
         std::string speed = naive != table.end() && r.pass_ms > 0
-                                ? fmt(naive->second.pass_ms / r.pass_ms) : "—";
+                                ? pf::bench::fmt_ms(naive->second.pass_ms / r.pass_ms) : "—";
         std::string mark = r.sample > 1 ? " (×" + std::to_string(r.sample) + ")" : "";
-        std::printf(" %s%s | %s | %s |", fmt(r.pass_ms).c_str(), mark.c_str(),
-                    info.device ? fmt(r.kernel_ms).c_str() : "—", speed.c_str());
+        std::printf(" %s%s | %s | %s |", pf::bench::fmt_ms(r.pass_ms).c_str(), mark.c_str(),
+                    info.device ? pf::bench::fmt_ms(r.kernel_ms).c_str() : "—", speed.c_str());
         same &= r.same;
       }
       std::printf(" %s |\n", same ? "yes" : "NO");
@@ -299,7 +284,7 @@ int main(int argc, char** argv) {
       const double gk = pass_ms(pf::GatherMethod::GridKmeans, km);
       const double gg = pass_ms(pf::GatherMethod::GridGridClusters, gr);
       std::printf("| %dx%d | %.3f | %.3f | %s | %s |\n", sz.w, sz.h, median(tk), median(tg),
-                  fmt(gk).c_str(), fmt(gg).c_str());
+                  pf::bench::fmt_ms(gk).c_str(), pf::bench::fmt_ms(gg).c_str());
       char line[256];
       std::snprintf(line, sizeof line, "| %dx%d | %zu | %zu | %zu | %zu |\n", sz.w, sz.h,
                     fresh.hitpoints.size(), pf::mesh_sorted_order(fresh, wg).size(),

@@ -101,27 +101,10 @@ pf::HitpointSet state_of(const pf::Scene& scene, pf::EyePassResult r) {
   return pf::make_hitpoint_set(std::move(r), pf::DirectMode::Photons, scene.scene_id);
 }
 
-std::string fmt(double ms) {
-  char b[64];
-  if (ms >= 100)
-    std::snprintf(b, sizeof b, "%.0f", ms);
-  else if (ms >= 1)
-    std::snprintf(b, sizeof b, "%.1f", ms);
-  else
-    std::snprintf(b, sizeof b, "%.2f", ms);
-  return b;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Idle OpenMP threads must not spin while PoCL's threads run the next (interleaved) OpenCL
-  // measurement on the same cores: libgomp reads OMP_WAIT_POLICY when it is loaded, so re-execute
-  // once with it set (unless the caller chose a policy).
-  if (!std::getenv("OMP_WAIT_POLICY")) {
-    setenv("OMP_WAIT_POLICY", "passive", 1);
-    execv("/proc/self/exe", argv);
-  }
+  pf::bench::reexec_with_passive_openmp(argv);
   cxxopts::Options o("bench_opencl", "CPU backend vs OpenCL backend per block (thesis Tables 7.1/7.2)");
   o.add_options()
     ("scene", "baked scene.h5 (camera resolution overridden per size); default: bake --dae",
@@ -231,12 +214,12 @@ int main(int argc, char** argv) {
       std::printf("## %dx%d: %zu hitpoints, %zu photons stored in pass 0\n\n", sz.w, sz.h,
                   fresh.hitpoints.size(), pass0.size());
       std::printf("First OpenCL calls (with code generation): ray tracing %s ms, photon tracing %s ms\n\n",
-                  fmt(first_rt).c_str(), fmt(first_pt).c_str());
+                  pf::bench::fmt_ms(first_rt).c_str(), pf::bench::fmt_ms(first_pt).c_str());
       std::printf("| block | CPU backend (ms) | OpenCL (ms) | OpenCL kernels only (ms) | OpenCL / CPU |\n");
       std::printf("|---|---:|---:|---:|---:|\n");
       auto row = [&](const char* name, Timing c, Timing g, const char* note) {
-        std::printf("| %s%s | %s | %s | %s | %.2f |\n", name, note, fmt(c.wall_ms).c_str(),
-                    fmt(g.wall_ms).c_str(), fmt(g.kernel_ms).c_str(), g.wall_ms / c.wall_ms);
+        std::printf("| %s%s | %s | %s | %s | %.2f |\n", name, note, pf::bench::fmt_ms(c.wall_ms).c_str(),
+                    pf::bench::fmt_ms(g.wall_ms).c_str(), pf::bench::fmt_ms(g.kernel_ms).c_str(), g.wall_ms / c.wall_ms);
       };
       row("ray tracing", rt_cpu, rt_cl, "");
       row("photon tracing", pt_cpu, pt_cl, "");
