@@ -326,8 +326,9 @@ TEST_CASE("the cluster tool writes loadable clusters and refuses a foreign scene
   CHECK_THAT(bad.err, Catch::Contains("different scene"));
   auto choice = test::run_tool("cluster", "--scene " + (tmp / "scene.h5") + " --hitpoints " +
                                               (tmp / "hp.h5") + " -o " + (tmp / "x.h5") +
-                                              " --method ga", tmp);
+                                              " --method spectral", tmp);
   CHECK(choice.exit_code == kExitBadInput);
+  CHECK(!std::filesystem::exists(tmp / "x.h5"));
   auto help = test::run_tool("cluster", "--help", tmp);
   CHECK(help.exit_code == 0);
   CHECK_THAT(help.out, Catch::Contains("wg-size") && Catch::Contains("default: 64"));

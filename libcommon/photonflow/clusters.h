@@ -25,6 +25,7 @@
 //     load_clusters refuses a file whose hitpoints_sha256 does not match the hitpoints.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,7 +43,7 @@ struct ClusterSet {
   std::vector<pf_cluster> clusters;  // ordered by mesh, then as the method made them
   std::vector<int32_t> order;        // Σ padded_count entries: hitpoint index or −1 (filler)
   int wg_size = 0;                   // work-group size
-  std::string method;                // "kmeans" or "grid"
+  std::string method;                // "kmeans", "grid" or "ga" (ga_clusters.h)
   std::string scene_id;
   uint64_t hitpoint_count = 0;       // hitpoints of the set the clusters were made for
   std::string hitpoints_sha256;      // hitpoints_hash() of that set
@@ -63,8 +64,9 @@ struct ClusterStats {
 // summed in double in hitpoint order), then a final assignment. Empty clusters are dropped;
 // members are listed in ascending hitpoint index and the centre is their mean. The result depends
 // on the hitpoints, wg_size, iterations and seed only (not on `threads`, 0 = all cores). The
-// Morton seeding is deterministic and does not use `seed` yet (it is recorded in the file's
-// provenance and reserved for randomised seeding / the evolutionary clustering of issue 6).
+// Morton seeding is deterministic and does not use `seed` (it is recorded in the file's
+// provenance; the evolutionary clustering, ga_clusters.h, starts from these clusters and draws its
+// own random streams from its seed).
 ClusterSet cluster_kmeans(const HitpointSet& h, int wg_size, int iterations, uint32_t seed,
                           int threads = 0);
 
@@ -103,7 +105,24 @@ void update_cluster_radii(ClusterSet& c, const HitpointSet& h);
 // radius or PPM state, which change between passes without invalidating the clusters).
 std::string hitpoints_hash(const HitpointSet& h);
 
-void save_clusters(const ClusterSet& c, const std::string& path, const Provenance& prov);
+// Building blocks of the clustering methods (k-means and grid here, the evolutionary clustering of
+// ga_clusters.h), so that every method makes its clusters by the same rules:
+//   empty_cluster_set  a set without clusters bound to `h` (wg_size, method, scene_id, hitpoint
+//                      count and hash);
+//   cluster_centre_radius  centre = mean of the members (summed in double in the given order,
+//                      rounded to float) and the shared radius R of the rule above;
+//   append_cluster     appends one cluster of `members` (ascending hitpoint indices, all on `mesh`,
+//                      n > 0) with that centre and radius, padded with fillers to a multiple of
+//                      wg_size.
+ClusterSet empty_cluster_set(const HitpointSet& h, int wg_size, const std::string& method);
+void cluster_centre_radius(const HitpointSet& h, const int32_t* members, size_t n, float centre[3],
+                           float* radius);
+void append_cluster(ClusterSet& c, int mesh, const int32_t* members, size_t n, const HitpointSet& h);
+
+// Writes clusters.h5; `extra`, when given, adds method-specific groups (the GA's /ga) before the
+// file is committed.
+void save_clusters(const ClusterSet& c, const std::string& path, const Provenance& prov,
+                   const std::function<void(h5::Writer&)>& extra = {});
 // Loads clusters.h5 and refuses (InputError, one line) a file made for another scene or other
 // hitpoints than `h`, or one that is not a valid clustering of `h`.
 ClusterSet load_clusters(const std::string& path, const HitpointSet& h);

@@ -107,36 +107,6 @@ float shared_radius(const float c[3], const int32_t* members, size_t n, const Hi
   return r;
 }
 
-// Appends one cluster of `members` (ascending hitpoint indices) with centre = their mean.
-void add_cluster(ClusterSet& c, int mesh, const int32_t* members, size_t n, const HitpointSet& h) {
-  if (n == 0) return;
-  double s[3] = {0, 0, 0};
-  for (size_t k = 0; k < n; ++k)
-    for (int a = 0; a < 3; ++a) s[a] += h.hitpoints[size_t(members[k])].position[a];
-  pf_cluster cl{};
-  for (int a = 0; a < 3; ++a) cl.centre[a] = float(s[a] / double(n));
-  cl.radius = shared_radius(cl.centre, members, n, h);
-  cl.mesh = mesh;
-  cl.first = pf_int(c.order.size());
-  cl.count = pf_int(n);
-  const size_t wg = size_t(c.wg_size);
-  cl.padded_count = pf_int((n + wg - 1) / wg * wg);
-  c.order.insert(c.order.end(), members, members + n);
-  c.order.insert(c.order.end(), size_t(cl.padded_count) - n, -1);
-  c.clusters.push_back(cl);
-}
-
-ClusterSet empty_set(const HitpointSet& h, int wg_size, const char* method) {
-  if (wg_size < 1) throw std::invalid_argument("clusters: work-group size must be >= 1");
-  ClusterSet c;
-  c.wg_size = wg_size;
-  c.method = method;
-  c.scene_id = h.scene_id;
-  c.hitpoint_count = h.hitpoints.size();
-  c.hitpoints_sha256 = hitpoints_hash(h);
-  return c;
-}
-
 // Spreads the low 21 bits of v to every third bit.
 inline uint64_t spread3(uint64_t v) {
   v &= 0x1fffff;
@@ -323,10 +293,45 @@ void kmeans_mesh(ClusterSet& out, int mesh, const std::vector<int32_t>& idx, con
     for (size_t t = 0; t < n; ++t) members[size_t(cur[size_t(assign[t])]++)] = idx[t];
   }
   for (size_t j = 0; j < k; ++j)
-    add_cluster(out, mesh, members.data() + start[j], size_t(start[j + 1] - start[j]), h);
+    append_cluster(out, mesh, members.data() + start[j], size_t(start[j + 1] - start[j]), h);
 }
 
 }  // namespace
+
+ClusterSet empty_cluster_set(const HitpointSet& h, int wg_size, const std::string& method) {
+  if (wg_size < 1) throw std::invalid_argument("clusters: work-group size must be >= 1");
+  ClusterSet c;
+  c.wg_size = wg_size;
+  c.method = method;
+  c.scene_id = h.scene_id;
+  c.hitpoint_count = h.hitpoints.size();
+  c.hitpoints_sha256 = hitpoints_hash(h);
+  return c;
+}
+
+void cluster_centre_radius(const HitpointSet& h, const int32_t* members, size_t n, float centre[3],
+                           float* radius) {
+  double s[3] = {0, 0, 0};
+  for (size_t k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) s[a] += h.hitpoints[size_t(members[k])].position[a];
+  for (int a = 0; a < 3; ++a) centre[a] = n ? float(s[a] / double(n)) : 0.f;
+  *radius = shared_radius(centre, members, n, h);
+}
+
+// Appends one cluster of `members` (ascending hitpoint indices) with centre = their mean.
+void append_cluster(ClusterSet& c, int mesh, const int32_t* members, size_t n, const HitpointSet& h) {
+  if (n == 0) return;
+  pf_cluster cl{};
+  cluster_centre_radius(h, members, n, cl.centre, &cl.radius);
+  cl.mesh = mesh;
+  cl.first = pf_int(c.order.size());
+  cl.count = pf_int(n);
+  const size_t wg = size_t(c.wg_size);
+  cl.padded_count = pf_int((n + wg - 1) / wg * wg);
+  c.order.insert(c.order.end(), members, members + n);
+  c.order.insert(c.order.end(), size_t(cl.padded_count) - n, -1);
+  c.clusters.push_back(cl);
+}
 
 std::vector<int32_t> mesh_sorted_order(const HitpointSet& h, int wg_size) {
   if (wg_size < 1) throw std::invalid_argument("clusters: work-group size must be >= 1");
@@ -357,7 +362,7 @@ ClusterSet cluster_kmeans(const HitpointSet& h, int wg_size, int iterations, uin
                           int threads) {
   (void)seed;  // the Morton seeding is deterministic (clusters.h)
   if (iterations < 0) throw std::invalid_argument("clusters: negative iteration count");
-  ClusterSet c = empty_set(h, wg_size, "kmeans");
+  ClusterSet c = empty_cluster_set(h, wg_size, "kmeans");
   const int nt = threads > 0 ? threads : omp_get_max_threads();
   auto per_mesh = split_by_mesh(h);
   c.order.reserve(h.hitpoints.size() + h.hitpoints.size() / 4);
@@ -388,7 +393,7 @@ size_t occupied_cells(const pf_mesh_grid& g, const HitpointSet& h, const std::ve
 
 ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins) {
   if (max_bins < 0) throw std::invalid_argument("clusters: max_bins must be >= 0");
-  ClusterSet c = empty_set(h, wg_size, "grid");
+  ClusterSet c = empty_cluster_set(h, wg_size, "grid");
   auto per_mesh = split_by_mesh(h);
   c.order.reserve(h.hitpoints.size() + h.hitpoints.size() / 8);
   for (size_t m = 0; m < per_mesh.size(); ++m) {
@@ -421,7 +426,7 @@ ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins) {
     const size_t wg = size_t(wg_size);
     for (size_t e = 0; e < cells; ++e)
       for (size_t b = size_t(start[e]); b < size_t(start[e + 1]); b += wg)
-        add_cluster(c, int(m), sorted.data() + b, std::min(wg, size_t(start[e + 1]) - b), h);
+        append_cluster(c, int(m), sorted.data() + b, std::min(wg, size_t(start[e + 1]) - b), h);
   }
   return c;
 }
@@ -497,7 +502,8 @@ const h5::Compound& h5_type_cluster() {
 }
 }  // namespace
 
-void save_clusters(const ClusterSet& c, const std::string& path, const Provenance& prov) {
+void save_clusters(const ClusterSet& c, const std::string& path, const Provenance& prov,
+                   const std::function<void(h5::Writer&)>& extra) {
   h5::Writer w(path, kClustersFormat, kClustersVersion);
   w.attr("/", "scene_id", c.scene_id);
   w.attr("/", "wg_size", int64_t(c.wg_size));
@@ -510,6 +516,7 @@ void save_clusters(const ClusterSet& c, const std::string& path, const Provenanc
              "over the members, mesh, first, count and padded_count in /order");
   w.write("/order", c.order);
   w.describe("/order", "", "hitpoint index of each work-item, -1 = filler (cluster tails)");
+  if (extra) extra(w);
   write_provenance(w, prov);
   w.commit();
 }
