@@ -4,6 +4,7 @@
 #   make test     install missing Debian packages, build (Release), run the test suite (ctest)
 #   make bench    build and run the benchmarks (long; results go to docs/BENCHMARKS.md by hand)
 #   make ch6      the thesis's ch. 6 experiments: tables and charts into docs/results/
+#   make accuracy speed against accuracy: error vs time and passes, charts into docs/results/
 #
 # Variables: SCENE (a name in data/, default cornell-box), OUT (default out), BUILD (default build),
 # JOBS (default: all cores).
@@ -13,11 +14,11 @@ SCENE ?= cornell-box
 OUT   ?= out
 BIN   := $(abspath $(BUILD))/bin
 
-.PHONY: all deps configure build render test bench ch6 clean help
+.PHONY: all deps configure build render test bench ch6 accuracy clean help
 all: build
 
 help:
-	@sed -n '2,10p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,11p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@tools/setup/install-deps.sh
@@ -41,6 +42,9 @@ bench: build
 
 ch6: build
 	@$(MAKE) --no-print-directory -f pipelines/ch6.mk BUILD=$(BUILD) OUT=$(OUT)
+
+accuracy: build
+	@$(MAKE) --no-print-directory -f pipelines/accuracy.mk BUILD=$(BUILD) OUT=$(OUT)
 
 clean:
 	rm -rf $(BUILD)

@@ -1,7 +1,8 @@
 // render_driver.h — progressive photon mapping in one process (the `render` tool): the same stage
 // functions as the staged route (trace_hitpoints, trace_photons, ppm_pass, synthesize), with no
-// files between passes, an iteration interface (SmallVCM's RunIteration) and atomic checkpoints
-// of the hitpoint state for --resume.
+// files between passes, an iteration interface (SmallVCM's RunIteration), atomic checkpoints
+// of the hitpoint state for --resume, and progressive snapshots with a run record (the
+// (passes, seconds) pairs of the speed–accuracy pipeline, pipelines/accuracy.mk).
 //
 // With the same scene, seed and options, pass p here traces exactly the photons that
 // `trace-photons --first-pass p` writes, and gathers them exactly as `illuminate` does, so both
@@ -10,6 +11,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "photonflow/cl_runtime.h"
 #include "photonflow/clusters.h"
@@ -29,6 +31,8 @@ struct RenderOptions {
   int passes = 16;                 // total photon passes of the run
   std::string checkpoint;          // hitpoint-state file ("" = none)
   int checkpoint_every = 10;       // passes between checkpoints
+  int snapshot_every = 0;          // passes between snapshot callbacks (0 = none)
+  std::vector<int> snapshot_at;    // further pass counts with a snapshot callback (any order)
   ClContext* device = nullptr;     // OpenCL backend (cl_backend.h, ppm.method); nullptr = CPU
 };
 
@@ -62,11 +66,61 @@ class ProgressiveRenderer {
   std::unique_ptr<ClusterSet> clusters_;
 };
 
+// Where a run stands after a pass (snapshot callbacks and the run record).
+//   seconds: wall time of this process's rendering work — the eye pass (unless the run resumed
+//   from a checkpoint) and every photon pass with its gather — without the time spent in snapshot
+//   callbacks, in checkpoint writes and in building OpenCL programs (a one-off cost, cached by the
+//   driver; build_seconds says how much it was). These are the seconds a speed–accuracy chart
+//   puts on its time axis: the cost of the image, not of watching it.
+struct RenderStatus {
+  int passes = 0;                 // photon passes in the state
+  int target = 0;                 // passes asked for (opt.passes)
+  uint64_t photons_emitted = 0;   // N_emitted of eq. 3.19, all passes in the state
+  uint64_t photons_stored = 0;    // photons stored by the passes this process traced
+  double seconds = 0;             // rendering wall time (above)
+  double build_seconds = 0;       // OpenCL program builds so far (not in `seconds`)
+  double mean_radius = 0;         // mean gather radius R of the hitpoints (eq. 3.16), world units
+  bool resumed = false;           // the run continued a checkpoint
+};
+
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final
-// state. `on_pass(done, photons)` is called after every pass (progress display).
-HitpointSet render_progressive(const Scene& scene, const RenderOptions& opt, bool resume,
-                               const Provenance& prov,
-                               const std::function<void(int, double)>& on_pass = {});
+// state. `on_pass(done, photons)` is called after every pass (progress display);
+// `on_snapshot(state, status)` after every pass whose count is a multiple of opt.snapshot_every
+// (> 0) or is listed in opt.snapshot_at, including the last when it is one. `status`, when
+// given, receives the final status.
+HitpointSet render_progressive(
+    const Scene& scene, const RenderOptions& opt, bool resume, const Provenance& prov,
+    const std::function<void(int, double)>& on_pass = {},
+    const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot = {},
+    RenderStatus* status = nullptr);
+
+// One image a run wrote (a snapshot or the final image) and the run's status when it was taken.
+struct RenderImageRecord {
+  std::string path;
+  RenderStatus status;
+};
+
+// True when a snapshot is due after `passes` passes (opt.snapshot_every, opt.snapshot_at).
+bool snapshot_due(const RenderOptions& opt, int passes);
+
+// A list of pass counts "1,2,4,8" (comma-separated positive integers, no spaces needed) as
+// --snapshot-at takes it; InputError naming `option` for anything else.
+std::vector<int> parse_pass_list(const std::string& text, const std::string& option);
+
+// The snapshot file name: `pattern` with every "{pass}" replaced by `passes`, zero-padded to the
+// digits of `total` so that names sort in pass order.
+std::string render_snapshot_name(const std::string& pattern, int passes, int total);
+
+// The run record (render's images carry no provenance) as a JSON object:
+//   {"tool", "version", "git_hash", "seed", "command_line", "wall_time_s",
+//    "parameters": {name: value, ...}, "inputs": [{"role", "path", "sha256", "format",
+//    "scene_id"}, ...], "images": [{"path", "passes", "target", "photons_emitted",
+//    "photons_stored", "seconds", "build_seconds", "mean_radius", "resumed"}, ...]}
+// `images` in the order written: (passes, seconds) pairs for convergence charts.
+std::string render_record_json(const Provenance& prov, const std::vector<RenderImageRecord>& images);
+// Writes it to `path` atomically; InputError if it cannot.
+void write_render_record(const std::string& path, const Provenance& prov,
+                         const std::vector<RenderImageRecord>& images);
 
 }  // namespace pf

@@ -3,7 +3,14 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <climits>
+#include <cstdint>
+#include <sstream>
+
 #include "photonflow/cl_backend.h"
+#include "photonflow/text_file.h"
+#include "photonflow/version.h"
 
 namespace pf {
 
@@ -54,35 +61,155 @@ void ProgressiveRenderer::save_state(const std::string& path, const Provenance& 
   save_hitpoints(state_, path, prov);
 }
 
-HitpointSet render_progressive(const Scene& scene, const RenderOptions& opt, bool resume,
-                               const Provenance& prov,
-                               const std::function<void(int, double)>& on_pass) {
+HitpointSet render_progressive(
+    const Scene& scene, const RenderOptions& opt, bool resume, const Provenance& prov,
+    const std::function<void(int, double)>& on_pass,
+    const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot,
+    RenderStatus* status) {
   bool from_checkpoint = resume && !opt.checkpoint.empty() && access(opt.checkpoint.c_str(), F_OK) == 0;
   std::unique_ptr<ProgressiveRenderer> r;
+  HitpointSet loaded;
   if (from_checkpoint) {
-    HitpointSet state = load_hitpoints(opt.checkpoint);
-    require_scene(opt.checkpoint, state.scene_id, scene.scene_id, scene.source);
-    if (state.estimator == "classic")
+    loaded = load_hitpoints(opt.checkpoint);
+    require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
+    if (loaded.estimator == "classic")
       throw input_error(opt.checkpoint, "holds a classic photon-mapping estimate, not a PPM state",
                         "delete it or pass another --checkpoint");
-    if (state.passes > opt.passes)
+    if (loaded.passes > opt.passes)
       throw input_error(opt.checkpoint,
-                        "already has " + std::to_string(state.passes) + " passes, more than --passes",
+                        "already has " + std::to_string(loaded.passes) + " passes, more than --passes",
                         "raise --passes or start without --resume");
-    r = std::make_unique<ProgressiveRenderer>(scene, opt, std::move(state));
-  } else {
-    r = std::make_unique<ProgressiveRenderer>(scene, opt);
   }
+  // The rendering clock (RenderStatus::seconds): starts before the eye pass; the time spent in
+  // checkpoints, snapshot callbacks and OpenCL program builds is taken off it.
+  Stopwatch clock;
+  double aside = 0;
+  const double build0 = opt.device ? opt.device->build_seconds() : 0.0;
+  if (from_checkpoint)
+    r = std::make_unique<ProgressiveRenderer>(scene, opt, std::move(loaded));
+  else
+    r = std::make_unique<ProgressiveRenderer>(scene, opt);
+  RenderStatus st;
+  st.target = opt.passes;
+  st.resumed = from_checkpoint;
+  auto update_status = [&] {
+    st.passes = r->passes_done();
+    st.photons_emitted = r->state().photons_emitted;
+    st.photons_stored = r->photons_traced();
+    st.build_seconds = opt.device ? opt.device->build_seconds() - build0 : 0.0;
+    st.seconds = clock.seconds() - aside - st.build_seconds;
+  };
+  // The hitpoints' mean radius, for the record (outside the rendering clock).
+  auto mean_radius = [&] {
+    const std::vector<pf_hitpoint>& hp = r->state().hitpoints;
+    double sum = 0;
+    for (const pf_hitpoint& x : hp) sum += double(x.radius);
+    return hp.empty() ? 0.0 : sum / double(hp.size());
+  };
+  update_status();
+  st.mean_radius = mean_radius();
   double photons = 0;
   while (r->passes_done() < opt.passes) {
     r->run_iteration();
     photons += double(opt.photons.photons);
+    update_status();
+    // Time outside the rendering clock; a program built inside (the device synthesis of a first
+    // snapshot) is already in build_seconds and is not taken off twice.
+    Stopwatch outside;
+    const double built_before = opt.device ? opt.device->build_seconds() : 0.0;
     if (!opt.checkpoint.empty() && opt.checkpoint_every > 0 &&
         (r->passes_done() % opt.checkpoint_every == 0 || r->passes_done() == opt.passes))
       r->save_state(opt.checkpoint, prov);
+    const bool snapshot = on_snapshot && snapshot_due(opt, r->passes_done());
+    if (snapshot || r->passes_done() == opt.passes) st.mean_radius = mean_radius();
+    if (snapshot) on_snapshot(r->state(), st);
+    aside += outside.seconds() - ((opt.device ? opt.device->build_seconds() : 0.0) - built_before);
     if (on_pass) on_pass(r->passes_done(), photons);
   }
+  if (status) *status = st;
   return r->state();
+}
+
+bool snapshot_due(const RenderOptions& opt, int passes) {
+  if (opt.snapshot_every > 0 && passes % opt.snapshot_every == 0) return true;
+  return std::find(opt.snapshot_at.begin(), opt.snapshot_at.end(), passes) != opt.snapshot_at.end();
+}
+
+std::vector<int> parse_pass_list(const std::string& text, const std::string& option) {
+  std::vector<int> out;
+  size_t at = 0;
+  while (at <= text.size() && !text.empty()) {
+    size_t end = text.find(',', at);
+    if (end == std::string::npos) end = text.size();
+    const std::string item = text.substr(at, end - at);
+    size_t used = 0;
+    long v = 0;
+    try {
+      v = std::stol(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size() || v <= 0 || v > INT32_MAX)
+      throw input_error("", "--" + option + " takes positive pass counts separated by commas, got '" +
+                                text + "'");
+    out.push_back(int(v));
+    at = end + 1;
+  }
+  return out;
+}
+
+std::string render_snapshot_name(const std::string& pattern, int passes, int total) {
+  const std::string key = "{pass}";
+  std::string n = std::to_string(passes);
+  const std::string t = std::to_string(total);
+  if (n.size() < t.size()) n.insert(0, t.size() - n.size(), '0');
+  std::string out = pattern;
+  for (size_t at = out.find(key); at != std::string::npos; at = out.find(key, at + n.size()))
+    out.replace(at, key.size(), n);
+  return out;
+}
+
+std::string render_record_json(const Provenance& prov, const std::vector<RenderImageRecord>& images) {
+  std::ostringstream o;
+  o << "{\n  \"tool\": " << json_string(prov.tool)
+    << ",\n  \"version\": " << json_string(PHOTONFLOW_VERSION)
+    << ",\n  \"git_hash\": " << json_string(PHOTONFLOW_GIT_HASH)
+    << ",\n  \"seed\": " << prov.seed
+    << ",\n  \"command_line\": " << json_string(prov.command_line)
+    << ",\n  \"wall_time_s\": " << json_number(prov.wall_time_s) << ",\n  \"parameters\": {";
+  const char* sep = "";
+  for (const auto& [k, v] : prov.parameters) {
+    o << sep << "\n    " << json_string(k) << ": " << json_string(v);
+    sep = ",";
+  }
+  o << "\n  },\n  \"inputs\": [";
+  sep = "";
+  for (const auto& in : prov.inputs) {
+    o << sep << "\n    {\"role\": " << json_string(in.role) << ", \"path\": " << json_string(in.path)
+      << ", \"sha256\": " << json_string(in.sha256) << ", \"format\": " << json_string(in.format)
+      << ", \"scene_id\": " << json_string(in.scene_id) << "}";
+    sep = ",";
+  }
+  o << "\n  ],\n  \"images\": [";
+  sep = "";
+  for (const auto& im : images) {
+    const RenderStatus& s = im.status;
+    o << sep << "\n    {\"path\": " << json_string(im.path) << ", \"passes\": " << s.passes
+      << ", \"target\": " << s.target << ", \"photons_emitted\": " << s.photons_emitted
+      << ", \"photons_stored\": " << s.photons_stored
+      << ", \"seconds\": " << json_number(s.seconds)
+      << ", \"build_seconds\": " << json_number(s.build_seconds)
+      << ", \"mean_radius\": " << json_number(s.mean_radius)
+      << ", \"resumed\": " << (s.resumed ? "true" : "false") << "}";
+    sep = ",";
+  }
+  o << "\n  ]\n}\n";
+  return o.str();
+}
+
+void write_render_record(const std::string& path, const Provenance& prov,
+                         const std::vector<RenderImageRecord>& images) {
+  write_text_atomic(path, render_record_json(prov, images));
 }
 
 }  // namespace pf

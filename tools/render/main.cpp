@@ -1,8 +1,12 @@
 // render — progressive photon mapping in one process: eye pass, then `--passes` photon passes
 // with their gathers, no files between passes; checkpoints of the hitpoint state every
-// --checkpoint-every passes (atomic) and --resume to continue a killed run. Same stage functions
-// as trace-hitpoints → trace-photons → illuminate → synthesize, so both routes give one image.
+// --checkpoint-every passes (atomic) and --resume to continue a killed run; snapshots of the
+// image every --snapshot-every passes and a JSON run record (--stats) for convergence charts.
+// Same stage functions as trace-hitpoints → trace-photons → illuminate → synthesize, so both
+// routes give one image.
+#include <filesystem>
 #include <iostream>
+#include <vector>
 
 #include "photonflow/cl_backend.h"
 #include "photonflow/device_options.h"
@@ -37,6 +41,16 @@ int main(int argc, char** argv) {
        cxxopts::value<std::string>()->default_value(""))
       ("checkpoint-every", "passes between checkpoints", cxxopts::value<int>()->default_value("10"))
       ("resume", "continue from --checkpoint if it exists")
+      ("snapshot-every", "write the image every K passes; 0 = no snapshots",
+       cxxopts::value<int>()->default_value("0"))
+      ("snapshot-at", "also write the image after these passes (comma-separated, e.g. 1,2,4,8)",
+       cxxopts::value<std::string>()->default_value(""))
+      ("snapshot", "snapshot file pattern; {pass} becomes the passes so far (zero-padded); "
+       "default: the output's name with -{pass}p before the extension",
+       cxxopts::value<std::string>()->default_value(""))
+      ("stats", "also write a JSON record of the run here: parameters, input scene and its "
+       "SHA-256, and passes, photons and rendering seconds of every image written",
+       cxxopts::value<std::string>()->default_value(""))
       ("exposure", "PNG exposure in stops", cxxopts::value<float>()->default_value("0"))
       ("threads", "worker threads, 0 = all cores", cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
@@ -80,6 +94,22 @@ int main(int argc, char** argv) {
     if (!(opt.eye.radius >= 0.f)) pf::require_positive("radius", opt.eye.radius);
     if (a.count("resume") && opt.checkpoint.empty())
       throw pf::input_error("", "--resume needs --checkpoint FILE");
+    opt.snapshot_every = a["snapshot-every"].as<int>();
+    if (opt.snapshot_every < 0) throw pf::input_error("", "--snapshot-every must be >= 0");
+    opt.snapshot_at = pf::parse_pass_list(a["snapshot-at"].as<std::string>(), "snapshot-at");
+    const std::string out = a["output"].as<std::string>();
+    std::string pattern = a["snapshot"].as<std::string>();
+    if (pattern.empty()) {
+      const std::filesystem::path p(out);
+      pattern = std::filesystem::path(p).replace_extension().string() + "-{pass}p" +
+                (p.extension().empty() ? std::string(".exr") : p.extension().string());
+    }
+    const std::string stats = a["stats"].as<std::string>();
+    for (const std::string& file : {out, pattern, stats}) {
+      const std::filesystem::path dir = std::filesystem::path(file).parent_path();
+      if (!file.empty() && !dir.empty() && !std::filesystem::is_directory(dir))
+        throw pf::input_error(file, "its directory does not exist", "create it first");
+    }
 
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();
@@ -98,13 +128,28 @@ int main(int argc, char** argv) {
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
 
     pf::Progress progress("pass", opt.passes, "photons");
+    std::vector<pf::RenderImageRecord> written;
+    auto image_of = [&](const pf::HitpointSet& h) {
+      return dev ? pf::synthesize(h, *dev) : pf::synthesize(h);
+    };
+    pf::RenderStatus status;
     pf::HitpointSet h = pf::render_progressive(
         scene, opt, a.count("resume") > 0, prov,
-        [&](int done, double n) { progress.update(done, n); });
-    std::string out = a["output"].as<std::string>();
-    pf::Image img = dev ? pf::synthesize(h, *dev) : pf::synthesize(h);
+        [&](int done, double n) { progress.update(done, n); },
+        [&](const pf::HitpointSet& state, const pf::RenderStatus& s) {
+          const std::string file = pf::render_snapshot_name(pattern, s.passes, opt.passes);
+          pf::write_exr(image_of(state), file);
+          written.push_back({file, s});
+          std::cout << "render: snapshot " << file << " (" << s.passes << " passes, " << s.seconds
+                    << " s)\n";
+        },
+        &status);
+    pf::Image img = image_of(h);
     pf::write_exr(img, out);
+    written.push_back({out, status});
     pf::write_png(img, out.substr(0, out.rfind('.')) + ".png", a["exposure"].as<float>());
+    prov.wall_time_s = clock.seconds();
+    if (!stats.empty()) pf::write_render_record(stats, prov, written);
     std::cout << "render: " << out << " (" << h.width << "x" << h.height << ", " << h.passes
               << " passes, " << h.photons_emitted << " photons, " << clock.seconds() << " s)\n";
     return 0;

@@ -1,0 +1,44 @@
+// Emitter mask: see emitter_mask.h.
+#include "photonflow/emitter_mask.h"
+
+#include <algorithm>
+#include <vector>
+
+#include "photonflow/error.h"
+#include "photonflow/eye_pass.h"
+
+namespace pf {
+
+EmitterMask emitter_mask(const Scene& scene, const EmitterMaskOptions& opt) {
+  if (opt.spp < 1) throw input_error("", "spp must be >= 1, got " + std::to_string(opt.spp));
+  if (opt.dilate < 0)
+    throw input_error("", "dilate must be >= 0, got " + std::to_string(opt.dilate));
+  EyePassOptions eye;
+  eye.spp = opt.spp;
+  eye.max_depth = opt.max_depth;
+  eye.seed = opt.seed;
+  eye.threads = opt.threads;
+  const EyePassResult r = trace_hitpoints(scene, eye);
+  const int W = r.width, H = r.height;
+  std::vector<uint8_t> sees(size_t(W) * size_t(H), 0);
+  EmitterMask out;
+  for (size_t p = 0; p < sees.size(); ++p) {
+    const float* e = &r.emitted[3 * p];
+    sees[p] = (e[0] > 0.f || e[1] > 0.f || e[2] > 0.f) ? 1 : 0;
+    out.seeing += sees[p];
+  }
+  out.mask = Image(W, H);
+  const int d = opt.dilate;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      bool near = false;
+      for (int yy = std::max(0, y - d); yy <= std::min(H - 1, y + d) && !near; ++yy)
+        for (int xx = std::max(0, x - d); xx <= std::min(W - 1, x + d) && !near; ++xx)
+          near = sees[size_t(yy) * size_t(W) + size_t(xx)] != 0;
+      out.mask.set(x, y, near ? Vec3(0.f, 0.f, 0.f) : Vec3(1.f, 1.f, 1.f));
+      out.excluded += near;
+    }
+  return out;
+}
+
+}  // namespace pf

@@ -1,0 +1,279 @@
+// Progressive snapshots and the run record of the render driver (render_driver.h: snapshot_every,
+// snapshot_at, RenderStatus, render_record_json), the emitter mask (emitter_mask.h), and the
+// tools' options that expose them (render --snapshot-every/--snapshot-at/--snapshot/--stats,
+// emitter-mask) — what pipelines/accuracy.mk builds its charts on.
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "photonflow/camera.h"
+#include "photonflow/emitter_mask.h"
+#include "photonflow/error.h"
+#include "photonflow/image_metrics.h"
+#include "photonflow/raycast.h"
+#include "photonflow/render_driver.h"
+#include "photonflow/synthesize.h"
+#include "support.h"
+
+using namespace pf;
+using test::run_tool;
+using test::TempDir;
+
+namespace {
+
+RenderOptions small_run(int passes) {
+  RenderOptions o;
+  o.passes = passes;
+  o.photons.photons = 2000;
+  return o;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+size_t occurrences(const std::string& text, const std::string& needle) {
+  size_t n = 0;
+  for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("render driver: snapshots every K passes and at listed passes equal shorter runs",
+          "[render][snapshots]") {
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 16, 12);
+  RenderOptions opt = small_run(5);
+  opt.snapshot_every = 2;
+  opt.snapshot_at = {3, 3, 9};  // duplicates and passes beyond the run are harmless
+  std::vector<RenderStatus> seen;
+  std::vector<Image> images;
+  RenderStatus final_status;
+  Provenance prov;
+  const HitpointSet h = render_progressive(
+      s, opt, false, prov, {},
+      [&](const HitpointSet& state, const RenderStatus& st) {
+        seen.push_back(st);
+        images.push_back(synthesize(state));
+      },
+      &final_status);
+  REQUIRE(seen.size() == 3);
+  CHECK(seen[0].passes == 2);
+  CHECK(seen[1].passes == 3);
+  CHECK(seen[2].passes == 4);
+  for (size_t i = 0; i < seen.size(); ++i) {
+    CHECK(seen[i].target == 5);
+    CHECK(seen[i].photons_emitted == uint64_t(seen[i].passes) * 2000u);
+    CHECK(seen[i].photons_stored > 0);
+    CHECK(seen[i].seconds > 0);
+    CHECK_FALSE(seen[i].resumed);
+    if (i > 0) {
+      CHECK(seen[i].seconds >= seen[i - 1].seconds);
+      CHECK(seen[i].photons_stored > seen[i - 1].photons_stored);
+      CHECK(seen[i].mean_radius < seen[i - 1].mean_radius);  // eq. 3.16 with α < 1
+    }
+  }
+  CHECK(final_status.passes == 5);
+  CHECK(final_status.photons_emitted == h.photons_emitted);
+  CHECK(final_status.seconds >= seen.back().seconds);
+  double mean = 0;
+  for (const pf_hitpoint& p : h.hitpoints) mean += p.radius;
+  CHECK(final_status.mean_radius == Approx(mean / double(h.hitpoints.size())).epsilon(1e-9));
+  // The snapshot after 3 passes is the image of a 3-pass run, bit for bit.
+  RenderOptions three = small_run(3);
+  const Image direct = synthesize(render_progressive(s, three, false, prov));
+  CHECK(images[1].rgb == direct.rgb);
+  // No snapshot options: no callback.
+  int calls = 0;
+  render_progressive(s, small_run(2), false, prov, {},
+                     [&](const HitpointSet&, const RenderStatus&) { ++calls; });
+  CHECK(calls == 0);
+}
+
+TEST_CASE("render driver: time spent in snapshot callbacks is not rendering time",
+          "[render][snapshots]") {
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 16, 12);
+  RenderOptions opt = small_run(4);
+  opt.snapshot_every = 1;
+  Provenance prov;
+  RenderStatus st;
+  Stopwatch wall;
+  render_progressive(
+      s, opt, false, prov, {},
+      [](const HitpointSet&, const RenderStatus&) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(150));
+      },
+      &st);
+  const double total = wall.seconds();
+  INFO("rendering seconds " << st.seconds << ", wall " << total);
+  CHECK(total >= 0.6);
+  CHECK(st.seconds > 0);
+  CHECK(st.seconds < total - 0.55);  // the 4 × 150 ms asleep are taken off
+}
+
+TEST_CASE("render driver: pass lists and snapshot names", "[render][snapshots]") {
+  CHECK(parse_pass_list("", "snapshot-at").empty());
+  CHECK(parse_pass_list("1,2,16", "snapshot-at") == std::vector<int>{1, 2, 16});
+  CHECK(parse_pass_list("7", "snapshot-at") == std::vector<int>{7});
+  for (const char* bad : {"0", "-3", "a", "1,,2", "1,2,", ",1", "1.5", "1 2", "99999999999"}) {
+    INFO(bad);
+    CHECK_THROWS_AS(parse_pass_list(bad, "snapshot-at"), InputError);
+  }
+  CHECK(render_snapshot_name("a-{pass}p.exr", 3, 128) == "a-003p.exr");
+  CHECK(render_snapshot_name("{pass}/{pass}.exr", 12, 12) == "12/12.exr");
+  CHECK(render_snapshot_name("fixed.exr", 3, 10) == "fixed.exr");
+  RenderOptions o;
+  o.snapshot_every = 4;
+  o.snapshot_at = {1, 6};
+  std::vector<int> due;
+  for (int p = 1; p <= 9; ++p)
+    if (snapshot_due(o, p)) due.push_back(p);
+  CHECK(due == std::vector<int>{1, 4, 6, 8});
+}
+
+TEST_CASE("render driver: the run record lists every image with its status",
+          "[render][snapshots]") {
+  Provenance prov;
+  prov.tool = "render";
+  prov.seed = 5;
+  prov.command_line = "render --x \"y\"";
+  prov.parameters["passes"] = "8";
+  RenderStatus a;
+  a.passes = 4;
+  a.target = 8;
+  a.photons_emitted = 400;
+  a.photons_stored = 700;
+  a.seconds = 1.5;
+  a.build_seconds = 0.25;
+  a.mean_radius = 0.125;
+  RenderStatus b = a;
+  b.passes = 8;
+  b.resumed = true;
+  const std::string j = render_record_json(prov, {{"a-4p.exr", a}, {"a.exr", b}});
+  CHECK_THAT(j, Catch::Contains("\"tool\": \"render\""));
+  CHECK_THAT(j, Catch::Contains("\"command_line\": \"render --x \\\"y\\\"\""));
+  CHECK_THAT(j, Catch::Contains("\"passes\": \"8\""));
+  CHECK_THAT(j, Catch::Contains("{\"path\": \"a-4p.exr\", \"passes\": 4, \"target\": 8, "
+                                "\"photons_emitted\": 400, \"photons_stored\": 700, "
+                                "\"seconds\": 1.5, \"build_seconds\": 0.25, "
+                                "\"mean_radius\": 0.125, \"resumed\": false}"));
+  CHECK_THAT(j, Catch::Contains("\"path\": \"a.exr\", \"passes\": 8"));
+  CHECK_THAT(j, Catch::Contains("\"resumed\": true}"));
+}
+
+TEST_CASE("render tool: snapshots and run record", "[render][snapshots][tools]") {
+  TempDir tmp("render-snap");
+  REQUIRE(run_tool("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o " +
+                                     (tmp / "s.h5") + " --width 24 --height 24", tmp)
+              .exit_code == 0);
+  const std::string base = "--scene " + (tmp / "s.h5") + " --photons 3000 --passes 4 ";
+  auto r = run_tool("render", base + "-o " + (tmp / "r.exr") +
+                                  " --snapshot-every 2 --snapshot-at 1 --stats " + (tmp / "r.json"),
+                    tmp);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  for (const char* f : {"r-1p.exr", "r-2p.exr", "r-4p.exr", "r.exr", "r.png", "r.json"})
+    CHECK(std::filesystem::exists(tmp / f));
+  CHECK_FALSE(std::filesystem::exists(tmp / "r-3p.exr"));
+  CHECK(read_exr(tmp / "r-4p.exr").rgb == read_exr(tmp / "r.exr").rgb);
+  const std::string j = slurp(tmp / "r.json");
+  CHECK(occurrences(j, "{\"path\": ") == 4);  // three snapshots and the final image
+  CHECK_THAT(j, Catch::Contains("r-1p.exr\", \"passes\": 1,"));
+  CHECK_THAT(j, Catch::Contains("\"snapshot-at\": \"1\""));
+  CHECK_THAT(j, Catch::Contains("\"role\": \"scene\""));
+  // A pattern of its own, with a folder.
+  std::filesystem::create_directories(tmp / "snaps");
+  REQUIRE(run_tool("render", base + "-o " + (tmp / "q.exr") + " --snapshot-at 3 --snapshot " +
+                                 (tmp / "snaps") + "/{pass}.exr", tmp)
+              .exit_code == 0);
+  CHECK(std::filesystem::exists(tmp / "snaps/3.exr"));
+  // Bad options: one line, exit 2, no image.
+  for (const std::string& bad : {std::string("--snapshot-at 0"), std::string("--snapshot-at 1,x"),
+                                 std::string("--snapshot-every -1"),
+                                 "--stats " + (tmp / "nodir") + "/r.json"}) {
+    auto b = run_tool("render", base + "-o " + (tmp / "bad.exr") + " " + bad, tmp);
+    INFO(bad << ": " << b.err);
+    CHECK(b.exit_code == kExitBadInput);
+    CHECK(std::count(b.err.begin(), b.err.end(), '\n') == 1);
+    CHECK_FALSE(std::filesystem::exists(tmp / "bad.exr"));
+  }
+}
+
+TEST_CASE("emitter mask: the pixels that see the lamp are left out", "[emitter-mask]") {
+  Scene s = test::room_scene(PF_MAT_DIFFUSE, 32, 32);
+  // Looking up at the ceiling lamp (a 0.2 × 0.2 quad at y = 0.98, facing down) from the centre.
+  s.camera = pf_camera{{0.5f, 0.3f, 0.5f}, {0.5f, 1.f, 0.5f}, {0, 0, 1}, 60.f, 32, 32};
+  const int lamp = 3;  // mesh and material id of the lamp (support.h)
+  EmitterMaskOptions o;
+  o.dilate = 0;
+  const EmitterMask m0 = emitter_mask(s, o);
+  o.dilate = 1;
+  const EmitterMask m1 = emitter_mask(s, o);
+  CHECK(m0.seeing > 20);
+  CHECK(m0.excluded == m0.seeing);
+  CHECK(m1.seeing == m0.seeing);
+  CHECK(m1.excluded > m0.excluded);
+  CameraFrame cam(s.camera);
+  size_t centre_on_lamp = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      Hit hit;
+      Ray r{cam.eye(), cam.direction(x + 0.5f, y + 0.5f)};
+      const bool on_lamp =
+          intersect_closest(s, r, hit) && s.triangles[size_t(hit.tri)].material == lamp;
+      const float v0 = m0.mask.get(x, y).x, v1 = m1.mask.get(x, y).x;
+      CHECK((v0 == 0.f || v0 == 1.f));
+      if (on_lamp) {
+        ++centre_on_lamp;
+        CHECK(v0 == 0.f);  // a pixel whose centre sees the lamp is always left out
+      }
+      // Dilation by one pixel: left out exactly when a neighbour (or the pixel) sees the lamp.
+      bool near = false;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          if (xx >= 0 && yy >= 0 && xx < 32 && yy < 32) near = near || m0.mask.get(xx, yy).x == 0.f;
+        }
+      CHECK(v1 == (near ? 0.f : 1.f));
+    }
+  CHECK(centre_on_lamp > 10);
+  CHECK(m0.mask.get(0, 0).x == 1.f);  // the corner of the view sees the ceiling
+  // The test room's usual view (towards the back wall) sees no emitter; a mirror sphere there
+  // shows the lamp's reflection, which is left out too.
+  const EmitterMask none = emitter_mask(test::room_scene(PF_MAT_DIFFUSE, 32, 24), {});
+  CHECK(none.excluded == 0);
+  const EmitterMask mirror = emitter_mask(test::room_scene(PF_MAT_MIRROR, 32, 24), {});
+  CHECK(mirror.seeing > 0);
+  CHECK_THROWS_AS(emitter_mask(s, EmitterMaskOptions{0, 1}), InputError);
+  CHECK_THROWS_AS(emitter_mask(s, EmitterMaskOptions{4, -1}), InputError);
+}
+
+TEST_CASE("emitter-mask tool writes the mask imgcompare reads", "[emitter-mask][tools]") {
+  TempDir tmp("emitter-mask");
+  REQUIRE(run_tool("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o " +
+                                     (tmp / "s.h5") + " --width 32 --height 32", tmp)
+              .exit_code == 0);
+  auto r = run_tool("emitter-mask", "--scene " + (tmp / "s.h5") + " -o " + (tmp / "m.exr"), tmp);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(r.out, Catch::Contains("pixels left out"));
+  const Image m = read_mask(tmp / "m.exr");
+  size_t out = 0;
+  for (size_t i = 0; i < m.pixel_count(); ++i) out += m.rgb[3 * i] < 0.5f;
+  CHECK(out > 0);             // the Cornell box's lamp is in view
+  CHECK(out < m.pixel_count() / 10);
+  auto bad = run_tool("emitter-mask", "--scene " + (tmp / "s.h5") + " -o " + (tmp / "x.exr") +
+                                          " --spp 0", tmp);
+  CHECK(bad.exit_code == kExitBadInput);
+  CHECK_FALSE(std::filesystem::exists(tmp / "x.exr"));
+  auto missing = run_tool("emitter-mask", "--scene " + (tmp / "none.h5") + " -o " + (tmp / "x.exr"), tmp);
+  CHECK(missing.exit_code == kExitBadInput);
+}
