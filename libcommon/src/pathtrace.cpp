@@ -20,7 +20,6 @@
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
 #include "photonflow/surface.h"
-#include "photonflow/version.h"
 
 namespace pf {
 
@@ -303,27 +302,8 @@ Image pathtrace(const Scene& scene, const PathTraceOptions& opt,
 std::string pathtrace_record_json(const Provenance& prov,
                                   const std::vector<PathTraceImageRecord>& images) {
   std::ostringstream o;
-  o << "{\n  \"tool\": " << json_string(prov.tool)
-    << ",\n  \"version\": " << json_string(PHOTONFLOW_VERSION)
-    << ",\n  \"git_hash\": " << json_string(PHOTONFLOW_GIT_HASH)
-    << ",\n  \"seed\": " << prov.seed
-    << ",\n  \"command_line\": " << json_string(prov.command_line)
-    << ",\n  \"wall_time_s\": " << json_number(prov.wall_time_s) << ",\n  \"parameters\": {";
+  o << "{\n" << provenance_json_fields(prov) << ",\n  \"images\": [";
   const char* sep = "";
-  for (const auto& [k, v] : prov.parameters) {
-    o << sep << "\n    " << json_string(k) << ": " << json_string(v);
-    sep = ",";
-  }
-  o << "\n  },\n  \"inputs\": [";
-  sep = "";
-  for (const auto& in : prov.inputs) {
-    o << sep << "\n    {\"role\": " << json_string(in.role)
-      << ", \"path\": " << json_string(in.path) << ", \"sha256\": " << json_string(in.sha256) << ", \"format\": " << json_string(in.format)
-      << ", \"scene_id\": " << json_string(in.scene_id) << "}";
-    sep = ",";
-  }
-  o << "\n  ],\n  \"images\": [";
-  sep = "";
   for (const auto& im : images) {
     const PathTraceStatus& s = im.status;
     o << sep << "\n    {\"path\": " << json_string(im.path) << ", \"samples\": " << s.samples

@@ -10,7 +10,6 @@
 
 #include "photonflow/cl_backend.h"
 #include "photonflow/text_file.h"
-#include "photonflow/version.h"
 
 namespace pf {
 
@@ -159,39 +158,13 @@ std::vector<int> parse_pass_list(const std::string& text, const std::string& opt
 }
 
 std::string render_snapshot_name(const std::string& pattern, int passes, int total) {
-  const std::string key = "{pass}";
-  std::string n = std::to_string(passes);
-  const std::string t = std::to_string(total);
-  if (n.size() < t.size()) n.insert(0, t.size() - n.size(), '0');
-  std::string out = pattern;
-  for (size_t at = out.find(key); at != std::string::npos; at = out.find(key, at + n.size()))
-    out.replace(at, key.size(), n);
-  return out;
+  return numbered_name(pattern, "{pass}", passes, total);
 }
 
 std::string render_record_json(const Provenance& prov, const std::vector<RenderImageRecord>& images) {
   std::ostringstream o;
-  o << "{\n  \"tool\": " << json_string(prov.tool)
-    << ",\n  \"version\": " << json_string(PHOTONFLOW_VERSION)
-    << ",\n  \"git_hash\": " << json_string(PHOTONFLOW_GIT_HASH)
-    << ",\n  \"seed\": " << prov.seed
-    << ",\n  \"command_line\": " << json_string(prov.command_line)
-    << ",\n  \"wall_time_s\": " << json_number(prov.wall_time_s) << ",\n  \"parameters\": {";
+  o << "{\n" << provenance_json_fields(prov) << ",\n  \"images\": [";
   const char* sep = "";
-  for (const auto& [k, v] : prov.parameters) {
-    o << sep << "\n    " << json_string(k) << ": " << json_string(v);
-    sep = ",";
-  }
-  o << "\n  },\n  \"inputs\": [";
-  sep = "";
-  for (const auto& in : prov.inputs) {
-    o << sep << "\n    {\"role\": " << json_string(in.role) << ", \"path\": " << json_string(in.path)
-      << ", \"sha256\": " << json_string(in.sha256) << ", \"format\": " << json_string(in.format)
-      << ", \"scene_id\": " << json_string(in.scene_id) << "}";
-    sep = ",";
-  }
-  o << "\n  ],\n  \"images\": [";
-  sep = "";
   for (const auto& im : images) {
     const RenderStatus& s = im.status;
     o << sep << "\n    {\"path\": " << json_string(im.path) << ", \"passes\": " << s.passes

@@ -9,6 +9,7 @@
 #include "photonflow/options.h"
 #include "photonflow/pathtrace.h"
 #include "photonflow/progress.h"
+#include "photonflow/text_file.h"
 #include "photonflow/tool_main.h"
 
 namespace {
@@ -23,14 +24,7 @@ void require_directory_of(const std::string& path) {
 // The snapshot file name: `pattern` with "{spp}" replaced by the sample count, zero-padded to the
 // digits of the total so that names sort in sample order.
 std::string snapshot_name(const std::string& pattern, int samples, int total) {
-  const std::string key = "{spp}";
-  std::string n = std::to_string(samples);
-  const std::string t = std::to_string(total);
-  if (n.size() < t.size()) n.insert(0, t.size() - n.size(), '0');
-  std::string out = pattern;
-  for (size_t at = out.find(key); at != std::string::npos; at = out.find(key, at + n.size()))
-    out.replace(at, key.size(), n);
-  return out;
+  return pf::numbered_name(pattern, "{spp}", samples, total);
 }
 
 }  // namespace
