@@ -7,11 +7,15 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <cxxopts.hpp>
+
+#include "photonflow/cl_runtime.h"
 #include "photonflow/scene.h"
 #include "photonflow/scene_import.h"
 
@@ -50,6 +54,25 @@ inline void reexec_with_passive_openmp(char** argv) {
   if (std::getenv("OMP_WAIT_POLICY")) return;
   setenv("OMP_WAIT_POLICY", "passive", 1);
   execv("/proc/self/exe", argv);
+}
+
+// --cl-platform and --cl-device of the OpenCL benchmarks.
+inline void add_opencl_device_options(cxxopts::Options& o) {
+  o.add_options()
+    ("cl-platform", "OpenCL platform index", cxxopts::value<int>()->default_value("-1"))
+    ("cl-device", "OpenCL device index", cxxopts::value<int>()->default_value("-1"));
+}
+
+// The OpenCL device those options name (else the one --device opencl picks), with work-group size
+// `work_group` (0 = the default); InputError when there is none.
+inline std::unique_ptr<ClContext> open_opencl_device(const cxxopts::ParseResult& a, int work_group,
+                                                     const std::string& tool) {
+  DeviceOptions d;
+  d.device = "opencl";
+  d.platform = a["cl-platform"].as<int>();
+  d.device_index = a["cl-device"].as<int>();
+  d.work_group = work_group;
+  return open_device(d, tool);
 }
 
 struct Size {

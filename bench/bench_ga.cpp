@@ -166,9 +166,8 @@ int main(int argc, char** argv) {
      cxxopts::value<int>()->default_value("5"))
     ("time-rounds", "rounds of gather timing (best and median)", cxxopts::value<int>()->default_value("25"))
     ("wg-size", "work-group size of the clusters", cxxopts::value<int>()->default_value("64"))
-    ("cl-platform", "OpenCL platform index", cxxopts::value<int>()->default_value("-1"))
-    ("cl-device", "OpenCL device index", cxxopts::value<int>()->default_value("-1"))
     ("h,help", "print this help");
+  pf::bench::add_opencl_device_options(o);
   auto a = o.parse(argc, argv);
   if (a.count("help")) {
     std::cout << o.help() << "\n";
@@ -177,12 +176,7 @@ int main(int argc, char** argv) {
   try {
     const int wg = a["wg-size"].as<int>(), runs = a["runs"].as<int>();
     const int rounds = std::max(1, a["time-rounds"].as<int>());
-    pf::DeviceOptions dopt;
-    dopt.device = "opencl";
-    dopt.platform = a["cl-platform"].as<int>();
-    dopt.device_index = a["cl-device"].as<int>();
-    dopt.work_group = wg;
-    std::unique_ptr<pf::ClContext> dev = pf::open_device(dopt, "bench_ga");
+    std::unique_ptr<pf::ClContext> dev = pf::bench::open_opencl_device(a, wg, "bench_ga");
     dev->build_all();
 
     const pf::bench::Size sz = parse_size(a["size"].as<std::string>());

@@ -86,22 +86,16 @@ int main(int argc, char** argv) {
      cxxopts::value<int>()->default_value("0"))
     ("hash-cell", "hash-grid cell side in units of the largest radius",
      cxxopts::value<float>()->default_value("2"))
-    ("cl-platform", "OpenCL platform index", cxxopts::value<int>()->default_value("-1"))
-    ("cl-device", "OpenCL device index", cxxopts::value<int>()->default_value("-1"))
     ("work-group", "work-group size (and cluster size)", cxxopts::value<int>()->default_value("0"))
     ("h,help", "print this help");
+  pf::bench::add_opencl_device_options(o);
   auto a = o.parse(argc, argv);
   if (a.count("help")) {
     std::cout << o.help() << "\n";
     return 0;
   }
   try {
-    pf::DeviceOptions dopt;
-    dopt.device = "opencl";
-    dopt.platform = a["cl-platform"].as<int>();
-    dopt.device_index = a["cl-device"].as<int>();
-    dopt.work_group = a["work-group"].as<int>();
-    std::unique_ptr<pf::ClContext> dev = pf::open_device(dopt, "bench_gather");
+    std::unique_ptr<pf::ClContext> dev = pf::bench::open_opencl_device(a, a["work-group"].as<int>(), "bench_gather");
     dev->build_all();
     const int wg = dev->work_group();
     const int runs = a["runs"].as<int>();

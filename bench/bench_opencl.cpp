@@ -116,10 +116,9 @@ int main(int argc, char** argv) {
     ("gather-runs", "runs of the naive OpenCL gather (median)", cxxopts::value<int>()->default_value("5"))
     ("gather-sample", "naive gather on every N-th hitpoint, time × N; 0 = automatic",
      cxxopts::value<int>()->default_value("0"))
-    ("cl-platform", "OpenCL platform index", cxxopts::value<int>()->default_value("-1"))
-    ("cl-device", "OpenCL device index", cxxopts::value<int>()->default_value("-1"))
     ("work-group", "work-group size", cxxopts::value<int>()->default_value("0"))
     ("h,help", "print this help");
+  pf::bench::add_opencl_device_options(o);
   auto a = o.parse(argc, argv);
   if (a.count("help")) {
     std::cout << o.help() << "\n";
@@ -132,17 +131,12 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(cache);
     setenv("POCL_CACHE_DIR", cache.c_str(), 1);
 
-    pf::DeviceOptions dopt;
-    dopt.device = "opencl";
-    dopt.platform = a["cl-platform"].as<int>();
-    dopt.device_index = a["cl-device"].as<int>();
-    dopt.work_group = a["work-group"].as<int>();
-    std::unique_ptr<pf::ClContext> dev = pf::open_device(dopt, "bench_opencl");
+    std::unique_ptr<pf::ClContext> dev = pf::bench::open_opencl_device(a, a["work-group"].as<int>(), "bench_opencl");
     dev->build_all();
     const double build_cold = dev->build_seconds();
     double build_warm = 0;
     {
-      pf::ClContext again(dev->info(), dopt.work_group);
+      pf::ClContext again(dev->info(), a["work-group"].as<int>());
       again.build_all();
       build_warm = again.build_seconds();
     }
