@@ -14,6 +14,13 @@
 
 namespace pf {
 
+namespace h5 {
+class Compound;
+}
+
+// HDF5 record type of pf_mesh_grid (grid.h5's mesh_grid; photon_distribution.h5).
+const h5::Compound& h5_type_mesh_grid();
+
 constexpr const char* kHitpointsFormat = "photonflow.hitpoints";
 constexpr const char* kPhotonsFormat = "photonflow.photons";
 constexpr const char* kGridFormat = "photonflow.grid";

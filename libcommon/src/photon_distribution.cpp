@@ -14,19 +14,6 @@ namespace pf {
 namespace {
 constexpr int kDistributionVersion = 1;
 
-const h5::Compound& h5_type_mesh_grid() {
-  static const h5::Compound t = [] {
-    h5::Compound c(sizeof(pf_mesh_grid));
-    c.f32("lo", offsetof(pf_mesh_grid, lo), 3).f32("bin_size", offsetof(pf_mesh_grid, bin_size));
-    c.i32("nx", offsetof(pf_mesh_grid, nx)).i32("ny", offsetof(pf_mesh_grid, ny));
-    c.i32("nz", offsetof(pf_mesh_grid, nz)).i32("first_bin", offsetof(pf_mesh_grid, first_bin));
-    c.i32("first_photon", offsetof(pf_mesh_grid, first_photon));
-    c.i32("photon_count", offsetof(pf_mesh_grid, photon_count));
-    return c;
-  }();
-  return t;
-}
-
 size_t bins_of(const pf_mesh_grid& g) { return size_t(g.nx) * size_t(g.ny) * size_t(g.nz); }
 }  // namespace
 

@@ -19,6 +19,14 @@ DirectMode parse_direct(const std::string& s, const std::string& path) {
   throw input_error(path, "unknown direct mode '" + s + "'");
 }
 
+void check_image(const std::string& path, const std::vector<float>& v, int w, int h,
+                 const char* name) {
+  if (v.size() != size_t(w) * size_t(h) * 3)
+    throw input_error(path, std::string("image layer ") + name + " does not match width × height",
+                      "the file is damaged; remake it");
+}
+}  // namespace
+
 const h5::Compound& h5_type_mesh_grid() {
   static const h5::Compound t = [] {
     h5::Compound c(sizeof(pf_mesh_grid));
@@ -31,14 +39,6 @@ const h5::Compound& h5_type_mesh_grid() {
   }();
   return t;
 }
-
-void check_image(const std::string& path, const std::vector<float>& v, int w, int h,
-                 const char* name) {
-  if (v.size() != size_t(w) * size_t(h) * 3)
-    throw input_error(path, std::string("image layer ") + name + " does not match width × height",
-                      "the file is damaged; remake it");
-}
-}  // namespace
 
 void require_scene(const std::string& path, const std::string& scene_id,
                    const std::string& expected, const std::string& scene_path) {
