@@ -5,11 +5,13 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include "photonflow/clusters.h"
 #include "photonflow/image.h"
 #include "photonflow/procedural.h"
 #include "photonflow/scene.h"
@@ -133,6 +135,12 @@ inline double relative_rmse(const Image& a, const Image& b) {
     ref += double(b.rgb[i]) * double(b.rgb[i]);
   }
   return ref > 0 ? std::sqrt(se / ref) : std::sqrt(se);
+}
+
+// The same clusters, byte for byte: records and order array.
+inline bool same_clusters(const ClusterSet& a, const ClusterSet& b) {
+  return a.order == b.order && a.clusters.size() == b.clusters.size() &&
+         std::memcmp(a.clusters.data(), b.clusters.data(), a.clusters.size() * sizeof(pf_cluster)) == 0;
 }
 
 }  // namespace pf::test

@@ -13,6 +13,7 @@
 
 using namespace pf;
 using test::TempDir;
+using test::same_clusters;
 
 namespace {
 pf_hitpoint hp(float x, float y, float z, int mesh, float r) {
@@ -63,11 +64,6 @@ bool radii_contain(const ClusterSet& c, const HitpointSet& h) {
       if (std::sqrt(d2) + double(p.radius) > double(cl.radius)) return false;
     }
   return true;
-}
-
-bool same(const ClusterSet& a, const ClusterSet& b) {
-  return a.order == b.order && a.clusters.size() == b.clusters.size() &&
-         std::memcmp(a.clusters.data(), b.clusters.data(), a.clusters.size() * sizeof(pf_cluster)) == 0;
 }
 
 Provenance prov() {
@@ -166,8 +162,8 @@ TEST_CASE("k-means is deterministic for a seed and independent of the thread cou
   ClusterSet a = cluster_kmeans(h, 32, 8, 7, 1);
   ClusterSet b = cluster_kmeans(h, 32, 8, 7, 2);
   ClusterSet c = cluster_kmeans(h, 32, 8, 7, 1);
-  CHECK(same(a, b));
-  CHECK(same(a, c));
+  CHECK(same_clusters(a, b));
+  CHECK(same_clusters(a, c));
   // K per mesh is ceil(n / wg) before empty clusters are dropped.
   std::map<int, size_t> per_mesh, clusters_per_mesh;
   for (auto& p : h.hitpoints) ++per_mesh[p.mesh];
@@ -231,7 +227,7 @@ TEST_CASE("clusters.h5 round-trips and refuses other hitpoints or scenes", "[clu
   ClusterSet c = cluster_kmeans(h, 32, 5, 3, 2);
   save_clusters(c, tmp / "c.h5", prov());
   ClusterSet r = load_clusters(tmp / "c.h5", h);
-  CHECK(same(r, c));
+  CHECK(same_clusters(r, c));
   CHECK(r.wg_size == 32);
   CHECK(r.method == "kmeans");
   CHECK(r.scene_id == h.scene_id);
@@ -265,7 +261,7 @@ TEST_CASE("clusters.h5 round-trips and refuses other hitpoints or scenes", "[clu
   ClusterSet g = cluster_grid(h, 16, 8);
   save_clusters(g, tmp / "g.h5", prov());
   ClusterSet gr = load_clusters(tmp / "g.h5", h);
-  CHECK(same(gr, g));
+  CHECK(same_clusters(gr, g));
   CHECK(gr.method == "grid");
 }
 
@@ -276,7 +272,7 @@ TEST_CASE("update_cluster_radii tightens radii as hitpoint radii shrink", "[clus
     HitpointSet cur = h;
     ClusterSet before = c;
     update_cluster_radii(c, cur);  // same radii: unchanged
-    CHECK(same(c, before));
+    CHECK(same_clusters(c, before));
     for (int pass = 0; pass < 3; ++pass) {
       for (size_t i = 0; i < cur.hitpoints.size(); ++i)
         cur.hitpoints[i].radius *= (i % 3 == 0) ? 0.5f : 0.9f;

@@ -33,6 +33,7 @@
 
 using namespace pf;
 using test::TempDir;
+using test::same_clusters;
 
 namespace {
 
@@ -70,11 +71,6 @@ GaFitnessInputs inputs(const Fixture& f, int wg) {
   in.wg_size = wg;
   in.distribution = &f.dist;
   return in;
-}
-
-bool same(const ClusterSet& a, const ClusterSet& b) {
-  return a.order == b.order && a.clusters.size() == b.clusters.size() &&
-         std::memcmp(a.clusters.data(), b.clusters.data(), a.clusters.size() * sizeof(pf_cluster)) == 0;
 }
 
 Provenance prov() {
@@ -233,15 +229,15 @@ TEST_CASE("every mutation keeps a valid clustering and undo restores the state",
       st.evaluate();
       const ClusterSet after = st.clusters();
       REQUIRE(check_clusters(after, f.h) == "");  // every hitpoint exactly once, meshes pure
-      REQUIRE(same(after, st.full_clusters()));   // still the nearest-centroid clustering
+      REQUIRE(same_clusters(after, st.full_clusters()));   // still the nearest-centroid clustering
       REQUIRE(st.score() == st.full_score());
       changed += ch;
       fewer += after.clusters.size() < before.clusters.size();
       more += after.clusters.size() > before.clusters.size();
-      if (!ch) CHECK(same(after, before));
+      if (!ch) CHECK(same_clusters(after, before));
       if (k % 3 == 0) {
         st.undo();
-        CHECK(same(st.clusters(), before));
+        CHECK(same_clusters(st.clusters(), before));
         CHECK(st.score() == score_before);
       } else {
         st.commit();
@@ -344,11 +340,11 @@ TEST_CASE("incremental fitness equals a full recomputation after random mutation
         }
         st.evaluate();
         REQUIRE(st.score() == st.full_score());
-        REQUIRE(same(st.clusters(), st.full_clusters()));
+        REQUIRE(same_clusters(st.clusters(), st.full_clusters()));
         CHECK(st.fitness() == cluster_fitness(st.clusters(), in, fit));
         if (k % 5 == 2) {
           st.undo();
-          REQUIRE(same(st.clusters(), committed.clusters()));
+          REQUIRE(same_clusters(st.clusters(), committed.clusters()));
           REQUIRE(st.score() == committed.score());
         } else {
           st.commit();
@@ -374,15 +370,15 @@ TEST_CASE("evolution: deterministic per seed, independent of the thread count", 
   const GaResult b = evolve_clusters(in, o);
   o.threads = 3;
   const GaResult c = evolve_clusters(in, o);
-  CHECK(same(a.clusters, b.clusters));
-  CHECK(same(a.clusters, c.clusters));
+  CHECK(same_clusters(a.clusters, b.clusters));
+  CHECK(same_clusters(a.clusters, c.clusters));
   CHECK(a.history == b.history);
   CHECK(a.history == c.history);
   CHECK(a.clusters.method == "ga");
   REQUIRE(check_clusters(a.clusters, f.h) == "");
   o.seed = 5;
   const GaResult d = evolve_clusters(in, o);
-  CHECK_FALSE(same(a.clusters, d.clusters));
+  CHECK_FALSE(same_clusters(a.clusters, d.clusters));
 }
 
 TEST_CASE("evolution: elitist, never worse than its start; it improves on k-means",
@@ -433,7 +429,7 @@ TEST_CASE("evolution: resume after an interruption = an uninterrupted run", "[ga
   o.resume = true;
   const GaResult rest = evolve_clusters(in, o);
   CHECK(rest.resumed_from == 17);
-  CHECK(same(rest.clusters, whole.clusters));
+  CHECK(same_clusters(rest.clusters, whole.clusters));
   CHECK(rest.history == whole.history);
   CHECK(rest.fitness == whole.fitness);
   CHECK(rest.evaluations == whole.evaluations);
@@ -449,7 +445,7 @@ TEST_CASE("evolution: resume after an interruption = an uninterrupted run", "[ga
   o.resume = true;
   const GaResult after_kill = evolve_clusters(in, o);
   CHECK(after_kill.resumed_from == 21);
-  CHECK(same(after_kill.clusters, whole.clusters));
+  CHECK(same_clusters(after_kill.clusters, whole.clusters));
   CHECK(after_kill.history == whole.history);
 
   // A checkpoint of another run (other seed) is refused, one line naming it.
@@ -472,7 +468,7 @@ TEST_CASE("GA clusters give the naive gather's image", "[ga][opencl]") {
   GaResult r = evolve_clusters(in, o);
   REQUIRE(r.fitness < r.start_fitness);
   const ClusterSet km = cluster_kmeans(f.h, wg, 10, 1, 2);
-  REQUIRE_FALSE(same(r.clusters, km));  // the test gathers with clusters k-means did not make
+  REQUIRE_FALSE(same_clusters(r.clusters, km));  // the test gathers with clusters k-means did not make
   auto run = [&](GatherMethod m, ClusterSet* cs) {
     PpmOptions opt;
     opt.method = m;
@@ -603,7 +599,7 @@ TEST_CASE("cluster --method ga and photon-distribution: files, provenance, refus
   auto again = test::run_tool("cluster", GA + " -o " + (tmp / "ga2.h5") + " --resume --checkpoint " +
                                              (tmp / "ga.h5.checkpoint.h5"), tmp);
   REQUIRE(again.exit_code == 0);
-  CHECK(same(load_clusters(tmp / "ga2.h5", h), load_clusters(tmp / "ga.h5", h)));
+  CHECK(same_clusters(load_clusters(tmp / "ga2.h5", h), load_clusters(tmp / "ga.h5", h)));
 
   // Bad input: one line, exit 2, no output.
   auto refuse = [&](const std::string& args, const std::string& what) {
