@@ -6,6 +6,7 @@
 //     within 1e-5 relative RMSE, and naive equals the CPU grid gather bit for bit;
 //   - the device's grid build equals the CPU's build_photon_grid array for array (eq. 7.1), and the
 //     device's per-mesh sort is the stable sort by mesh;
+//   - the grid-cluster gather timer of the GA's device-time fitness gathers the same photons;
 //   - hitpoint sorting's filler counts follow Table 7.5's definition;
 //   - a method on the wrong backend, and an allocation the non-batching methods cannot make, are
 //     refused with one line.
@@ -19,6 +20,7 @@
 #include <vector>
 
 #include "photonflow/cl_backend.h"
+#include "photonflow/cl_gather.h"
 #include "photonflow/clusters.h"
 #include "photonflow/error.h"
 #include "photonflow/eye_pass.h"
@@ -196,6 +198,43 @@ TEST_CASE("gather methods: the device grid is the CPU's grid (eq. 7.1)", "[gathe
   // The CPU build's refusals.
   few[4].mesh = 3;
   CHECK_THROWS_AS(build_photon_grid(few, 3, gp, *dev), std::invalid_argument);
+}
+
+TEST_CASE("gather methods: the grid-cluster gather timer gathers the pass's photons",
+          "[gather][opencl][ga]") {
+  auto dev = test_device();
+  if (!dev) return;
+  Fixture f = make_fixture(48, 40, 1, 6000, DirectMode::Photons);
+  const std::vector<pf_photon>& ph = f.passes[0].photons;
+  PpmOptions opt;
+  opt.alpha = 1.f;  // one pass from the fresh state with alpha 1: N = M (eq. 3.15)
+  HitpointSet cpu = f.fresh;
+  ppm_pass(f.scene, cpu, ph, f.passes[0].emitted, opt);
+  size_t gathered = 0;
+  for (const pf_hitpoint& hp : cpu.hitpoints) gathered += hp.n_photons > 0;
+  REQUIRE(gathered > cpu.hitpoints.size() / 4);
+  opt.method = GatherMethod::GridKmeans;
+  GridGatherTimer timer(f.scene, f.fresh, ph, opt, *dev);
+  std::vector<int32_t> m = timer.photon_counts();
+  REQUIRE(m.size() == f.fresh.hitpoints.size());
+  CHECK(std::count(m.begin(), m.end(), 0) == std::ptrdiff_t(m.size()));  // nothing gathered yet
+  const int wg = dev->work_group();
+  const ClusterSet kmeans = cluster_kmeans(f.fresh, wg, 10, 1, 0), grid = cluster_grid(f.fresh, wg, 0);
+  for (const ClusterSet* cs : {&kmeans, &grid}) {
+    CHECK(timer.time(*cs, 2) > 0.0);
+    // A ppm_pass on the same context in between must not disturb the timer's buffers.
+    HitpointSet other = f.fresh;
+    ppm_pass(f.scene, other, f.passes[0].photons, f.passes[0].emitted, opt, *dev);
+    m = timer.photon_counts();
+    size_t same = 0;
+    for (size_t i = 0; i < m.size(); ++i) same += float(m[i]) == cpu.hitpoints[i].n_photons;
+    CHECK(same == m.size());
+    timer.time(*cs);
+    CHECK(timer.photon_counts() == m);
+  }
+  // Clusters of other hitpoints are refused.
+  Fixture g = make_fixture(40, 40, 1, 1000, DirectMode::Photons);
+  CHECK_THROWS_AS(timer.time(cluster_grid(g.fresh, wg, 0)), InputError);
 }
 
 TEST_CASE("gather methods: photon sorting is the stable sort by mesh", "[gather][opencl]") {

@@ -42,9 +42,10 @@
 //                  photons_distribution(x): photons read by the real work-items only. A device that
 //                  runs a work-group's work-items as a loop (PoCL, CPUs) retires a filler at once,
 //                  so it pays per hitpoint, not per padded slot;
-//   device-time    the gather kernel (ppm_pass with GatherMethod::GridKmeans and the candidate's
-//                  clusters on an OpenCL device), best of device_runs runs, in microseconds
-//                  (GatherTimes::gather). Noisy: not reproducible from the seed alone, and the
+//   device-time    the gather kernel of grid-kmeans (gather_grid_clusters) with the candidate's
+//                  clusters on an OpenCL device, best of device_runs runs, in microseconds: what
+//                  ppm_pass reports as GatherTimes::gather, measured by cl_gather.h's
+//                  GridGatherTimer, which builds the photons' grid once per evolution. Noisy: not reproducible from the seed alone, and the
 //                  parent is timed again in every generation together with its children (its
 //                  older measurement is dropped), so "never worse" holds between measurements of
 //                  one generation only.

@@ -107,8 +107,9 @@ struct DeviceGrid {
   const ClBuffer* mesh_grid = nullptr;   // headers on the device
 };
 
+// Its lasting buffers are the device's scratch buffers `ns`.headers, .cell_start, .order, .photons.
 DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int mesh_count,
-                       const PhotonGridParams& params) {
+                       const PhotonGridParams& params, const std::string& ns = "grid") {
   if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
     throw std::invalid_argument("photon grid: default_radius must be positive and finite");
   if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
@@ -152,14 +153,14 @@ DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int me
     first_photon += count;
   }
   g.entries = size_t(entries);
-  const ClBuffer& mg = dev.scratch("grid.headers", std::max<size_t>(meshes, 1) * sizeof(pf_mesh_grid));
+  const ClBuffer& mg = dev.scratch(ns + ".headers", std::max<size_t>(meshes, 1) * sizeof(pf_mesh_grid));
   dev.write(mg, meshes * sizeof(pf_mesh_grid), g.headers.data());
   // 3. Keys and counts with atomic counters; 4. the bin-start table and the sorted order.
-  const ClBuffer& counts = dev.scratch("grid.cell_start", (g.entries + 1) * sizeof(cl_int));
+  const ClBuffer& counts = dev.scratch(ns + ".cell_start", (g.entries + 1) * sizeof(cl_int));
   dev.fill_zero(counts, (g.entries + 1) * sizeof(cl_int));
-  const ClBuffer& key = dev.scratch("grid.key", n * sizeof(cl_int));
-  const ClBuffer& order = dev.scratch("grid.order", n * sizeof(cl_int));
-  const ClBuffer& sorted = dev.scratch("grid.photons", n * sizeof(pf_photon));
+  const ClBuffer& key = dev.scratch(ns + ".key", n * sizeof(cl_int));
+  const ClBuffer& order = dev.scratch(ns + ".order", n * sizeof(cl_int));
+  const ClBuffer& sorted = dev.scratch(ns + ".photons", n * sizeof(pf_photon));
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "key_grid_bin");
     dev.args(k, photons, cl_int(n), mg, key, counts);
@@ -275,6 +276,43 @@ std::vector<cl_int> group_clusters(const ClusterSet& cs) {
       t[size_t(g)] = cl_int(c);
   }
   return t;
+}
+
+// A cluster set on the device: the hitpoint order (fillers -1), the work-group → cluster table
+// and the clusters, in the scratch buffers `ns`.order, .group_cluster, .clusters.
+struct DeviceClusters {
+  const ClBuffer* order = nullptr;
+  const ClBuffer* groups = nullptr;
+  const ClBuffer* clusters = nullptr;
+  size_t items = 0;  // work-items: order.size()
+  size_t wg = 0;     // work-group size
+};
+
+DeviceClusters upload_clusters(ClContext& dev, const ClusterSet& cs, const std::string& ns) {
+  DeviceClusters d;
+  d.wg = size_t(cs.wg_size);
+  d.items = cs.order.size();
+  const size_t cl_tile = 2 * d.wg * sizeof(pf_photon) + d.wg * sizeof(cl_int);
+  if (cl_tile > dev.info().local_mem)
+    throw input_error("", "clusters of work-group size " + std::to_string(d.wg) +
+                              " need more local memory than the device has",
+                      "make clusters with a smaller --wg-size");
+  const std::vector<cl_int> groups = group_clusters(cs);
+  d.order = &dev.scratch(ns + ".order", cs.order.size() * sizeof(cl_int));
+  d.groups = &dev.scratch(ns + ".group_cluster", groups.size() * sizeof(cl_int));
+  d.clusters = &dev.scratch(ns + ".clusters", cs.clusters.size() * sizeof(pf_cluster));
+  dev.write(*d.order, cs.order.size() * sizeof(cl_int), cs.order.data());
+  dev.write(*d.groups, groups.size() * sizeof(cl_int), groups.data());
+  dev.write(*d.clusters, cs.clusters.size() * sizeof(pf_cluster), cs.clusters.data());
+  return d;
+}
+
+// The cluster set must belong to the pass's hitpoints.
+void check_cluster_count(const ClusterSet& cs, size_t hitpoints) {
+  if (cs.hitpoint_count != hitpoints)
+    throw input_error("", "the clusters were made for " + std::to_string(cs.hitpoint_count) +
+                              " hitpoints, the state has " + std::to_string(hitpoints),
+                      "run the cluster stage on these hitpoints");
 }
 
 double since(ClContext& dev, double t0) { return dev.kernel_seconds() - t0; }
@@ -465,45 +503,31 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
         if (!cs) {
           made = clusters_for_method(m, h, int(L), opt);
           cs = &made;
-        } else if (cs->hitpoint_count != nh) {
-          throw input_error("", "the clusters were made for " + std::to_string(cs->hitpoint_count) +
-                                    " hitpoints, the state has " + std::to_string(nh),
-                            "run the cluster stage on these hitpoints");
+        } else {
+          check_cluster_count(*cs, nh);
         }
         update_cluster_radii(*cs, h);  // R only tightens as PPM shrinks radii (clusters.h)
-        const size_t wg = size_t(cs->wg_size);
-        const size_t cl_tile = 2 * wg * sizeof(pf_photon) + wg * sizeof(cl_int);
-        if (cl_tile > dev.info().local_mem)
-          throw input_error("", "clusters of work-group size " + std::to_string(wg) +
-                                    " need more local memory than the device has",
-                            "make clusters with a smaller --wg-size");
-        const std::vector<cl_int> groups = group_clusters(*cs);
-        const ClBuffer& ob = dev.scratch("ppm.order", cs->order.size() * sizeof(cl_int));
-        const ClBuffer& gb = dev.scratch("ppm.group_cluster", groups.size() * sizeof(cl_int));
-        const ClBuffer& cb = dev.scratch("ppm.clusters", cs->clusters.size() * sizeof(pf_cluster));
-        dev.write(ob, cs->order.size() * sizeof(cl_int), cs->order.data());
-        dev.write(gb, groups.size() * sizeof(cl_int), groups.data());
-        dev.write(cb, cs->clusters.size() * sizeof(pf_cluster), cs->clusters.data());
-        const ClLocal tile{2 * wg * sizeof(pf_photon)}, scan{wg * sizeof(cl_int)};
+        const DeviceClusters dc = upload_clusters(dev, *cs, "ppm");
+        const ClLocal tile{2 * dc.wg * sizeof(pf_photon)}, scan{dc.wg * sizeof(cl_int)};
         t0 = dev.kernel_seconds();
         if (m == GatherMethod::KmeansClusters) {
           DeviceMeshSort s = device_mesh_sort(dev, phs, np, mesh_count);
           times.order = since(dev, t0);
           t0 = dev.kernel_seconds();
           cl_kernel k = dev.kernel("illuminate_methods", "gather_clusters");
-          dev.args(k, hps, ob, gb, cb, *s.sorted, *s.mesh_start, cl_int(mesh_count), mats,
-                   skip_direct, acc_m, acc_tau, tile, scan);
-          dev.run(k, cs->order.size(), wg);
+          dev.args(k, hps, *dc.order, *dc.groups, *dc.clusters, *s.sorted, *s.mesh_start,
+                   cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau, tile, scan);
+          dev.run(k, dc.items, dc.wg);
         } else {
           DeviceGrid g = device_grid(dev, phs, np, mesh_count, ppm_grid_params(h, opt));
           times.order = since(dev, t0);
           t0 = dev.kernel_seconds();
           cl_kernel k = dev.kernel("illuminate_methods", "gather_grid_clusters");
-          dev.args(k, hps, ob, gb, cb, *g.sorted, *g.mesh_grid, *g.cell_start,
-                   cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau);
-          dev.run(k, cs->order.size(), wg);
+          dev.args(k, hps, *dc.order, *dc.groups, *dc.clusters, *g.sorted, *g.mesh_grid,
+                   *g.cell_start, cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau);
+          dev.run(k, dc.items, dc.wg);
         }
-        times.work_items = cs->order.size();
+        times.work_items = dc.items;
       }
       times.gather = since(dev, t0);
       t0 = dev.kernel_seconds();
@@ -518,6 +542,64 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   h.estimator = "ppm";
   times.total = wall.seconds();
   return times;
+}
+
+// ---- GridGatherTimer ----------------------------------------------------------------------------
+
+GridGatherTimer::GridGatherTimer(const Scene& scene, const HitpointSet& h,
+                                 const std::vector<pf_photon>& photons, const PpmOptions& opt,
+                                 ClContext& dev)
+    : dev_(dev), h_(h) {
+  nh_ = h.hitpoints.size();
+  np_ = photons.size();
+  if (nh_ > size_t(INT32_MAX) || np_ > size_t(INT32_MAX))
+    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
+  require_one_buffer(dev, nh_, sizeof(pf_hitpoint), "hitpoints", GatherMethod::GridKmeans);
+  require_one_buffer(dev, np_, sizeof(pf_photon), "photons", GatherMethod::GridKmeans);
+  mesh_count_ = int(scene.mesh_names.size());
+  check_photons(photons, mesh_count_);
+  skip_direct_ = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
+  acc_bytes_ = dev.info().fp64 ? sizeof(double) : sizeof(float);
+  const size_t nh1 = std::max<size_t>(nh_, 1), np1 = std::max<size_t>(np_, 1);
+  mats_ = &dev.scratch("timer.materials", std::max<size_t>(scene.materials.size(), 1) * sizeof(pf_material));
+  dev.write(*mats_, scene.materials.size() * sizeof(pf_material), scene.materials.data());
+  hps_ = &dev.scratch("timer.hitpoints", nh1 * sizeof(pf_hitpoint));
+  dev.write(*hps_, nh_ * sizeof(pf_hitpoint), h.hitpoints.data());
+  acc_m_ = &dev.scratch("timer.acc_m", nh1 * sizeof(cl_int));
+  acc_tau_ = &dev.scratch("timer.acc_tau", nh1 * 3 * acc_bytes_);
+  dev.fill_zero(*acc_m_, nh1 * sizeof(cl_int));
+  const ClBuffer& phs = dev.scratch("timer.photons_in", np1 * sizeof(pf_photon));
+  dev.write(phs, np_ * sizeof(pf_photon), photons.data());
+  const DeviceGrid g = device_grid(dev, phs, np_, mesh_count_, ppm_grid_params(h, opt), "timer.grid");
+  sorted_ = g.sorted;
+  mesh_grid_ = g.mesh_grid;
+  cell_start_ = g.cell_start;
+}
+
+double GridGatherTimer::time(const ClusterSet& c, int runs) {
+  check_cluster_count(c, nh_);
+  if (nh_ == 0 || np_ == 0) return 0.0;
+  ClusterSet cs = c;
+  update_cluster_radii(cs, h_);
+  const DeviceClusters dc = upload_clusters(dev_, cs, "timer");
+  cl_kernel k = dev_.kernel("illuminate_methods", "gather_grid_clusters");
+  double best = INFINITY;
+  for (int r = 0; r < std::max(1, runs); ++r) {
+    dev_.fill_zero(*acc_m_, nh_ * sizeof(cl_int));
+    dev_.fill_zero(*acc_tau_, nh_ * 3 * acc_bytes_);
+    dev_.args(k, *hps_, *dc.order, *dc.groups, *dc.clusters, *sorted_, *mesh_grid_, *cell_start_,
+              cl_int(mesh_count_), *mats_, cl_int(skip_direct_), *acc_m_, *acc_tau_);
+    const double t0 = dev_.kernel_seconds();
+    dev_.run(k, dc.items, dc.wg);
+    best = std::min(best, since(dev_, t0));
+  }
+  return best;
+}
+
+std::vector<int32_t> GridGatherTimer::photon_counts() {
+  std::vector<int32_t> m(nh_, 0);
+  if (nh_ > 0) dev_.read(*acc_m_, nh_ * sizeof(cl_int), m.data());
+  return m;
 }
 
 }  // namespace pf

@@ -14,10 +14,12 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
 #include "photonflow/cl_backend.h"
+#include "photonflow/cl_gather.h"
 #include "photonflow/h5io.h"
 #include "photonflow/hash.h"
 #include "photonflow/provenance.h"
@@ -100,21 +102,19 @@ struct TermCalc {
   }
 };
 
-double measure_device_us(const ClusterSet& c, const GaFitnessInputs& in) {
+// The device-time fitness: the grid-cluster gather's kernel time in us, best of in.device_runs,
+// on a timer that holds the photons' grid (built once per timer, cl_gather.h).
+GridGatherTimer device_timer(const GaFitnessInputs& in) {
   if (!in.device || !in.scene || !in.photons)
     throw std::invalid_argument("device-time fitness needs a device, the scene and photons");
-  ClusterSet cs = c;
   PpmOptions opt;
   opt.method = GatherMethod::GridKmeans;
-  opt.clusters = &cs;
   opt.max_bins = in.max_bins;
-  double best = INFINITY;
-  for (int r = 0; r < std::max(1, in.device_runs); ++r) {
-    HitpointSet w = *in.hitpoints;
-    const GatherTimes t = ppm_pass(*in.scene, w, *in.photons, in.emitted, opt, *in.device);
-    best = std::min(best, t.gather);
-  }
-  return best * 1e6;
+  return GridGatherTimer(*in.scene, *in.hitpoints, *in.photons, opt, *in.device);
+}
+
+double measure_device_us(GridGatherTimer& timer, const ClusterSet& c, const GaFitnessInputs& in) {
+  return timer.time(c, std::max(1, in.device_runs)) * 1e6;
 }
 
 void check_inputs(const GaFitnessInputs& in, GaFitness f) {
@@ -132,7 +132,10 @@ void check_inputs(const GaFitnessInputs& in, GaFitness f) {
 
 double cluster_fitness(const ClusterSet& c, const GaFitnessInputs& in, GaFitness f) {
   check_inputs(in, f);
-  if (f == GaFitness::DeviceTime) return measure_device_us(c, in);
+  if (f == GaFitness::DeviceTime) {
+    GridGatherTimer timer = device_timer(in);
+    return measure_device_us(timer, c, in);
+  }
   DistributionSums sums;
   if (ga_fitness_needs_distribution(f)) sums = DistributionSums(*in.distribution);
   TermCalc calc{f, c.wg_size, &sums};
@@ -1125,6 +1128,8 @@ GaResult evolve_clusters(const GaFitnessInputs& in, const GaOptions& opt,
   const ClusterSet km = cluster_kmeans(h, in.wg_size, opt.kmeans_iterations, opt.seed, opt.threads);
   res.kmeans_fitness = cluster_fitness(km, in, f);
   const bool device = f == GaFitness::DeviceTime;
+  std::optional<GridGatherTimer> timer;  // device-time: the photons' grid, built once
+  if (device) timer.emplace(device_timer(in));
   const int threads = device ? 1 : (opt.threads > 0 ? opt.threads : omp_get_max_threads());
   const std::string id = opt.checkpoint.empty() ? "" : inputs_id(in, f);
   const std::string hp_hash = opt.checkpoint.empty() ? "" : hitpoints_hash(h);
@@ -1142,7 +1147,7 @@ GaResult evolve_clusters(const GaFitnessInputs& in, const GaOptions& opt,
     prior_seconds = ck.seconds;
   } else {
     copies.emplace_back(in, f, km);
-    ck.fitness = device ? measure_device_us(copies[0].clusters(), in) : copies[0].fitness();
+    ck.fitness = device ? measure_device_us(*timer, copies[0].clusters(), in) : copies[0].fitness();
     ck.start_fitness = ck.fitness;
     ck.next_id = copies[0].next_id();
   }
@@ -1168,13 +1173,13 @@ GaResult evolve_clusters(const GaFitnessInputs& in, const GaOptions& opt,
       // A device time is noisy (on a shared machine by up to 2x, when other work takes a core):
       // the parent is timed again with its children, so that every generation compares
       // measurements taken together and one lucky measurement cannot stay the best for good.
-      ck.fitness = measure_device_us(copies[0].clusters(), in);
+      ck.fitness = measure_device_us(*timer, copies[0].clusters(), in);
       for (int c = 0; c < lambda; ++c) {
         GaState& st = copies[0];
         pf_rng rng = pf_rng_start(opt.seed, uint32_t(g), uint32_t(c));
         st.mutate_child(rng);
         st.evaluate();
-        child[size_t(c)] = measure_device_us(st.clusters(), in);
+        child[size_t(c)] = measure_device_us(*timer, st.clusters(), in);
         st.undo();
       }
     }
