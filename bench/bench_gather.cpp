@@ -14,7 +14,10 @@
 // cluster-radius refresh); "kernels" the device time of its kernels (enqueue to clFinish). The
 // CPU rows (grid, flann) run on all cores. Clusters are made once per size, as the cluster stage
 // does, and not counted in the pass. Every method's result is checked against the CPU grid
-// gather: the photon counts M of all hitpoints must agree ("same photons").
+// gather: the photon counts M of all hitpoints must agree ("same photons"). With hash-grid in the
+// list, a row "hash-grid, state on device" times DevicePpmState::pass on a state already on the
+// device (the render driver's and illuminate's steady state: the pass's photons go up, nothing
+// comes down; the state is read back after the timing for the check).
 //
 // The methods that read every photon of a mesh (naive … kmeans-clusters) cost O(hitpoints ×
 // photons): with --sample N > 1 (0 = automatic: 1 at <= 320×280, 16 above) they run on every N-th
@@ -60,6 +63,9 @@ bool reads_whole_meshes(pf::GatherMethod m) {
   return m == M::Naive || m == M::LocalMemory || m == M::PhotonSort || m == M::HitpointSort ||
          m == M::HitpointSortLocal || m == M::ManualDistance || m == M::KmeansClusters;
 }
+
+// Table key offset of the "hash-grid, state on device" row.
+constexpr int kResidentRow = 1000;
 
 struct Row {
   double pass_ms = 0, kernel_ms = 0;
@@ -152,12 +158,18 @@ int main(int argc, char** argv) {
         std::vector<size_t> index;  // hitpoints of the sample, as indices into fresh
         pf::PpmOptions opt;
         pf::ClusterSet clusters;
+        bool resident = false;  // hash-grid with the state kept on the device (DevicePpmState)
         std::vector<double> wall, kern, order_ms, gather_ms;
       };
       std::vector<Run> set(methods.size());
-      for (size_t k = 0; k < methods.size(); ++k) {
+      for (pf::GatherMethod m : methods)
+        if (m == pf::GatherMethod::HashGrid) {
+          set.emplace_back();
+          set.back().resident = true;
+        }
+      for (size_t k = 0; k < set.size(); ++k) {
         Run& u = set[k];
-        u.m = methods[k];
+        u.m = u.resident ? pf::GatherMethod::HashGrid : methods[k];
         const pf::GatherMethodInfo& info = pf::gather_method_info(u.m);
         u.row.sample = info.device && reads_whole_meshes(u.m) ? sample : 1;
         u.start = fresh;
@@ -183,6 +195,20 @@ int main(int argc, char** argv) {
           u.work = u.start;
           dev->reset_kernel_seconds();
           const double t0 = now();
+          if (u.resident) {  // the render driver's steady state: photons up, nothing down
+            pf::DevicePpmState st(scene, u.work, *dev);
+            st.upload();
+            dev->reset_kernel_seconds();
+            const double t1 = now();
+            const pf::GatherTimes t = st.pass(pass0.photons, pass0.emitted, u.opt);
+            const double ms = (now() - t1) * 1e3;
+            st.sync();
+            u.order_ms.push_back(t.order * 1e3);
+            u.gather_ms.push_back(t.gather * 1e3);
+            u.wall.push_back(ms);
+            u.kern.push_back(dev->kernel_seconds() * 1e3);
+            continue;
+          }
           if (device) {
             const pf::GatherTimes t = pf::ppm_pass(scene, u.work, pass0.photons, pass0.emitted, u.opt, *dev);
             u.order_ms.push_back(t.order * 1e3);  // the photons, not the hitpoints: not scaled
@@ -201,8 +227,9 @@ int main(int argc, char** argv) {
         u.row.kernel_ms = info.device ? median(u.kern) : 0;
         for (size_t k = 0; k < u.index.size(); ++k)
           u.row.same &= u.work.hitpoints[k].n_photons == ref.hitpoints[u.index[k]].n_photons;
-        table[{int(u.m), int(si)}] = u.row;
-        std::fprintf(stderr, "  %-20s %10s ms (ordering %s, gather %s)%s\n", info.name,
+        table[{int(u.m) + (u.resident ? kResidentRow : 0), int(si)}] = u.row;
+        std::fprintf(stderr, "  %-20s %10s ms (ordering %s, gather %s)%s\n",
+                     u.resident ? "hash-grid, resident" : info.name,
                      pf::bench::fmt_ms(u.row.pass_ms).c_str(), pf::bench::fmt_ms(median(u.order_ms)).c_str(),
                      pf::bench::fmt_ms(median(u.gather_ms)).c_str(), u.row.same ? "" : "  (DIFFERENT PHOTONS)");
       }
@@ -213,12 +240,19 @@ int main(int argc, char** argv) {
     std::printf(" same photons |\n|---|---|");
     for (size_t i = 0; i < sizes.size(); ++i) std::printf("---:|---:|---:|");
     std::printf("---|\n");
+    std::vector<int> rows;
     for (pf::GatherMethod m : methods) {
+      rows.push_back(int(m));
+      if (m == pf::GatherMethod::HashGrid) rows.push_back(int(m) + kResidentRow);
+    }
+    for (int row : rows) {
+      const pf::GatherMethod m = pf::GatherMethod(row % kResidentRow);
       const pf::GatherMethodInfo& info = pf::gather_method_info(m);
-      std::printf("| %s | %s |", info.name, info.device ? "OpenCL" : "CPU");
+      std::printf("| %s | %s |", row >= kResidentRow ? "hash-grid, state on device" : info.name,
+                  info.device ? "OpenCL" : "CPU");
       bool same = true;
       for (size_t si = 0; si < sizes.size(); ++si) {
-        const Row& r = table[{int(m), int(si)}];
+        const Row& r = table[{row, int(si)}];
         auto naive = table.find({int(pf::GatherMethod::Naive), int(si)});
         std::string speed = naive != table.end() && r.pass_ms > 0
                                 ? pf::bench::fmt_ms(naive->second.pass_ms / r.pass_ms) : "—";

@@ -18,7 +18,8 @@
  *     PF_CHUNK photons (mesh_chunk_count, one exclusive scan over the mesh-major count matrix,
  *     mesh_chunk_scatter), deterministic without atomics; mesh_start[m] .. mesh_start[m+1].
  *   hashed grid (`hash-grid`): key_hash_cell gives each photon its table slot (grid_shared.h),
- *     then the same count / scan / scatter / sort / permute kernels as the per-mesh grid.
+ *     then the same count / scan / scatter / sort kernels as the per-mesh grid, and
+ *     permute_photons_keys, which also writes the 16-byte pf_photon_key array the gather tests.
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "photonflow/shared_types.h"
@@ -127,6 +128,21 @@ __kernel void permute_photons(__global const pf_photon* in, __global const int* 
   const int i = (int)get_global_id(0);
   if (i >= n) return;
   out[i] = in[order[i]];
+}
+
+/* The same permutation, also writing each photon's pf_photon_key (shared_types.h). */
+__kernel void permute_photons_keys(__global const pf_photon* in, __global const int* order, int n,
+                                   __global pf_photon* out, __global pf_photon_key* keys) {
+  const int i = (int)get_global_id(0);
+  if (i >= n) return;
+  const pf_photon p = in[order[i]];
+  out[i] = p;
+  pf_photon_key k;
+  k.position[0] = p.position[0];
+  k.position[1] = p.position[1];
+  k.position[2] = p.position[2];
+  k.key = 2 * p.mesh + ((p.flags & PF_PHOTON_DIRECT) ? 1 : 0);
+  keys[i] = k;
 }
 
 /* ---- stable counting sort by mesh, in chunks ------------------------------------------------- */

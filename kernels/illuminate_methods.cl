@@ -48,12 +48,10 @@ typedef struct {
   pf_acc t0, t1, t2;
 } pf_gather_hp;
 
-/* Loads hitpoint hi and resumes its accumulators (zero at the start of a pass; the naive
- * kernel's photon batches continue the same sum). A hitpoint with a negative or NaN radius
- * gathers nothing (mesh −1 matches no photon), as on the CPU. */
-static inline void pf_gather_load(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
-                                  __global const pf_material* mats, __global const int* acc_m,
-                                  __global const pf_acc* acc_tau) {
+/* Loads hitpoint hi with zero accumulators. A hitpoint with a negative or NaN radius gathers
+ * nothing (mesh −1 matches no photon), as on the CPU. */
+static inline void pf_gather_load_fresh(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
+                                        __global const pf_material* mats) {
   __global const pf_hitpoint* hp = &hps[hi];
   h->x = hp->position[0];
   h->y = hp->position[1];
@@ -67,6 +65,18 @@ static inline void pf_gather_load(pf_gather_hp* h, __global const pf_hitpoint* h
   h->fr0 = mat->color[0] * PF_K_INV_PI;
   h->fr1 = mat->color[1] * PF_K_INV_PI;
   h->fr2 = mat->color[2] * PF_K_INV_PI;
+  h->m = 0;
+  h->t0 = 0;
+  h->t1 = 0;
+  h->t2 = 0;
+}
+
+/* Loads hitpoint hi and resumes its accumulators (zero at the start of a pass; the naive
+ * kernel's photon batches continue the same sum). */
+static inline void pf_gather_load(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
+                                  __global const pf_material* mats, __global const int* acc_m,
+                                  __global const pf_acc* acc_tau) {
+  pf_gather_load_fresh(h, hps, hi, mats);
   h->m = acc_m[hi];
   h->t0 = acc_tau[3 * hi];
   h->t1 = acc_tau[3 * hi + 1];
@@ -107,6 +117,32 @@ static inline void pf_gather_local(pf_gather_hp* h, __local const pf_photon* p,
   pf_gather_photon(h, p->position[0], p->position[1], p->position[2], p->dir[0], p->dir[1],
                    p->dir[2], p->mesh, p->flags, p->flux[0], p->flux[1], p->flux[2], skip_direct,
                    builtin);
+}
+
+/* The rule over photons j0 .. j1 − 1 of a sorted array and its pf_photon_key array: mesh, direct
+ * flag and distance from the 16-byte keys, the direction and flux from the whole record only for
+ * photons inside R. The same photons in the same order as pf_gather_global (only the order of
+ * the rule's tests differs), so the same sums. */
+static inline void pf_gather_keyed(pf_gather_hp* h, __global const pf_photon_key* keys,
+                                   __global const pf_photon* sorted, int j0, int j1,
+                                   const int skip_direct) {
+  /* key = 2·mesh + direct: with skip_direct the key must be 2·mesh (mesh matches, not direct),
+   * otherwise key >> 1 must be the mesh. A hitpoint with mesh −1 matches no key (keys >= 0). */
+  const int shift = skip_direct ? 0 : 1;
+  const int want = skip_direct ? 2 * h->mesh : h->mesh;
+  for (int j = j0; j < j1; ++j) {
+    __global const pf_photon_key* k = &keys[j];
+    if ((k->key >> shift) != want) continue;
+    if (!pf_ppm_in_radius(pf_ppm_dist2(h->x, h->y, h->z, k->position[0], k->position[1],
+                                       k->position[2]), h->r))
+      continue;
+    __global const pf_photon* p = &sorted[j];
+    if (!(p->dir[0] * h->nx + p->dir[1] * h->ny + p->dir[2] * h->nz < 0.0f)) continue;
+    h->m += 1;
+    h->t0 += (pf_acc)(h->fr0 * p->flux[0]);
+    h->t1 += (pf_acc)(h->fr1 * p->flux[1]);
+    h->t2 += (pf_acc)(h->fr2 * p->flux[2]);
+  }
 }
 
 /* Stores a hitpoint's accumulators. */
@@ -369,18 +405,26 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  * congruent modulo the table size: along a row when the row is longer than the table, across rows
  * when row offsets are congruent — both tested arithmetically. When the grid has no more cells
  * than the table has slots (`unique`, the host's choice of table size makes that the common case)
- * no two cells share a slot, and a row is one run of photons (two if it wraps around the table). */
-__kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
-                               __global const pf_photon* sorted, __global const int* slot_start,
+ * no two cells share a slot, and a row is one run of photons (two if it wraps around the table).
+ *
+ * One work-item owns one hitpoint for the whole pass, so the kernel also applies eq. 3.14–3.18 to
+ * it (pf_ppm_update, the arithmetic of ppm_apply on the same sums: the same state) instead of
+ * leaving m and τ_M in accumulators for ppm_apply, and it reduces the largest finite positive
+ * new radius (order-preserving ints, grid_shared.h) into rmax_next[0] (zero on entry): the next
+ * pass's cell size, so that a state kept on the device needs no copy to the host between passes
+ * (cl_gather.h, DevicePpmState). `lmax` holds one int per work-item. */
+__kernel void gather_hash_grid(__global pf_hitpoint* hps, int count,
+                               __global const pf_photon* sorted,
+                               __global const pf_photon_key* keys, __global const int* slot_start,
                                float ox, float oy, float oz, float cell, int nx, int ny, int nz,
                                uint mask, int unique, __global const pf_material* mats,
-                               int skip_direct,
-                               __global int* acc_m, __global pf_acc* acc_tau) {
-  const int hi = (int)get_global_id(0);
-  if (hi >= count) return;
+                               int skip_direct, float alpha, __global int* rmax_next,
+                               __local int* lmax) {
+  const int hi = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
+  int r_next = 0; /* pf_float_ordered(0.0f) */
   pf_gather_hp h;
-  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
-  if (h.mesh >= 0) {
+  if (hi < count) pf_gather_load_fresh(&h, hps, hi, mats);
+  if (hi < count && h.mesh >= 0) {
     const float pad = h.r * PF_SLACK;
     const int x0 = pf_grid_coord(h.x - pad, ox, cell, nx), x1 = pf_grid_coord(h.x + pad, ox, cell, nx);
     const int y0 = pf_grid_coord(h.y - pad, oy, cell, ny), y1 = pf_grid_coord(h.y + pad, oy, cell, ny);
@@ -391,12 +435,9 @@ __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
         const uint first = pf_hash_slot(x0, y, z, (uint)nx, (uint)ny, mask);
         if (unique) { /* the row's slots first .. first + len − 1 (mod table): 1 or 2 runs */
           const uint stop = first + len <= mask + 1 ? first + len : mask + 1;
-          int end = slot_start[stop];
-          for (int j = slot_start[first]; j < end; ++j) pf_gather_global(&h, &sorted[j], skip_direct, 0);
-          if (first + len > mask + 1) {
-            end = slot_start[first + len - (mask + 1)];
-            for (int j = 0; j < end; ++j) pf_gather_global(&h, &sorted[j], skip_direct, 0);
-          }
+          pf_gather_keyed(&h, keys, sorted, slot_start[first], slot_start[stop], skip_direct);
+          if (first + len > mask + 1)
+            pf_gather_keyed(&h, keys, sorted, 0, slot_start[first + len - (mask + 1)], skip_direct);
           continue;
         }
         for (uint dx = 0; dx < len && dx <= mask; ++dx) { /* dx > mask: repeats within the row */
@@ -409,12 +450,23 @@ __kernel void gather_hash_grid(__global const pf_hitpoint* hps, int count,
               if (((k - f) & mask) < len) { seen = 1; break; }
             }
           if (seen) continue;
-          const int end = slot_start[k + 1];
-          for (int j = slot_start[k]; j < end; ++j) pf_gather_global(&h, &sorted[j], skip_direct, 0);
+          pf_gather_keyed(&h, keys, sorted, slot_start[k], slot_start[k + 1], skip_direct);
         }
       }
   }
-  pf_gather_store(&h, hi, acc_m, acc_tau);
+  if (hi < count) {
+    const float tau_m[3] = {(float)h.t0, (float)h.t1, (float)h.t2};
+    pf_ppm_update(&hps[hi], h.m, tau_m, alpha);
+    const float r = hps[hi].radius;
+    if (isfinite(r) && r > 0.0f) r_next = pf_float_ordered(r);
+  }
+  lmax[lid] = r_next;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (int s = 1; s < L; s <<= 1) {
+    if ((lid & (2 * s - 1)) == 0 && lid + s < L) lmax[lid] = max(lmax[lid], lmax[lid + s]);
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  if (lid == 0) atomic_max(rmax_next, lmax[0]);
 }
 
 /* Eq. 3.14, 3.16, 3.18 for hitpoints 0 .. count − 1 with the accumulated m and τ_M. */

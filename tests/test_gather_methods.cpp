@@ -6,6 +6,7 @@
 //     within 1e-5 relative RMSE, and naive equals the CPU grid gather bit for bit;
 //   - the device's grid build equals the CPU's build_photon_grid array for array (eq. 7.1), and the
 //     device's per-mesh sort is the stable sort by mesh;
+//   - a state kept on the device between passes (DevicePpmState) equals ppm_pass's, byte for byte;
 //   - the grid-cluster gather timer of the GA's device-time fitness gathers the same photons;
 //   - hitpoint sorting's filler counts follow Table 7.5's definition;
 //   - a method on the wrong backend, and an allocation the non-batching methods cannot make, are
@@ -198,6 +199,59 @@ TEST_CASE("gather methods: the device grid is the CPU's grid (eq. 7.1)", "[gathe
   // The CPU build's refusals.
   few[4].mesh = 3;
   CHECK_THROWS_AS(build_photon_grid(few, 3, gp, *dev), std::invalid_argument);
+}
+
+TEST_CASE("gather methods: a state kept on the device equals ppm_pass pass by pass",
+          "[gather][opencl][resident]") {
+  auto dev = test_device();
+  if (!dev) return;
+  for (DirectMode direct : {DirectMode::Photons, DirectMode::ShadowRays}) {
+    Fixture f = make_fixture(40, 32, 6, 4000, direct);
+    for (GatherMethod m : {GatherMethod::HashGrid, GatherMethod::GridKmeans}) {
+      INFO("method " << gather_method_name(m));
+      PpmOptions opt;
+      opt.method = m;
+      opt.alpha = 0.7f;
+      HitpointSet copied = f.fresh, resident = f.fresh;
+      DevicePpmState state(f.scene, resident, *dev);
+      for (size_t p = 0; p < f.passes.size(); ++p) {
+        ppm_pass(f.scene, copied, f.passes[p].photons, f.passes[p].emitted, opt, *dev);
+        state.pass(f.passes[p].photons, f.passes[p].emitted, opt);
+        CHECK(resident.passes == copied.passes);
+        CHECK(resident.photons_emitted == copied.photons_emitted);
+        if (m == GatherMethod::HashGrid) CHECK_FALSE(state.host_current());
+        if (p == 2 || p + 1 == f.passes.size()) {  // mid-stream and at the end: the same bytes
+          state.sync();
+          CHECK(state.host_current());
+          REQUIRE(resident.hitpoints.size() == copied.hitpoints.size());
+          CHECK(std::memcmp(resident.hitpoints.data(), copied.hitpoints.data(),
+                            copied.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+          if (m == GatherMethod::HashGrid) {  // the kernel's reduction = the host's maximum
+            float rmax = 0.f;
+            for (const pf_hitpoint& hp : resident.hitpoints)
+              if (std::isfinite(hp.radius)) rmax = std::max(rmax, hp.radius);
+            CHECK(rmax > 0.f);
+            CHECK(state.device_max_radius() == rmax);
+          }
+        }
+      }
+      // The radii shrank (the passes did work).
+      size_t shrunk = 0;
+      for (size_t i = 0; i < copied.hitpoints.size(); ++i)
+        shrunk += copied.hitpoints[i].radius < f.fresh.hitpoints[i].radius;
+      CHECK(shrunk > copied.hitpoints.size() / 4);
+      // Another method after a resident pass continues from the device's state.
+      state.pass(f.passes[0].photons, f.passes[0].emitted, opt);
+      ppm_pass(f.scene, copied, f.passes[0].photons, f.passes[0].emitted, opt, *dev);
+      PpmOptions other = opt;
+      other.method = m == GatherMethod::HashGrid ? GatherMethod::Naive : GatherMethod::HashGrid;
+      state.pass(f.passes[1].photons, f.passes[1].emitted, other);
+      ppm_pass(f.scene, copied, f.passes[1].photons, f.passes[1].emitted, other, *dev);
+      state.sync();
+      CHECK(std::memcmp(resident.hitpoints.data(), copied.hitpoints.data(),
+                        copied.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+    }
+  }
 }
 
 TEST_CASE("gather methods: the grid-cluster gather timer gathers the pass's photons",

@@ -8,6 +8,9 @@
 // build (its build log is saved to photonflow-cl-build.log in the current folder, or in $TMPDIR
 // when that is not writable) all throw pf::InputError; nothing crashes.
 //
+// Profiling: with the environment variable PF_CL_PROFILE set (non-empty), the context sums each
+// kernel's launch-to-finish time by kernel name and prints the table to stderr when it closes.
+//
 // Allocation limit: CL_DEVICE_MAX_MEM_ALLOC_SIZE (2 GiB on PoCL), lowered by the environment
 // variable PF_CL_MAX_ALLOC=<bytes> or set_max_alloc() (tests force small limits to exercise the
 // batched paths).
@@ -161,6 +164,8 @@ class ClContext {
   uint64_t max_alloc_ = 0;
   int work_group_ = kDefaultWorkGroup;
   double build_seconds_ = 0, kernel_seconds_ = 0;
+  bool profile_ = false;                                     // PF_CL_PROFILE
+  std::map<std::string, std::pair<uint64_t, double>> profile_times_;  // name → calls, seconds
 };
 
 // Opens the backend `opt` asks for and says which on `log` (one line "<tool>: device: ..."):

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "photonflow/cl_gather.h"
 #include "photonflow/cl_runtime.h"
 #include "photonflow/clusters.h"
 #include "photonflow/eye_pass.h"
@@ -46,7 +47,12 @@ class ProgressiveRenderer {
   // One photon pass (trace photons of pass `passes_done()`) and its PPM gather.
   void run_iteration();
   int passes_done() const { return state_.passes; }
-  const HitpointSet& state() const { return state_; }
+  uint64_t photons_emitted() const { return state_.photons_emitted; }
+  // The state after the last pass (brought back from the device first when it is kept there).
+  const HitpointSet& state() const {
+    if (device_state_) device_state_->sync();
+    return state_;
+  }
   uint64_t photons_traced() const { return photons_stored_; }
 
   // Writes the hitpoint state atomically to `path` with provenance `prov`.
@@ -64,6 +70,9 @@ class ProgressiveRenderer {
   // Clusters of a clustered device method, made once from the eye pass (or the checkpoint's
   // hitpoints, which have the same positions) when opt.ppm.clusters is not given.
   std::unique_ptr<ClusterSet> clusters_;
+  // The OpenCL backend's state on the device (cl_gather.h): with hash-grid the hitpoints stay
+  // there between passes and come back only when state() is read (snapshots, checkpoints, end).
+  std::unique_ptr<DevicePpmState> device_state_;
 };
 
 // Where a run stands after a pass (snapshot callbacks and the run record).

@@ -219,6 +219,7 @@ DeviceMeshSort device_mesh_sort(ClContext& dev, const ClBuffer& photons, size_t 
 // `origin`, table of mask + 1 slots; slot_start has mask + 2 entries.
 struct DeviceHashGrid {
   const ClBuffer* sorted = nullptr;
+  const ClBuffer* keys = nullptr;  // pf_photon_key of each sorted photon
   const ClBuffer* slot_start = nullptr;
   float origin[3] = {0, 0, 0};
   float cell = 1.f;
@@ -254,6 +255,7 @@ DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t 
   const ClBuffer& key = dev.scratch("hash.key", n * sizeof(cl_int));
   const ClBuffer& order = dev.scratch("hash.order", n * sizeof(cl_int));
   const ClBuffer& sorted = dev.scratch("hash.photons", n * sizeof(pf_photon));
+  const ClBuffer& keys = dev.scratch("hash.keys", n * sizeof(pf_photon_key));
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "key_hash_cell");
     dev.args(k, photons, cl_int(n), origin[0], origin[1], origin[2], cell, g.n[0], g.n[1], g.n[2],
@@ -261,8 +263,13 @@ DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t 
     dev.run(k, n);
   }
   sort_by_key(dev, key, counts, n, table, order);
-  permute(dev, photons, order, n, sorted);
+  if (n > 0) {
+    cl_kernel k = dev.kernel("build_grid", "permute_photons_keys");
+    dev.args(k, photons, order, cl_int(n), sorted, keys);
+    dev.run(k, n);
+  }
   g.sorted = &sorted;
+  g.keys = &keys;
   g.slot_start = &counts;
   return g;
 }
@@ -317,6 +324,68 @@ void check_cluster_count(const ClusterSet& cs, size_t hitpoints) {
 
 double since(ClContext& dev, double t0) { return dev.kernel_seconds() - t0; }
 
+// One hash-grid pass over nh hitpoints already in `hps` (device_grid's cell size from rmax, their
+// largest finite positive radius, as the host computes it): uploads the photons, builds the hashed
+// grid, gathers and applies eq. 3.14–3.18 in one kernel. Returns the new states' rmax (reduced by
+// the kernel, so a state kept on the device needs no copy to the host between passes).
+float hash_grid_pass(const Scene& scene, const ClBuffer& hps, size_t nh, DirectMode direct,
+                     float rmax, const std::vector<pf_photon>& photons, const PpmOptions& opt,
+                     ClContext& dev, GatherTimes& times) {
+  const size_t np = photons.size();
+  require_one_buffer(dev, np, sizeof(pf_photon), "photons", opt.method);
+  check_photons(photons, int(scene.mesh_names.size()));
+  const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
+  dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
+  const ClBuffer& phs = dev.scratch("ppm.photons", np * sizeof(pf_photon));
+  dev.write(phs, np * sizeof(pf_photon), photons.data());
+  const Vec3 ext = scene.bounds.hi - scene.bounds.lo;
+  float floor_cell = std::max({ext.x, ext.y, ext.z, 1e-6f}) * 1e-6f;
+  if (!std::isfinite(floor_cell)) floor_cell = 1e-6f;
+  if (!(opt.hash_cell > 0.f)) throw input_error("", "hash-grid cell size must be > 0");
+  const float cell = std::max(opt.hash_cell * rmax * kSlack * kSlack, floor_cell);
+  // The grid spans the scene's bounds; photons and spheres beyond them (rounding) fall into
+  // the edge cells, consistently for both (pf_grid_coord clamps monotonically).
+  float origin[3] = {scene.bounds.lo.x, scene.bounds.lo.y, scene.bounds.lo.z};
+  float extent[3] = {ext.x, ext.y, ext.z};
+  for (int c = 0; c < 3; ++c)
+    if (!std::isfinite(origin[c]) || !std::isfinite(extent[c])) origin[c] = extent[c] = 0.f;
+  double t0 = dev.kernel_seconds();
+  DeviceHashGrid g = device_hash_grid(dev, phs, np, origin, extent, cell, opt.hash_slots);
+  times.order = since(dev, t0);
+  const ClBuffer& next = dev.scratch("ppm.rmax", sizeof(cl_int));
+  dev.fill_zero(next, sizeof(cl_int));
+  const size_t L = size_t(dev.work_group());
+  t0 = dev.kernel_seconds();
+  cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
+  dev.args(k, hps, cl_int(nh), *g.sorted, *g.keys, *g.slot_start, g.origin[0], g.origin[1],
+           g.origin[2], g.cell, g.n[0], g.n[1], g.n[2], g.mask, g.unique, mats,
+           cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha, next,
+           ClLocal{L * sizeof(cl_int)});
+  dev.run(k, nh);
+  times.gather = since(dev, t0);
+  times.work_items = nh;
+  cl_int r = 0;
+  dev.read(next, sizeof r, &r);
+  return pf_ordered_float(r);
+}
+
+// The largest finite positive radius of a state (the hash-grid cell size's unit).
+float max_radius(const HitpointSet& h) {
+  float rmax = 0.f;
+  for (const pf_hitpoint& hp : h.hitpoints)
+    if (std::isfinite(hp.radius)) rmax = std::max(rmax, hp.radius);
+  return rmax;
+}
+
+void check_pass_options(const PpmOptions& opt) {
+  if (!(opt.alpha > 0.f && opt.alpha <= 1.f))
+    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(opt.alpha));
+  const GatherMethodInfo& mi = gather_method_info(opt.method);
+  if (!mi.device)
+    throw input_error("", std::string("--method ") + mi.name + " runs on the CPU backend",
+                      "use --device cpu, or an OpenCL method such as grid-kmeans");
+}
+
 }  // namespace
 
 ClusterSet clusters_for_method(GatherMethod m, const HitpointSet& h, int wg_size,
@@ -368,12 +437,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
                      uint64_t emitted, const PpmOptions& opt, ClContext& dev) {
   Stopwatch wall;
   GatherTimes times;
-  if (!(opt.alpha > 0.f && opt.alpha <= 1.f))
-    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(opt.alpha));
-  const GatherMethodInfo& mi = gather_method_info(opt.method);
-  if (!mi.device)
-    throw input_error("", std::string("--method ") + mi.name + " runs on the CPU backend",
-                      "use --device cpu, or an OpenCL method such as grid-kmeans");
+  check_pass_options(opt);
   const size_t nh = h.hitpoints.size(), np = photons.size();
   if (nh > size_t(INT32_MAX) || np > size_t(INT32_MAX))
     throw input_error("", "too many hitpoints or photons for the OpenCL backend");
@@ -387,7 +451,13 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
     dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
     cl_kernel apply = dev.kernel("illuminate_methods", "ppm_apply");
 
-    if (opt.method == GatherMethod::Naive) {
+    if (opt.method == GatherMethod::HashGrid) {
+      require_one_buffer(dev, nh, sizeof(pf_hitpoint), "hitpoints", opt.method);
+      const ClBuffer& hps = dev.scratch("ppm.hitpoints", nh * sizeof(pf_hitpoint));
+      dev.write(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
+      hash_grid_pass(scene, hps, nh, h.direct_mode, max_radius(h), photons, opt, dev, times);
+      dev.read(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
+    } else if (opt.method == GatherMethod::Naive) {
       // Batches of hitpoints × batches of photons under the allocation limit, photons in index
       // order: the CPU's summation order, so the result equals the CPU gathers bit for bit.
       cl_kernel gather = dev.kernel("illuminate_methods", "gather_naive");
@@ -473,30 +543,6 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
           dev.run(k, order.size());
           times.work_items = order.size();
         }
-      } else if (m == GatherMethod::HashGrid) {
-        float rmax = 0.f;
-        for (const pf_hitpoint& hp : h.hitpoints)
-          if (std::isfinite(hp.radius)) rmax = std::max(rmax, hp.radius);
-        const Vec3 ext = scene.bounds.hi - scene.bounds.lo;
-        float floor_cell = std::max({ext.x, ext.y, ext.z, 1e-6f}) * 1e-6f;
-        if (!std::isfinite(floor_cell)) floor_cell = 1e-6f;
-        if (!(opt.hash_cell > 0.f)) throw input_error("", "hash-grid cell size must be > 0");
-        const float cell = std::max(opt.hash_cell * rmax * kSlack * kSlack, floor_cell);
-        // The grid spans the scene's bounds; photons and spheres beyond them (rounding) fall into
-        // the edge cells, consistently for both (pf_grid_coord clamps monotonically).
-        float origin[3] = {scene.bounds.lo.x, scene.bounds.lo.y, scene.bounds.lo.z};
-        float extent[3] = {ext.x, ext.y, ext.z};
-        for (int c = 0; c < 3; ++c)
-          if (!std::isfinite(origin[c]) || !std::isfinite(extent[c])) origin[c] = extent[c] = 0.f;
-        DeviceHashGrid g = device_hash_grid(dev, phs, np, origin, extent, cell, opt.hash_slots);
-        times.order = since(dev, t0);
-        t0 = dev.kernel_seconds();
-        cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
-        dev.args(k, hps, cl_int(nh), *g.sorted, *g.slot_start, g.origin[0], g.origin[1],
-                 g.origin[2], g.cell, g.n[0], g.n[1], g.n[2], g.mask, g.unique, mats, skip_direct,
-                 acc_m, acc_tau);
-        dev.run(k, nh);
-        times.work_items = nh;
       } else {  // kmeans-clusters, grid-kmeans, grid-gridclusters
         ClusterSet made;
         ClusterSet* cs = opt.clusters;
@@ -542,6 +588,55 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   h.estimator = "ppm";
   times.total = wall.seconds();
   return times;
+}
+
+// ---- DevicePpmState ---------------------------------------------------------------------------
+
+DevicePpmState::DevicePpmState(const Scene& scene, HitpointSet& h, ClContext& dev)
+    : scene_(scene), h_(h), dev_(dev) {}
+
+GatherTimes DevicePpmState::pass(const std::vector<pf_photon>& photons, uint64_t emitted,
+                                 const PpmOptions& opt) {
+  if (opt.method != GatherMethod::HashGrid) {  // the copying route
+    sync();
+    device_current_ = false;
+    return ppm_pass(scene_, h_, photons, emitted, opt, dev_);
+  }
+  Stopwatch wall;
+  GatherTimes times;
+  check_pass_options(opt);
+  const size_t nh = h_.hitpoints.size(), np = photons.size();
+  if (nh > size_t(INT32_MAX) || np > size_t(INT32_MAX))
+    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
+  if (nh > 0 && np > 0) {
+    upload();
+    rmax_ = hash_grid_pass(scene_, hps_, nh, h_.direct_mode, rmax_, photons, opt, dev_, times);
+    host_current_ = false;
+  }
+  h_.photons_emitted += emitted;
+  h_.passes += 1;
+  h_.estimator = "ppm";
+  times.total = wall.seconds();
+  return times;
+}
+
+void DevicePpmState::upload() {
+  if (device_current_) return;
+  sync();  // never overwrite a newer device state with an older host copy
+  const size_t nh = h_.hitpoints.size();
+  if (nh > 0) {
+    require_one_buffer(dev_, nh, sizeof(pf_hitpoint), "hitpoints", GatherMethod::HashGrid);
+    if (hps_.bytes() < nh * sizeof(pf_hitpoint)) hps_ = dev_.buffer(nh * sizeof(pf_hitpoint));
+    dev_.write(hps_, nh * sizeof(pf_hitpoint), h_.hitpoints.data());
+  }
+  rmax_ = max_radius(h_);
+  device_current_ = true;
+}
+
+void DevicePpmState::sync() {
+  if (host_current_) return;
+  dev_.read(hps_, h_.hitpoints.size() * sizeof(pf_hitpoint), h_.hitpoints.data());
+  host_current_ = true;
 }
 
 // ---- GridGatherTimer ----------------------------------------------------------------------------

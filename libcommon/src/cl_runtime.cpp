@@ -260,9 +260,18 @@ ClContext::ClContext(const ClDeviceInfo& dev, int work_group) : info_(dev) {
                                 env + "'");
     set_max_alloc(v);
   }
+  const char* prof = std::getenv("PF_CL_PROFILE");
+  profile_ = prof && *prof;
 }
 
 ClContext::~ClContext() {
+  if (profile_ && !profile_times_.empty()) {
+    std::fprintf(stderr, "PF_CL_PROFILE %-32s %8s %12s %10s\n", "kernel", "calls", "total ms", "ms/call");
+    for (const auto& [name, t] : profile_times_)
+      std::fprintf(stderr, "PF_CL_PROFILE %-32s %8llu %12.3f %10.4f\n", name.c_str(),
+                   static_cast<unsigned long long>(t.first), t.second * 1e3,
+                   t.second * 1e3 / double(t.first));
+  }
   scene_cache.reset();
   scratch_.clear();
   for (auto& k : kernels_) clReleaseKernel(k.second);
@@ -444,7 +453,15 @@ void ClContext::run(cl_kernel k, size_t n, size_t local) {
   cl_check(clEnqueueNDRangeKernel(queue_, k, 1, nullptr, &global, &local, 0, nullptr, nullptr),
            "clEnqueueNDRangeKernel");
   cl_check(clFinish(queue_), "clFinish");
-  kernel_seconds_ += seconds_since(t0);
+  const double dt = seconds_since(t0);
+  kernel_seconds_ += dt;
+  if (profile_) {
+    char name[128] = {0};
+    clGetKernelInfo(k, CL_KERNEL_FUNCTION_NAME, sizeof name - 1, name, nullptr);
+    auto& t = profile_times_[name];
+    t.first += 1;
+    t.second += dt;
+  }
 }
 
 // ---- choice ------------------------------------------------------------------------------------

@@ -37,7 +37,8 @@ void ProgressiveRenderer::run_iteration() {
     PhotonPassResult pass =
         trace_photons(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
     photons_stored_ += pass.photons.size();
-    ppm_pass(scene_, state_, pass.photons, pass.emitted, opt_.ppm, *opt_.device);
+    if (!device_state_) device_state_ = std::make_unique<DevicePpmState>(scene_, state_, *opt_.device);
+    device_state_->pass(pass.photons, pass.emitted, opt_.ppm);
     return;
   }
   // The same photons and the same gather as trace_photons + ppm_pass, without the copies: the
@@ -57,7 +58,7 @@ void ProgressiveRenderer::run_iteration() {
 }
 
 void ProgressiveRenderer::save_state(const std::string& path, const Provenance& prov) const {
-  save_hitpoints(state_, path, prov);
+  save_hitpoints(state(), path, prov);
 }
 
 HitpointSet render_progressive(
@@ -93,7 +94,7 @@ HitpointSet render_progressive(
   st.resumed = from_checkpoint;
   auto update_status = [&] {
     st.passes = r->passes_done();
-    st.photons_emitted = r->state().photons_emitted;
+    st.photons_emitted = r->photons_emitted();
     st.photons_stored = r->photons_traced();
     st.build_seconds = opt.device ? opt.device->build_seconds() - build0 : 0.0;
     st.seconds = clock.seconds() - aside - st.build_seconds;
@@ -110,6 +111,7 @@ HitpointSet render_progressive(
   double photons = 0;
   while (r->passes_done() < opt.passes) {
     r->run_iteration();
+    if (r->passes_done() == opt.passes) r->state();  // the last state back from the device, on the clock
     photons += double(opt.photons.photons);
     update_status();
     // Time outside the rendering clock; a program built inside (the device synthesis of a first

@@ -5,8 +5,10 @@
 // ones). --estimator classic: classic photon mapping (k nearest global photons + fixed-radius
 // caustic estimate, thesis eq. 3.10).
 #include <iostream>
+#include <memory>
 
 #include "photonflow/cl_backend.h"
+#include "photonflow/cl_gather.h"
 #include "photonflow/clusters.h"
 #include "photonflow/device_options.h"
 #include "photonflow/illuminate.h"
@@ -146,13 +148,17 @@ int main(int argc, char** argv) {
                                 " but the hitpoints have " + std::to_string(h.passes) + " passes",
                                 "trace photons with --first-pass " + std::to_string(h.passes));
         pf::Progress progress("pass", photons.pass_count(), "photons");
+        // On the device the state stays there between passes (hash-grid) and comes back once.
+        std::unique_ptr<pf::DevicePpmState> on_device;
+        if (dev) on_device = std::make_unique<pf::DevicePpmState>(scene, h, *dev);
         for (int k = 0; k < photons.pass_count(); ++k) {
-          if (dev)
-            pf::ppm_pass(scene, h, photons.pass(k), photons.pass_emitted[size_t(k)], ppm, *dev);
+          if (on_device)
+            on_device->pass(photons.pass(k), photons.pass_emitted[size_t(k)], ppm);
           else
             pf::ppm_pass(scene, h, photons.pass(k), photons.pass_emitted[size_t(k)], ppm);
           progress.update(k + 1, double(h.photons_emitted));
         }
+        if (on_device) on_device->sync();
       } else {
         uint64_t emitted = 0;
         for (auto e : photons.pass_emitted) emitted += e;
