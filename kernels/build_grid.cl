@@ -7,9 +7,10 @@
  *                    atomic_min/atomic_max per mesh on order-preserving ints (grid_shared.h);
  *     (host)         the headers from the bounds: photon_grid.h's mesh_grid_header, shared code;
  *     key_grid_bin   each photon's global bin = first_bin(mesh) + eq. 7.1 offset, counted with
- *                    atomic_inc ("photons scattered into bins with atomic counters");
+ *                    atomic_inc ("photons scattered into bins with atomic counters"), whose old
+ *                    value is the photon's rank in its bin;
  *     scan_*         exclusive prefix sum of the counts → the bin-start table cell_start;
- *     scatter_keys   each photon to cell_start[bin] + atomic_inc(cursor[bin]) (a separate kernel);
+ *     scatter_keys   each photon to cell_start[bin] + rank (a separate kernel);
  *     sort_ranges    each bin's photon indices ascending (a shell sort per bin; bins hold few
  *                    photons), which makes the scatter's arbitrary order deterministic — the
  *                    result is the CPU's stable counting sort, byte for byte;
@@ -64,20 +65,20 @@ __kernel void grid_bounds(__global const pf_photon* ph, int n, int mesh_first, i
 
 /* key[i] = global bin of photon i (first_bin + eq. 7.1 offset); counts[key]++. */
 __kernel void key_grid_bin(__global const pf_photon* ph, int n, __global const pf_mesh_grid* mg,
-                           __global int* key, __global int* counts) {
+                           __global int* key, __global int* rank, __global int* counts) {
   const int i = (int)get_global_id(0);
   if (i >= n) return;
   __global const pf_mesh_grid* g = &mg[ph[i].mesh];
   const int k = g->first_bin + pf_grid_bin(g, ph[i].position[0], ph[i].position[1],
                                            ph[i].position[2]);
   key[i] = k;
-  atomic_inc(&counts[k]);
+  rank[i] = atomic_inc(&counts[k]);
 }
 
 /* key[i] = table slot of photon i's cell in the hashed grid (grid_shared.h); counts[key]++. */
 __kernel void key_hash_cell(__global const pf_photon* ph, int n, float ox, float oy, float oz,
                             float cell, int nx, int ny, int nz, uint mask, __global int* key,
-                            __global int* counts) {
+                            __global int* rank, __global int* counts) {
   const int i = (int)get_global_id(0);
   if (i >= n) return;
   const int cx = pf_grid_coord(ph[i].position[0], ox, cell, nx);
@@ -85,16 +86,16 @@ __kernel void key_hash_cell(__global const pf_photon* ph, int n, float ox, float
   const int cz = pf_grid_coord(ph[i].position[2], oz, cell, nz);
   const int k = (int)pf_hash_slot(cx, cy, cz, (uint)nx, (uint)ny, mask);
   key[i] = k;
-  atomic_inc(&counts[k]);
+  rank[i] = atomic_inc(&counts[k]);
 }
 
-/* order[start[key[i]] + atomic_inc(cursor[key[i]])] = i. */
-__kernel void scatter_keys(__global const int* key, int n, __global const int* start,
-                           __global int* cursor, __global int* order) {
+/* order[start[key[i]] + rank[i]] = i: each photon to the place its counter gave it (rank = the
+ * count before its atomic_inc, a distinct slot of its range in whatever order the atomics ran). */
+__kernel void scatter_keys(__global const int* key, __global const int* rank, int n,
+                           __global const int* start, __global int* order) {
   const int i = (int)get_global_id(0);
   if (i >= n) return;
-  const int k = key[i];
-  order[start[k] + atomic_inc(&cursor[k])] = i;
+  order[start[key[i]] + rank[i]] = i;
 }
 
 /* Range r = order[start[r] .. start[r+1]) (the last range ends at `total`) sorted ascending:
@@ -132,17 +133,14 @@ __kernel void permute_photons(__global const pf_photon* in, __global const int* 
 
 /* The same permutation, also writing each photon's pf_photon_key (shared_types.h). */
 __kernel void permute_photons_keys(__global const pf_photon* in, __global const int* order, int n,
-                                   __global pf_photon* out, __global pf_photon_key* keys) {
+                                   __global pf_photon* out, __global float4* keys) {
   const int i = (int)get_global_id(0);
   if (i >= n) return;
-  const pf_photon p = in[order[i]];
-  out[i] = p;
-  pf_photon_key k;
-  k.position[0] = p.position[0];
-  k.position[1] = p.position[1];
-  k.position[2] = p.position[2];
-  k.key = 2 * p.mesh + ((p.flags & PF_PHOTON_DIRECT) ? 1 : 0);
-  keys[i] = k;
+  __global const pf_photon* p = &in[order[i]];
+  out[i] = *p;
+  /* a pf_photon_key, written as one 16-byte vector */
+  keys[i] = (float4)(p->position[0], p->position[1], p->position[2],
+                     as_float(2 * p->mesh + ((p->flags & PF_PHOTON_DIRECT) ? 1 : 0)));
 }
 
 /* ---- stable counting sort by mesh, in chunks ------------------------------------------------- */

@@ -74,16 +74,15 @@ void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level = 
   }
 }
 
-// Counting sort of photon indices by key (key[i] in [0, ranges)): counts → exclusive scan (the
-// start table, ranges + 1 entries, the last = n) → scatter with atomic cursors → each range sorted
-// ascending, so the order equals a stable sort. `start` and `order` are the results.
-void sort_by_key(ClContext& dev, const ClBuffer& key, const ClBuffer& counts, size_t n,
-                 size_t ranges, const ClBuffer& order) {
+// Counting sort of photon indices by key (key[i] in [0, ranges), rank[i] its place among the
+// photons of its key as the atomic counters gave it): counts → exclusive scan (the start table,
+// ranges + 1 entries, the last = n) → scatter to start + rank → each range sorted ascending, so
+// the order equals a stable sort. `counts` becomes the start table; `order` is the result.
+void sort_by_key(ClContext& dev, const ClBuffer& key, const ClBuffer& rank, const ClBuffer& counts,
+                 size_t n, size_t ranges, const ClBuffer& order) {
   exclusive_scan(dev, counts, ranges + 1);
-  const ClBuffer& cursor = dev.scratch("sort.cursor", (ranges + 1) * sizeof(cl_int));
-  dev.fill_zero(cursor, (ranges + 1) * sizeof(cl_int));
   cl_kernel scatter = dev.kernel("build_grid", "scatter_keys");
-  dev.args(scatter, key, cl_int(n), counts, cursor, order);
+  dev.args(scatter, key, rank, cl_int(n), counts, order);
   dev.run(scatter, n);
   cl_kernel sort = dev.kernel("build_grid", "sort_ranges");
   dev.args(sort, counts, cl_int(ranges), cl_int(n), order);
@@ -159,14 +158,15 @@ DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int me
   const ClBuffer& counts = dev.scratch(ns + ".cell_start", (g.entries + 1) * sizeof(cl_int));
   dev.fill_zero(counts, (g.entries + 1) * sizeof(cl_int));
   const ClBuffer& key = dev.scratch(ns + ".key", n * sizeof(cl_int));
+  const ClBuffer& rank = dev.scratch(ns + ".rank", n * sizeof(cl_int));
   const ClBuffer& order = dev.scratch(ns + ".order", n * sizeof(cl_int));
   const ClBuffer& sorted = dev.scratch(ns + ".photons", n * sizeof(pf_photon));
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "key_grid_bin");
-    dev.args(k, photons, cl_int(n), mg, key, counts);
+    dev.args(k, photons, cl_int(n), mg, key, rank, counts);
     dev.run(k, n);
   }
-  sort_by_key(dev, key, counts, n, g.entries, order);
+  sort_by_key(dev, key, rank, counts, n, g.entries, order);
   permute(dev, photons, order, n, sorted);
   g.sorted = &sorted;
   g.order = &order;
@@ -253,16 +253,17 @@ DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t 
   const ClBuffer& counts = dev.scratch("hash.start", (table + 1) * sizeof(cl_int));
   dev.fill_zero(counts, (table + 1) * sizeof(cl_int));
   const ClBuffer& key = dev.scratch("hash.key", n * sizeof(cl_int));
+  const ClBuffer& rank = dev.scratch("hash.rank", n * sizeof(cl_int));
   const ClBuffer& order = dev.scratch("hash.order", n * sizeof(cl_int));
   const ClBuffer& sorted = dev.scratch("hash.photons", n * sizeof(pf_photon));
   const ClBuffer& keys = dev.scratch("hash.keys", n * sizeof(pf_photon_key));
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "key_hash_cell");
     dev.args(k, photons, cl_int(n), origin[0], origin[1], origin[2], cell, g.n[0], g.n[1], g.n[2],
-             g.mask, key, counts);
+             g.mask, key, rank, counts);
     dev.run(k, n);
   }
-  sort_by_key(dev, key, counts, n, table, order);
+  sort_by_key(dev, key, rank, counts, n, table, order);
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "permute_photons_keys");
     dev.args(k, photons, order, cl_int(n), sorted, keys);
