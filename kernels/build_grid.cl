@@ -20,7 +20,8 @@
  *     mesh_chunk_scatter), deterministic without atomics; mesh_start[m] .. mesh_start[m+1].
  *   hashed grid (`hash-grid`): key_hash_cell gives each photon its table slot (grid_shared.h),
  *     then the same count / scan / scatter / sort kernels as the per-mesh grid, and
- *     permute_photons_keys, which also writes the 16-byte pf_photon_key array the gather tests.
+ *     permute_photons_keys, which also writes the photon keys (position, mesh, direct flag) the
+ *     gather tests, as a structure of arrays.
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "photonflow/shared_types.h"
@@ -131,16 +132,20 @@ __kernel void permute_photons(__global const pf_photon* in, __global const int* 
   out[i] = in[order[i]];
 }
 
-/* The same permutation, also writing each photon's pf_photon_key (shared_types.h). */
+/* The same permutation, also writing the photon keys of the hashed-grid gather (structure of
+ * arrays, 4·n 4-byte words): keys[i], keys[n + i], keys[2n + i] the position, keys[3n + i] the int
+ * 2·mesh + (PF_PHOTON_DIRECT set ? 1 : 0). A gather tests mesh, direct flag and distance on
+ * these, four photons per vector, and reads the whole 48-byte record only for photons inside R. */
 __kernel void permute_photons_keys(__global const pf_photon* in, __global const int* order, int n,
-                                   __global pf_photon* out, __global float4* keys) {
+                                   __global pf_photon* out, __global float* keys) {
   const int i = (int)get_global_id(0);
   if (i >= n) return;
   __global const pf_photon* p = &in[order[i]];
   out[i] = *p;
-  /* a pf_photon_key, written as one 16-byte vector */
-  keys[i] = (float4)(p->position[0], p->position[1], p->position[2],
-                     as_float(2 * p->mesh + ((p->flags & PF_PHOTON_DIRECT) ? 1 : 0)));
+  keys[i] = p->position[0];
+  keys[n + i] = p->position[1];
+  keys[2 * n + i] = p->position[2];
+  ((__global int*)keys)[3 * n + i] = 2 * p->mesh + ((p->flags & PF_PHOTON_DIRECT) ? 1 : 0);
 }
 
 /* ---- stable counting sort by mesh, in chunks ------------------------------------------------- */

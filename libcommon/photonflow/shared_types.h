@@ -142,16 +142,6 @@ typedef struct {
   pf_int flags; /* PF_PHOTON_* */
 } pf_photon;
 
-/* The fields of a photon that decide most of the gather rule, 16 bytes beside the sorted
- * pf_photon array of the hashed-grid gather (build_grid.cl's permute_photons_keys): a gather tests
- * position, mesh and the direct flag here and reads the whole record only for photons inside R
- * (illuminate_methods.cl), a third of the memory traffic of testing whole records.
- * key = 2·mesh + (PF_PHOTON_DIRECT set ? 1 : 0). */
-typedef struct {
-  pf_float position[3];
-  pf_int key;
-} pf_photon_key;
-
 /* Grid header of one mesh's photons (thesis ch. 7.3, eq. 7.1; photon_grid.h, grid_shared.h).
  * Bin of a point p: per axis c = clamp(floor((p − lo)/bin_size), 0, n−1) (eq. 7.1), linear
  * offset cx + cy·nx + cz·nx·ny. A mesh without photons has nx = ny = nz = 0 and one cell_start
@@ -185,7 +175,6 @@ static_assert(sizeof(pf_light) == 40, "pf_light layout");
 static_assert(sizeof(pf_camera) == 48, "pf_camera layout");
 static_assert(sizeof(pf_hitpoint) == 84, "pf_hitpoint layout");
 static_assert(sizeof(pf_photon) == 48, "pf_photon layout");
-static_assert(sizeof(pf_photon_key) == 16, "pf_photon_key layout");
 static_assert(sizeof(pf_mesh_grid) == 40, "pf_mesh_grid layout");
 static_assert(sizeof(pf_cluster) == 32, "pf_cluster layout");
 #endif

@@ -219,7 +219,7 @@ DeviceMeshSort device_mesh_sort(ClContext& dev, const ClBuffer& photons, size_t 
 // `origin`, table of mask + 1 slots; slot_start has mask + 2 entries.
 struct DeviceHashGrid {
   const ClBuffer* sorted = nullptr;
-  const ClBuffer* keys = nullptr;  // pf_photon_key of each sorted photon
+  const ClBuffer* keys = nullptr;  // x, y, z, 2·mesh + direct of the sorted photons: 4 arrays of n
   const ClBuffer* slot_start = nullptr;
   float origin[3] = {0, 0, 0};
   float cell = 1.f;
@@ -256,7 +256,7 @@ DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t 
   const ClBuffer& rank = dev.scratch("hash.rank", n * sizeof(cl_int));
   const ClBuffer& order = dev.scratch("hash.order", n * sizeof(cl_int));
   const ClBuffer& sorted = dev.scratch("hash.photons", n * sizeof(pf_photon));
-  const ClBuffer& keys = dev.scratch("hash.keys", n * sizeof(pf_photon_key));
+  const ClBuffer& keys = dev.scratch("hash.keys", 4 * n * sizeof(cl_float));
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "key_hash_cell");
     dev.args(k, photons, cl_int(n), origin[0], origin[1], origin[2], cell, g.n[0], g.n[1], g.n[2],
@@ -358,7 +358,7 @@ float hash_grid_pass(const Scene& scene, const ClBuffer& hps, size_t nh, DirectM
   const size_t L = size_t(dev.work_group());
   t0 = dev.kernel_seconds();
   cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
-  dev.args(k, hps, cl_int(nh), *g.sorted, *g.keys, *g.slot_start, g.origin[0], g.origin[1],
+  dev.args(k, hps, cl_int(nh), *g.sorted, *g.keys, cl_int(np), *g.slot_start, g.origin[0], g.origin[1],
            g.origin[2], g.cell, g.n[0], g.n[1], g.n[2], g.mask, g.unique, mats,
            cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha, next,
            ClLocal{L * sizeof(cl_int)});
