@@ -13,7 +13,10 @@
 //   hash-grid                           one grid of cells hash_cell·max R (default 2, times a
 //                                       1e-4 slack) over the scene, its cells hashed by linear
 //                                       index into 2^k ≥ photons slots, built by the same count /
-//                                       scan / scatter / sort kernels.
+//                                       scan / scatter / sort kernels, plus the photons' keys
+//                                       (position, mesh, direct flag; structure of arrays) that
+//                                       the gather tests four at a time; its gather kernel also
+//                                       applies eq. 3.14–3.18 and reduces the next max R.
 // The host supplies the hitpoint orders: mesh_sorted_order (hitpoint sorting, fillers) and the
 // clusters' order (clusters.h), one work-group per cluster.
 //

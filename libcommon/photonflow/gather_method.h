@@ -24,7 +24,10 @@
 //   grid-gridclusters    opencl   same with clusters made from grid bins     grid + grid clust.
 //   hash-grid            opencl   the cells of its sphere's box in one       (beyond the thesis)
 //                                 hashed grid over all meshes (cells 2·max R:
-//                                 ≤ 2 per axis), one work-item per hitpoint
+//                                 ≤ 2 per axis), one work-item per hitpoint;
+//                                 photon keys tested 4 per vector, eq. 3.14–
+//                                 3.18 in the same kernel, the state can stay
+//                                 on the device between passes (cl_gather.h)
 //
 // The methods before manual-distance test distances with OpenCL's built-in distance() as the
 // thesis's kernels did, guarded by the exact squared-distance rule so that they select the same
