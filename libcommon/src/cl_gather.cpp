@@ -378,13 +378,24 @@ float max_radius(const HitpointSet& h) {
   return rmax;
 }
 
-void check_pass_options(const PpmOptions& opt) {
+// The checks every device pass makes before any work: alpha, a device method, sizes that fit the
+// kernels' int indices.
+void check_pass(const PpmOptions& opt, size_t hitpoints, size_t photons) {
+  if (hitpoints > size_t(INT32_MAX) || photons > size_t(INT32_MAX))
+    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
   if (!(opt.alpha > 0.f && opt.alpha <= 1.f))
     throw input_error("", "alpha must be in (0, 1], got " + std::to_string(opt.alpha));
   const GatherMethodInfo& mi = gather_method_info(opt.method);
   if (!mi.device)
     throw input_error("", std::string("--method ") + mi.name + " runs on the CPU backend",
                       "use --device cpu, or an OpenCL method such as grid-kmeans");
+}
+
+// A pass's bookkeeping on the state (eq. 3.19's N_emitted, the pass count).
+void count_pass(HitpointSet& h, uint64_t emitted) {
+  h.photons_emitted += emitted;
+  h.passes += 1;
+  h.estimator = "ppm";
 }
 
 }  // namespace
@@ -438,10 +449,8 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
                      uint64_t emitted, const PpmOptions& opt, ClContext& dev) {
   Stopwatch wall;
   GatherTimes times;
-  check_pass_options(opt);
   const size_t nh = h.hitpoints.size(), np = photons.size();
-  if (nh > size_t(INT32_MAX) || np > size_t(INT32_MAX))
-    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
+  check_pass(opt, nh, np);
   const int mesh_count = int(scene.mesh_names.size());
   const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
   const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
@@ -584,9 +593,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       dev.read(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
     }
   }
-  h.photons_emitted += emitted;
-  h.passes += 1;
-  h.estimator = "ppm";
+  count_pass(h, emitted);
   times.total = wall.seconds();
   return times;
 }
@@ -605,18 +612,14 @@ GatherTimes DevicePpmState::pass(const std::vector<pf_photon>& photons, uint64_t
   }
   Stopwatch wall;
   GatherTimes times;
-  check_pass_options(opt);
   const size_t nh = h_.hitpoints.size(), np = photons.size();
-  if (nh > size_t(INT32_MAX) || np > size_t(INT32_MAX))
-    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
+  check_pass(opt, nh, np);
   if (nh > 0 && np > 0) {
     upload();
     rmax_ = hash_grid_pass(scene_, hps_, nh, h_.direct_mode, rmax_, photons, opt, dev_, times);
     host_current_ = false;
   }
-  h_.photons_emitted += emitted;
-  h_.passes += 1;
-  h_.estimator = "ppm";
+  count_pass(h_, emitted);
   times.total = wall.seconds();
   return times;
 }
