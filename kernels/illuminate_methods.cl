@@ -7,7 +7,8 @@
  * PF_PHOTON_DIRECT when direct light came from shadow rays; dot(photon.dir, normal) < 0;
  * pf_ppm_in_radius(pf_ppm_dist2(x, x_p), R)) and adds m and Σ f_r·Φ_p (eq. 3.17) into
  * per-hitpoint accumulators acc_m / acc_tau (double where the device has fp64, PF_FP64);
- * ppm_apply then applies eq. 3.14, 3.16, 3.18 once per pass. Only the order of the sum differs
+ * ppm_apply then applies eq. 3.14, 3.16, 3.18 once per pass (gather_hash_grid, where one
+ * work-item owns a hitpoint for the whole pass, applies them itself with the same arithmetic). Only the order of the sum differs
  * between kernels (each kernel's order is fixed, so every kernel is deterministic).
  *
  * Distance tests. The thesis's kernels up to "hitpoint sorting + local memory" used OpenCL's

@@ -325,10 +325,10 @@ void check_cluster_count(const ClusterSet& cs, size_t hitpoints) {
 
 double since(ClContext& dev, double t0) { return dev.kernel_seconds() - t0; }
 
-// One hash-grid pass over nh hitpoints already in `hps` (device_grid's cell size from rmax, their
-// largest finite positive radius, as the host computes it): uploads the photons, builds the hashed
-// grid, gathers and applies eq. 3.14–3.18 in one kernel. Returns the new states' rmax (reduced by
-// the kernel, so a state kept on the device needs no copy to the host between passes).
+// One hash-grid pass over nh hitpoints already in `hps`, rmax being their largest finite positive
+// radius as max_radius computes it (the cell side is hash_cell·rmax): uploads the photons, builds
+// the hashed grid, gathers and applies eq. 3.14–3.18 in one kernel. Returns the new state's rmax
+// (reduced by the kernel, so a state kept on the device needs no copy to the host between passes).
 float hash_grid_pass(const Scene& scene, const ClBuffer& hps, size_t nh, DirectMode direct,
                      float rmax, const std::vector<pf_photon>& photons, const PpmOptions& opt,
                      ClContext& dev, GatherTimes& times) {
