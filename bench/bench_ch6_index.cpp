@@ -54,16 +54,6 @@ using pf::Vec3;
 using pf::bench::median;
 using pf::bench::now;
 
-// "a,b,c" → strings; empty items are skipped.
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 // Camera rays through the pixel centres of a square grid of ceil(sqrt(n))² pixels, row by row,
 // the first n of them.
 std::vector<pf::Ray> camera_rays(const pf::Scene& scene, size_t n) {
@@ -211,7 +201,7 @@ int main(int argc, char** argv) {
   const double load_start = pf::bench::load_average();
   std::string note;
   const pf::Scene scene = make_scene(args["dae"].as<std::string>(),
-                                     split(args["meshes"].as<std::string>()),
+                                     pf::bench::split_list(args["meshes"].as<std::string>()),
                                      args["fallback-triangles"].as<size_t>(), note);
 
   // Builds, each the median of --runs.

@@ -87,13 +87,20 @@ inline Size parse_size(const std::string& s) {
   return z;
 }
 
+// "a,b,c" → items; empty items are skipped.
+inline std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
 // "W1xH1,W2xH2,..." → sizes.
 inline std::vector<Size> parse_sizes(const std::string& list) {
   std::vector<Size> out;
-  std::stringstream ss(list);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(parse_size(item));
+  for (const std::string& item : split_list(list)) out.push_back(parse_size(item));
   return out;
 }
 

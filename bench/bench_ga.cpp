@@ -56,15 +56,6 @@ using pf::bench::median;
 using pf::bench::now;
 using pf::bench::parse_size;
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
 // Ranks (1-based) with ties given their mean rank.
 std::vector<double> ranks(const std::vector<double>& v) {
   std::vector<size_t> idx(v.size());
@@ -256,7 +247,7 @@ int main(int argc, char** argv) {
         pf::append_cluster(one.clusters, h.hitpoints[size_t(i)].mesh, &i, 1, h);
       cands.push_back(std::move(one));
     }
-    std::vector<std::string> fits = split(a["fitness"].as<std::string>());
+    std::vector<std::string> fits = pf::bench::split_list(a["fitness"].as<std::string>());
     const int dev_runs = a["device-fitness-runs"].as<int>();
     std::map<std::string, pf::GaOptions> opts;
     for (const std::string& fname : fits) {

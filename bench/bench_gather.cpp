@@ -114,13 +114,8 @@ int main(int argc, char** argv) {
       if (list == "all") {
         for (const pf::GatherMethodInfo& i : pf::gather_methods()) methods.push_back(i.method);
       } else {
-        size_t p = 0;
-        while (p <= list.size()) {
-          size_t q = list.find(',', p);
-          if (q == std::string::npos) q = list.size();
-          if (q > p) methods.push_back(pf::parse_gather_method(list.substr(p, q - p)));
-          p = q + 1;
-        }
+        for (const std::string& m : pf::bench::split_list(list))
+          methods.push_back(pf::parse_gather_method(m));
       }
     }
     std::printf("# bench_gather: %s, %u photons/pass, median of %d runs\n",

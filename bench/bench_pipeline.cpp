@@ -98,17 +98,6 @@ bool reset_peak() {
   return bool(out);
 }
 
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(item);
-  return out;
-}
-
-
 pf::HitpointSet fresh_state(const pf::Scene& scene, const pf::EyePassOptions& eye) {
   return pf::make_hitpoint_set(pf::trace_hitpoints(scene, eye), eye.direct, scene.scene_id);
 }
@@ -193,7 +182,7 @@ int main(int argc, char** argv) {
                        a["memory-threads"].as<int>());
 
   std::vector<int> threads;
-  for (auto& t : split(a["threads"].as<std::string>())) threads.push_back(std::stoi(t));
+  for (auto& t : pf::bench::split_list(a["threads"].as<std::string>())) threads.push_back(std::stoi(t));
   const uint32_t photons = a["photons"].as<uint32_t>();
   const bool flann = !a.count("no-flann");
 
@@ -203,7 +192,7 @@ int main(int argc, char** argv) {
               "| grid build | grid gather (incl. build) | FLANN gather (incl. build) "
               "| synthesis | PPM pass (trace + grid + gather) | first pass of a new renderer |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-  for (auto& s : split(a["sizes"].as<std::string>())) {
+  for (auto& s : pf::bench::split_list(a["sizes"].as<std::string>())) {
     Size sz = parse_size(s);
     pf::Scene scene = make_scene(scene_h5, dae, sz);
     for (int t : threads) {

@@ -6,16 +6,15 @@
 #include <string>
 #include <vector>
 
+#include "bench_common.h"
+
 namespace pf::bench {
 
 // "a,b,c" → values (std::stod, converted to T); empty items are skipped.
 template <class T>
 std::vector<T> parse_list(const std::string& s) {
   std::vector<T> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ','))
-    if (!item.empty()) out.push_back(T(std::stod(item)));
+  for (const std::string& item : split_list(s)) out.push_back(T(std::stod(item)));
   return out;
 }
 
