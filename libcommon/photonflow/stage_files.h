@@ -77,4 +77,11 @@ GridSet load_grids(const std::string& path);
 void require_scene(const std::string& path, const std::string& scene_id,
                    const std::string& expected, const std::string& scene_path);
 
+// A stage's input file `path` (format `format`, made from scene `scene_id`): refused by
+// require_scene unless made from the scene at scene_path (id `expected`), then recorded in prov
+// under `role` (hashed; InputError when unreadable).
+void accept_input(Provenance& prov, const std::string& role, const std::string& path,
+                  const std::string& format, const std::string& scene_id,
+                  const std::string& expected, const std::string& scene_path);
+
 }  // namespace pf

@@ -49,6 +49,13 @@ void require_scene(const std::string& path, const std::string& scene_id,
                       "rerun the stages from the same scene.h5");
 }
 
+void accept_input(Provenance& prov, const std::string& role, const std::string& path,
+                  const std::string& format, const std::string& scene_id,
+                  const std::string& expected, const std::string& scene_path) {
+  require_scene(path, scene_id, expected, scene_path);
+  prov.add_input(role, path, format, scene_id);
+}
+
 // ---- hitpoints.h5 ---------------------------------------------------------------------------
 
 HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id) {

@@ -43,18 +43,18 @@ int main(int argc, char** argv) {
     std::string scene_path = a["scene"].as<std::string>(), photons_path = a["photons"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
     pf::PhotonSet photons = pf::load_photons(photons_path);
-    pf::require_scene(photons_path, photons.scene_id, scene.scene_id, scene_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    prov.add_input("photons", photons_path, pf::kPhotonsFormat, photons.scene_id);
+    pf::accept_input(prov, "photons", photons_path, pf::kPhotonsFormat, photons.scene_id,
+                     scene.scene_id, scene_path);
     if (gp.default_radius <= 0.f) {
       if (!a.count("hitpoints"))
         throw pf::input_error("", "give --radius or --hitpoints (whose R0 sets the bin size)");
       std::string hp_path = a["hitpoints"].as<std::string>();
       pf::HitpointSet h = pf::load_hitpoints(hp_path);
-      pf::require_scene(hp_path, h.scene_id, scene.scene_id, scene_path);
+      pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
+                       scene_path);
       gp.default_radius = h.radius0;
-      prov.add_input("hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id);
     }
     pf::require_positive("radius", gp.default_radius);
     pf::GridSet grids;

@@ -116,10 +116,10 @@ int main(int argc, char** argv) {
     std::string scene_path = a["scene"].as<std::string>(), hp_path = a["hitpoints"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
     pf::HitpointSet h = pf::load_hitpoints(hp_path);
-    pf::require_scene(hp_path, h.scene_id, scene.scene_id, scene_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    prov.add_input("hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id);
+    pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
+                     scene_path);
 
     pf::ClusterSet c;
     pf::GaResult result;
@@ -143,9 +143,9 @@ int main(int argc, char** argv) {
       if (ga.fitness == pf::GaFitness::DeviceTime) {
         const std::string ppath = a["photons"].as<std::string>();
         pf::PhotonSet ps = pf::load_photons(ppath);
-        pf::require_scene(ppath, ps.scene_id, scene.scene_id, scene_path);
+        pf::accept_input(prov, "photons", ppath, pf::kPhotonsFormat, ps.scene_id, scene.scene_id,
+                         scene_path);
         if (ps.pass_count() < 1) throw pf::input_error(ppath, "holds no photon pass");
-        prov.add_input("photons", ppath, pf::kPhotonsFormat, ps.scene_id);
         photons = ps.pass(0);
         in.emitted = ps.pass_emitted[0];
         dev = pf::open_device(pf::device_options(a), "cluster");

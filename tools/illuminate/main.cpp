@@ -94,10 +94,10 @@ int main(int argc, char** argv) {
     std::string scene_path = a["scene"].as<std::string>(), hp_path = a["hitpoints"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
     pf::HitpointSet h = pf::load_hitpoints(hp_path);
-    pf::require_scene(hp_path, h.scene_id, scene.scene_id, scene_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    prov.add_input("hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id);
+    pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
+                     scene_path);
     if (estimator == "ppm" && h.estimator == "classic")
       throw pf::input_error(hp_path, "holds a classic estimate; PPM continues only a PPM state",
                             "start from trace-hitpoints' output");
@@ -125,8 +125,8 @@ int main(int argc, char** argv) {
     if (a.count("grid") && estimator == "ppm") {
       std::string grid_path = a["grid"].as<std::string>();
       pf::GridSet grids = pf::load_grids(grid_path);
-      pf::require_scene(grid_path, grids.scene_id, scene.scene_id, scene_path);
-      prov.add_input("grid", grid_path, pf::kGridFormat, grids.scene_id);
+      pf::accept_input(prov, "grid", grid_path, pf::kGridFormat, grids.scene_id, scene.scene_id,
+                       scene_path);
       if (grids.first_pass != h.passes)
         throw pf::input_error(grid_path, "starts at pass " + std::to_string(grids.first_pass) +
                               " but the hitpoints have " + std::to_string(h.passes) + " passes",
@@ -140,8 +140,8 @@ int main(int argc, char** argv) {
       if (!a.count("photons")) throw pf::input_error("", "--photons is required here");
       std::string ph_path = a["photons"].as<std::string>();
       pf::PhotonSet photons = pf::load_photons(ph_path);
-      pf::require_scene(ph_path, photons.scene_id, scene.scene_id, scene_path);
-      prov.add_input("photons", ph_path, pf::kPhotonsFormat, photons.scene_id);
+      pf::accept_input(prov, "photons", ph_path, pf::kPhotonsFormat, photons.scene_id,
+                       scene.scene_id, scene_path);
       if (estimator == "ppm") {
         if (photons.first_pass != h.passes)
           throw pf::input_error(ph_path, "starts at pass " + std::to_string(photons.first_pass) +

@@ -58,10 +58,10 @@ int main(int argc, char** argv) {
                       hp_path = a["hitpoints"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
     pf::HitpointSet h = pf::load_hitpoints(hp_path);
-    pf::require_scene(hp_path, h.scene_id, scene.scene_id, scene_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    prov.add_input("hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id);
+    pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
+                     scene_path);
 
     pf::PpmOptions ppm;
     ppm.max_bins = max_bins;
@@ -70,8 +70,8 @@ int main(int argc, char** argv) {
     if (a.count("photons")) {
       const std::string ph_path = a["photons"].as<std::string>();
       pf::PhotonSet ps = pf::load_photons(ph_path);
-      pf::require_scene(ph_path, ps.scene_id, scene.scene_id, scene_path);
-      prov.add_input("photons", ph_path, pf::kPhotonsFormat, ps.scene_id);
+      pf::accept_input(prov, "photons", ph_path, pf::kPhotonsFormat, ps.scene_id, scene.scene_id,
+                       scene_path);
       prov.seed = ps.seed;
       d.first_pass = ps.first_pass;
       for (int p = 0; p < ps.pass_count(); ++p)
