@@ -131,10 +131,7 @@ std::string loadavg() {
 
 int main(int argc, char** argv) {
   // OpenMP workers must not spin while PoCL's threads run (see bench_opencl.cpp).
-  if (!std::getenv("OMP_WAIT_POLICY")) {
-    setenv("OMP_WAIT_POLICY", "passive", 1);
-    execv("/proc/self/exe", argv);
-  }
+  pf::bench::reexec_with_passive_openmp(argv);
   cxxopts::Options o("bench_ga", "Evolutionary clustering (thesis Tables 8.1-8.4)");
   o.add_options()
     ("scene", "baked scene.h5 (camera resolution overridden); default: bake --dae",
