@@ -187,6 +187,23 @@ def theory_slope(alpha):
     return -min(alpha / 2.0, 1.0 - alpha)
 
 
+def finish_axes(ax, heading, xlabel, **legend):
+    """The look every RMSE chart shares: heading, axis labels, log grid, small legend (legend
+    options such as its own title pass through)."""
+    ax.set_title(heading)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("RMSE (masked)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, **legend)
+
+
+def save_figure(fig, res, name):
+    import matplotlib.pyplot as plt  # imported where charts are drawn, as in report()
+    fig.tight_layout()
+    fig.savefig(os.path.join(res, name), dpi=110)
+    plt.close(fig)
+
+
 def report(a):
     import matplotlib
     matplotlib.use("Agg")
@@ -373,14 +390,8 @@ def report(a):
             for r in cl:
                 ax.annotate(f"{int(r['photons']) // 1000}k,{r['k']}", (r["seconds"], r["rmse"]),
                             fontsize=6, xytext=(3, 2), textcoords="offset points")
-        ax.set_title(s)
-        ax.set_xlabel("rendering wall time (s)")
-        ax.set_ylabel("RMSE (masked)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(a.res, "accuracy-time.png"), dpi=110)
-    plt.close(fig)
+        finish_axes(ax, s, "rendering wall time (s)")
+    save_figure(fig, a.res, "accuracy-time.png")
 
     fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.4), squeeze=False)
     for ax, s in zip(axes[0], scenes):
@@ -409,14 +420,8 @@ def report(a):
             x0, y0 = pt[0]["x"], pt[0]["rmse"]
             ax.loglog([x0, pt[-1]["x"]], [y0, y0 * (pt[-1]["x"] / x0) ** (-0.5)], "-.",
                       color="tab:red", lw=0.8, label="slope −1/2")
-        ax.set_title(s)
-        ax.set_xlabel("photon passes (PPM) or samples per pixel (PT)")
-        ax.set_ylabel("RMSE (masked)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(a.res, "accuracy-passes.png"), dpi=110)
-    plt.close(fig)
+        finish_axes(ax, s, "photon passes (PPM) or samples per pixel (PT)")
+    save_figure(fig, a.res, "accuracy-passes.png")
 
     fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.4), squeeze=False)
     cmap = plt.get_cmap("viridis")
@@ -429,15 +434,9 @@ def report(a):
                           color=cmap(i / max(1, len(alphas) - 1)),
                           label=f"α {al}: {sl[2]:.2f}, fit {-sl[4]:.2f} (theory "
                                 f"{theory_slope(float(al)):.2f})")
-        ax.set_title(f"{s}: α sweep")
-        ax.set_xlabel("photon passes")
-        ax.set_ylabel("RMSE (masked)")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, title=f"slope over passes 16–{int(last)}; with floor fitted",
-                  title_fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(a.res, "accuracy-alpha.png"), dpi=110)
-    plt.close(fig)
+        finish_axes(ax, f"{s}: α sweep", "photon passes",
+                    title=f"slope over passes 16–{int(last)}; with floor fitted", title_fontsize=7)
+    save_figure(fig, a.res, "accuracy-alpha.png")
 
     # The PNG previews: reference, path tracing and PPM at their final passes.
     cols = [("ref.png", "reference"), ("pt/final.png", "path tracing, final"),
@@ -453,9 +452,7 @@ def report(a):
                 ser = series(rows, s, "pt" if j == 1 else "ppm") if j else []
                 extra = f"\n{ser[-1]['seconds']:.1f} s, RMSE {ser[-1]['rmse']:.4f}" if ser else ""
                 ax.set_title(f"{s}: {title}{extra}", fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(a.res, "accuracy-images.png"), dpi=110)
-    plt.close(fig)
+    save_figure(fig, a.res, "accuracy-images.png")
 
     w("Charts: [accuracy-time.png](accuracy-time.png) (error against wall time), "
       "[accuracy-passes.png](accuracy-passes.png) (against passes or samples), "
