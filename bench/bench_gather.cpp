@@ -17,7 +17,9 @@
 // gather: the photon counts M of all hitpoints must agree ("same photons"). With hash-grid in the
 // list, a row "hash-grid, state on device" times DevicePpmState::pass on a state already on the
 // device (the render driver's and illuminate's steady state: the pass's photons go up, nothing
-// comes down; the state is read back after the timing for the check).
+// comes down; the state is read back after the timing for the check). --hash-order lists who
+// orders hash-grid's photons (hash_grid.h: auto, device, host); with more than one, each gets its
+// two rows, named "(device order)" / "(host order)", in the same rounds.
 //
 // The methods that read every photon of a mesh (naive … kmeans-clusters) cost O(hitpoints ×
 // photons): with --sample N > 1 (0 = automatic: 1 at <= 320×280, 16 above) they run on every N-th
@@ -42,7 +44,9 @@
 #include "photonflow/cl_backend.h"
 #include "photonflow/clusters.h"
 #include "photonflow/eye_pass.h"
+#include "photonflow/error.h"
 #include "photonflow/gather_method.h"
+#include "photonflow/hash_grid.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/photon_pass.h"
 #include "bench_common.h"
@@ -63,9 +67,6 @@ bool reads_whole_meshes(pf::GatherMethod m) {
   return m == M::Naive || m == M::LocalMemory || m == M::PhotonSort || m == M::HitpointSort ||
          m == M::HitpointSortLocal || m == M::ManualDistance || m == M::KmeansClusters;
 }
-
-// Table key offset of the "hash-grid, state on device" row.
-constexpr int kResidentRow = 1000;
 
 struct Row {
   double pass_ms = 0, kernel_ms = 0;
@@ -92,6 +93,8 @@ int main(int argc, char** argv) {
      cxxopts::value<int>()->default_value("0"))
     ("hash-cell", "hash-grid cell side in units of the largest radius",
      cxxopts::value<float>()->default_value("2"))
+    ("hash-order", "hash-grid photon ordering: comma-separated auto, device, host",
+     cxxopts::value<std::string>()->default_value("auto"))
     ("work-group", "work-group size (and cluster size)", cxxopts::value<int>()->default_value("0"))
     ("h,help", "print this help");
   pf::bench::add_opencl_device_options(o);
@@ -118,6 +121,31 @@ int main(int argc, char** argv) {
           methods.push_back(pf::parse_gather_method(m));
       }
     }
+    std::vector<pf::HashOrder> orders;
+    for (const std::string& o : pf::bench::split_list(a["hash-order"].as<std::string>()))
+      orders.push_back(pf::parse_hash_order(o));
+    if (orders.empty()) throw pf::input_error("", "--hash-order lists no ordering");
+    // The table's rows, in order: a label per method, two per hash-grid ordering.
+    struct RowName {
+      std::string label;
+      pf::GatherMethod m;
+      bool resident;
+      pf::HashOrder order;
+    };
+    std::vector<RowName> row_names;
+    for (pf::GatherMethod m : methods) {
+      const std::string name = pf::gather_method_info(m).name;
+      if (m != pf::GatherMethod::HashGrid) {
+        row_names.push_back({name, m, false, pf::HashOrder::Auto});
+        continue;
+      }
+      for (pf::HashOrder o : orders) {
+        const std::string tag =
+            orders.size() > 1 ? std::string(" (") + pf::hash_order_name(o) + " order)" : "";
+        row_names.push_back({name + tag, m, false, o});
+        row_names.push_back({name + ", state on device" + tag, m, true, o});
+      }
+    }
     std::printf("# bench_gather: %s, %u photons/pass, median of %d runs\n",
                 scene_h5.empty() ? dae.c_str() : scene_h5.c_str(), photons, runs);
     std::printf("# CPU rows: %d OpenMP threads; OpenCL: %s, work-group %d\n\n",
@@ -125,7 +153,7 @@ int main(int argc, char** argv) {
 
     // ---- Table 7.3 ----
     const std::vector<Size> sizes = parse_sizes(a["sizes"].as<std::string>());
-    std::map<std::pair<int, int>, Row> table;  // (method, size index)
+    std::map<std::pair<std::string, int>, Row> table;  // (row label, size index)
     std::vector<size_t> hitpoints_of(sizes.size());
     for (size_t si = 0; si < sizes.size(); ++si) {
       const Size sz = sizes[si];
@@ -147,6 +175,7 @@ int main(int argc, char** argv) {
       // Per method: its start state (a sample for the whole-mesh methods), clusters, and one
       // untimed call (PoCL generates code per kernel and local size at the first enqueue).
       struct Run {
+        RowName name;
         pf::GatherMethod m;
         Row row;
         pf::HitpointSet start, work;
@@ -156,15 +185,12 @@ int main(int argc, char** argv) {
         bool resident = false;  // hash-grid with the state kept on the device (DevicePpmState)
         std::vector<double> wall, kern, order_ms, gather_ms;
       };
-      std::vector<Run> set(methods.size());
-      for (pf::GatherMethod m : methods)
-        if (m == pf::GatherMethod::HashGrid) {
-          set.emplace_back();
-          set.back().resident = true;
-        }
+      std::vector<Run> set(row_names.size());
       for (size_t k = 0; k < set.size(); ++k) {
         Run& u = set[k];
-        u.m = u.resident ? pf::GatherMethod::HashGrid : methods[k];
+        u.name = row_names[k];
+        u.m = u.name.m;
+        u.resident = u.name.resident;
         const pf::GatherMethodInfo& info = pf::gather_method_info(u.m);
         u.row.sample = info.device && reads_whole_meshes(u.m) ? sample : 1;
         u.start = fresh;
@@ -175,6 +201,7 @@ int main(int argc, char** argv) {
         }
         u.opt.method = u.m;
         u.opt.hash_cell = a["hash-cell"].as<float>();
+        u.opt.hash_order = u.name.order;
         if (info.clusters) {
           u.clusters = pf::clusters_for_method(u.m, u.start, wg, u.opt);
           u.opt.clusters = &u.clusters;
@@ -222,9 +249,8 @@ int main(int argc, char** argv) {
         u.row.kernel_ms = info.device ? median(u.kern) : 0;
         for (size_t k = 0; k < u.index.size(); ++k)
           u.row.same &= u.work.hitpoints[k].n_photons == ref.hitpoints[u.index[k]].n_photons;
-        table[{int(u.m) + (u.resident ? kResidentRow : 0), int(si)}] = u.row;
-        std::fprintf(stderr, "  %-20s %10s ms (ordering %s, gather %s)%s\n",
-                     u.resident ? "hash-grid, resident" : info.name,
+        table[{u.name.label, int(si)}] = u.row;
+        std::fprintf(stderr, "  %-44s %10s ms (ordering %s, gather %s)%s\n", u.name.label.c_str(),
                      pf::bench::fmt_ms(u.row.pass_ms).c_str(), pf::bench::fmt_ms(median(u.order_ms)).c_str(),
                      pf::bench::fmt_ms(median(u.gather_ms)).c_str(), u.row.same ? "" : "  (DIFFERENT PHOTONS)");
       }
@@ -235,20 +261,13 @@ int main(int argc, char** argv) {
     std::printf(" same photons |\n|---|---|");
     for (size_t i = 0; i < sizes.size(); ++i) std::printf("---:|---:|---:|");
     std::printf("---|\n");
-    std::vector<int> rows;
-    for (pf::GatherMethod m : methods) {
-      rows.push_back(int(m));
-      if (m == pf::GatherMethod::HashGrid) rows.push_back(int(m) + kResidentRow);
-    }
-    for (int row : rows) {
-      const pf::GatherMethod m = pf::GatherMethod(row % kResidentRow);
-      const pf::GatherMethodInfo& info = pf::gather_method_info(m);
-      std::printf("| %s | %s |", row >= kResidentRow ? "hash-grid, state on device" : info.name,
-                  info.device ? "OpenCL" : "CPU");
+    for (const RowName& row : row_names) {
+      const pf::GatherMethodInfo& info = pf::gather_method_info(row.m);
+      std::printf("| %s | %s |", row.label.c_str(), info.device ? "OpenCL" : "CPU");
       bool same = true;
       for (size_t si = 0; si < sizes.size(); ++si) {
-        const Row& r = table[{row, int(si)}];
-        auto naive = table.find({int(pf::GatherMethod::Naive), int(si)});
+        const Row& r = table[{row.label, int(si)}];
+        auto naive = table.find({std::string(pf::gather_method_name(pf::GatherMethod::Naive)), int(si)});
         std::string speed = naive != table.end() && r.pass_ms > 0
                                 ? pf::bench::fmt_ms(naive->second.pass_ms / r.pass_ms) : "—";
         std::string mark = r.sample > 1 ? " (×" + std::to_string(r.sample) + ")" : "";

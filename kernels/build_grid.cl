@@ -20,8 +20,9 @@
  *     mesh_chunk_scatter), deterministic without atomics; mesh_start[m] .. mesh_start[m+1].
  *   hashed grid (`hash-grid`): key_hash_cell gives each photon its table slot (grid_shared.h),
  *     then the same count / scan / scatter / sort kernels as the per-mesh grid, and
- *     permute_photons_keys, which also writes the photon keys (position, mesh, direct flag) the
- *     gather tests, as a structure of arrays.
+ *     permute_photons_keys, which writes the sorted photons as the gather reads them: keys
+ *     (position, mesh, direct flag) in blocks of four photons and a 24-byte payload (direction,
+ *     flux) per photon.
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "photonflow/shared_types.h"
@@ -132,20 +133,30 @@ __kernel void permute_photons(__global const pf_photon* in, __global const int* 
   out[i] = in[order[i]];
 }
 
-/* The same permutation, also writing the photon keys of the hashed-grid gather (structure of
- * arrays, 4·n 4-byte words): keys[i], keys[n + i], keys[2n + i] the position, keys[3n + i] the int
- * 2·mesh + (PF_PHOTON_DIRECT set ? 1 : 0). A gather tests mesh, direct flag and distance on
- * these, four photons per vector, and reads the whole 48-byte record only for photons inside R. */
+/* The same permutation into the hashed grid's two arrays (hash_grid.h): lane i % 4 of key block
+ * i / 4 = position and 2·mesh + (PF_PHOTON_DIRECT set ? 1 : 0), payload[i] = direction and flux,
+ * of photon order[i]. Work-items n .. 4·ceil(n / 4) − 1 zero the last block's unused lanes. */
 __kernel void permute_photons_keys(__global const pf_photon* in, __global const int* order, int n,
-                                   __global pf_photon* out, __global float* keys) {
+                                   __global pf_photon_keys4* keys,
+                                   __global pf_photon_payload* payload) {
   const int i = (int)get_global_id(0);
-  if (i >= n) return;
+  if (i >= (n + 3) / 4 * 4) return;
+  __global pf_photon_keys4* b = &keys[i / 4];
+  const int l = i % 4;
+  if (i >= n) {
+    b->x[l] = b->y[l] = b->z[l] = 0.0f;
+    b->key[l] = 0;
+    return;
+  }
   __global const pf_photon* p = &in[order[i]];
-  out[i] = *p;
-  keys[i] = p->position[0];
-  keys[n + i] = p->position[1];
-  keys[2 * n + i] = p->position[2];
-  ((__global int*)keys)[3 * n + i] = 2 * p->mesh + ((p->flags & PF_PHOTON_DIRECT) ? 1 : 0);
+  b->x[l] = p->position[0];
+  b->y[l] = p->position[1];
+  b->z[l] = p->position[2];
+  b->key[l] = 2 * p->mesh + ((p->flags & PF_PHOTON_DIRECT) ? 1 : 0);
+  for (int a = 0; a < 3; ++a) {
+    payload[i].dir[a] = p->dir[a];
+    payload[i].flux[a] = p->flux[a];
+  }
 }
 
 /* ---- stable counting sort by mesh, in chunks ------------------------------------------------- */

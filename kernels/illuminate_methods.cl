@@ -120,9 +120,9 @@ static inline void pf_gather_local(pf_gather_hp* h, __local const pf_photon* p,
                    builtin);
 }
 
-/* The rule for photon j of the sorted array once its key and distance passed: the direction
- * from the whole record, then the sums. */
-static inline void pf_gather_accept(pf_gather_hp* h, __global const pf_photon* p) {
+/* The rest of the rule for a photon whose key and distance passed: the direction, then the sums
+ * (from its payload, hash_grid.h). */
+static inline void pf_gather_payload(pf_gather_hp* h, __global const pf_photon_payload* p) {
   if (!(p->dir[0] * h->nx + p->dir[1] * h->ny + p->dir[2] * h->nz < 0.0f)) return;
   h->m += 1;
   h->t0 += (pf_acc)(h->fr0 * p->flux[0]);
@@ -130,42 +130,36 @@ static inline void pf_gather_accept(pf_gather_hp* h, __global const pf_photon* p
   h->t2 += (pf_acc)(h->fr2 * p->flux[2]);
 }
 
-/* The rule over photons j0 .. j1 − 1 of a sorted array and its keys (build_grid.cl's
- * permute_photons_keys: x, y, z and key = 2·mesh + direct as four arrays of n): mesh, direct flag
- * and distance are tested four photons at a time in float4 / int4 lanes, the direction and flux
- * read from the whole record only for photons that passed, in index order. Each lane computes
- * pf_ppm_dist2 and pf_ppm_in_radius's operations in their order (FP_CONTRACT OFF), so the same
- * photons are selected and summed in the same order as pf_gather_global would: the same sums. */
-static inline void pf_gather_keyed(pf_gather_hp* h, __global const float* keys, int n,
-                                   __global const pf_photon* sorted, int j0, int j1,
+/* The rule over photons j0 .. j1 − 1 of the hashed grid's sorted arrays (hash_grid.h): mesh,
+ * direct flag and distance are tested a block of four photons at a time (pf_photon_keys4: aligned
+ * float4 / int4 loads; lanes outside j0 .. j1 − 1 are masked off), the direction and flux read
+ * from the payload only for photons that passed, in index order. Each lane computes pf_ppm_dist2
+ * and pf_ppm_in_radius's operations in their order (FP_CONTRACT OFF), so the same photons are
+ * selected and summed in the same order as pf_gather_global would: the same sums. */
+static inline void pf_gather_keyed(pf_gather_hp* h, __global const pf_photon_keys4* keys,
+                                   __global const pf_photon_payload* payload, int j0, int j1,
                                    const int skip_direct) {
   /* With skip_direct the key must be 2·mesh (mesh matches, not direct), otherwise key >> 1 must
    * be the mesh. A hitpoint with mesh −1 matches no key (keys >= 0). */
   const int shift = skip_direct ? 0 : 1;
   const int want = skip_direct ? 2 * h->mesh : h->mesh;
-  __global const float* kx = keys;
-  __global const float* ky = keys + n;
-  __global const float* kz = keys + 2 * n;
-  __global const int* kk = (__global const int*)(keys + 3 * n);
   const float r2 = h->r * h->r;
   const float4 hx = (float4)(h->x), hy = (float4)(h->y), hz = (float4)(h->z);
-  int j = j0;
-  for (; j + 4 <= j1; j += 4) {
-    const float4 dx = hx - vload4(0, kx + j);
-    const float4 dy = hy - vload4(0, ky + j);
-    const float4 dz = hz - vload4(0, kz + j);
+  const int4 lane = (int4)(0, 1, 2, 3);
+  for (int b = j0 >> 2; 4 * b < j1; ++b) {
+    __global const float* k = (__global const float*)&keys[b];
+    const float4 dx = hx - vload4(0, k);
+    const float4 dy = hy - vload4(1, k);
+    const float4 dz = hz - vload4(2, k);
     const float4 d2 = dx * dx + dy * dy + dz * dz;
-    const int4 ok = ((vload4(0, kk + j) >> shift) == (int4)(want)) & (d2 <= (float4)(r2));
+    const int4 j = (int4)(4 * b) + lane;
+    const int4 ok = ((vload4(3, (__global const int*)k) >> shift) == (int4)(want)) &
+                    (d2 <= (float4)(r2)) & (j >= (int4)(j0)) & (j < (int4)(j1));
     if (!any(ok)) continue;
-    if (ok.s0) pf_gather_accept(h, &sorted[j]);
-    if (ok.s1) pf_gather_accept(h, &sorted[j + 1]);
-    if (ok.s2) pf_gather_accept(h, &sorted[j + 2]);
-    if (ok.s3) pf_gather_accept(h, &sorted[j + 3]);
-  }
-  for (; j < j1; ++j) {
-    if ((kk[j] >> shift) != want) continue;
-    if (!pf_ppm_in_radius(pf_ppm_dist2(h->x, h->y, h->z, kx[j], ky[j], kz[j]), h->r)) continue;
-    pf_gather_accept(h, &sorted[j]);
+    if (ok.s0) pf_gather_payload(h, &payload[4 * b]);
+    if (ok.s1) pf_gather_payload(h, &payload[4 * b + 1]);
+    if (ok.s2) pf_gather_payload(h, &payload[4 * b + 2]);
+    if (ok.s3) pf_gather_payload(h, &payload[4 * b + 3]);
   }
 }
 
@@ -421,9 +415,9 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
 /* ---- hashed grid over all meshes: one work-item per hitpoint --------------------------------
  * Cells of side `cell` (a multiple of the largest R, PpmOptions::hash_cell) of an nx × ny × nz grid
  * over the scene, hashed into mask + 1 slots by their linear index (pf_hash_slot); slot k holds
- * sorted[slot_start[k] .. slot_start[k+1]) in photon-index order. A hitpoint reads each distinct
- * slot of its sphere box's cells once, row by row (a row's slots are consecutive modulo the table
- * size). That is exact: a photon within R lies in a cell of the box, so its slot is read, once;
+ * photons slot_start[k] .. slot_start[k+1] − 1 of keys / payload (hash_grid.h) in photon-index
+ * order. A hitpoint reads each distinct slot of its sphere box's cells once, row by row (a row's
+ * slots are consecutive modulo the table size). That is exact: a photon within R lies in a cell of the box, so its slot is read, once;
  * photons of other cells that share a slot lie outside the box, farther than R, and the rule
  * rejects them. A slot repeats within the box only when two of its cells' linear indices are
  * congruent modulo the table size: along a row when the row is longer than the table, across rows
@@ -438,8 +432,8 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  * pass's cell size, so that a state kept on the device needs no copy to the host between passes
  * (cl_gather.h, DevicePpmState). `lmax` holds one int per work-item. */
 __kernel void gather_hash_grid(__global pf_hitpoint* hps, int count,
-                               __global const pf_photon* sorted, __global const float* keys,
-                               int photon_count, __global const int* slot_start,
+                               __global const pf_photon_payload* payload,
+                               __global const pf_photon_keys4* keys, __global const int* slot_start,
                                float ox, float oy, float oz, float cell, int nx, int ny, int nz,
                                uint mask, int unique, __global const pf_material* mats,
                                int skip_direct, float alpha, __global int* rmax_next,
@@ -459,9 +453,9 @@ __kernel void gather_hash_grid(__global pf_hitpoint* hps, int count,
         const uint first = pf_hash_slot(x0, y, z, (uint)nx, (uint)ny, mask);
         if (unique) { /* the row's slots first .. first + len − 1 (mod table): 1 or 2 runs */
           const uint stop = first + len <= mask + 1 ? first + len : mask + 1;
-          pf_gather_keyed(&h, keys, photon_count, sorted, slot_start[first], slot_start[stop], skip_direct);
+          pf_gather_keyed(&h, keys, payload, slot_start[first], slot_start[stop], skip_direct);
           if (first + len > mask + 1)
-            pf_gather_keyed(&h, keys, photon_count, sorted, 0, slot_start[first + len - (mask + 1)], skip_direct);
+            pf_gather_keyed(&h, keys, payload, 0, slot_start[first + len - (mask + 1)], skip_direct);
           continue;
         }
         for (uint dx = 0; dx < len && dx <= mask; ++dx) { /* dx > mask: repeats within the row */
@@ -474,7 +468,7 @@ __kernel void gather_hash_grid(__global pf_hitpoint* hps, int count,
               if (((k - f) & mask) < len) { seen = 1; break; }
             }
           if (seen) continue;
-          pf_gather_keyed(&h, keys, photon_count, sorted, slot_start[k], slot_start[k + 1], skip_direct);
+          pf_gather_keyed(&h, keys, payload, slot_start[k], slot_start[k + 1], skip_direct);
         }
       }
   }

@@ -7,10 +7,12 @@
 //   - the device's grid build equals the CPU's build_photon_grid array for array (eq. 7.1), and the
 //     device's per-mesh sort is the stable sort by mesh;
 //   - a state kept on the device between passes (DevicePpmState) equals ppm_pass's, byte for byte;
+//   - hash-grid's two photon orderings (device kernels, host into mapped buffers) give the same
+//     bytes, for the automatic table, one slot and a small table;
 //   - the grid-cluster gather timer of the GA's device-time fitness gathers the same photons;
 //   - hitpoint sorting's filler counts follow Table 7.5's definition;
 //   - a method on the wrong backend, and an allocation the non-batching methods cannot make, are
-//     refused with one line.
+//     refused with one line; a bad photon by either hash-grid ordering, the state untouched.
 // Without an OpenCL platform every case WARNs "SKIPPED" and returns.
 #include <catch2/catch.hpp>
 
@@ -98,15 +100,26 @@ TEST_CASE("gather methods: every method gathers the CPU grid's photons", "[gathe
       CHECK(same_m == h.hitpoints.size());
       CHECK(same_r == h.hitpoints.size());
       CHECK(flux_ok == h.hitpoints.size());
-      if (m == GatherMethod::HashGrid) {  // one slot: every cell shares it, each photon once
-        opt.hash_slots = 1;
-        HitpointSet one = f.fresh;
-        ppm_pass(f.scene, one, f.passes[0].photons, f.passes[0].emitted, opt, *dev);
-        size_t same = 0;
-        for (size_t i = 0; i < one.hitpoints.size(); ++i)
-          same += one.hitpoints[i].n_photons == h.hitpoints[i].n_photons &&
-                  one.hitpoints[i].radius == h.hitpoints[i].radius;
-        CHECK(same == one.hitpoints.size());
+      if (m == GatherMethod::HashGrid) {
+        // The device's and the host's photon ordering (hash_grid.h) build the same arrays, so
+        // the states are the same bytes; with one slot (every cell shares it, each photon read
+        // once) and 64 slots (rows wrap around the table, cells share slots) the same photons.
+        for (int slots : {0, 1, 64}) {
+          INFO("hash slots " << slots);
+          HitpointSet by[2] = {f.fresh, f.fresh};
+          for (int o = 0; o < 2; ++o) {
+            opt.hash_slots = slots;
+            opt.hash_order = o == 0 ? HashOrder::Device : HashOrder::Host;
+            ppm_pass(f.scene, by[o], f.passes[0].photons, f.passes[0].emitted, opt, *dev);
+          }
+          CHECK(std::memcmp(by[0].hitpoints.data(), by[1].hitpoints.data(),
+                            by[0].hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+          size_t same = 0;
+          for (size_t i = 0; i < by[1].hitpoints.size(); ++i)
+            same += by[1].hitpoints[i].n_photons == h.hitpoints[i].n_photons &&
+                    by[1].hitpoints[i].radius == h.hitpoints[i].radius;
+          CHECK(same == by[1].hitpoints.size());
+        }
       }
       if (m == GatherMethod::Naive)  // the CPU's summation order: the same bytes
         CHECK(std::memcmp(h.hitpoints.data(), cpu.hitpoints.data(),
@@ -371,4 +384,19 @@ TEST_CASE("gather methods: wrong backend and oversized passes are refused", "[ga
     CHECK(std::string(e.what()).find("--method naive") != std::string::npos);
   }
   CHECK(h.passes == 0);  // nothing was applied
+  // A bad photon is refused by either hash-grid ordering, before the state changes.
+  std::vector<pf_photon> bad = f.passes[0].photons;
+  bad[bad.size() / 2].mesh = int(f.scene.mesh_names.size());
+  for (HashOrder order : {HashOrder::Device, HashOrder::Host}) {
+    INFO("hash order " << hash_order_name(order));
+    opt.hash_order = order;
+    HitpointSet b = f.fresh;
+    CHECK_THROWS_AS(ppm_pass(f.scene, b, bad, f.passes[0].emitted, opt, *dev), std::invalid_argument);
+    CHECK(b.passes == 0);
+    CHECK(std::memcmp(b.hitpoints.data(), f.fresh.hitpoints.data(),
+                      b.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+    // The context still works after the refusal (the host ordering gave its buffers back).
+    ppm_pass(f.scene, b, f.passes[0].photons, f.passes[0].emitted, opt, *dev);
+    CHECK(b.passes == 1);
+  }
 }

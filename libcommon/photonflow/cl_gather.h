@@ -2,7 +2,7 @@
 // photon orderings (kernels/build_grid.cl) and the gather methods of gather_method.h
 // (kernels/illuminate_methods.cl), behind cl_backend.h's ppm_pass(…, ClContext&).
 //
-// What each method builds on the device before it gathers (all deterministic):
+// What each method builds before it gathers (all deterministic):
 //   naive, local-memory                 nothing (photons in pass order);
 //   photon-sort … kmeans-clusters       per-mesh photon arrays: a stable counting sort by mesh;
 //   grid-kmeans, grid-gridclusters      the per-mesh uniform grid of eq. 7.1: bounds reduced on the
@@ -12,11 +12,14 @@
 //                                       index — the same arrays as the CPU's build_photon_grid;
 //   hash-grid                           one grid of cells hash_cell·max R (default 2, times a
 //                                       1e-4 slack) over the scene, its cells hashed by linear
-//                                       index into 2^k ≥ photons slots, built by the same count /
-//                                       scan / scatter / sort kernels, plus the photons' keys
-//                                       (position, mesh, direct flag; structure of arrays) that
-//                                       the gather tests four at a time; its gather kernel also
-//                                       applies eq. 3.14–3.18 and reduces the next max R.
+//                                       index into a power-of-two table (hash_grid.h), built by
+//                                       the same count / scan / scatter / sort kernels — or, on a
+//                                       CPU device, by the host straight into the mapped buffers
+//                                       (PpmOptions::hash_order; the same bytes) — as the photons'
+//                                       keys (position, mesh, direct flag, in blocks of four that
+//                                       the gather tests per float4) and payloads (direction,
+//                                       flux); its gather kernel also applies eq. 3.14–3.18 and
+//                                       reduces the next max R.
 // The host supplies the hitpoint orders: mesh_sorted_order (hitpoint sorting, fillers) and the
 // clusters' order (clusters.h), one work-group per cluster.
 //

@@ -124,6 +124,9 @@ class ClContext {
   void fill_zero(const ClBuffer& b, size_t bytes);
   // Maps `bytes` of b for reading (blocking); unmap() when done.
   const void* map_read(const ClBuffer& b, size_t bytes);
+  // Maps `bytes` of b for writing (blocking; the old contents are discarded, so nothing is
+  // copied to the host: on a CPU device the pointer is the buffer itself); unmap() when done.
+  void* map_write(const ClBuffer& b, size_t bytes);
   void unmap(const ClBuffer& b, const void* p);
 
   // Sets the arguments in order (cl_mem via ClBuffer, scalars by value).

@@ -25,15 +25,31 @@
 #ifndef __OPENCL_VERSION__
 #include <cmath>
 #include <cstring>
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 #endif
 
+/* c clamped to [0, top], NaN → 0, without branches. OpenCL compilers turn the comparisons into
+ * selects; GCC keeps branches for them (maxss / minss would change which compares raise FP
+ * exceptions, and it branches on which value to convert), so the host uses maxss / minss
+ * themselves, whose NaN rule (the second operand) gives the same result. */
+PF_INLINE pf_float pf_grid_clamp(pf_float c, pf_float top) {
+#if !defined(__OPENCL_VERSION__) && defined(__SSE__)
+  return _mm_cvtss_f32(_mm_min_ss(_mm_max_ss(_mm_set_ss(c), _mm_setzero_ps()), _mm_set_ss(top)));
+#else
+  c = c > 0.0f ? c : 0.0f;
+  return c < top ? c : top;
+#endif
+}
+
 /* Bin coordinate of x along one axis (eq. 7.1), clamped to [0, n−1]. Monotone in x, so the bins
- * overlapping an interval [x0, x1] are those from coord(x0) to coord(x1). NaN maps to 0. */
+ * overlapping an interval [x0, x1] are those from coord(x0) to coord(x1). NaN maps to 0.
+ * The clamps are selects, not branches: photons on a scene's walls lie on the grid's faces, so
+ * which side of a clamp a coordinate falls on is unpredictable, and branches mispredict on a
+ * third of them (BENCHMARKS.md, issue 5, third round). */
 PF_INLINE pf_int pf_grid_coord(pf_float x, pf_float lo, pf_float bin_size, pf_int n) {
-  pf_float c = (x - lo) / bin_size;
-  if (!(c > 0.0f)) return 0;
-  if (c >= (pf_float)(n - 1)) return n - 1;
-  return (pf_int)c;
+  return (pf_int)pf_grid_clamp((x - lo) / bin_size, (pf_float)(n - 1)); /* n − 1 exact: n <= 2^24 */
 }
 
 /* Linear bin offset of point p in the grid of g (eq. 7.1): x + y·nx + z·nx·ny. */

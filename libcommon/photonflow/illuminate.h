@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "photonflow/gather_method.h"
+#include "photonflow/hash_grid.h"
 #include "photonflow/photon_grid.h"
 #include "photonflow/photon_map.h"
 #include "photonflow/scene.h"
@@ -36,13 +37,16 @@ struct PpmOptions {
   // or cluster_grid with max_bins) with the context's work-group size.
   ClusterSet* clusters = nullptr;
   int cluster_iterations = 10;
-  // hash-grid: slots of the hash table, a power of two; 0 = the smallest >= max(1024, photons),
-  // or, when up to 4 times that holds every cell of the grid, the smallest that does.
+  // hash-grid: slots of the hash table, a power of two; 0 = automatic (hash_grid_layout: about
+  // the photon count, adjusted so that every cell gets a slot of its own where that is cheap).
   // Fewer slots mean more cells per slot (more photons read and skipped), never a wrong result.
   int hash_slots = 0;
   // hash-grid: cell side in units of the largest hitpoint radius (> 0). Smaller cells fit the
   // gather spheres tighter (fewer photons tested) but each sphere's box spans more cells.
   float hash_cell = 2.f;
+  // hash-grid: who orders the photons (hash_grid.h): auto = the host on a CPU device (PoCL, which
+  // shares the host's cores and memory), the device's kernels otherwise. Same arrays either way.
+  HashOrder hash_order = HashOrder::Auto;
 };
 
 // One PPM iteration (eq. 3.14–3.18) of every hitpoint over one pass's photons, gathering through

@@ -13,6 +13,7 @@
 //   photons       the pass's photons reordered by (mesh, bin), stable (a counting sort), so the
 //                 result is deterministic; `order[i]` is the input index of photons[i].
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -59,6 +60,15 @@ struct PhotonGrid {
   // The sorted photon indices that for_each_in_radius visits.
   std::vector<int32_t> gather(int mesh, const float q[3], float radius) const;
 };
+
+// The check every photon ordering makes (CPU grid, device orderings, hash_grid.h): the photon's
+// mesh in [0, mesh_count) and its position finite. photon_ok says whether it passes;
+// throw_bad_photon throws the std::invalid_argument naming photon i and what is wrong.
+inline bool photon_ok(const pf_photon& p, int mesh_count) {
+  return p.mesh >= 0 && p.mesh < mesh_count && std::isfinite(p.position[0]) &&
+         std::isfinite(p.position[1]) && std::isfinite(p.position[2]);
+}
+[[noreturn]] void throw_bad_photon(const pf_photon& p, size_t i, int mesh_count);
 
 // Sorts one pass's photons into per-mesh grids. mesh_count = number of meshes of the scene; every
 // photon's mesh must lie in [0, mesh_count) and its position must be finite

@@ -142,6 +142,23 @@ typedef struct {
   pf_int flags; /* PF_PHOTON_* */
 } pf_photon;
 
+/* The sorted photons as the hashed-grid gather reads them (hash_grid.h), in two arrays, so that
+ * testing a candidate reads 16 bytes and only an accepted photon's payload is read:
+ *   pf_photon_keys4   photons 4b .. 4b + 3 in one 64-byte block, each field as 4 lanes (the gather
+ *                     tests four photons per float4 / int4 with aligned loads, and a photon's
+ *                     key fields share one cache line); key = 2·mesh + (PF_PHOTON_DIRECT ? 1 : 0);
+ *                     lanes past the last photon are never read as photons;
+ *   pf_photon_payload direction and flux, one per photon. */
+typedef struct {
+  pf_float x[4], y[4], z[4];
+  pf_int key[4];
+} pf_photon_keys4;
+
+typedef struct {
+  pf_float dir[3];
+  pf_float flux[3];
+} pf_photon_payload;
+
 /* Grid header of one mesh's photons (thesis ch. 7.3, eq. 7.1; photon_grid.h, grid_shared.h).
  * Bin of a point p: per axis c = clamp(floor((p − lo)/bin_size), 0, n−1) (eq. 7.1), linear
  * offset cx + cy·nx + cz·nx·ny. A mesh without photons has nx = ny = nz = 0 and one cell_start
@@ -175,6 +192,8 @@ static_assert(sizeof(pf_light) == 40, "pf_light layout");
 static_assert(sizeof(pf_camera) == 48, "pf_camera layout");
 static_assert(sizeof(pf_hitpoint) == 84, "pf_hitpoint layout");
 static_assert(sizeof(pf_photon) == 48, "pf_photon layout");
+static_assert(sizeof(pf_photon_keys4) == 64, "pf_photon_keys4 layout");
+static_assert(sizeof(pf_photon_payload) == 24, "pf_photon_payload layout");
 static_assert(sizeof(pf_mesh_grid) == 40, "pf_mesh_grid layout");
 static_assert(sizeof(pf_cluster) == 32, "pf_cluster layout");
 #endif

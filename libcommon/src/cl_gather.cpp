@@ -14,6 +14,7 @@
 #include "photonflow/error.h"
 #include "photonflow/gather_method.h"
 #include "photonflow/grid_shared.h"
+#include "photonflow/hash_grid.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/provenance.h"
 
@@ -31,17 +32,8 @@ void check_photons(const std::vector<pf_photon>& photons, int mesh_count) {
   if (mesh_count < 0) throw std::invalid_argument("photon grid: negative mesh count");
   if (photons.size() > size_t(std::numeric_limits<int32_t>::max()))
     throw std::invalid_argument("photon grid: more than 2^31-1 photons");
-  for (size_t i = 0; i < photons.size(); ++i) {
-    const pf_photon& p = photons[i];
-    if (p.mesh < 0 || p.mesh >= mesh_count)
-      throw std::invalid_argument("photon grid: photon " + std::to_string(i) + " has mesh id " +
-                                  std::to_string(p.mesh) + " outside [0, " +
-                                  std::to_string(mesh_count) + ")");
-    if (!std::isfinite(p.position[0]) || !std::isfinite(p.position[1]) ||
-        !std::isfinite(p.position[2]))
-      throw std::invalid_argument("photon grid: photon " + std::to_string(i) +
-                                  " has a non-finite position");
-  }
+  for (size_t i = 0; i < photons.size(); ++i)
+    if (!photon_ok(photons[i], mesh_count)) throw_bad_photon(photons[i], i, mesh_count);
 }
 
 // A device buffer for `count` items of `item` bytes, or InputError naming the batched method.
@@ -215,64 +207,72 @@ DeviceMeshSort device_mesh_sort(ClContext& dev, const ClBuffer& photons, size_t 
   return s;
 }
 
-// The hashed grid of `hash-grid` over the n photons: n[0] × n[1] × n[2] cells of side `cell` from
-// `origin`, table of mask + 1 slots; slot_start has mask + 2 entries.
+// The hashed grid of `hash-grid` (hash_grid.h) on the device: the sorted photons' keys and
+// payloads and the slot-start table (slots + 1 entries), in the scratch buffers hash.keys,
+// hash.payload and hash.start.
 struct DeviceHashGrid {
-  const ClBuffer* sorted = nullptr;
-  const ClBuffer* keys = nullptr;  // x, y, z, 2·mesh + direct of the sorted photons: 4 arrays of n
+  const ClBuffer* keys = nullptr;
+  const ClBuffer* payload = nullptr;
   const ClBuffer* slot_start = nullptr;
-  float origin[3] = {0, 0, 0};
-  float cell = 1.f;
-  cl_int n[3] = {1, 1, 1};
-  cl_uint mask = 0;
-  cl_int unique = 0;  // every cell has a slot of its own (cells <= slots)
 };
 
+DeviceHashGrid hash_grid_buffers(ClContext& dev, size_t n, const HashGridLayout& g) {
+  DeviceHashGrid d;
+  d.slot_start = &dev.scratch("hash.start", (g.slots() + 1) * sizeof(cl_int));
+  d.keys = &dev.scratch("hash.keys", hash_grid_key_blocks(n) * sizeof(pf_photon_keys4));
+  d.payload = &dev.scratch("hash.payload", n * sizeof(pf_photon_payload));
+  return d;
+}
+
+// Built by the device's kernels from the n photons in `photons` (already uploaded).
 DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t n,
-                                const float origin[3], const float extent[3], float cell, int slots) {
-  DeviceHashGrid g;
-  for (int a = 0; a < 3; ++a) {
-    g.origin[a] = origin[a];
-    const double cells = std::ceil(double(extent[a]) / double(cell));
-    g.n[a] = cl_int(std::clamp(cells, 1.0, double(1 << 24)));
-  }
-  g.cell = cell;
-  // Slots: a power of two >= the photons; up to 4 times that when it then holds every cell (no
-  // two cells share a slot: the gather reads whole rows as runs, see gather_hash_grid).
-  size_t table = 1024;
-  while (table < n && table < (size_t(1) << 30)) table <<= 1;
-  const double cells = double(g.n[0]) * double(g.n[1]) * double(g.n[2]);
-  if (cells > double(table) && cells <= 4.0 * double(table))
-    while (double(table) < cells) table <<= 1;
-  if (slots > 0) {
-    if (slots & (slots - 1)) throw input_error("", "hash-grid slots must be a power of two");
-    table = size_t(slots);
-  }
-  g.unique = cells <= double(table) ? 1 : 0;
-  g.mask = cl_uint(table - 1);
-  const ClBuffer& counts = dev.scratch("hash.start", (table + 1) * sizeof(cl_int));
-  dev.fill_zero(counts, (table + 1) * sizeof(cl_int));
+                                const HashGridLayout& g) {
+  const DeviceHashGrid d = hash_grid_buffers(dev, n, g);
+  const size_t table = g.slots();
+  dev.fill_zero(*d.slot_start, (table + 1) * sizeof(cl_int));
   const ClBuffer& key = dev.scratch("hash.key", n * sizeof(cl_int));
   const ClBuffer& rank = dev.scratch("hash.rank", n * sizeof(cl_int));
   const ClBuffer& order = dev.scratch("hash.order", n * sizeof(cl_int));
-  const ClBuffer& sorted = dev.scratch("hash.photons", n * sizeof(pf_photon));
-  const ClBuffer& keys = dev.scratch("hash.keys", 4 * n * sizeof(cl_float));
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "key_hash_cell");
-    dev.args(k, photons, cl_int(n), origin[0], origin[1], origin[2], cell, g.n[0], g.n[1], g.n[2],
-             g.mask, key, rank, counts);
+    dev.args(k, photons, cl_int(n), g.origin[0], g.origin[1], g.origin[2], g.cell, cl_int(g.n[0]),
+             cl_int(g.n[1]), cl_int(g.n[2]), cl_uint(g.mask), key, rank, *d.slot_start);
     dev.run(k, n);
   }
-  sort_by_key(dev, key, rank, counts, n, table, order);
+  sort_by_key(dev, key, rank, *d.slot_start, n, table, order);
   if (n > 0) {
     cl_kernel k = dev.kernel("build_grid", "permute_photons_keys");
-    dev.args(k, photons, order, cl_int(n), sorted, keys);
-    dev.run(k, n);
+    dev.args(k, photons, order, cl_int(n), *d.keys, *d.payload);
+    dev.run(k, 4 * hash_grid_key_blocks(n));
   }
-  g.sorted = &sorted;
-  g.keys = &keys;
-  g.slot_start = &counts;
-  return g;
+  return d;
+}
+
+// Built on the host (order_hash_grid, which also checks the photons) straight into the mapped
+// device buffers: the photons never go up unsorted.
+DeviceHashGrid host_hash_grid(ClContext& dev, const std::vector<pf_photon>& photons,
+                              int mesh_count, const HashGridLayout& g, int threads) {
+  const size_t n = photons.size();
+  const DeviceHashGrid d = hash_grid_buffers(dev, n, g);
+  const size_t start_bytes = (g.slots() + 1) * sizeof(cl_int);
+  void* keys = dev.map_write(*d.keys, hash_grid_key_blocks(n) * sizeof(pf_photon_keys4));
+  void* payload = dev.map_write(*d.payload, n * sizeof(pf_photon_payload));
+  void* start = dev.map_write(*d.slot_start, start_bytes);
+  auto unmap = [&] {
+    dev.unmap(*d.slot_start, start);
+    dev.unmap(*d.payload, payload);
+    dev.unmap(*d.keys, keys);
+  };
+  try {
+    order_hash_grid(g, photons.data(), n, mesh_count, static_cast<pf_photon_keys4*>(keys),
+                    static_cast<pf_photon_payload*>(payload), static_cast<int32_t*>(start),
+                    threads);
+  } catch (...) {  // a bad photon: the buffers go back to the device before the error goes on
+    unmap();
+    throw;
+  }
+  unmap();
+  return d;
 }
 
 // Work-group → cluster table of a cluster set (work-group g covers order[g·wg, (g+1)·wg)).
@@ -326,19 +326,19 @@ void check_cluster_count(const ClusterSet& cs, size_t hitpoints) {
 double since(ClContext& dev, double t0) { return dev.kernel_seconds() - t0; }
 
 // One hash-grid pass over nh hitpoints already in `hps`, rmax being their largest finite positive
-// radius as max_radius computes it (the cell side is hash_cell·rmax): uploads the photons, builds
-// the hashed grid, gathers and applies eq. 3.14–3.18 in one kernel. Returns the new state's rmax
-// (reduced by the kernel, so a state kept on the device needs no copy to the host between passes).
+// radius as max_radius computes it (the cell side is hash_cell·rmax): checks the photons and
+// builds the hashed grid (on the host into mapped buffers, or uploads the photons and builds it
+// with the device's kernels: opt.hash_order), gathers and applies eq. 3.14–3.18 in one kernel.
+// Returns the new state's rmax (reduced by the kernel, so a state kept on the device needs no
+// copy to the host between passes).
 float hash_grid_pass(const Scene& scene, const ClBuffer& hps, size_t nh, DirectMode direct,
                      float rmax, const std::vector<pf_photon>& photons, const PpmOptions& opt,
                      ClContext& dev, GatherTimes& times) {
   const size_t np = photons.size();
   require_one_buffer(dev, np, sizeof(pf_photon), "photons", opt.method);
-  check_photons(photons, int(scene.mesh_names.size()));
+  const int mesh_count = int(scene.mesh_names.size());
   const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
   dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
-  const ClBuffer& phs = dev.scratch("ppm.photons", np * sizeof(pf_photon));
-  dev.write(phs, np * sizeof(pf_photon), photons.data());
   const Vec3 ext = scene.bounds.hi - scene.bounds.lo;
   float floor_cell = std::max({ext.x, ext.y, ext.z, 1e-6f}) * 1e-6f;
   if (!std::isfinite(floor_cell)) floor_cell = 1e-6f;
@@ -350,16 +350,30 @@ float hash_grid_pass(const Scene& scene, const ClBuffer& hps, size_t nh, DirectM
   float extent[3] = {ext.x, ext.y, ext.z};
   for (int c = 0; c < 3; ++c)
     if (!std::isfinite(origin[c]) || !std::isfinite(extent[c])) origin[c] = extent[c] = 0.f;
-  double t0 = dev.kernel_seconds();
-  DeviceHashGrid g = device_hash_grid(dev, phs, np, origin, extent, cell, opt.hash_slots);
-  times.order = since(dev, t0);
+  const HashGridLayout g = hash_grid_layout(origin, extent, cell, np, opt.hash_slots);
+  const bool on_host = opt.hash_order == HashOrder::Host ||
+                       (opt.hash_order == HashOrder::Auto && dev.info().type == "CPU");
+  DeviceHashGrid d;
+  if (on_host) {  // GatherTimes::order: the host's wall time
+    Stopwatch sw;
+    d = host_hash_grid(dev, photons, mesh_count, g, opt.threads);
+    times.order = sw.seconds();
+  } else {
+    check_photons(photons, mesh_count);
+    const ClBuffer& phs = dev.scratch("ppm.photons", np * sizeof(pf_photon));
+    dev.write(phs, np * sizeof(pf_photon), photons.data());
+    const double t0 = dev.kernel_seconds();
+    d = device_hash_grid(dev, phs, np, g);
+    times.order = since(dev, t0);
+  }
   const ClBuffer& next = dev.scratch("ppm.rmax", sizeof(cl_int));
   dev.fill_zero(next, sizeof(cl_int));
   const size_t L = size_t(dev.work_group());
-  t0 = dev.kernel_seconds();
+  const double t0 = dev.kernel_seconds();
   cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
-  dev.args(k, hps, cl_int(nh), *g.sorted, *g.keys, cl_int(np), *g.slot_start, g.origin[0], g.origin[1],
-           g.origin[2], g.cell, g.n[0], g.n[1], g.n[2], g.mask, g.unique, mats,
+  dev.args(k, hps, cl_int(nh), *d.payload, *d.keys, *d.slot_start, g.origin[0],
+           g.origin[1], g.origin[2], g.cell, cl_int(g.n[0]), cl_int(g.n[1]), cl_int(g.n[2]),
+           cl_uint(g.mask), cl_int(g.unique), mats,
            cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha, next,
            ClLocal{L * sizeof(cl_int)});
   dev.run(k, nh);

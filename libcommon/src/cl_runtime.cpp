@@ -429,6 +429,14 @@ const void* ClContext::map_read(const ClBuffer& b, size_t bytes) {
   return p;
 }
 
+void* ClContext::map_write(const ClBuffer& b, size_t bytes) {
+  cl_int err = CL_SUCCESS;
+  void* p = clEnqueueMapBuffer(queue_, b.get(), CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0,
+                               std::max<size_t>(bytes, 4), 0, nullptr, nullptr, &err);
+  cl_check(err, "clEnqueueMapBuffer");
+  return p;
+}
+
 void ClContext::unmap(const ClBuffer& b, const void* p) {
   cl_check(clEnqueueUnmapMemObject(queue_, b.get(), const_cast<void*>(p), 0, nullptr, nullptr),
            "clEnqueueUnmapMemObject");

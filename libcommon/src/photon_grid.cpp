@@ -99,7 +99,10 @@ void reset_acc(std::vector<MeshAcc>& acc, int mesh_count) {
   }
 }
 
-[[noreturn]] void throw_bad_photon(const pf_photon& p, size_t i, int mesh_count) {
+
+}  // namespace
+
+void throw_bad_photon(const pf_photon& p, size_t i, int mesh_count) {
   if (p.mesh < 0 || p.mesh >= mesh_count)
     throw std::invalid_argument("photon grid: photon " + std::to_string(i) + " has mesh id " +
                                 std::to_string(p.mesh) + " outside [0, " +
@@ -107,8 +110,6 @@ void reset_acc(std::vector<MeshAcc>& acc, int mesh_count) {
   throw std::invalid_argument("photon grid: photon " + std::to_string(i) +
                               " has a non-finite position");
 }
-
-}  // namespace
 
 std::vector<int32_t> PhotonGrid::gather(int mesh, const float q[3], float radius) const {
   std::vector<int32_t> out;
@@ -189,8 +190,7 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
       for (size_t j = 0; j < blk.size; ++j) {
         const pf_photon& p = blk.data[j];
         const float* pos = p.position;
-        if (p.mesh < 0 || p.mesh >= mesh_count || !std::isfinite(pos[0]) ||
-            !std::isfinite(pos[1]) || !std::isfinite(pos[2])) {
+        if (!photon_ok(p, mesh_count)) {
           sc.first_bad[size_t(w)] = blk.base + j;
           b = block_begin(w + 1);  // stop this worker: later photons cannot be reported first
           break;

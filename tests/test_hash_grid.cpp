@@ -1,0 +1,167 @@
+// test_hash_grid.cpp — the hashed photon grid's layout and host ordering (hash_grid.h), without
+// OpenCL: the table size rule, and order_hash_grid against a reference stable sort by slot for
+// several thread counts and table sizes. (test_gather_methods checks that the device's kernels
+// build the same arrays.)
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <cstring>
+#include <numeric>
+#include <vector>
+
+#include "photonflow/error.h"
+#include "photonflow/grid_shared.h"
+#include "photonflow/hash_grid.h"
+#include "photonflow/rng.h"
+
+using namespace pf;
+
+namespace {
+
+// n photons in [-0.1, 1.1]³ (some beyond the grid's box [0, 1]³: clamped into edge cells), on 5
+// meshes, a third of them direct; dir and flux distinct per photon.
+std::vector<pf_photon> random_photons(size_t n) {
+  std::vector<pf_photon> v(n);
+  for (size_t i = 0; i < n; ++i) {
+    pf_rng r = pf_rng_start(7, 0, uint32_t(i));
+    pf_photon& p = v[i];
+    for (int a = 0; a < 3; ++a) {
+      p.position[a] = -0.1f + 1.2f * pf_rng_next(&r);
+      p.dir[a] = pf_rng_next(&r) - 0.5f;
+      p.flux[a] = float(i) + 0.25f * float(a);
+    }
+    p.mesh = int(i % 5);
+    p.pass = 0;
+    p.flags = i % 3 == 0 ? PF_PHOTON_DIRECT : 0;
+  }
+  return v;
+}
+
+uint32_t slot_of(const HashGridLayout& g, const pf_photon& p) {
+  const int x = pf_grid_coord(p.position[0], g.origin[0], g.cell, g.n[0]);
+  const int y = pf_grid_coord(p.position[1], g.origin[1], g.cell, g.n[1]);
+  const int z = pf_grid_coord(p.position[2], g.origin[2], g.cell, g.n[2]);
+  return pf_hash_slot(x, y, z, uint32_t(g.n[0]), uint32_t(g.n[1]), g.mask);
+}
+
+}  // namespace
+
+TEST_CASE("hash grid: table size and cells", "[hash_grid]") {
+  const float o[3] = {0, 0, 0}, e[3] = {1, 0.5f, 0.25f};
+  // 10 × 5 × 3 = 150 cells of 0.1 (ceil(2.5) = 3), 100 photons: 1024 slots, one per cell.
+  HashGridLayout g = hash_grid_layout(o, e, 0.1f, 100, 0);
+  CHECK(g.n[0] == 10);
+  CHECK(g.n[1] == 5);
+  CHECK(g.n[2] == 3);
+  CHECK(g.slots() == 1024);
+  CHECK(g.unique == 1);
+  // 5000 photons, 150 cells: 8192 slots would do, but 1024 give every cell its own.
+  CHECK(hash_grid_layout(o, e, 0.1f, 5000, 0).slots() == 1024);
+  CHECK(hash_grid_layout(o, e, 0.1f, 5000, 0).unique == 1);
+  // Cells of 1/64 (exact): 64 × 32 × 16 = 32,768 cells, 10,000 photons: 16,384 slots would
+  // share cells, and 4 × 16,384 holds them all, so the table grows to 32,768 (unique).
+  g = hash_grid_layout(o, e, 1.f / 64, 10000, 0);
+  CHECK(g.n[0] * g.n[1] * g.n[2] == 32768);
+  CHECK(g.slots() == 32768);
+  CHECK(g.unique == 1);
+  // 40,000 photons (65,536 slots), 32,768 cells: lowered to 32,768.
+  g = hash_grid_layout(o, e, 1.f / 64, 40000, 0);
+  CHECK(g.slots() == 32768);
+  CHECK(g.unique == 1);
+  // 1,000 photons, 32,768 cells > 4 × 1024: the table stays at 1024, cells share slots.
+  g = hash_grid_layout(o, e, 1.f / 64, 1000, 0);
+  CHECK(g.slots() == 1024);
+  CHECK(g.unique == 0);
+  // An explicit table size; not a power of two is refused.
+  CHECK(hash_grid_layout(o, e, 0.1f, 100, 64).slots() == 64);
+  CHECK(hash_grid_layout(o, e, 0.1f, 100, 64).unique == 0);
+  CHECK_THROWS_AS(hash_grid_layout(o, e, 0.1f, 100, 48), InputError);
+  CHECK_THROWS_AS(hash_grid_layout(o, e, 0.1f, 100, -4), InputError);
+}
+
+TEST_CASE("hash grid: the host ordering is the stable sort by slot", "[hash_grid]") {
+  const std::vector<pf_photon> ph = random_photons(70001);  // above the parallel threshold; a partial last key block
+  const float o[3] = {0, 0, 0}, e[3] = {1, 1, 1};
+  for (int slots : {0, 64, 1}) {
+    const HashGridLayout g = hash_grid_layout(o, e, 0.03f, ph.size(), slots);
+    INFO("slots " << g.slots());
+    // Reference: photon indices stably sorted by slot; the start of every slot.
+    std::vector<uint32_t> order(ph.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](uint32_t a, uint32_t b) { return slot_of(g, ph[a]) < slot_of(g, ph[b]); });
+    std::vector<int32_t> start(g.slots() + 1, 0);
+    for (const pf_photon& p : ph) start[slot_of(g, p) + 1] += 1;
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    size_t used = 0;
+    for (size_t k = 0; k < g.slots(); ++k) used += start[k + 1] > start[k];
+    CHECK(used > std::min<size_t>(g.slots() / 2, 1000));  // photons spread over the table
+    for (int threads : {1, 2, 3}) {
+      INFO("threads " << threads);
+      std::vector<pf_photon_keys4> keys(hash_grid_key_blocks(ph.size()));
+      std::vector<pf_photon_payload> payload(ph.size());
+      std::vector<int32_t> got(g.slots() + 1, -1);
+      order_hash_grid(g, ph.data(), ph.size(), 5, keys.data(), payload.data(), got.data(),
+                      threads);
+      CHECK(got == start);
+      size_t same = 0;
+      for (size_t j = 0; j < ph.size(); ++j) {
+        const pf_photon& p = ph[order[j]];
+        const pf_photon_keys4& k = keys[j / 4];
+        const size_t l = j % 4;
+        same += k.x[l] == p.position[0] && k.y[l] == p.position[1] && k.z[l] == p.position[2] &&
+                k.key[l] == 2 * p.mesh + ((p.flags & PF_PHOTON_DIRECT) ? 1 : 0) &&
+                std::memcmp(payload[j].dir, p.dir, sizeof p.dir) == 0 &&
+                std::memcmp(payload[j].flux, p.flux, sizeof p.flux) == 0;
+      }
+      CHECK(same == ph.size());
+      for (size_t j = ph.size(); j < 4 * keys.size(); ++j) {  // unused lanes: zero
+        const pf_photon_keys4& k = keys[j / 4];
+        CHECK((k.x[j % 4] == 0.f && k.y[j % 4] == 0.f && k.z[j % 4] == 0.f && k.key[j % 4] == 0));
+      }
+    }
+  }
+  // No photons: every slot starts (and ends) at 0.
+  const HashGridLayout g = hash_grid_layout(o, e, 0.1f, 0, 0);
+  std::vector<int32_t> got(g.slots() + 1, -1);
+  order_hash_grid(g, nullptr, 0, 5, nullptr, nullptr, got.data(), 2);
+  CHECK(std::all_of(got.begin(), got.end(), [](int32_t v) { return v == 0; }));
+}
+
+TEST_CASE("hash grid: the host ordering refuses bad photons, naming the first", "[hash_grid]") {
+  std::vector<pf_photon> ph = random_photons(70001);
+  const float o[3] = {0, 0, 0}, e[3] = {1, 1, 1};
+  const HashGridLayout g = hash_grid_layout(o, e, 0.03f, ph.size(), 0);
+  std::vector<pf_photon_keys4> keys(hash_grid_key_blocks(ph.size()));
+  std::vector<pf_photon_payload> payload(ph.size());
+  std::vector<int32_t> start(g.slots() + 1);
+  auto message = [&](int threads) {
+    try {
+      order_hash_grid(g, ph.data(), ph.size(), 5, keys.data(), payload.data(), start.data(),
+                      threads);
+    } catch (const std::invalid_argument& x) {
+      return std::string(x.what());
+    }
+    return std::string("no error");
+  };
+  ph[60000].position[1] = NAN;  // in the second worker's half
+  ph[50000].mesh = 5;           // the first bad photon: in the second half too with 2 threads
+  for (int threads : {1, 2, 3}) {
+    INFO("threads " << threads);
+    CHECK(message(threads) == "photon grid: photon 50000 has mesh id 5 outside [0, 5)");
+  }
+  ph[50000].mesh = 0;
+  ph[10].mesh = -1;  // now the first, in the first worker's run
+  for (int threads : {1, 2}) CHECK(message(threads).find("photon 10 has mesh id -1") != std::string::npos);
+  ph[10].mesh = 0;
+  for (int threads : {1, 2}) CHECK(message(threads) == "photon grid: photon 60000 has a non-finite position");
+}
+
+TEST_CASE("hash grid: ordering names", "[hash_grid]") {
+  for (HashOrder o : {HashOrder::Auto, HashOrder::Device, HashOrder::Host})
+    CHECK(parse_hash_order(hash_order_name(o)) == o);
+  CHECK_THROWS_AS(parse_hash_order("gpu"), InputError);
+}
