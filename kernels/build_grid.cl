@@ -134,7 +134,7 @@ __kernel void permute_photons(__global const pf_photon* in, __global const int* 
 }
 
 /* The same permutation into the hashed grid's two arrays (hash_grid.h): lane i % 4 of key block
- * i / 4 = position and 2·mesh + (PF_PHOTON_DIRECT set ? 1 : 0), payload[i] = direction and flux,
+ * i / 4 = position and pf_photon_hash_key, payload[i] = direction and flux,
  * of photon order[i]. Work-items n .. 4·ceil(n / 4) − 1 zero the last block's unused lanes. */
 __kernel void permute_photons_keys(__global const pf_photon* in, __global const int* order, int n,
                                    __global pf_photon_keys4* keys,
@@ -152,7 +152,7 @@ __kernel void permute_photons_keys(__global const pf_photon* in, __global const 
   b->x[l] = p->position[0];
   b->y[l] = p->position[1];
   b->z[l] = p->position[2];
-  b->key[l] = 2 * p->mesh + ((p->flags & PF_PHOTON_DIRECT) ? 1 : 0);
+  b->key[l] = pf_photon_hash_key(p->mesh, p->flags);
   for (int a = 0; a < 3; ++a) {
     payload[i].dir[a] = p->dir[a];
     payload[i].flux[a] = p->flux[a];

@@ -70,6 +70,12 @@ PF_INLINE pf_uint pf_hash_slot(pf_int x, pf_int y, pf_int z, pf_uint nx, pf_uint
   return ((pf_uint)x + nx * ((pf_uint)y + ny * (pf_uint)z)) & mask;
 }
 
+/* The key the hashed-grid gather tests for a photon (pf_photon_keys4): 2·mesh + 1 when the photon
+ * is PF_PHOTON_DIRECT, so one integer compare checks the mesh (key >> 1) or mesh and flag (key). */
+PF_INLINE pf_int pf_photon_hash_key(pf_int mesh, pf_int flags) {
+  return 2 * mesh + ((flags & PF_PHOTON_DIRECT) ? 1 : 0);
+}
+
 /* Monotone float → int: a < b (floats, not NaN) ⇔ pf_float_ordered(a) < pf_float_ordered(b),
  * with −0 ordered just below +0. pf_ordered_float inverts it. */
 PF_INLINE pf_int pf_float_ordered(pf_float f) {

@@ -72,9 +72,5 @@ void order_hash_grid(const HashGridLayout& g, const pf_photon* photons, size_t n
 // Key blocks for n photons: ceil(n / 4).
 inline size_t hash_grid_key_blocks(size_t n) { return (n + 3) / 4; }
 
-// The key of photon p: 2·mesh + (PF_PHOTON_DIRECT set ? 1 : 0).
-inline int32_t hash_grid_key(const pf_photon& p) {
-  return 2 * p.mesh + ((p.flags & PF_PHOTON_DIRECT) ? 1 : 0);
-}
 
 }  // namespace pf

@@ -146,7 +146,7 @@ typedef struct {
  * testing a candidate reads 16 bytes and only an accepted photon's payload is read:
  *   pf_photon_keys4   photons 4b .. 4b + 3 in one 64-byte block, each field as 4 lanes (the gather
  *                     tests four photons per float4 / int4 with aligned loads, and a photon's
- *                     key fields share one cache line); key = 2·mesh + (PF_PHOTON_DIRECT ? 1 : 0);
+ *                     key fields share one cache line); key = pf_photon_hash_key (grid_shared.h);
  *                     lanes past the last photon are never read as photons;
  *   pf_photon_payload direction and flux, one per photon. */
 typedef struct {

@@ -164,7 +164,7 @@ void order_hash_grid(const HashGridLayout& g, const pf_photon* photons, size_t n
       k.x[l] = p.position[0];
       k.y[l] = p.position[1];
       k.z[l] = p.position[2];
-      k.key[l] = hash_grid_key(p);
+      k.key[l] = pf_photon_hash_key(p.mesh, p.flags);
       pf_photon_payload& y = payload[j];
       std::memcpy(y.dir, p.dir, sizeof y.dir);
       std::memcpy(y.flux, p.flux, sizeof y.flux);
