@@ -172,6 +172,19 @@ int main(int argc, char** argv) {
       if (sample <= 0) sample = size_t(sz.w) * size_t(sz.h) <= 320 * 280 ? 1 : 16;
       std::fprintf(stderr, "bench_gather: %dx%d, %zu hitpoints, %zu photons stored\n", sz.w, sz.h,
                    fresh.hitpoints.size(), pass0.photons.size());
+      {  // what one upload of the pass's photons costs (a blocking write from pageable memory):
+         // the part of a "state on device" pass that no kernel shows
+        const size_t bytes = pass0.photons.size() * sizeof(pf_photon);
+        const pf::ClBuffer& b = dev->scratch("bench.upload", std::max<size_t>(bytes, 4));
+        std::vector<double> t;
+        for (int r = 0; r < std::max(runs, 3); ++r) {
+          const double t0 = now();
+          dev->write(b, bytes, pass0.photons.data());
+          t.push_back(now() - t0);
+        }
+        std::fprintf(stderr, "  photon upload: %.3f ms for %.1f MB (%.1f GB/s), median of %zu\n",
+                     median(t) * 1e3, bytes / 1e6, bytes / median(t) / 1e9, t.size());
+      }
       // Per method: its start state (a sample for the whole-mesh methods), clusters, and one
       // untimed call (PoCL generates code per kernel and local size at the first enqueue).
       struct Run {

@@ -18,9 +18,11 @@
 #       opencl    the per-block table of issue 4 (bench_opencl --runs 5)
 #     ARGS are passed on to the benchmark (e.g. --cl-platform 1 --cl-device 0).
 #
-# The NVIDIA driver registers no ICD file on those machines; `run` writes one naming
+# The NVIDIA driver registers no ICD file on those machines (their /etc/OpenCL/vendors names only a
+# PoCL that finds no device there: seen on the H100 machine, 2026-11-22); `run` writes one naming
 # libnvidia-opencl.so.1 (when found) into a temporary vendors folder and points OCL_ICD_VENDORS at
-# it. An existing /etc/OpenCL/vendors is used as it is.
+# it, so the NVIDIA platform is the only one. Without that library, or with OCL_ICD_VENDORS already
+# set, the ICD loader's usual search applies.
 set -euo pipefail
 
 BINS=(bench_gather bench_ga bench_opencl render)
@@ -62,7 +64,7 @@ run() {
   local out=${OUT:-out/gpu}
   mkdir -p "$out"
   export LD_LIBRARY_PATH="$PWD/.gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-  if [ -z "${OCL_ICD_VENDORS:-}" ] && ! ls /etc/OpenCL/vendors/*.icd > /dev/null 2>&1; then
+  if [ -z "${OCL_ICD_VENDORS:-}" ]; then
     local icd
     icd=$(find_nvidia_icd || true)
     if [ -n "$icd" ]; then
@@ -73,6 +75,12 @@ run() {
     fi
   fi
   local g=.gpu
+  # The tests skip their device cases when no OpenCL device is found, and the benchmarks would
+  # time PoCL: refuse to run without a GPU in the list.
+  if [ "$what" != devices ] && ! "$g/render" --list-devices 2>/dev/null | grep -q '\[GPU\]'; then
+    echo "gpu.sh: no OpenCL GPU device found (bench/gpu.sh run devices lists what there is)" >&2
+    exit 3
+  fi
   case "$what" in
     devices) "$g/render" --list-devices "$@" 2>&1 | tee "$out/devices.md" ;;
     check)
