@@ -165,3 +165,67 @@ TEST_CASE("hash grid: ordering names", "[hash_grid]") {
     CHECK(parse_hash_order(hash_order_name(o)) == o);
   CHECK_THROWS_AS(parse_hash_order("gpu"), InputError);
 }
+
+TEST_CASE("hash grid: hitpoints in cell order (Z-order of cells, stable)", "[hash_grid]") {
+  // A 64 × 48 "image" of hitpoints on the plane z = 0.5 of [0, 1]³, in scanline order, as the eye
+  // pass writes them; cells of 1/8.
+  const int w = 64, hgt = 48;
+  std::vector<pf_hitpoint> hps(size_t(w) * hgt);
+  for (int y = 0; y < hgt; ++y)
+    for (int x = 0; x < w; ++x) {
+      pf_hitpoint& hp = hps[size_t(y) * w + size_t(x)];
+      std::memset(&hp, 0, sizeof hp);
+      hp.position[0] = (x + 0.5f) / w;
+      hp.position[1] = (y + 0.5f) / hgt;
+      hp.position[2] = 0.5f;
+    }
+  const float origin[3] = {0.f, 0.f, 0.f};
+  const float cell = 0.125f;
+  const std::vector<int32_t> order = hitpoint_cell_order(hps, origin, cell);
+
+  // A permutation of the indices.
+  std::vector<int32_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<int32_t> identity(hps.size());
+  std::iota(identity.begin(), identity.end(), 0);
+  CHECK(sorted == identity);
+  CHECK(order != identity);  // scanline order is not cell order
+
+  // Each cell's hitpoints form one run, in index order; the cells come in Z-order (x, y, z
+  // interleaved from the lowest bit): the cell of (x, y) precedes (x + 1, y) within a 2 × 2 block,
+  // and (x, y + 1) follows both.
+  auto cell_of = [&](int32_t i) {
+    const int cx = int(hps[size_t(i)].position[0] / cell), cy = int(hps[size_t(i)].position[1] / cell);
+    return std::pair<int, int>(cx, cy);
+  };
+  auto z = [](int cx, int cy) {  // reference Z-order code of two coordinates (z = 4 for all)
+    uint64_t c = 0;
+    for (int b = 0; b < 8; ++b)
+      c |= uint64_t((cx >> b) & 1) << (3 * b) | uint64_t((cy >> b) & 1) << (3 * b + 1) |
+           uint64_t((4 >> b) & 1) << (3 * b + 2);
+    return c;
+  };
+  for (size_t k = 1; k < order.size(); ++k) {
+    const auto a = cell_of(order[k - 1]), b = cell_of(order[k]);
+    const uint64_t za = z(a.first, a.second), zb = z(b.first, b.second);
+    REQUIRE(za <= zb);
+    if (za == zb) REQUIRE(order[k - 1] < order[k]);
+  }
+  CHECK(cell_of(order.front()) == std::pair<int, int>(0, 0));
+  CHECK(cell_of(order[size_t(8 * 6)]) == std::pair<int, int>(1, 0));  // 8 × 6 hitpoints per cell
+  CHECK(cell_of(order[size_t(2 * 8 * 6)]) == std::pair<int, int>(0, 1));
+
+  // No usable cell side: the identity. Non-finite positions count as coordinate 0.
+  CHECK(hitpoint_cell_order(hps, origin, 0.f) == identity);
+  CHECK(hitpoint_cell_order(hps, origin, std::nanf("")) == identity);
+  CHECK(hitpoint_cell_order(hps, origin, INFINITY) == identity);
+  REQUIRE(cell_of(20).first == 2);
+  hps[20].position[0] = std::nanf("");
+  hps[20].position[1] = INFINITY;
+  const std::vector<int32_t> with_nan = hitpoint_cell_order(hps, origin, cell);
+  // Hitpoint 20 joins cell (0, 0)'s run (then 49 long), in index order after 0..7.
+  const std::vector<int32_t> run(with_nan.begin(), with_nan.begin() + 8 * 6 + 1);
+  CHECK(std::is_sorted(run.begin(), run.end()));
+  CHECK(std::find(run.begin(), run.end(), 20) != run.end());
+  CHECK(with_nan[8] == 20);
+}

@@ -75,7 +75,9 @@ void sort_photons_by_mesh(const std::vector<pf_photon>& photons, int mesh_count,
 // a pass uploads only its photons, gathers and applies eq. 3.14–3.18 in one kernel, and brings
 // back the largest radius (4 bytes, the next pass's cell size); the host copy h.hitpoints is
 // brought up to date by sync(). Other methods copy the state each pass as ppm_pass does (sync()
-// first). The states are those of ppm_pass pass by pass, bit for bit (tested).
+// first). On the device the hitpoints are kept in cell order (hitpoint_cell_order, cells of
+// kHitpointOrderCell × the largest radius), which changes no result: one work-item gathers for
+// one hitpoint. The states are those of ppm_pass pass by pass, bit for bit (tested).
 // h.passes, h.photons_emitted and h.estimator are always current; h.hitpoints only after sync().
 // h must outlive this object and must not be changed by others while a pass may be pending.
 class DevicePpmState {
@@ -101,6 +103,9 @@ class DevicePpmState {
   bool host_current_ = true;     // h_.hitpoints holds the latest state
   bool device_current_ = false;  // hps_ holds it
   float rmax_ = 0.f;             // largest finite positive radius of the device's state
+  // hps_[i] holds h_.hitpoints[order_[i]]: the hitpoints in cell order (hitpoint_cell_order,
+  // hash_grid.h), so that a work-group's hitpoints read the same rows of the hashed grid.
+  std::vector<int32_t> order_;
 };
 
 // The grid-cluster gather alone (gather_grid_clusters, the kernel of grid-kmeans and

@@ -29,6 +29,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "photonflow/shared_types.h"
 
@@ -71,6 +72,22 @@ void order_hash_grid(const HashGridLayout& g, const pf_photon* photons, size_t n
 
 // Key blocks for n photons: ceil(n / 4).
 inline size_t hash_grid_key_blocks(size_t n) { return (n + 3) / 4; }
+
+// The order in which a resident state keeps its hitpoints on the device (DevicePpmState): by the
+// Morton code (Z-order; x in the lowest bit) of the cell of side `cell` over `origin` that holds
+// each hitpoint's position, stably (equal codes keep their index order). Hitpoints gathered one
+// after another then read the same rows of the hashed grid, where image order scatters the
+// rows of one work-group along a scanline (the clusters' idea, without fillers). A hitpoint's
+// gather does not depend on the others, so the order changes no result. Coordinates are clamped
+// to [0, 2^21); a non-finite position counts as coordinate 0. Returns order[i] = the index of the
+// hitpoint stored at position i; the identity when cell is not finite and positive.
+std::vector<int32_t> hitpoint_cell_order(const std::vector<pf_hitpoint>& hitpoints,
+                                         const float origin[3], float cell);
+
+// The cell side of DevicePpmState's hitpoint order, in units of the largest radius: cells of 2
+// and 8 radii gave the same gather time within the spread on PoCL (1080p gather kernel 100–104 →
+// 89–93 ms either way, docs/BENCHMARKS.md); larger blocks keep more of a scanline together.
+constexpr float kHitpointOrderCell = 8.f;
 
 
 }  // namespace pf

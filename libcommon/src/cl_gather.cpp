@@ -642,18 +642,25 @@ void DevicePpmState::upload() {
   if (device_current_) return;
   sync();  // never overwrite a newer device state with an older host copy
   const size_t nh = h_.hitpoints.size();
+  rmax_ = max_radius(h_);
   if (nh > 0) {
     require_one_buffer(dev_, nh, sizeof(pf_hitpoint), "hitpoints", GatherMethod::HashGrid);
     if (hps_.bytes() < nh * sizeof(pf_hitpoint)) hps_ = dev_.buffer(nh * sizeof(pf_hitpoint));
-    dev_.write(hps_, nh * sizeof(pf_hitpoint), h_.hitpoints.data());
+    const float origin[3] = {scene_.bounds.lo.x, scene_.bounds.lo.y, scene_.bounds.lo.z};
+    order_ = hitpoint_cell_order(h_.hitpoints, origin, kHitpointOrderCell * rmax_);
+    std::vector<pf_hitpoint> staged(nh);
+    for (size_t i = 0; i < nh; ++i) staged[i] = h_.hitpoints[size_t(order_[i])];
+    dev_.write(hps_, nh * sizeof(pf_hitpoint), staged.data());
   }
-  rmax_ = max_radius(h_);
   device_current_ = true;
 }
 
 void DevicePpmState::sync() {
   if (host_current_) return;
-  dev_.read(hps_, h_.hitpoints.size() * sizeof(pf_hitpoint), h_.hitpoints.data());
+  const size_t nh = h_.hitpoints.size();
+  std::vector<pf_hitpoint> staged(nh);
+  dev_.read(hps_, nh * sizeof(pf_hitpoint), staged.data());
+  for (size_t i = 0; i < nh; ++i) h_.hitpoints[size_t(order_[i])] = staged[i];
   host_current_ = true;
 }
 

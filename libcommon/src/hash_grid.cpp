@@ -178,4 +178,42 @@ void order_hash_grid(const HashGridLayout& g, const pf_photon* photons, size_t n
   }
 }
 
+namespace {
+
+// The 21 low bits of v spread to every third bit (bit i → bit 3i).
+uint64_t spread3(uint32_t v) {
+  uint64_t x = v & 0x1fffffu;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+}  // namespace
+
+std::vector<int32_t> hitpoint_cell_order(const std::vector<pf_hitpoint>& hitpoints,
+                                         const float origin[3], float cell) {
+  const size_t n = hitpoints.size();
+  if (n > size_t(INT32_MAX)) throw std::invalid_argument("hitpoint_cell_order: too many hitpoints");
+  std::vector<int32_t> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = int32_t(i);
+  if (!(cell > 0.f) || !std::isfinite(cell)) return order;
+  constexpr float kMaxCoord = float((1u << 21) - 1);
+  std::vector<uint64_t> code(n);
+  for (size_t i = 0; i < n; ++i) {
+    uint64_t c = 0;
+    for (int a = 0; a < 3; ++a) {
+      const float t = (hitpoints[i].position[a] - origin[a]) / cell;
+      const float u = std::isfinite(t) ? std::min(std::max(t, 0.f), kMaxCoord) : 0.f;
+      c |= spread3(uint32_t(u)) << a;
+    }
+    code[i] = c;
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int32_t a, int32_t b) { return code[size_t(a)] < code[size_t(b)]; });
+  return order;
+}
+
 }  // namespace pf
