@@ -12,6 +12,7 @@
 
 #include "photonflow/h5io.h"
 #include "photonflow/hash.h"
+#include "photonflow/morton.h"
 #include "photonflow/photon_grid.h"
 
 namespace pf {
@@ -105,17 +106,6 @@ float shared_radius(const float c[3], const int32_t* members, size_t n, const Hi
   float r = float(m);
   if (double(r) < m) r = std::nextafter(r, INFINITY);
   return r;
-}
-
-// Spreads the low 21 bits of v to every third bit.
-inline uint64_t spread3(uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffull;
-  v = (v | v << 16) & 0x1f0000ff0000ffull;
-  v = (v | v << 8) & 0x100f00f00f00f00full;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-  v = (v | v << 2) & 0x1249249249249249ull;
-  return v;
 }
 
 // Uniform grid over the centres of one mesh, for nearest-centre queries.
@@ -237,7 +227,7 @@ void kmeans_mesh(ClusterSet& out, int mesh, const std::vector<int32_t>& idx, con
       uint64_t code = 0;
       for (int a = 0; a < 3; ++a) {
         uint64_t q = ext[a] > 0.f ? uint64_t(double(p[a] - b.lo[a]) / ext[a] * 2097151.0) : 0;
-        code |= spread3(std::min<uint64_t>(q, 2097151)) << a;
+        code |= morton_spread3(std::min<uint64_t>(q, 2097151)) << a;
       }
       keyed[size_t(t)] = {code, idx[size_t(t)]};
     }

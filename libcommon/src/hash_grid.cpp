@@ -13,6 +13,7 @@
 
 #include "photonflow/error.h"
 #include "photonflow/grid_shared.h"
+#include "photonflow/morton.h"
 #include "photonflow/photon_grid.h"
 
 namespace pf {
@@ -178,21 +179,6 @@ void order_hash_grid(const HashGridLayout& g, const pf_photon* photons, size_t n
   }
 }
 
-namespace {
-
-// The 21 low bits of v spread to every third bit (bit i → bit 3i).
-uint64_t spread3(uint32_t v) {
-  uint64_t x = v & 0x1fffffu;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
-}  // namespace
-
 std::vector<int32_t> hitpoint_cell_order(const std::vector<pf_hitpoint>& hitpoints,
                                          const float origin[3], float cell) {
   const size_t n = hitpoints.size();
@@ -203,13 +189,12 @@ std::vector<int32_t> hitpoint_cell_order(const std::vector<pf_hitpoint>& hitpoin
   constexpr float kMaxCoord = float((1u << 21) - 1);
   std::vector<uint64_t> code(n);
   for (size_t i = 0; i < n; ++i) {
-    uint64_t c = 0;
+    uint64_t c[3];
     for (int a = 0; a < 3; ++a) {
       const float t = (hitpoints[i].position[a] - origin[a]) / cell;
-      const float u = std::isfinite(t) ? std::min(std::max(t, 0.f), kMaxCoord) : 0.f;
-      c |= spread3(uint32_t(u)) << a;
+      c[a] = uint64_t(std::isfinite(t) ? std::min(std::max(t, 0.f), kMaxCoord) : 0.f);
     }
-    code[i] = c;
+    code[i] = morton3(c[0], c[1], c[2]);
   }
   std::stable_sort(order.begin(), order.end(),
                    [&](int32_t a, int32_t b) { return code[size_t(a)] < code[size_t(b)]; });
