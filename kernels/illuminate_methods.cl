@@ -8,8 +8,9 @@
  * pf_ppm_in_radius(pf_ppm_dist2(x, x_p), R)) and adds m and Σ f_r·Φ_p (eq. 3.17) into
  * per-hitpoint accumulators acc_m / acc_tau (double where the device has fp64, PF_FP64);
  * ppm_apply then applies eq. 3.14, 3.16, 3.18 once per pass (gather_hash_grid, where one
- * work-item owns a hitpoint for the whole pass, applies them itself with the same arithmetic). Only the order of the sum differs
- * between kernels (each kernel's order is fixed, so every kernel is deterministic).
+ * work-item owns a hitpoint for the whole pass, applies them itself with the same arithmetic).
+ * Only the order of the sum differs between kernels (each kernel's order is fixed, so every
+ * kernel is deterministic).
  *
  * Distance tests. The thesis's kernels up to "hitpoint sorting + local memory" used OpenCL's
  * built-in distance(); "manual distance" replaced it by dx·dx + dy·dy + dz·dz. The kernels of
@@ -417,13 +418,14 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  * over the scene, hashed into mask + 1 slots by their linear index (pf_hash_slot); slot k holds
  * photons slot_start[k] .. slot_start[k+1] − 1 of keys / payload (hash_grid.h) in photon-index
  * order. A hitpoint reads each distinct slot of its sphere box's cells once, row by row (a row's
- * slots are consecutive modulo the table size). That is exact: a photon within R lies in a cell of the box, so its slot is read, once;
- * photons of other cells that share a slot lie outside the box, farther than R, and the rule
- * rejects them. A slot repeats within the box only when two of its cells' linear indices are
- * congruent modulo the table size: along a row when the row is longer than the table, across rows
- * when row offsets are congruent — both tested arithmetically. When the grid has no more cells
- * than the table has slots (`unique`, the host's choice of table size makes that the common case)
- * no two cells share a slot, and a row is one run of photons (two if it wraps around the table).
+ * slots are consecutive modulo the table size). That is exact: a photon within R lies in a cell
+ * of the box, so its slot is read, once; photons of other cells that share a slot lie outside
+ * the box, farther than R, and the rule rejects them. A slot repeats within the box only when two
+ * of its cells' linear indices are congruent modulo the table size: along a row when the row is
+ * longer than the table, across rows when row offsets are congruent — both tested arithmetically.
+ * When the grid has no more cells than the table has slots (`unique`, the host's choice of table
+ * size makes that the common case) no two cells share a slot, and a row is one run of photons
+ * (two if it wraps around the table).
  *
  * One work-item owns one hitpoint for the whole pass, so the kernel also applies eq. 3.14–3.18 to
  * it (pf_ppm_update, the arithmetic of ppm_apply on the same sums: the same state) instead of

@@ -100,6 +100,7 @@ class DevicePpmState {
   HitpointSet& h_;
   ClContext& dev_;
   ClBuffer hps_;                 // the resident hitpoints (allocated on the first hash-grid pass)
+  ClBuffer mats_;                // the scene's materials, written with the hitpoints
   bool host_current_ = true;     // h_.hitpoints holds the latest state
   bool device_current_ = false;  // hps_ holds it
   float rmax_ = 0.f;             // largest finite positive radius of the device's state

@@ -69,6 +69,9 @@ inline bool photon_ok(const pf_photon& p, int mesh_count) {
          std::isfinite(p.position[1]) && std::isfinite(p.position[2]);
 }
 [[noreturn]] void throw_bad_photon(const pf_photon& p, size_t i, int mesh_count);
+// The checks before any photon: mesh_count >= 0 and at most 2^31 − 1 photons (int indices);
+// std::invalid_argument otherwise.
+void check_photon_count(size_t n, int mesh_count);
 
 // Sorts one pass's photons into per-mesh grids. mesh_count = number of meshes of the scene; every
 // photon's mesh must lie in [0, mesh_count) and its position must be finite

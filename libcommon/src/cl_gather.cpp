@@ -29,9 +29,7 @@ constexpr float kSlack = 1.0001f;  // PF_SLACK of illuminate_methods.cl
 // The host-side checks of the CPU grid build (photon_grid.cpp), so the device never indexes a
 // mesh table out of range: every photon's mesh in [0, mesh_count), every position finite.
 void check_photons(const std::vector<pf_photon>& photons, int mesh_count) {
-  if (mesh_count < 0) throw std::invalid_argument("photon grid: negative mesh count");
-  if (photons.size() > size_t(std::numeric_limits<int32_t>::max()))
-    throw std::invalid_argument("photon grid: more than 2^31-1 photons");
+  check_photon_count(photons.size(), mesh_count);
   for (size_t i = 0; i < photons.size(); ++i)
     if (!photon_ok(photons[i], mesh_count)) throw_bad_photon(photons[i], i, mesh_count);
 }
@@ -325,20 +323,19 @@ void check_cluster_count(const ClusterSet& cs, size_t hitpoints) {
 
 double since(ClContext& dev, double t0) { return dev.kernel_seconds() - t0; }
 
-// One hash-grid pass over nh hitpoints already in `hps`, rmax being their largest finite positive
-// radius as max_radius computes it (the cell side is hash_cell·rmax): checks the photons and
+// One hash-grid pass over nh hitpoints already in `hps` (the scene's materials in `mats`), rmax
+// being their largest finite positive radius as max_radius computes it (the cell side is
+// hash_cell·rmax): checks the photons and
 // builds the hashed grid (on the host into mapped buffers, or uploads the photons and builds it
 // with the device's kernels: opt.hash_order), gathers and applies eq. 3.14–3.18 in one kernel.
 // Returns the new state's rmax (reduced by the kernel, so a state kept on the device needs no
 // copy to the host between passes).
-float hash_grid_pass(const Scene& scene, const ClBuffer& hps, size_t nh, DirectMode direct,
-                     float rmax, const std::vector<pf_photon>& photons, const PpmOptions& opt,
-                     ClContext& dev, GatherTimes& times) {
+float hash_grid_pass(const Scene& scene, const ClBuffer& hps, const ClBuffer& mats, size_t nh,
+                     DirectMode direct, float rmax, const std::vector<pf_photon>& photons,
+                     const PpmOptions& opt, ClContext& dev, GatherTimes& times) {
   const size_t np = photons.size();
   require_one_buffer(dev, np, sizeof(pf_photon), "photons", opt.method);
   const int mesh_count = int(scene.mesh_names.size());
-  const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
-  dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
   const Vec3 ext = scene.bounds.hi - scene.bounds.lo;
   float floor_cell = std::max({ext.x, ext.y, ext.z, 1e-6f}) * 1e-6f;
   if (!std::isfinite(floor_cell)) floor_cell = 1e-6f;
@@ -392,11 +389,15 @@ float max_radius(const HitpointSet& h) {
   return rmax;
 }
 
-// The checks every device pass makes before any work: alpha, a device method, sizes that fit the
-// kernels' int indices.
-void check_pass(const PpmOptions& opt, size_t hitpoints, size_t photons) {
+// Hitpoint and photon counts that fit the kernels' int indices.
+void check_sizes(size_t hitpoints, size_t photons) {
   if (hitpoints > size_t(INT32_MAX) || photons > size_t(INT32_MAX))
     throw input_error("", "too many hitpoints or photons for the OpenCL backend");
+}
+
+// The checks every device pass makes before any work: sizes (check_sizes), alpha, a device method.
+void check_pass(const PpmOptions& opt, size_t hitpoints, size_t photons) {
+  check_sizes(hitpoints, photons);
   if (!(opt.alpha > 0.f && opt.alpha <= 1.f))
     throw input_error("", "alpha must be in (0, 1], got " + std::to_string(opt.alpha));
   const GatherMethodInfo& mi = gather_method_info(opt.method);
@@ -479,7 +480,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       require_one_buffer(dev, nh, sizeof(pf_hitpoint), "hitpoints", opt.method);
       const ClBuffer& hps = dev.scratch("ppm.hitpoints", nh * sizeof(pf_hitpoint));
       dev.write(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
-      hash_grid_pass(scene, hps, nh, h.direct_mode, max_radius(h), photons, opt, dev, times);
+      hash_grid_pass(scene, hps, mats, nh, h.direct_mode, max_radius(h), photons, opt, dev, times);
       dev.read(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
     } else if (opt.method == GatherMethod::Naive) {
       // Batches of hitpoints × batches of photons under the allocation limit, photons in index
@@ -630,7 +631,8 @@ GatherTimes DevicePpmState::pass(const std::vector<pf_photon>& photons, uint64_t
   check_pass(opt, nh, np);
   if (nh > 0 && np > 0) {
     upload();
-    rmax_ = hash_grid_pass(scene_, hps_, nh, h_.direct_mode, rmax_, photons, opt, dev_, times);
+    rmax_ = hash_grid_pass(scene_, hps_, mats_, nh, h_.direct_mode, rmax_, photons, opt, dev_,
+                           times);
     host_current_ = false;
   }
   count_pass(h_, emitted);
@@ -646,6 +648,9 @@ void DevicePpmState::upload() {
   if (nh > 0) {
     require_one_buffer(dev_, nh, sizeof(pf_hitpoint), "hitpoints", GatherMethod::HashGrid);
     if (hps_.bytes() < nh * sizeof(pf_hitpoint)) hps_ = dev_.buffer(nh * sizeof(pf_hitpoint));
+    const size_t mat_bytes = scene_.materials.size() * sizeof(pf_material);
+    if (!mats_.get()) mats_ = dev_.buffer(std::max<size_t>(mat_bytes, 4));
+    dev_.write(mats_, mat_bytes, scene_.materials.data());
     const float origin[3] = {scene_.bounds.lo.x, scene_.bounds.lo.y, scene_.bounds.lo.z};
     order_ = hitpoint_cell_order(h_.hitpoints, origin, kHitpointOrderCell * rmax_);
     std::vector<pf_hitpoint> staged(nh);
@@ -672,8 +677,7 @@ GridGatherTimer::GridGatherTimer(const Scene& scene, const HitpointSet& h,
     : dev_(dev), h_(h) {
   nh_ = h.hitpoints.size();
   np_ = photons.size();
-  if (nh_ > size_t(INT32_MAX) || np_ > size_t(INT32_MAX))
-    throw input_error("", "too many hitpoints or photons for the OpenCL backend");
+  check_sizes(nh_, np_);
   require_one_buffer(dev, nh_, sizeof(pf_hitpoint), "hitpoints", GatherMethod::GridKmeans);
   require_one_buffer(dev, np_, sizeof(pf_photon), "photons", GatherMethod::GridKmeans);
   mesh_count_ = int(scene.mesh_names.size());

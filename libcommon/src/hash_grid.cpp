@@ -83,8 +83,7 @@ HashGridLayout hash_grid_layout(const float origin[3], const float extent[3], fl
 void order_hash_grid(const HashGridLayout& g, const pf_photon* photons, size_t n, int mesh_count,
                      pf_photon_keys4* keys, pf_photon_payload* payload, int32_t* slot_start,
                      int threads) {
-  if (mesh_count < 0) throw std::invalid_argument("photon grid: negative mesh count");
-  if (n > size_t(INT32_MAX)) throw std::invalid_argument("photon grid: more than 2^31-1 photons");
+  check_photon_count(n, mesh_count);
   const size_t table = g.slots();
   Scratch& sc = scratch();
   if (sc.slot.size() < n) {

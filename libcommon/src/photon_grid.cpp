@@ -111,6 +111,12 @@ void throw_bad_photon(const pf_photon& p, size_t i, int mesh_count) {
                               " has a non-finite position");
 }
 
+void check_photon_count(size_t n, int mesh_count) {
+  if (mesh_count < 0) throw std::invalid_argument("photon grid: negative mesh count");
+  if (n > static_cast<size_t>(std::numeric_limits<int32_t>::max()))
+    throw std::invalid_argument("photon grid: more than 2^31-1 photons");
+}
+
 std::vector<int32_t> PhotonGrid::gather(int mesh, const float q[3], float radius) const {
   std::vector<int32_t> out;
   for_each_in_radius(mesh, q, radius, [&](int i) { out.push_back(i); });
@@ -154,11 +160,9 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
   if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
     throw std::invalid_argument("photon grid: default_radius must be positive and finite");
   if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
-  if (mesh_count < 0) throw std::invalid_argument("photon grid: negative mesh count");
   size_t n = 0;
   for (size_t s = 0; s < span_count; ++s) n += spans[s].size;
-  if (n > static_cast<size_t>(std::numeric_limits<int32_t>::max()))
-    throw std::invalid_argument("photon grid: more than 2^31-1 photons");
+  check_photon_count(n, mesh_count);
 
   Scratch& sc = scratch();
   sc.blocks.clear();
