@@ -8,7 +8,8 @@
 //     device's per-mesh sort is the stable sort by mesh;
 //   - a state kept on the device between passes (DevicePpmState) equals ppm_pass's, byte for byte;
 //   - hash-grid's two photon orderings (device kernels, host into mapped buffers) give the same
-//     bytes, for the automatic table, one slot and a small table;
+//     bytes, for the automatic table, one slot and a small table, and so do its two ways of reading
+//     accepted photons (a private pending list of 4 or 32, or at once: PF_GATHER_LIST);
 //   - the grid-cluster gather timer of the GA's device-time fitness gathers the same photons;
 //   - hitpoint sorting's filler counts follow Table 7.5's definition;
 //   - a method on the wrong backend, and an allocation the non-batching methods cannot make, are
@@ -19,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -264,6 +266,46 @@ TEST_CASE("gather methods: a state kept on the device equals ppm_pass pass by pa
       CHECK(std::memcmp(resident.hitpoints.data(), copied.hitpoints.data(),
                         copied.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
     }
+  }
+}
+
+TEST_CASE("gather methods: hash-grid's pending list and per-lane branches give the same bytes",
+          "[gather][opencl][hash]") {
+  // PF_GATHER_LIST (illuminate_methods.cl): 0 reads an accepted photon's payload at once, N >= 4
+  // queues accepted photons in a private list of N and reads them when it may overflow and at the
+  // end. Both must sum the same photons in the same order.
+  auto dev = test_device();
+  if (!dev) return;
+  Fixture f = make_fixture(40, 32, 3, 20000, DirectMode::Photons);
+  PpmOptions opt;
+  opt.method = GatherMethod::HashGrid;
+  opt.alpha = 0.7f;
+  {  // the 32-entry list overflows mid-hitpoint: some hitpoint accepts more than 28 photons
+    HitpointSet one = f.fresh;
+    PpmOptions cpu = opt;
+    cpu.method = GatherMethod::Grid;
+    ppm_pass(f.scene, one, f.passes[0].photons, f.passes[0].emitted, cpu);
+    float most = 0.f;  // M = N / α after the first pass (eq. 3.14 with N = 0)
+    for (const pf_hitpoint& hp : one.hitpoints) most = std::max(most, hp.n_photons / opt.alpha);
+    CHECK(most > 28.5f);
+  }
+  std::vector<HitpointSet> out;
+  for (long list : {0L, 4L, 32L}) {
+    INFO("PF_GATHER_LIST " << list);
+    ClContext c(dev->info(), 0);
+    c.define("PF_GATHER_LIST", list);
+    HitpointSet s = f.fresh;
+    for (const PhotonPassResult& p : f.passes) ppm_pass(f.scene, s, p.photons, p.emitted, opt, c);
+    CHECK_THROWS_AS(c.define("PF_GATHER_LIST", 0), std::logic_error);  // programs are cached
+    out.push_back(std::move(s));
+  }
+  size_t gathered = 0;
+  for (const pf_hitpoint& hp : out[0].hitpoints) gathered += hp.n_photons > 0.f;
+  CHECK(gathered > out[0].hitpoints.size() / 2);
+  for (size_t k = 1; k < out.size(); ++k) {
+    REQUIRE(out[k].hitpoints.size() == out[0].hitpoints.size());
+    CHECK(std::memcmp(out[k].hitpoints.data(), out[0].hitpoints.data(),
+                      out[0].hitpoints.size() * sizeof(pf_hitpoint)) == 0);
   }
 }
 

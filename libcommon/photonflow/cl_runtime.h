@@ -104,6 +104,11 @@ class ClContext {
   // Builds every embedded program now (benchmarks time this apart from the work).
   void build_all();
   double build_seconds() const { return build_seconds_; }
+  // Adds -D<macro>=<value> to the options of every program this context builds, after the
+  // defaults (-DPF_FP64, -DPF_DEVICE_CPU: 1 on a CPU device); only before the first build
+  // (std::logic_error after: programs are cached). Tests compare a kernel's compile-time
+  // variants with it (PF_GATHER_LIST, kernels/illuminate_methods.cl).
+  void define(const std::string& macro, long value);
 
   // Largest single buffer this context will create.
   uint64_t max_alloc() const { return max_alloc_; }
@@ -161,6 +166,7 @@ class ClContext {
   cl_context ctx_ = nullptr;
   cl_command_queue queue_ = nullptr;
   std::map<std::string, cl_program> programs_;
+  std::string defines_;  // define(): " -DNAME=value" each
   std::map<std::string, cl_kernel> kernels_;
   std::map<cl_kernel, size_t> local_;
   std::map<std::string, ClBuffer> scratch_;

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <stdexcept>
 
 #include "photonflow/error.h"
 #include "photonflow/kernels_embedded.h"
@@ -294,6 +295,12 @@ size_t ClContext::batch_items(size_t item_bytes, size_t total) const {
   return std::min(n, std::max<size_t>(1, total));
 }
 
+void ClContext::define(const std::string& macro, long value) {
+  if (!programs_.empty())
+    throw std::logic_error("ClContext::define(" + macro + ") after a program was built");
+  defines_ += " -D" + macro + "=" + std::to_string(value);
+}
+
 cl_program ClContext::build(const std::string& name) {
   auto it = programs_.find(name);
   if (it != programs_.end()) return it->second;
@@ -315,6 +322,7 @@ cl_program ClContext::build(const std::string& name) {
   cl_program prog = clCreateProgramWithSource(ctx_, 1, &src, nullptr, &err);
   cl_check(err, "clCreateProgramWithSource");
   std::string options = "-cl-std=CL1.2 -DPF_FP64=" + std::string(info_.fp64 ? "1" : "0");
+  options += " -DPF_DEVICE_CPU=" + std::string(info_.type == "CPU" ? "1" : "0") + defines_;
   cl_device_fp_config sp = num_info<cl_device_fp_config>(info_.device_id, CL_DEVICE_SINGLE_FP_CONFIG);
   if (sp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) options += " -cl-fp32-correctly-rounded-divide-sqrt";
   options += includes;
