@@ -17,7 +17,10 @@
 // gather: the photon counts M of all hitpoints must agree ("same photons"). With hash-grid in the
 // list, a row "hash-grid, state on device" times DevicePpmState::pass on a state already on the
 // device (the render driver's and illuminate's steady state: the pass's photons go up, nothing
-// comes down; the state is read back after the timing for the check). --hash-order lists who
+// comes down; the state is read back after the timing for the check), and a row "hash-grid, state
+// and photons on device" the same pass over photons already in a device buffer, as
+// trace_photons_device leaves them for the render driver (uploaded before the timing; the photons
+// are the same, so is the check). --hash-order lists who
 // orders hash-grid's photons (hash_grid.h: auto, device, host); with more than one, each gets its
 // two rows, named "(device order)" / "(host order)", in the same rounds.
 //
@@ -131,6 +134,7 @@ int main(int argc, char** argv) {
       pf::GatherMethod m;
       bool resident;
       pf::HashOrder order;
+      bool photons_on_device = false;  // resident, and the photons already on the device
     };
     std::vector<RowName> row_names;
     for (pf::GatherMethod m : methods) {
@@ -144,6 +148,7 @@ int main(int argc, char** argv) {
             orders.size() > 1 ? std::string(" (") + pf::hash_order_name(o) + " order)" : "";
         row_names.push_back({name + tag, m, false, o});
         row_names.push_back({name + ", state on device" + tag, m, true, o});
+        row_names.push_back({name + ", state and photons on device" + tag, m, true, o, true});
       }
     }
     std::printf("# bench_gather: %s, %u photons/pass, median of %d runs\n",
@@ -233,9 +238,18 @@ int main(int argc, char** argv) {
           if (u.resident) {  // the render driver's steady state: photons up, nothing down
             pf::DevicePpmState st(scene, u.work, *dev);
             st.upload();
+            pf::DevicePhotons on_device;  // as trace_photons_device leaves them
+            if (u.name.photons_on_device) {
+              on_device.photons = &dev->scratch("bench.photons", std::max<size_t>(pass0.photons.size(), 1) * sizeof(pf_photon));
+              dev->write(*on_device.photons, pass0.photons.size() * sizeof(pf_photon), pass0.photons.data());
+              on_device.count = pass0.photons.size();
+              on_device.emitted = pass0.emitted;
+            }
             dev->reset_kernel_seconds();
             const double t1 = now();
-            const pf::GatherTimes t = st.pass(pass0.photons, pass0.emitted, u.opt);
+            const pf::GatherTimes t = u.name.photons_on_device
+                                          ? st.pass(on_device, u.opt)
+                                          : st.pass(pass0.photons, pass0.emitted, u.opt);
             const double ms = (now() - t1) * 1e3;
             st.sync();
             u.order_ms.push_back(t.order * 1e3);

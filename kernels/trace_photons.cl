@@ -117,3 +117,16 @@ __kernel void trace_photons(PF_SCENE_PARAMS, uint seed, uint pass, int max_bounc
   }
   stored[local_i] = n_stored;
 }
+
+/* The used slots of a batch, concatenated in photon order (photon index, then bounce: the CPU's
+ * order) on the device: start[0 .. count] is the exclusive prefix sum of the batch's `stored`
+ * counts (start[count] = the total), so photon i owns out[start[i] .. start[i+1]). The host's
+ * concatenation in trace_photons (cl_backend.cpp) gives the same array; trace_photons_device uses
+ * this one so that a pass gathered on the device never copies its photons through the host. */
+__kernel void compact_photons(__global const pf_photon* slots, __global const int* start,
+                              int count, __global pf_photon* out) {
+  const int i = (int)get_global_id(0);
+  if (i >= count) return;
+  const int s = start[i], n = start[i + 1] - s;
+  for (int k = 0; k < n; ++k) out[s + k] = slots[(size_t)k * (size_t)count + (size_t)i];
+}

@@ -6,7 +6,8 @@
 //     within 1e-5 relative RMSE, and naive equals the CPU grid gather bit for bit;
 //   - the device's grid build equals the CPU's build_photon_grid array for array (eq. 7.1), and the
 //     device's per-mesh sort is the stable sort by mesh;
-//   - a state kept on the device between passes (DevicePpmState) equals ppm_pass's, byte for byte;
+//   - a state kept on the device between passes (DevicePpmState) equals ppm_pass's, byte for byte,
+//     and so does one fed photons that never left the device (trace_photons_device);
 //   - hash-grid's two photon orderings (device kernels, host into mapped buffers) give the same
 //     bytes, for the automatic table, one slot and a small table, and so do its two ways of reading
 //     accepted photons (a private pending list of 4 or 32, or at once: PF_GATHER_LIST);
@@ -306,6 +307,45 @@ TEST_CASE("gather methods: hash-grid's pending list and per-lane branches give t
     REQUIRE(out[k].hitpoints.size() == out[0].hitpoints.size());
     CHECK(std::memcmp(out[k].hitpoints.data(), out[0].hitpoints.data(),
                       out[0].hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+  }
+}
+
+TEST_CASE("gather methods: a resident pass over device-traced photons equals one over host photons",
+          "[gather][opencl][resident]") {
+  auto dev = test_device();
+  if (!dev) return;
+  Fixture f = make_fixture(40, 32, 0, 0, DirectMode::Photons);
+  PhotonPassOptions ph;
+  ph.photons = 4000;
+  ph.seed = 3;
+  struct Case {
+    GatherMethod m;
+    HashOrder order;
+  };
+  for (Case c : {Case{GatherMethod::HashGrid, HashOrder::Device},
+                 Case{GatherMethod::HashGrid, HashOrder::Host}, Case{GatherMethod::Naive, HashOrder::Auto}}) {
+    INFO("method " << gather_method_name(c.m) << ", order " << hash_order_name(c.order));
+    PpmOptions opt;
+    opt.method = c.m;
+    opt.hash_order = c.order;
+    opt.alpha = 0.7f;
+    HitpointSet a = f.fresh, b = f.fresh;
+    DevicePpmState sa(f.scene, a, *dev), sb(f.scene, b, *dev);
+    for (uint32_t p = 0; p < 4; ++p) {
+      const PhotonPassResult host = trace_photons(f.scene, p, ph, *dev);
+      sa.pass(host.photons, host.emitted, opt);
+      sb.pass(trace_photons_device(f.scene, p, ph, *dev), opt);
+    }
+    sa.sync();
+    sb.sync();
+    CHECK(b.passes == a.passes);
+    CHECK(b.photons_emitted == a.photons_emitted);
+    size_t gathered = 0;
+    for (const pf_hitpoint& hp : a.hitpoints) gathered += hp.n_photons > 0.f;
+    CHECK(gathered > a.hitpoints.size() / 2);
+    REQUIRE(b.hitpoints.size() == a.hitpoints.size());
+    CHECK(std::memcmp(b.hitpoints.data(), a.hitpoints.data(),
+                      a.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
   }
 }
 

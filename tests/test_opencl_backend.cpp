@@ -189,6 +189,44 @@ TEST_CASE("OpenCL: photons agree with the CPU backend", "[opencl][photons]") {
   CHECK(caustic > 0);  // the glass sphere's caustic made it through the device path
 }
 
+TEST_CASE("OpenCL: photons compacted on the device equal the host's concatenation",
+          "[opencl][photons]") {
+  auto dev = test_device();
+  if (!dev) return;
+  Scene scene = test::room_scene(PF_MAT_GLASS, 16, 16);
+  auto same = [&](const PhotonPassOptions& opt, uint32_t pass, ClContext& c) {
+    const PhotonPassResult host = trace_photons(scene, pass, opt, c);
+    const DevicePhotons on = trace_photons_device(scene, pass, opt, c);
+    CHECK(on.emitted == host.emitted);
+    const std::vector<pf_photon> down = download_photons(on, c);
+    REQUIRE(down.size() == host.photons.size());
+    CHECK(std::memcmp(down.data(), host.photons.data(), down.size() * sizeof(pf_photon)) == 0);
+    return down.size();
+  };
+  PhotonPassOptions opt;
+  opt.photons = 20000;
+  opt.seed = 3;
+  CHECK(same(opt, 2, *dev) > 20000);  // glass: several slots per photon
+  opt.photons = 500;                  // fewer than before: nothing stale from the larger pass
+  CHECK(same(opt, 3, *dev) > 500);
+  opt.max_bounces = 0;  // one slot per photon
+  CHECK(same(opt, 4, *dev) > 0);
+  opt.photons = 0;
+  CHECK(same(opt, 5, *dev) == 0);
+  // Slots for more than one batch under a small allocation limit: traced by the host route and
+  // uploaded, the same photons.
+  opt.photons = 3000;
+  opt.max_bounces = 16;
+  const size_t stored = trace_photons(scene, 6, opt, *dev).photons.size();
+  size_t scene_max = std::max({scene.triangles.size() * sizeof(pf_triangle),
+                               scene.hh.size() * sizeof(pf_hh_triangle),
+                               scene.kd.nodes.size() * sizeof(pf_kd_node)});
+  ClContext small(dev->info(), 0);
+  small.set_max_alloc(std::max(scene_max, (stored + 1) * sizeof(pf_photon)) + 1024);
+  REQUIRE(small.batch_items(17 * sizeof(pf_photon), opt.photons) < opt.photons);
+  CHECK(same(opt, 6, small) == stored);
+}
+
 TEST_CASE("OpenCL: image after 10 PPM passes equals the CPU backend's", "[opencl][ppm]") {
   auto dev = test_device();
   if (!dev) return;

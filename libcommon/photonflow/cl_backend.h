@@ -6,7 +6,8 @@
 //   trace_hitpoints — kernels/trace_hitpoints.cl: one work-item per pixel, iterative specular
 //                     chain, stackless kd-tree traversal with ropes (intersect_shared.h);
 //   trace_photons   — kernels/trace_photons.cl: one work-item per photon, fixed bounce limit,
-//                     per-photon slots compacted on the host into the CPU's order;
+//                     per-photon slots compacted on the host into the CPU's order (or, by
+//                     trace_photons_device, on the device, for a pass gathered there);
 //   ppm_pass        — kernels/illuminate_methods.cl (cl_gather.cpp): the naive gather (every
 //                     hitpoint loops over all photons; thesis Table 7.1 "Hitpoint Illumination",
 //                     the CPU's summation order) and the accelerated variants of thesis ch. 7.3
@@ -37,6 +38,17 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
 
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
                                ClContext& dev);
+
+// trace_photons with the photons left on the device: the used slots are concatenated there
+// (a prefix sum of the per-photon counts, then kernels/trace_photons.cl compact_photons) instead
+// of on the host, giving the same array (tested). For a pass gathered on the device
+// (DevicePpmState::pass(DevicePhotons)): no photon crosses the bus. A pass too large for one
+// batch of slots is traced by trace_photons and uploaded.
+DevicePhotons trace_photons_device(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
+                                   ClContext& dev);
+
+// The photons of a device pass, downloaded (tests; methods that read them on the host).
+std::vector<pf_photon> download_photons(const DevicePhotons& p, ClContext& dev);
 
 // One PPM iteration (eq. 3.14–3.18) on the device with opt.method (a device method of
 // gather_method.h; InputError for grid/flann). Every method selects the photons the CPU gathers

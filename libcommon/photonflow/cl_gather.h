@@ -46,6 +46,19 @@ struct GatherTimes {
   size_t work_items = 0;  // hitpoint slots launched (fillers included)
 };
 
+// The photons of one pass kept on the device (cl_backend.h, trace_photons_device): `count`
+// pf_photon records in `photons` (a scratch buffer of the context, valid until the next pass is
+// traced), in the CPU backend's order; `emitted` photons were emitted for them.
+struct DevicePhotons {
+  const ClBuffer* photons = nullptr;
+  size_t count = 0;
+  uint64_t emitted = 0;
+};
+
+// Exclusive prefix sum of the n ints of `data`, in place, on the device (kernels/build_grid.cl,
+// scan_blocks and scan_add; the block sums of each level scanned recursively).
+void device_exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n);
+
 struct ClusterSet;
 struct Scene;
 struct HitpointSet;
@@ -72,7 +85,7 @@ void sort_photons_by_mesh(const std::vector<pf_photon>& photons, int mesh_count,
 
 // A PPM state kept on the device between passes: the route of a stream of passes (the render
 // driver, illuminate over a photons file). With hash-grid the hitpoints stay in device memory:
-// a pass uploads only its photons, gathers and applies eq. 3.14–3.18 in one kernel, and brings
+// a pass uploads only its photons (nothing when they were traced on the device), gathers and applies eq. 3.14–3.18 in one kernel, and brings
 // back the largest radius (4 bytes, the next pass's cell size); the host copy h.hitpoints is
 // brought up to date by sync(). Other methods copy the state each pass as ppm_pass does (sync()
 // first). On the device the hitpoints are kept in cell order (hitpoint_cell_order, cells of
@@ -85,6 +98,13 @@ class DevicePpmState {
   DevicePpmState(const Scene& scene, HitpointSet& h, ClContext& dev);
   // One pass, as ppm_pass(scene, h, photons, emitted, opt, dev).
   GatherTimes pass(const std::vector<pf_photon>& photons, uint64_t emitted, const PpmOptions& opt);
+  // One pass over photons already on the device (trace_photons_device): the same state as
+  // pass(photons downloaded, emitted, opt). With hash-grid no photon crosses the bus: a GPU orders
+  // them with its kernels, a CPU device (opt.hash_order auto/host) maps them, which costs no copy
+  // there, and orders them on the host (checking them as ever). The device route does not check
+  // them: trace_photons_device made them from the checked scene. Other methods download them and
+  // take the copying route.
+  GatherTimes pass(const DevicePhotons& photons, const PpmOptions& opt);
   // h.hitpoints ← the device's state (nothing when already current).
   void sync();
   // Copies h.hitpoints to the device now (a hash-grid pass does it when needed); benchmarks
@@ -96,6 +116,10 @@ class DevicePpmState {
   float device_max_radius() const { return rmax_; }
 
  private:
+  // A hash-grid pass over photons on the host (host) or on the device (device), np of them.
+  GatherTimes hash_grid(const pf_photon* host, const ClBuffer* device, size_t np, uint64_t emitted,
+                        const PpmOptions& opt);
+
   const Scene& scene_;
   HitpointSet& h_;
   ClContext& dev_;

@@ -150,40 +150,97 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
 
 // ---- photon pass -------------------------------------------------------------------------------
 
+namespace {
+
+// Checks a photon pass for the device (InputError); false when there is nothing to trace.
+bool photon_pass_work(const Scene& scene, const PhotonPassOptions& opt) {
+  if (scene.lights.empty() || opt.photons == 0) return false;
+  if (opt.photons > uint32_t(INT32_MAX))
+    throw input_error("", "--photons must be below 2^31 per pass with --device opencl");
+  return true;
+}
+
+// Slots per emitted photon: one stored photon per bounce at most.
+size_t photon_slots(const PhotonPassOptions& opt) { return size_t(std::max(0, opt.max_bounces)) + 1; }
+
+// Traces photons first .. first + count − 1 of the pass into `slots` (slot-major) and their
+// stored counts into stored[0 .. count).
+void trace_photon_batch(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
+                        size_t first, size_t count, const ClBuffer& slots, const ClBuffer& stored,
+                        ClContext& dev) {
+  ClSceneBuffers& sb = scene_buffers(scene, dev);
+  cl_kernel k = dev.kernel("trace_photons", "trace_photons");
+  dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
+           sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, cl_uint(opt.seed),
+           cl_uint(pass), cl_int(opt.max_bounces), ray_epsilon(scene), cl_uint(first),
+           cl_int(count), slots, stored);
+  dev.run(k, count);
+}
+
+}  // namespace
+
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
                                ClContext& dev) {
   PhotonPassResult res;
   res.emitted = opt.photons;
-  if (scene.lights.empty() || opt.photons == 0) return res;
-  if (opt.photons > uint32_t(INT32_MAX))
-    throw input_error("", "--photons must be below 2^31 per pass with --device opencl");
-  const float eps = ray_epsilon(scene);
-  ClSceneBuffers& sb = scene_buffers(scene, dev);
-  cl_kernel k = dev.kernel("trace_photons", "trace_photons");
-  const size_t per = size_t(std::max(0, opt.max_bounces)) + 1;  // slots per emitted photon
+  if (!photon_pass_work(scene, opt)) return res;
+  const size_t per = photon_slots(opt);
   const size_t batch = dev.batch_items(per * sizeof(pf_photon), opt.photons);
   const ClBuffer& slots = dev.scratch("photon.slots", batch * per * sizeof(pf_photon));
   const ClBuffer& stored = dev.scratch("photon.stored", batch * sizeof(cl_int));
   std::vector<cl_int> counts;
   for (size_t first = 0; first < opt.photons; first += batch) {
-    const cl_int count = cl_int(std::min(batch, size_t(opt.photons) - first));
-    dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
-             sb.leaf_groups, sb.mats, sb.lights,
-             sb.light_cdf, sb.light_count, cl_uint(opt.seed), cl_uint(pass),
-             cl_int(opt.max_bounces), eps, cl_uint(first), count, slots, stored);
-    dev.run(k, size_t(count));
-    counts.resize(size_t(count));
-    dev.read(stored, size_t(count) * sizeof(cl_int), counts.data());
+    const size_t count = std::min(batch, size_t(opt.photons) - first);
+    trace_photon_batch(scene, pass, opt, first, count, slots, stored, dev);
+    counts.resize(count);
+    dev.read(stored, count * sizeof(cl_int), counts.data());
     size_t total = 0;
     for (cl_int c : counts) total += size_t(c);
     res.photons.reserve(res.photons.size() + total);
     const auto* ph =
-        static_cast<const pf_photon*>(dev.map_read(slots, size_t(count) * per * sizeof(pf_photon)));
-    for (size_t i = 0; i < size_t(count); ++i)  // slot-major: slot k of photon i at k·count + i
-      for (size_t k = 0; k < size_t(counts[i]); ++k) res.photons.push_back(ph[k * size_t(count) + i]);
+        static_cast<const pf_photon*>(dev.map_read(slots, count * per * sizeof(pf_photon)));
+    for (size_t i = 0; i < count; ++i)  // slot-major: slot k of photon i at k·count + i
+      for (size_t k = 0; k < size_t(counts[i]); ++k) res.photons.push_back(ph[k * count + i]);
     dev.unmap(slots, ph);
   }
   return res;
+}
+
+DevicePhotons trace_photons_device(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
+                                   ClContext& dev) {
+  DevicePhotons out;
+  out.emitted = opt.photons;
+  out.photons = &dev.scratch("photon.compact", sizeof(pf_photon));
+  if (!photon_pass_work(scene, opt)) return out;
+  const size_t per = photon_slots(opt), n = opt.photons;
+  if (dev.batch_items(per * sizeof(pf_photon), n) < n ||
+      (n + 1) * sizeof(cl_int) > dev.max_alloc()) {  // more than one batch: the host concatenates
+    const PhotonPassResult r = trace_photons(scene, pass, opt, dev);
+    out.photons = &dev.scratch("photon.compact", std::max<size_t>(r.photons.size(), 1) * sizeof(pf_photon));
+    dev.write(*out.photons, r.photons.size() * sizeof(pf_photon), r.photons.data());
+    out.count = r.photons.size();
+    return out;
+  }
+  const ClBuffer& slots = dev.scratch("photon.slots", n * per * sizeof(pf_photon));
+  const ClBuffer& start = dev.scratch("photon.start", (n + 1) * sizeof(cl_int));
+  trace_photon_batch(scene, pass, opt, 0, n, slots, start, dev);
+  const cl_int zero = 0;  // start[n]: the total after the scan
+  dev.write(start, sizeof zero, &zero, n * sizeof(cl_int));
+  device_exclusive_scan(dev, start, n + 1);
+  cl_int total = 0;
+  dev.read(start, sizeof total, &total, n * sizeof(cl_int));
+  out.count = size_t(total);
+  out.photons = &dev.scratch("photon.compact", std::max<size_t>(out.count, 1) * sizeof(pf_photon));
+  cl_kernel k = dev.kernel("trace_photons", "compact_photons");
+  dev.args(k, slots, start, cl_int(n), *out.photons);
+  dev.run(k, n);
+  return out;
+}
+
+std::vector<pf_photon> download_photons(const DevicePhotons& p, ClContext& dev) {
+  std::vector<pf_photon> v(p.count);
+  if (p.count > 0) dev.read(*p.photons, p.count * sizeof(pf_photon), v.data());
+  return v;
 }
 
 // ---- synthesis ---------------------------------------------------------------------------------

@@ -28,10 +28,14 @@ constexpr float kSlack = 1.0001f;  // PF_SLACK of illuminate_methods.cl
 
 // The host-side checks of the CPU grid build (photon_grid.cpp), so the device never indexes a
 // mesh table out of range: every photon's mesh in [0, mesh_count), every position finite.
-void check_photons(const std::vector<pf_photon>& photons, int mesh_count) {
-  check_photon_count(photons.size(), mesh_count);
-  for (size_t i = 0; i < photons.size(); ++i)
+void check_photons(const pf_photon* photons, size_t n, int mesh_count) {
+  check_photon_count(n, mesh_count);
+  for (size_t i = 0; i < n; ++i)
     if (!photon_ok(photons[i], mesh_count)) throw_bad_photon(photons[i], i, mesh_count);
+}
+
+void check_photons(const std::vector<pf_photon>& photons, int mesh_count) {
+  check_photons(photons.data(), photons.size(), mesh_count);
 }
 
 // A device buffer for `count` items of `item` bytes, or InputError naming the batched method.
@@ -46,7 +50,7 @@ void require_one_buffer(const ClContext& dev, size_t count, size_t item, const c
 
 // Exclusive prefix sum of data[0 .. n) in place (build_grid.cl's scan_blocks / scan_add); the
 // block sums of each level are scanned recursively.
-void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level = 0) {
+void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level) {
   if (n == 0) return;
   if (n > size_t(INT_MAX)) throw std::invalid_argument("device scan: more than 2^31-1 entries");
   const size_t L = size_t(dev.work_group());
@@ -70,7 +74,7 @@ void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level = 
 // the order equals a stable sort. `counts` becomes the start table; `order` is the result.
 void sort_by_key(ClContext& dev, const ClBuffer& key, const ClBuffer& rank, const ClBuffer& counts,
                  size_t n, size_t ranges, const ClBuffer& order) {
-  exclusive_scan(dev, counts, ranges + 1);
+  exclusive_scan(dev, counts, ranges + 1, 0);
   cl_kernel scatter = dev.kernel("build_grid", "scatter_keys");
   dev.args(scatter, key, rank, cl_int(n), counts, order);
   dev.run(scatter, n);
@@ -194,7 +198,7 @@ DeviceMeshSort device_mesh_sort(ClContext& dev, const ClBuffer& photons, size_t 
   cl_kernel count = dev.kernel("build_grid", "mesh_chunk_count");
   dev.args(count, photons, cl_int(n), cl_int(chunks), offsets);
   dev.run(count, chunks);
-  exclusive_scan(dev, offsets, chunks * meshes);
+  exclusive_scan(dev, offsets, chunks * meshes, 0);
   cl_kernel starts = dev.kernel("build_grid", "mesh_starts");
   dev.args(starts, offsets, cl_int(chunks), cl_int(meshes), cl_int(n), start);
   dev.run(starts, meshes + 1);
@@ -248,9 +252,8 @@ DeviceHashGrid device_hash_grid(ClContext& dev, const ClBuffer& photons, size_t 
 
 // Built on the host (order_hash_grid, which also checks the photons) straight into the mapped
 // device buffers: the photons never go up unsorted.
-DeviceHashGrid host_hash_grid(ClContext& dev, const std::vector<pf_photon>& photons,
+DeviceHashGrid host_hash_grid(ClContext& dev, const pf_photon* photons, size_t n,
                               int mesh_count, const HashGridLayout& g, int threads) {
-  const size_t n = photons.size();
   const DeviceHashGrid d = hash_grid_buffers(dev, n, g);
   const size_t start_bytes = (g.slots() + 1) * sizeof(cl_int);
   void* keys = dev.map_write(*d.keys, hash_grid_key_blocks(n) * sizeof(pf_photon_keys4));
@@ -262,7 +265,7 @@ DeviceHashGrid host_hash_grid(ClContext& dev, const std::vector<pf_photon>& phot
     dev.unmap(*d.keys, keys);
   };
   try {
-    order_hash_grid(g, photons.data(), n, mesh_count, static_cast<pf_photon_keys4*>(keys),
+    order_hash_grid(g, photons, n, mesh_count, static_cast<pf_photon_keys4*>(keys),
                     static_cast<pf_photon_payload*>(payload), static_cast<int32_t*>(start),
                     threads);
   } catch (...) {  // a bad photon: the buffers go back to the device before the error goes on
@@ -323,17 +326,25 @@ void check_cluster_count(const ClusterSet& cs, size_t hitpoints) {
 
 double since(ClContext& dev, double t0) { return dev.kernel_seconds() - t0; }
 
+// A pass's photons for hash_grid_pass: n records on the host, or on the device (trace_photons_device).
+struct PassPhotons {
+  const pf_photon* host = nullptr;
+  const ClBuffer* device = nullptr;
+  size_t n = 0;
+};
+
 // One hash-grid pass over nh hitpoints already in `hps` (the scene's materials in `mats`), rmax
 // being their largest finite positive radius as max_radius computes it (the cell side is
-// hash_cell·rmax): checks the photons and
-// builds the hashed grid (on the host into mapped buffers, or uploads the photons and builds it
-// with the device's kernels: opt.hash_order), gathers and applies eq. 3.14–3.18 in one kernel.
-// Returns the new state's rmax (reduced by the kernel, so a state kept on the device needs no
-// copy to the host between passes).
+// hash_cell·rmax): builds the hashed grid — on the host into mapped buffers (photons on the
+// device are mapped, no copy on a CPU device; order_hash_grid checks them), or with the device's
+// kernels (host photons are checked and uploaded; device photons, made by trace_photons_device
+// from the checked scene, are used where they are): opt.hash_order — then gathers and applies
+// eq. 3.14–3.18 in one kernel. Returns the new state's rmax (reduced by the kernel, so a state
+// kept on the device needs no copy to the host between passes).
 float hash_grid_pass(const Scene& scene, const ClBuffer& hps, const ClBuffer& mats, size_t nh,
-                     DirectMode direct, float rmax, const std::vector<pf_photon>& photons,
+                     DirectMode direct, float rmax, const PassPhotons& photons,
                      const PpmOptions& opt, ClContext& dev, GatherTimes& times) {
-  const size_t np = photons.size();
+  const size_t np = photons.n;
   require_one_buffer(dev, np, sizeof(pf_photon), "photons", opt.method);
   const int mesh_count = int(scene.mesh_names.size());
   const Vec3 ext = scene.bounds.hi - scene.bounds.lo;
@@ -353,14 +364,30 @@ float hash_grid_pass(const Scene& scene, const ClBuffer& hps, const ClBuffer& ma
   DeviceHashGrid d;
   if (on_host) {  // GatherTimes::order: the host's wall time
     Stopwatch sw;
-    d = host_hash_grid(dev, photons, mesh_count, g, opt.threads);
+    if (photons.device) {
+      const auto* p = np ? static_cast<const pf_photon*>(
+                               dev.map_read(*photons.device, np * sizeof(pf_photon)))
+                         : nullptr;
+      try {
+        d = host_hash_grid(dev, p, np, mesh_count, g, opt.threads);
+      } catch (...) {
+        if (p) dev.unmap(*photons.device, p);
+        throw;
+      }
+      if (p) dev.unmap(*photons.device, p);
+    } else {
+      d = host_hash_grid(dev, photons.host, np, mesh_count, g, opt.threads);
+    }
     times.order = sw.seconds();
   } else {
-    check_photons(photons, mesh_count);
-    const ClBuffer& phs = dev.scratch("ppm.photons", np * sizeof(pf_photon));
-    dev.write(phs, np * sizeof(pf_photon), photons.data());
+    const ClBuffer* phs = photons.device;
+    if (!phs) {
+      check_photons(photons.host, np, mesh_count);
+      phs = &dev.scratch("ppm.photons", np * sizeof(pf_photon));
+      dev.write(*phs, np * sizeof(pf_photon), photons.host);
+    }
     const double t0 = dev.kernel_seconds();
-    d = device_hash_grid(dev, phs, np, g);
+    d = device_hash_grid(dev, *phs, np, g);
     times.order = since(dev, t0);
   }
   const ClBuffer& next = dev.scratch("ppm.rmax", sizeof(cl_int));
@@ -414,6 +441,10 @@ void count_pass(HitpointSet& h, uint64_t emitted) {
 }
 
 }  // namespace
+
+void device_exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n) {
+  exclusive_scan(dev, data, n, 0);
+}
 
 ClusterSet clusters_for_method(GatherMethod m, const HitpointSet& h, int wg_size,
                                const PpmOptions& opt) {
@@ -480,7 +511,8 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       require_one_buffer(dev, nh, sizeof(pf_hitpoint), "hitpoints", opt.method);
       const ClBuffer& hps = dev.scratch("ppm.hitpoints", nh * sizeof(pf_hitpoint));
       dev.write(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
-      hash_grid_pass(scene, hps, mats, nh, h.direct_mode, max_radius(h), photons, opt, dev, times);
+      hash_grid_pass(scene, hps, mats, nh, h.direct_mode, max_radius(h),
+                     PassPhotons{photons.data(), nullptr, np}, opt, dev, times);
       dev.read(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
     } else if (opt.method == GatherMethod::Naive) {
       // Batches of hitpoints × batches of photons under the allocation limit, photons in index
@@ -625,14 +657,25 @@ GatherTimes DevicePpmState::pass(const std::vector<pf_photon>& photons, uint64_t
     device_current_ = false;
     return ppm_pass(scene_, h_, photons, emitted, opt, dev_);
   }
+  return hash_grid(photons.data(), nullptr, photons.size(), emitted, opt);
+}
+
+GatherTimes DevicePpmState::pass(const DevicePhotons& photons, const PpmOptions& opt) {
+  if (opt.method != GatherMethod::HashGrid)
+    return pass(download_photons(photons, dev_), photons.emitted, opt);
+  return hash_grid(nullptr, photons.photons, photons.count, photons.emitted, opt);
+}
+
+GatherTimes DevicePpmState::hash_grid(const pf_photon* host, const ClBuffer* device, size_t np,
+                                      uint64_t emitted, const PpmOptions& opt) {
   Stopwatch wall;
   GatherTimes times;
-  const size_t nh = h_.hitpoints.size(), np = photons.size();
+  const size_t nh = h_.hitpoints.size();
   check_pass(opt, nh, np);
   if (nh > 0 && np > 0) {
     upload();
-    rmax_ = hash_grid_pass(scene_, hps_, mats_, nh, h_.direct_mode, rmax_, photons, opt, dev_,
-                           times);
+    rmax_ = hash_grid_pass(scene_, hps_, mats_, nh, h_.direct_mode, rmax_,
+                           PassPhotons{host, device, np}, opt, dev_, times);
     host_current_ = false;
   }
   count_pass(h_, emitted);

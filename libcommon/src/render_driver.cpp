@@ -34,10 +34,18 @@ void ProgressiveRenderer::run_iteration() {
           clusters_for_method(opt_.ppm.method, state_, opt_.device->work_group(), opt_.ppm));
       opt_.ppm.clusters = clusters_.get();
     }
+    if (!device_state_) device_state_ = std::make_unique<DevicePpmState>(scene_, state_, *opt_.device);
+    if (opt_.ppm.method == GatherMethod::HashGrid) {  // the photons never leave the device
+      const DevicePhotons pass =
+          trace_photons_device(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
+      photons_stored_ += pass.count;
+      device_state_->pass(pass, opt_.ppm);
+      return;
+    }
+    // Other methods read host photons (naive batches them past the allocation limit).
     PhotonPassResult pass =
         trace_photons(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
     photons_stored_ += pass.photons.size();
-    if (!device_state_) device_state_ = std::make_unique<DevicePpmState>(scene_, state_, *opt_.device);
     device_state_->pass(pass.photons, pass.emitted, opt_.ppm);
     return;
   }
