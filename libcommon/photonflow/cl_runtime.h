@@ -148,6 +148,20 @@ class ClContext {
   void run(cl_kernel k, size_t n, size_t local);
   double kernel_seconds() const { return kernel_seconds_; }
   void reset_kernel_seconds() { kernel_seconds_ = 0; }
+  // Whether run() waits for each kernel (the default: kernel_seconds() and PF_CL_PROFILE then
+  // time every kernel from enqueue to clFinish). Off, run() only enqueues: the in-order queue
+  // still runs the kernels in order, and the next blocking read, write or map waits for them, so
+  // a chain of launches pays no host round trip per kernel (a GPU's launch latency);
+  // kernel_seconds() then counts enqueue time only. PF_CL_PROFILE keeps the waits.
+  // Returns the previous setting.
+  bool set_wait_each(bool on) {
+    const bool was = wait_each_;
+    wait_each_ = on;
+    return was;
+  }
+  bool wait_each() const { return wait_each_ || profile_; }
+  // Waits for everything enqueued.
+  void finish();
 
   // Scene upload cache (cl_backend.cpp).
   std::shared_ptr<ClSceneBuffers> scene_cache;
@@ -167,6 +181,7 @@ class ClContext {
   cl_command_queue queue_ = nullptr;
   std::map<std::string, cl_program> programs_;
   std::string defines_;  // define(): " -DNAME=value" each
+  bool wait_each_ = true;
   std::map<std::string, cl_kernel> kernels_;
   std::map<cl_kernel, size_t> local_;
   std::map<std::string, ClBuffer> scratch_;
@@ -175,6 +190,19 @@ class ClContext {
   double build_seconds_ = 0, kernel_seconds_ = 0;
   bool profile_ = false;                                     // PF_CL_PROFILE
   std::map<std::string, std::pair<uint64_t, double>> profile_times_;  // name → calls, seconds
+};
+
+// ClContext::set_wait_each(on) for a scope; the previous setting comes back at its end.
+class ClWaitScope {
+ public:
+  ClWaitScope(ClContext& dev, bool on) : dev_(dev), was_(dev.set_wait_each(on)) {}
+  ~ClWaitScope() { dev_.set_wait_each(was_); }
+  ClWaitScope(const ClWaitScope&) = delete;
+  ClWaitScope& operator=(const ClWaitScope&) = delete;
+
+ private:
+  ClContext& dev_;
+  bool was_;
 };
 
 // Opens the backend `opt` asks for and says which on `log` (one line "<tool>: device: ..."):

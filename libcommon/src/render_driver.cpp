@@ -36,6 +36,8 @@ void ProgressiveRenderer::run_iteration() {
     }
     if (!device_state_) device_state_ = std::make_unique<DevicePpmState>(scene_, state_, *opt_.device);
     if (opt_.ppm.method == GatherMethod::HashGrid) {  // the photons never leave the device
+      // and the host waits only where it reads (photon count, next radius): no round trip per kernel
+      const ClWaitScope no_wait(*opt_.device, false);
       const DevicePhotons pass =
           trace_photons_device(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
       photons_stored_ += pass.count;
