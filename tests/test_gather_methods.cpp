@@ -310,7 +310,7 @@ TEST_CASE("gather methods: hash-grid's pending list and per-lane branches give t
   }
 }
 
-TEST_CASE("gather methods: a resident pass over device-traced photons, without waits, equals one over host photons",
+TEST_CASE("gather methods: resident passes over device-traced photons, no waits, equal host photons'",
           "[gather][opencl][resident]") {
   auto dev = test_device();
   if (!dev) return;
