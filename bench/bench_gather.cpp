@@ -21,9 +21,9 @@
 // and photons on device" the same pass over photons already in a device buffer, as
 // trace_photons_device leaves them for the render driver (uploaded before the timing; the photons
 // are the same, so is the check), with the render driver's waits: none per kernel (ClWaitScope),
-// so its ordering / gather split and kernel column are enqueue times, not kernel times. --hash-order lists who
+// so the kernel clock sees only enqueues and the row has no kernel column. --hash-order lists who
 // orders hash-grid's photons (hash_grid.h: auto, device, host); with more than one, each gets its
-// two rows, named "(device order)" / "(host order)", in the same rounds.
+// three rows, named "(device order)" / "(host order)", in the same rounds.
 //
 // The methods that read every photon of a mesh (naive … kmeans-clusters) cost O(hitpoints ×
 // photons): with --sample N > 1 (0 = automatic: 1 at <= 320×280, 16 above) they run on every N-th
@@ -178,14 +178,20 @@ int main(int argc, char** argv) {
       if (sample <= 0) sample = size_t(sz.w) * size_t(sz.h) <= 320 * 280 ? 1 : 16;
       std::fprintf(stderr, "bench_gather: %dx%d, %zu hitpoints, %zu photons stored\n", sz.w, sz.h,
                    fresh.hitpoints.size(), pass0.photons.size());
-      {  // what one upload of the pass's photons costs (a blocking write from pageable memory):
-         // the part of a "state on device" pass that no kernel shows
+      // The pass's photons in a device buffer, as trace_photons_device leaves them (the rows
+      // "state and photons on device"; nothing else writes this scratch buffer), uploaded a few
+      // times first to report what one upload costs (a blocking write from pageable memory): the
+      // part of a "state on device" pass that no kernel shows.
+      pf::DevicePhotons on_device;
+      {
         const size_t bytes = pass0.photons.size() * sizeof(pf_photon);
-        const pf::ClBuffer& b = dev->scratch("bench.upload", std::max<size_t>(bytes, 4));
+        on_device.photons = &dev->scratch("bench.photons", std::max<size_t>(bytes, 4));
+        on_device.count = pass0.photons.size();
+        on_device.emitted = pass0.emitted;
         std::vector<double> t;
         for (int r = 0; r < std::max(runs, 3); ++r) {
           const double t0 = now();
-          dev->write(b, bytes, pass0.photons.data());
+          dev->write(*on_device.photons, bytes, pass0.photons.data());
           t.push_back(now() - t0);
         }
         std::fprintf(stderr, "  photon upload: %.3f ms for %.1f MB (%.1f GB/s), median of %zu\n",
@@ -239,13 +245,6 @@ int main(int argc, char** argv) {
           if (u.resident) {  // the render driver's steady state: photons up, nothing down
             pf::DevicePpmState st(scene, u.work, *dev);
             st.upload();
-            pf::DevicePhotons on_device;  // as trace_photons_device leaves them
-            if (u.name.photons_on_device) {
-              on_device.photons = &dev->scratch("bench.photons", std::max<size_t>(pass0.photons.size(), 1) * sizeof(pf_photon));
-              dev->write(*on_device.photons, pass0.photons.size() * sizeof(pf_photon), pass0.photons.data());
-              on_device.count = pass0.photons.size();
-              on_device.emitted = pass0.emitted;
-            }
             dev->reset_kernel_seconds();
             const pf::ClWaitScope wait(*dev, !u.name.photons_on_device);
             const double t1 = now();

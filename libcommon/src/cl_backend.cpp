@@ -213,8 +213,8 @@ DevicePhotons trace_photons_device(const Scene& scene, uint32_t pass, const Phot
   out.photons = &dev.scratch("photon.compact", sizeof(pf_photon));
   if (!photon_pass_work(scene, opt)) return out;
   const size_t per = photon_slots(opt), n = opt.photons;
-  if (dev.batch_items(per * sizeof(pf_photon), n) < n ||
-      (n + 1) * sizeof(cl_int) > dev.max_alloc()) {  // more than one batch: the host concatenates
+  // (One batch of slots fits, so do the n + 1 counts and the compacted photons: both are smaller.)
+  if (dev.batch_items(per * sizeof(pf_photon), n) < n) {  // more than one batch: the host concatenates
     const PhotonPassResult r = trace_photons(scene, pass, opt, dev);
     out.photons = &dev.scratch("photon.compact", std::max<size_t>(r.photons.size(), 1) * sizeof(pf_photon));
     dev.write(*out.photons, r.photons.size() * sizeof(pf_photon), r.photons.data());

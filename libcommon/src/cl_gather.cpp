@@ -50,7 +50,7 @@ void require_one_buffer(const ClContext& dev, size_t count, size_t item, const c
 
 // Exclusive prefix sum of data[0 .. n) in place (build_grid.cl's scan_blocks / scan_add); the
 // block sums of each level are scanned recursively.
-void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level) {
+void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level = 0) {
   if (n == 0) return;
   if (n > size_t(INT_MAX)) throw std::invalid_argument("device scan: more than 2^31-1 entries");
   const size_t L = size_t(dev.work_group());
@@ -74,7 +74,7 @@ void exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n, int level) {
 // the order equals a stable sort. `counts` becomes the start table; `order` is the result.
 void sort_by_key(ClContext& dev, const ClBuffer& key, const ClBuffer& rank, const ClBuffer& counts,
                  size_t n, size_t ranges, const ClBuffer& order) {
-  exclusive_scan(dev, counts, ranges + 1, 0);
+  exclusive_scan(dev, counts, ranges + 1);
   cl_kernel scatter = dev.kernel("build_grid", "scatter_keys");
   dev.args(scatter, key, rank, cl_int(n), counts, order);
   dev.run(scatter, n);
@@ -198,7 +198,7 @@ DeviceMeshSort device_mesh_sort(ClContext& dev, const ClBuffer& photons, size_t 
   cl_kernel count = dev.kernel("build_grid", "mesh_chunk_count");
   dev.args(count, photons, cl_int(n), cl_int(chunks), offsets);
   dev.run(count, chunks);
-  exclusive_scan(dev, offsets, chunks * meshes, 0);
+  exclusive_scan(dev, offsets, chunks * meshes);
   cl_kernel starts = dev.kernel("build_grid", "mesh_starts");
   dev.args(starts, offsets, cl_int(chunks), cl_int(meshes), cl_int(n), start);
   dev.run(starts, meshes + 1);
@@ -443,7 +443,7 @@ void count_pass(HitpointSet& h, uint64_t emitted) {
 }  // namespace
 
 void device_exclusive_scan(ClContext& dev, const ClBuffer& data, size_t n) {
-  exclusive_scan(dev, data, n, 0);
+  exclusive_scan(dev, data, n);
 }
 
 ClusterSet clusters_for_method(GatherMethod m, const HitpointSet& h, int wg_size,
