@@ -336,7 +336,16 @@ TEST_CASE("gather methods: resident passes over device-traced photons, no waits,
       sa.pass(host.photons, host.emitted, opt);
       const ClWaitScope no_wait(*dev, false);  // as the render driver runs it
       CHECK_FALSE(dev->wait_each());
-      sb.pass(trace_photons_device(f.scene, p, ph, *dev), opt);
+      const uint64_t w0 = dev->host_waits();
+      const DevicePhotons traced = trace_photons_device(f.scene, p, ph, *dev);
+      const uint64_t w1 = dev->host_waits();
+      sb.pass(traced, opt);
+      if (c.m == GatherMethod::HashGrid && c.order == HashOrder::Device && p > 0) {
+        // A GPU pays a round trip per host wait: the trace waits once (its photon count), the
+        // pass once (the next radius). Pass 0 also uploads the state.
+        CHECK(w1 - w0 == 1);
+        CHECK(dev->host_waits() - w1 == 1);
+      }
     }
     CHECK(dev->wait_each());  // the scope restored the waits
     sa.sync();

@@ -131,6 +131,34 @@ TEST_CASE("OpenCL: devices list, kernels build, failures are one line", "[opencl
     o.platform = 99;
     CHECK_THROWS_AS(open_device(o, "test"), InputError);
   }
+  SECTION("a mapping writes through and ends with its scope, also when an exception leaves it") {
+    const ClBuffer b = dev->buffer(64 * sizeof(int));
+    {
+      ClMapping m(*dev, b, 64 * sizeof(int), ClMapping::Mode::Write);
+      for (int i = 0; i < 64; ++i) m.as<int>()[i] = 3 * i;
+    }
+    std::vector<int> back(64);
+    dev->read(b, back.size() * sizeof(int), back.data());
+    for (int i = 0; i < 64; ++i) CHECK(back[size_t(i)] == 3 * i);
+    uint64_t w = dev->host_waits();
+    try {
+      ClMapping m(*dev, b, sizeof(int), ClMapping::Mode::Write);
+      m.as<int>()[0] = -7;
+      throw std::runtime_error("a bad photon");
+    } catch (const std::runtime_error&) {
+    }
+    CHECK(dev->host_waits() - w == 2);  // mapped and unmapped
+    dev->read(b, sizeof(int), back.data());
+    CHECK(back[0] == -7);
+    w = dev->host_waits();
+    {
+      ClMapping m(*dev, b, 64 * sizeof(int), ClMapping::Mode::Read);
+      CHECK(m.as<const int>()[63] == 3 * 63);
+      m.unmap();
+      CHECK(m.as<const int>() == nullptr);
+    }
+    CHECK(dev->host_waits() - w == 2);  // unmap() ended it, the scope's end did not again
+  }
   SECTION("PF_CL_MAX_ALLOC lowers the allocation limit") {
     setenv("PF_CL_MAX_ALLOC", "65536", 1);
     ClContext ctx(dev->info(), 0);

@@ -126,13 +126,10 @@ class ClContext {
   const ClBuffer& scratch(const std::string& key, size_t bytes);
   void write(const ClBuffer& b, size_t bytes, const void* host, size_t offset = 0);
   void read(const ClBuffer& b, size_t bytes, void* host, size_t offset = 0);
-  void fill_zero(const ClBuffer& b, size_t bytes);
-  // Maps `bytes` of b for reading (blocking); unmap() when done.
-  const void* map_read(const ClBuffer& b, size_t bytes);
-  // Maps `bytes` of b for writing (blocking; the old contents are discarded, so nothing is
-  // copied to the host: on a CPU device the pointer is the buffer itself); unmap() when done.
-  void* map_write(const ClBuffer& b, size_t bytes);
-  void unmap(const ClBuffer& b, const void* p);
+  // Zeroes bytes offset .. offset + bytes − 1 of b (rounded up to whole ints); enqueued only,
+  // no host wait.
+  void fill_zero(const ClBuffer& b, size_t bytes, size_t offset = 0);
+  // (Mapping a buffer to the host: ClMapping below.)
 
   // Sets the arguments in order (cl_mem via ClBuffer, scalars by value).
   template <class... A> void args(cl_kernel k, const A&... a) {
@@ -162,12 +159,25 @@ class ClContext {
   bool wait_each() const { return wait_each_ || profile_; }
   // Waits for everything enqueued.
   void finish();
+  // Host waits so far: calls that block the host until the queue has reached them (blocking
+  // reads and writes, maps and unmaps, finish(), run() while wait_each()). On a GPU each is a
+  // round trip; tests count a pass's waits with it.
+  uint64_t host_waits() const { return host_waits_; }
 
   // Scene upload cache (cl_backend.cpp).
   std::shared_ptr<ClSceneBuffers> scene_cache;
   const void* scene_cache_key = nullptr;
 
  private:
+  friend class ClMapping;
+  // Maps `bytes` of b for reading (blocking).
+  const void* map_read(const ClBuffer& b, size_t bytes);
+  // Maps `bytes` of b for writing (blocking; the old contents are discarded, so nothing is
+  // copied to the host: on a CPU device the pointer is the buffer itself).
+  void* map_write(const ClBuffer& b, size_t bytes);
+  // Unmaps and waits; unmap_quietly drops errors (for destructors).
+  void unmap(const ClBuffer& b, const void* p);
+  void unmap_quietly(const ClBuffer& b, const void* p) noexcept;
   void set_arg(cl_kernel k, cl_uint i, const ClBuffer& b);
   void set_arg(cl_kernel k, cl_uint i, const ClLocal& l) { set_raw(k, i, l.bytes, nullptr); }
   template <class T> void set_arg(cl_kernel k, cl_uint i, const T& v) { set_raw(k, i, sizeof(T), &v); }
@@ -182,6 +192,7 @@ class ClContext {
   std::map<std::string, cl_program> programs_;
   std::string defines_;  // define(): " -DNAME=value" each
   bool wait_each_ = true;
+  uint64_t host_waits_ = 0;
   std::map<std::string, cl_kernel> kernels_;
   std::map<cl_kernel, size_t> local_;
   std::map<std::string, ClBuffer> scratch_;
@@ -203,6 +214,28 @@ class ClWaitScope {
  private:
   ClContext& dev_;
   bool was_;
+};
+
+// `bytes` of a buffer mapped to the host for reading or writing (a blocking map; for writing the
+// old contents are discarded, so nothing is copied to the host, and on a CPU device the pointer
+// is the buffer itself). Unmapped when the mapping goes out of scope, also when an exception
+// leaves it (that unmap's own errors are dropped: the exception in flight is the one to report);
+// unmap() ends it early and reports errors. The buffer must outlive the mapping.
+class ClMapping {
+ public:
+  enum class Mode { Read, Write };
+  ClMapping(ClContext& dev, const ClBuffer& b, size_t bytes, Mode mode);
+  ~ClMapping();
+  ClMapping(const ClMapping&) = delete;
+  ClMapping& operator=(const ClMapping&) = delete;
+  // The mapped bytes as T (const T for a Read mapping); nullptr after unmap().
+  template <class T> T* as() const { return static_cast<T*>(p_); }
+  void unmap();
+
+ private:
+  ClContext& dev_;
+  const ClBuffer& b_;
+  void* p_ = nullptr;
 };
 
 // Opens the backend `opt` asks for and says which on `log` (one line "<tool>: device: ..."):

@@ -138,10 +138,11 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
     const size_t nslots = size_t(count) * size_t(spp);
     flags.resize(nslots);
     dev.read(used, nslots * sizeof(cl_int), flags.data());
-    const auto* hp = static_cast<const pf_hitpoint*>(dev.map_read(slots, nslots * sizeof(pf_hitpoint)));
+    ClMapping map(dev, slots, nslots * sizeof(pf_hitpoint), ClMapping::Mode::Read);
+    const auto* hp = map.as<const pf_hitpoint>();
     for (size_t i = 0; i < nslots; ++i)
       if (flags[i]) res.hitpoints.push_back(hp[i]);
-    dev.unmap(slots, hp);
+    map.unmap();
     dev.read(emitted, size_t(count) * 3 * sizeof(float), &res.emitted[off * 3]);
     dev.read(direct, size_t(count) * 3 * sizeof(float), &res.direct[off * 3]);
   }
@@ -197,11 +198,11 @@ PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPa
     size_t total = 0;
     for (cl_int c : counts) total += size_t(c);
     res.photons.reserve(res.photons.size() + total);
-    const auto* ph =
-        static_cast<const pf_photon*>(dev.map_read(slots, count * per * sizeof(pf_photon)));
+    ClMapping map(dev, slots, count * per * sizeof(pf_photon), ClMapping::Mode::Read);
+    const auto* ph = map.as<const pf_photon>();
     for (size_t i = 0; i < count; ++i)  // slot-major: slot k of photon i at k·count + i
       for (size_t k = 0; k < size_t(counts[i]); ++k) res.photons.push_back(ph[k * count + i]);
-    dev.unmap(slots, ph);
+    map.unmap();
   }
   return res;
 }
@@ -224,8 +225,7 @@ DevicePhotons trace_photons_device(const Scene& scene, uint32_t pass, const Phot
   const ClBuffer& slots = dev.scratch("photon.slots", n * per * sizeof(pf_photon));
   const ClBuffer& start = dev.scratch("photon.start", (n + 1) * sizeof(cl_int));
   trace_photon_batch(scene, pass, opt, 0, n, slots, start, dev);
-  const cl_int zero = 0;  // start[n]: the total after the scan
-  dev.write(start, sizeof zero, &zero, n * sizeof(cl_int));
+  dev.fill_zero(start, sizeof(cl_int), n * sizeof(cl_int));  // start[n]: the total after the scan
   device_exclusive_scan(dev, start, n + 1);
   cl_int total = 0;
   dev.read(start, sizeof total, &total, n * sizeof(cl_int));

@@ -256,23 +256,16 @@ DeviceHashGrid host_hash_grid(ClContext& dev, const pf_photon* photons, size_t n
                               int mesh_count, const HashGridLayout& g, int threads) {
   const DeviceHashGrid d = hash_grid_buffers(dev, n, g);
   const size_t start_bytes = (g.slots() + 1) * sizeof(cl_int);
-  void* keys = dev.map_write(*d.keys, hash_grid_key_blocks(n) * sizeof(pf_photon_keys4));
-  void* payload = dev.map_write(*d.payload, n * sizeof(pf_photon_payload));
-  void* start = dev.map_write(*d.slot_start, start_bytes);
-  auto unmap = [&] {
-    dev.unmap(*d.slot_start, start);
-    dev.unmap(*d.payload, payload);
-    dev.unmap(*d.keys, keys);
-  };
-  try {
-    order_hash_grid(g, photons, n, mesh_count, static_cast<pf_photon_keys4*>(keys),
-                    static_cast<pf_photon_payload*>(payload), static_cast<int32_t*>(start),
-                    threads);
-  } catch (...) {  // a bad photon: the buffers go back to the device before the error goes on
-    unmap();
-    throw;
-  }
-  unmap();
+  using Mode = ClMapping::Mode;
+  // (A bad photon throws: the mappings end before the error goes on.)
+  ClMapping keys(dev, *d.keys, hash_grid_key_blocks(n) * sizeof(pf_photon_keys4), Mode::Write);
+  ClMapping payload(dev, *d.payload, n * sizeof(pf_photon_payload), Mode::Write);
+  ClMapping start(dev, *d.slot_start, start_bytes, Mode::Write);
+  order_hash_grid(g, photons, n, mesh_count, keys.as<pf_photon_keys4>(),
+                  payload.as<pf_photon_payload>(), start.as<int32_t>(), threads);
+  start.unmap();
+  payload.unmap();
+  keys.unmap();
   return d;
 }
 
@@ -364,17 +357,10 @@ float hash_grid_pass(const Scene& scene, const ClBuffer& hps, const ClBuffer& ma
   DeviceHashGrid d;
   if (on_host) {  // GatherTimes::order: the host's wall time
     Stopwatch sw;
-    if (photons.device) {
-      const auto* p = np ? static_cast<const pf_photon*>(
-                               dev.map_read(*photons.device, np * sizeof(pf_photon)))
-                         : nullptr;
-      try {
-        d = host_hash_grid(dev, p, np, mesh_count, g, opt.threads);
-      } catch (...) {
-        if (p) dev.unmap(*photons.device, p);
-        throw;
-      }
-      if (p) dev.unmap(*photons.device, p);
+    if (photons.device) {  // (at least one photon's bytes: trace_photons_device's buffer)
+      ClMapping p(dev, *photons.device, np * sizeof(pf_photon), ClMapping::Mode::Read);
+      d = host_hash_grid(dev, p.as<const pf_photon>(), np, mesh_count, g, opt.threads);
+      p.unmap();
     } else {
       d = host_hash_grid(dev, photons.host, np, mesh_count, g, opt.threads);
     }

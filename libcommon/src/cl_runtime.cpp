@@ -411,25 +411,28 @@ const ClBuffer& ClContext::scratch(const std::string& key, size_t bytes) {
 
 void ClContext::write(const ClBuffer& b, size_t bytes, const void* host, size_t offset) {
   if (!bytes) return;
+  ++host_waits_;
   cl_check(clEnqueueWriteBuffer(queue_, b.get(), CL_TRUE, offset, bytes, host, 0, nullptr, nullptr),
            "clEnqueueWriteBuffer");
 }
 
 void ClContext::read(const ClBuffer& b, size_t bytes, void* host, size_t offset) {
   if (!bytes) return;
+  ++host_waits_;
   cl_check(clEnqueueReadBuffer(queue_, b.get(), CL_TRUE, offset, bytes, host, 0, nullptr, nullptr),
            "clEnqueueReadBuffer");
 }
 
-void ClContext::fill_zero(const ClBuffer& b, size_t bytes) {
+void ClContext::fill_zero(const ClBuffer& b, size_t bytes, size_t offset) {
   if (!bytes) return;
   const cl_uint zero = 0;
-  cl_check(clEnqueueFillBuffer(queue_, b.get(), &zero, sizeof zero, 0, (bytes + 3) / 4 * 4, 0,
-                               nullptr, nullptr),
+  cl_check(clEnqueueFillBuffer(queue_, b.get(), &zero, sizeof zero, offset, (bytes + 3) / 4 * 4,
+                               0, nullptr, nullptr),
            "clEnqueueFillBuffer");
 }
 
 const void* ClContext::map_read(const ClBuffer& b, size_t bytes) {
+  ++host_waits_;
   cl_int err = CL_SUCCESS;
   void* p = clEnqueueMapBuffer(queue_, b.get(), CL_TRUE, CL_MAP_READ, 0, std::max<size_t>(bytes, 4),
                                0, nullptr, nullptr, &err);
@@ -438,6 +441,7 @@ const void* ClContext::map_read(const ClBuffer& b, size_t bytes) {
 }
 
 void* ClContext::map_write(const ClBuffer& b, size_t bytes) {
+  ++host_waits_;
   cl_int err = CL_SUCCESS;
   void* p = clEnqueueMapBuffer(queue_, b.get(), CL_TRUE, CL_MAP_WRITE_INVALIDATE_REGION, 0,
                                std::max<size_t>(bytes, 4), 0, nullptr, nullptr, &err);
@@ -446,9 +450,33 @@ void* ClContext::map_write(const ClBuffer& b, size_t bytes) {
 }
 
 void ClContext::unmap(const ClBuffer& b, const void* p) {
+  ++host_waits_;
   cl_check(clEnqueueUnmapMemObject(queue_, b.get(), const_cast<void*>(p), 0, nullptr, nullptr),
            "clEnqueueUnmapMemObject");
-  clFinish(queue_);
+  cl_check(clFinish(queue_), "clFinish");
+}
+
+void ClContext::unmap_quietly(const ClBuffer& b, const void* p) noexcept {
+  ++host_waits_;
+  if (clEnqueueUnmapMemObject(queue_, b.get(), const_cast<void*>(p), 0, nullptr, nullptr) ==
+      CL_SUCCESS)
+    clFinish(queue_);
+}
+
+ClMapping::ClMapping(ClContext& dev, const ClBuffer& b, size_t bytes, Mode mode)
+    : dev_(dev),
+      b_(b),
+      p_(mode == Mode::Read ? const_cast<void*>(dev.map_read(b, bytes)) : dev.map_write(b, bytes)) {}
+
+ClMapping::~ClMapping() {
+  if (p_) dev_.unmap_quietly(b_, p_);
+}
+
+void ClMapping::unmap() {
+  if (!p_) return;
+  void* p = p_;
+  p_ = nullptr;  // unmapped even when the call reports an error: never twice
+  dev_.unmap(b_, p);
 }
 
 void ClContext::set_arg(cl_kernel k, cl_uint i, const ClBuffer& b) {
@@ -461,7 +489,10 @@ void ClContext::set_raw(cl_kernel k, cl_uint i, size_t size, const void* v) {
 
 void ClContext::run(cl_kernel k, size_t n) { run(k, n, local_size(k)); }
 
-void ClContext::finish() { cl_check(clFinish(queue_), "clFinish"); }
+void ClContext::finish() {
+  ++host_waits_;
+  cl_check(clFinish(queue_), "clFinish");
+}
 
 void ClContext::run(cl_kernel k, size_t n, size_t local) {
   if (n == 0) return;
@@ -470,7 +501,10 @@ void ClContext::run(cl_kernel k, size_t n, size_t local) {
   auto t0 = std::chrono::steady_clock::now();
   cl_check(clEnqueueNDRangeKernel(queue_, k, 1, nullptr, &global, &local, 0, nullptr, nullptr),
            "clEnqueueNDRangeKernel");
-  if (wait_each()) cl_check(clFinish(queue_), "clFinish");
+  if (wait_each()) {
+    ++host_waits_;
+    cl_check(clFinish(queue_), "clFinish");
+  }
   const double dt = seconds_since(t0);
   kernel_seconds_ += dt;
   if (profile_) {
