@@ -13,6 +13,9 @@
 #       check     the OpenCL correctness tests (CPU backend vs device; every gather method
 #                 gathers the same photons as the CPU)
 #       gather    Tables 7.3–7.5 (bench_gather --runs 5)
+#       targets   issue 5's GPU targets alone (a few minutes): naive against hash-grid at 320×280
+#                 and 1920×1080 (bench_gather --runs 5), once with the GPU's default gather and
+#                 once with the CPU devices' pending list (PF_GATHER_LIST=32)
 #       ga        Table 8.4, the device-time fitness (bench_ga, 3 runs × 300 generations × 50;
 #                 the CPU fitnesses of Tables 8.1–8.3 are skipped, they do not use the device)
 #       opencl    the per-block table of issue 4 (bench_opencl --runs 5)
@@ -87,16 +90,26 @@ run() {
       { nvidia-smi -L 2>/dev/null || true
         for t in "${TESTS[@]}"; do echo "== $t"; "$g/$t" "$@"; done; } 2>&1 | tee "$out/check.log" ;;
     gather) "$g/bench_gather" --runs 5 "$@" > "$out/gather.md" 2> "$out/gather.log"; cat "$out/gather.md" ;;
+    targets)
+      { echo "## default kernels"
+        "$g/bench_gather" --runs 5 --sizes 320x280,1920x1080 --cluster-sizes "" \
+          --methods naive,hash-grid "$@"
+        echo
+        echo "## PF_CL_BUILD_OPTIONS=-DPF_GATHER_LIST=32"
+        PF_CL_BUILD_OPTIONS=-DPF_GATHER_LIST=32 "$g/bench_gather" --runs 5 --sizes 320x280,1920x1080 \
+          --cluster-sizes "" --methods naive,hash-grid "$@"
+      } > "$out/targets.md" 2> "$out/targets.log"
+      cat "$out/targets.md" ;;
     ga)
       "$g/bench_ga" --runs 0 --device-fitness-runs 3 "$@" > "$out/ga.md" 2> "$out/ga.log"
       cat "$out/ga.md" ;;
     opencl) "$g/bench_opencl" --runs 5 "$@" > "$out/opencl.md" 2> "$out/opencl.log"; cat "$out/opencl.md" ;;
-    *) echo "gpu.sh: run what? devices, check, gather, ga or opencl" >&2; exit 2 ;;
+    *) echo "gpu.sh: run what? devices, check, gather, targets, ga or opencl" >&2; exit 2 ;;
   esac
 }
 
 case "${1:-}" in
   pack) shift; pack "$@" ;;
   run) shift; run "$@" ;;
-  *) echo "usage: bench/gpu.sh pack [BUILD] | run devices|check|gather|ga|opencl [ARGS]" >&2; exit 2 ;;
+  *) echo "usage: bench/gpu.sh pack [BUILD] | run devices|check|gather|targets|ga|opencl [ARGS]" >&2; exit 2 ;;
 esac
