@@ -357,7 +357,7 @@ float hash_grid_pass(const Scene& scene, const ClBuffer& hps, const ClBuffer& ma
   DeviceHashGrid d;
   if (on_host) {  // GatherTimes::order: the host's wall time
     Stopwatch sw;
-    if (photons.device) {  // (at least one photon's bytes: trace_photons_device's buffer)
+    if (photons.device) {  // (np > 0: DevicePpmState::hash_grid skips empty passes)
       ClMapping p(dev, *photons.device, np * sizeof(pf_photon), ClMapping::Mode::Read);
       d = host_hash_grid(dev, p.as<const pf_photon>(), np, mesh_count, g, opt.threads);
       p.unmap();
