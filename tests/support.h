@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "photonflow/clusters.h"
 #include "photonflow/image.h"
@@ -141,6 +142,19 @@ inline double relative_rmse(const Image& a, const Image& b) {
 inline bool same_clusters(const ClusterSet& a, const ClusterSet& b) {
   return a.order == b.order && a.clusters.size() == b.clusters.size() &&
          std::memcmp(a.clusters.data(), b.clusters.data(), a.clusters.size() * sizeof(pf_cluster)) == 0;
+}
+
+// The same hitpoint records, byte for byte (the same count first).
+inline bool same_hitpoints(const std::vector<pf_hitpoint>& a, const std::vector<pf_hitpoint>& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.data(), b.data(), a.size() * sizeof(pf_hitpoint)) == 0;
+}
+
+// Hitpoints that have gathered at least one photon (a comparison of states is not vacuous).
+inline size_t gathered_hitpoints(const std::vector<pf_hitpoint>& h) {
+  size_t n = 0;
+  for (const pf_hitpoint& hp : h) n += hp.n_photons > 0.f;
+  return n;
 }
 
 }  // namespace pf::test

@@ -78,8 +78,7 @@ TEST_CASE("gather methods: every method gathers the CPU grid's photons", "[gathe
     PpmOptions cpu_opt;
     HitpointSet cpu = f.fresh;
     ppm_pass(f.scene, cpu, f.passes[0].photons, f.passes[0].emitted, cpu_opt);
-    size_t gathered = 0;
-    for (const pf_hitpoint& hp : cpu.hitpoints) gathered += hp.n_photons > 0;
+    const size_t gathered = gathered_hitpoints(cpu.hitpoints);
     REQUIRE(gathered > cpu.hitpoints.size() / 4);  // the comparison is not vacuous
     for (GatherMethod m : device_methods()) {
       INFO("method " << gather_method_name(m) << ", direct "
@@ -115,8 +114,7 @@ TEST_CASE("gather methods: every method gathers the CPU grid's photons", "[gathe
             opt.hash_order = o == 0 ? HashOrder::Device : HashOrder::Host;
             ppm_pass(f.scene, by[o], f.passes[0].photons, f.passes[0].emitted, opt, *dev);
           }
-          CHECK(std::memcmp(by[0].hitpoints.data(), by[1].hitpoints.data(),
-                            by[0].hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+          CHECK(same_hitpoints(by[0].hitpoints, by[1].hitpoints));
           size_t same = 0;
           for (size_t i = 0; i < by[1].hitpoints.size(); ++i)
             same += by[1].hitpoints[i].n_photons == h.hitpoints[i].n_photons &&
@@ -125,8 +123,7 @@ TEST_CASE("gather methods: every method gathers the CPU grid's photons", "[gathe
         }
       }
       if (m == GatherMethod::Naive)  // the CPU's summation order: the same bytes
-        CHECK(std::memcmp(h.hitpoints.data(), cpu.hitpoints.data(),
-                          h.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+        CHECK(same_hitpoints(h.hitpoints, cpu.hitpoints));
     }
   }
 }
@@ -155,8 +152,7 @@ TEST_CASE("gather methods: images equal naive's over 20 passes", "[gather][openc
   };
   const HitpointSet naive = run(GatherMethod::Naive, dev.get());
   const HitpointSet grid_cpu = run(GatherMethod::Grid, nullptr);
-  CHECK(std::memcmp(naive.hitpoints.data(), grid_cpu.hitpoints.data(),
-                    naive.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+  CHECK(same_hitpoints(naive.hitpoints, grid_cpu.hitpoints));
   const Image ref = synthesize(naive);
   double r0 = 0;  // the radii did shrink: the refresh of cluster radii was exercised
   for (const pf_hitpoint& hp : naive.hitpoints) r0 = std::max(r0, double(hp.radius));
@@ -240,8 +236,7 @@ TEST_CASE("gather methods: a state kept on the device equals ppm_pass pass by pa
           state.sync();
           CHECK(state.host_current());
           REQUIRE(resident.hitpoints.size() == copied.hitpoints.size());
-          CHECK(std::memcmp(resident.hitpoints.data(), copied.hitpoints.data(),
-                            copied.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+          CHECK(same_hitpoints(resident.hitpoints, copied.hitpoints));
           if (m == GatherMethod::HashGrid) {  // the kernel's reduction = the host's maximum
             float rmax = 0.f;
             for (const pf_hitpoint& hp : resident.hitpoints)
@@ -264,8 +259,7 @@ TEST_CASE("gather methods: a state kept on the device equals ppm_pass pass by pa
       state.pass(f.passes[1].photons, f.passes[1].emitted, other);
       ppm_pass(f.scene, copied, f.passes[1].photons, f.passes[1].emitted, other, *dev);
       state.sync();
-      CHECK(std::memcmp(resident.hitpoints.data(), copied.hitpoints.data(),
-                        copied.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+      CHECK(same_hitpoints(resident.hitpoints, copied.hitpoints));
     }
   }
 }
@@ -300,13 +294,11 @@ TEST_CASE("gather methods: hash-grid's pending list and per-lane branches give t
     CHECK_THROWS_AS(c.define("PF_GATHER_LIST", 0), std::logic_error);  // programs are cached
     out.push_back(std::move(s));
   }
-  size_t gathered = 0;
-  for (const pf_hitpoint& hp : out[0].hitpoints) gathered += hp.n_photons > 0.f;
+  const size_t gathered = gathered_hitpoints(out[0].hitpoints);
   CHECK(gathered > out[0].hitpoints.size() / 2);
   for (size_t k = 1; k < out.size(); ++k) {
     REQUIRE(out[k].hitpoints.size() == out[0].hitpoints.size());
-    CHECK(std::memcmp(out[k].hitpoints.data(), out[0].hitpoints.data(),
-                      out[0].hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+    CHECK(same_hitpoints(out[k].hitpoints, out[0].hitpoints));
   }
 }
 
@@ -352,12 +344,10 @@ TEST_CASE("gather methods: resident passes over device-traced photons, no waits,
     sb.sync();
     CHECK(b.passes == a.passes);
     CHECK(b.photons_emitted == a.photons_emitted);
-    size_t gathered = 0;
-    for (const pf_hitpoint& hp : a.hitpoints) gathered += hp.n_photons > 0.f;
+    const size_t gathered = gathered_hitpoints(a.hitpoints);
     CHECK(gathered > a.hitpoints.size() / 2);
     REQUIRE(b.hitpoints.size() == a.hitpoints.size());
-    CHECK(std::memcmp(b.hitpoints.data(), a.hitpoints.data(),
-                      a.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+    CHECK(same_hitpoints(b.hitpoints, a.hitpoints));
   }
 }
 
@@ -371,8 +361,7 @@ TEST_CASE("gather methods: the grid-cluster gather timer gathers the pass's phot
   opt.alpha = 1.f;  // one pass from the fresh state with alpha 1: N = M (eq. 3.15)
   HitpointSet cpu = f.fresh;
   ppm_pass(f.scene, cpu, ph, f.passes[0].emitted, opt);
-  size_t gathered = 0;
-  for (const pf_hitpoint& hp : cpu.hitpoints) gathered += hp.n_photons > 0;
+  const size_t gathered = gathered_hitpoints(cpu.hitpoints);
   REQUIRE(gathered > cpu.hitpoints.size() / 4);
   opt.method = GatherMethod::GridKmeans;
   GridGatherTimer timer(f.scene, f.fresh, ph, opt, *dev);
@@ -487,8 +476,7 @@ TEST_CASE("gather methods: wrong backend and oversized passes are refused", "[ga
     HitpointSet b = f.fresh;
     CHECK_THROWS_AS(ppm_pass(f.scene, b, bad, f.passes[0].emitted, opt, *dev), std::invalid_argument);
     CHECK(b.passes == 0);
-    CHECK(std::memcmp(b.hitpoints.data(), f.fresh.hitpoints.data(),
-                      b.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+    CHECK(same_hitpoints(b.hitpoints, f.fresh.hitpoints));
     // The context still works after the refusal (the host ordering gave its buffers back).
     ppm_pass(f.scene, b, f.passes[0].photons, f.passes[0].emitted, opt, *dev);
     CHECK(b.passes == 1);

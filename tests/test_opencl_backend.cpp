@@ -334,15 +334,13 @@ TEST_CASE("OpenCL: buffers over the allocation limit are processed in batches", 
   Image i2 = synthesize(h2, small);
 
   REQUIRE(e2.hitpoints.size() == e1.hitpoints.size());
-  CHECK(std::memcmp(e2.hitpoints.data(), e1.hitpoints.data(),
-                    e1.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+  CHECK(same_hitpoints(e2.hitpoints, e1.hitpoints));
   CHECK(e2.emitted == e1.emitted);
   REQUIRE(p2.photons.size() == p1.photons.size());
   CHECK(std::memcmp(p2.photons.data(), p1.photons.data(), p1.photons.size() * sizeof(pf_photon)) ==
         0);
   REQUIRE(h2.hitpoints.size() == h1.hitpoints.size());
-  CHECK(std::memcmp(h2.hitpoints.data(), h1.hitpoints.data(),
-                    h1.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+  CHECK(same_hitpoints(h2.hitpoints, h1.hitpoints));
   CHECK(i2.rgb == i1.rgb);
 }
 

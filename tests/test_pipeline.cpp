@@ -118,8 +118,7 @@ TEST_CASE("photons and hitpoints do not depend on the thread count", "[pipeline]
   eo.threads = 2;
   EyePassResult h2 = trace_hitpoints(s, eo);
   REQUIRE(h1.hitpoints.size() == h2.hitpoints.size());
-  CHECK(std::memcmp(h1.hitpoints.data(), h2.hitpoints.data(),
-                    h1.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+  CHECK(test::same_hitpoints(h1.hitpoints, h2.hitpoints));
 }
 
 TEST_CASE("the caustic map holds only L S+ D paths", "[pipeline][caustic]") {
@@ -158,11 +157,9 @@ TEST_CASE("grid gather equals FLANN gather", "[pipeline][gather]") {
     ppm_pass(s, f, r.photons, r.emitted, flann);
   }
   REQUIRE(g.hitpoints.size() == f.hitpoints.size());
-  size_t gathered = 0;
-  for (auto& hp : g.hitpoints) gathered += hp.n_photons > 0;
+  const size_t gathered = test::gathered_hitpoints(g.hitpoints);
   CHECK(gathered > g.hitpoints.size() / 2);
-  CHECK(std::memcmp(g.hitpoints.data(), f.hitpoints.data(),
-                    g.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+  CHECK(test::same_hitpoints(g.hitpoints, f.hitpoints));
 }
 
 TEST_CASE("alpha = 1 keeps every radius; alpha < 1 shrinks radii where photons arrive",
