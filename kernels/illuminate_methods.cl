@@ -52,18 +52,18 @@ typedef struct {
 
 /* Loads hitpoint hi with zero accumulators. A hitpoint with a negative or NaN radius gathers
  * nothing (mesh −1 matches no photon), as on the CPU. */
-static inline void pf_gather_load_fresh(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
-                                        __global const pf_material* mats) {
-  __global const pf_hitpoint* hp = &hps[hi];
-  h->x = hp->position[0];
-  h->y = hp->position[1];
-  h->z = hp->position[2];
-  h->nx = hp->normal[0];
-  h->ny = hp->normal[1];
-  h->nz = hp->normal[2];
-  h->r = hp->radius;
-  h->mesh = hp->radius >= 0.0f ? hp->mesh : -1;
-  __global const pf_material* mat = &mats[hp->material];
+static inline void pf_gather_start(pf_gather_hp* h, __global const float* position,
+                                   __global const float* normal, float radius, int mesh,
+                                   int material, __global const pf_material* mats) {
+  h->x = position[0];
+  h->y = position[1];
+  h->z = position[2];
+  h->nx = normal[0];
+  h->ny = normal[1];
+  h->nz = normal[2];
+  h->r = radius;
+  h->mesh = radius >= 0.0f ? mesh : -1;
+  __global const pf_material* mat = &mats[material];
   h->fr0 = mat->color[0] * PF_K_INV_PI;
   h->fr1 = mat->color[1] * PF_K_INV_PI;
   h->fr2 = mat->color[2] * PF_K_INV_PI;
@@ -71,6 +71,20 @@ static inline void pf_gather_load_fresh(pf_gather_hp* h, __global const pf_hitpo
   h->t0 = 0;
   h->t1 = 0;
   h->t2 = 0;
+}
+
+static inline void pf_gather_load_fresh(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
+                                        __global const pf_material* mats) {
+  __global const pf_hitpoint* hp = &hps[hi];
+  pf_gather_start(h, hp->position, hp->normal, hp->radius, hp->mesh, hp->material, mats);
+}
+
+/* The same from a split hitpoint (pf_gather_site and pf_ppm_state, the hashed grid's). */
+static inline void pf_gather_load_split(pf_gather_hp* h, __global const pf_gather_site* sites,
+                                        __global const pf_ppm_state* states, int hi,
+                                        __global const pf_material* mats) {
+  __global const pf_gather_site* s = &sites[hi];
+  pf_gather_start(h, s->position, s->normal, states[hi].radius, s->mesh, s->material, mats);
 }
 
 /* Loads hitpoint hi and resumes its accumulators (zero at the start of a pass; the naive
@@ -498,13 +512,17 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  * size makes that the common case) no two cells share a slot, and a row is one run of photons
  * (two if it wraps around the table).
  *
+ * The hitpoints come split (pf_gather_site, read; pf_ppm_state, read and rewritten: cl_gather.cpp
+ * splits and merges them): 72 bytes of traffic per hitpoint instead of 168 for whole pf_hitpoint
+ * records (1080p gather on PoCL 56–64 → 57–59 ms, docs/BENCHMARKS.md).
  * One work-item owns one hitpoint for the whole pass, so the kernel also applies eq. 3.14–3.18 to
- * it (pf_ppm_update, the arithmetic of ppm_apply on the same sums: the same state) instead of
+ * it (pf_ppm_update_state, the arithmetic of ppm_apply on the same sums: the same state) instead of
  * leaving m and τ_M in accumulators for ppm_apply, and it reduces the largest finite positive
  * new radius (order-preserving ints, grid_shared.h) into rmax_next[0] (zero on entry): the next
  * pass's cell size, so that a state kept on the device needs no copy to the host between passes
  * (cl_gather.h, DevicePpmState). `lmax` holds one int per work-item. */
-__kernel void gather_hash_grid(__global pf_hitpoint* hps, int count,
+__kernel void gather_hash_grid(__global const pf_gather_site* sites,
+                               __global pf_ppm_state* states, int count,
                                __global const pf_photon_payload* payload,
                                __global const pf_photon_keys4* keys, __global const int* slot_start,
                                float ox, float oy, float oz, float cell, int nx, int ny, int nz,
@@ -514,7 +532,7 @@ __kernel void gather_hash_grid(__global pf_hitpoint* hps, int count,
   const int hi = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
   int r_next = 0; /* pf_float_ordered(0.0f) */
   pf_gather_hp h;
-  if (hi < count) pf_gather_load_fresh(&h, hps, hi, mats);
+  if (hi < count) pf_gather_load_split(&h, sites, states, hi, mats);
   if (hi < count && h.mesh >= 0) {
     const float pad = h.r * PF_SLACK;
     const int x0 = pf_grid_coord(h.x - pad, ox, cell, nx), x1 = pf_grid_coord(h.x + pad, ox, cell, nx);
@@ -552,8 +570,8 @@ __kernel void gather_hash_grid(__global pf_hitpoint* hps, int count,
   }
   if (hi < count) {
     const float tau_m[3] = {(float)h.t0, (float)h.t1, (float)h.t2};
-    pf_ppm_update(&hps[hi], h.m, tau_m, alpha);
-    const float r = hps[hi].radius;
+    pf_ppm_update_state(&states[hi], h.m, tau_m, alpha);
+    const float r = states[hi].radius;
     if (isfinite(r) && r > 0.0f) r_next = pf_float_ordered(r);
   }
   lmax[lid] = r_next;

@@ -39,6 +39,28 @@ TEST_CASE("ppm: update follows eq. 3.14, 3.16, 3.18", "[ppm]") {
   CHECK(hp.flux[2] == Approx(13.f).epsilon(1e-6));
 }
 
+TEST_CASE("ppm: a split state (pf_ppm_state) updates to the hitpoint's bits", "[ppm]") {
+  // The hashed-grid gather keeps R, N, τ apart from the rest of the hitpoint; its update must give
+  // the same bits as the hitpoint's, whatever the inputs (M = 0 included: both unchanged).
+  for (uint32_t i = 0; i < 2000; ++i) {
+    pf_rng r = pf_rng_start(11, 0, i);
+    const float radius = 0.01f + pf_rng_next(&r), n = i % 5 == 0 ? 0.f : 100.f * pf_rng_next(&r);
+    pf_hitpoint hp = make_hitpoint(radius, n, pf_rng_next(&r), pf_rng_next(&r), pf_rng_next(&r));
+    pf_ppm_state st = {hp.radius, hp.n_photons, {hp.flux[0], hp.flux[1], hp.flux[2]}};
+    const float tau_m[3] = {pf_rng_next(&r), 2.f * pf_rng_next(&r), 3.f * pf_rng_next(&r)};
+    const int m = int(i % 7);
+    const float alpha = 0.1f + 0.9f * pf_rng_next(&r);
+    pf_ppm_update(&hp, m, tau_m, alpha);
+    pf_ppm_update_state(&st, m, tau_m, alpha);
+    INFO("case " << i);
+    CHECK(std::memcmp(&st.radius, &hp.radius, sizeof(float)) == 0);
+    CHECK(std::memcmp(&st.n_photons, &hp.n_photons, sizeof(float)) == 0);
+    CHECK(std::memcmp(st.flux, hp.flux, sizeof st.flux) == 0);
+    if (m == 0) CHECK(hp.radius == radius);
+    else CHECK(hp.radius < radius);
+  }
+}
+
 TEST_CASE("ppm: the first pass keeps the fraction alpha", "[ppm]") {
   // N = 0: ratio = αM/M = α, so N̂ = αM, R̂ = R·sqrt(α), τ̂ = α·τ_M.
   pf_hitpoint hp = make_hitpoint(5.f, 0.f, 0.f, 0.f, 0.f);

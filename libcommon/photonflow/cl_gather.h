@@ -90,7 +90,9 @@ void sort_photons_by_mesh(const std::vector<pf_photon>& photons, int mesh_count,
 // brought up to date by sync(). Other methods copy the state each pass as ppm_pass does (sync()
 // first). On the device the hitpoints are kept in cell order (hitpoint_cell_order, cells of
 // kHitpointOrderCell × the largest radius), which changes no result: one work-item gathers for
-// one hitpoint. The states are those of ppm_pass pass by pass, bit for bit (tested).
+// one hitpoint, and split into the fields a pass reads (pf_gather_site) and the R, N, τ it
+// rewrites (pf_ppm_state; shared_types.h), so that sync() copies back only those. The states are
+// those of ppm_pass pass by pass, bit for bit (tested).
 // h.passes, h.photons_emitted and h.estimator are always current; h.hitpoints only after sync().
 // h must outlive this object and must not be changed by others while a pass may be pending.
 class DevicePpmState {
@@ -123,12 +125,14 @@ class DevicePpmState {
   const Scene& scene_;
   HitpointSet& h_;
   ClContext& dev_;
-  ClBuffer hps_;                 // the resident hitpoints (allocated on the first hash-grid pass)
+  // The resident hitpoints, split (pf_gather_site, pf_ppm_state; allocated on the first
+  // hash-grid pass). A pass changes only the states: sync copies those back.
+  ClBuffer sites_, states_;
   ClBuffer mats_;                // the scene's materials, written with the hitpoints
   bool host_current_ = true;     // h_.hitpoints holds the latest state
   bool device_current_ = false;  // hps_ holds it
   float rmax_ = 0.f;             // largest finite positive radius of the device's state
-  // hps_[i] holds h_.hitpoints[order_[i]]: the hitpoints in cell order (hitpoint_cell_order,
+  // entry i holds h_.hitpoints[order_[i]]: the hitpoints in cell order (hitpoint_cell_order,
   // hash_grid.h), so that a work-group's hitpoints read the same rows of the hashed grid.
   std::vector<int32_t> order_;
 };

@@ -55,18 +55,39 @@ PF_INLINE int pf_ppm_in_radius(pf_float dist2, pf_float radius) {
  * α ∈ (0, 1] is the fraction of new photons kept (0.7 is usual; α = 1 keeps R fixed). A pass that
  * found no photons (m = 0) leaves the hitpoint unchanged. A device may differ from the host in the
  * last bit here (FMA contraction, device sqrt); only the gather rule is bit-exact. */
-PF_INLINE void pf_ppm_update(PF_GLOBAL pf_hitpoint* hp, pf_int m, const pf_float tau_m[3],
-                             pf_float alpha) {
-  if (m <= 0) return;
-  pf_float n = hp->n_photons;
+PF_INLINE pf_ppm_state pf_ppm_updated(pf_ppm_state s, pf_int m, const pf_float tau_m[3],
+                                      pf_float alpha) {
+  if (m <= 0) return s;
+  pf_float n = s.n_photons;
   pf_float mf = (pf_float)m;
   pf_float n_new = n + alpha * mf;
   pf_float ratio = n_new / (n + mf);
-  hp->n_photons = n_new;
-  hp->radius = hp->radius * PF_SQRT(ratio);
-  hp->flux[0] = (hp->flux[0] + tau_m[0]) * ratio;
-  hp->flux[1] = (hp->flux[1] + tau_m[1]) * ratio;
-  hp->flux[2] = (hp->flux[2] + tau_m[2]) * ratio;
+  s.n_photons = n_new;
+  s.radius = s.radius * PF_SQRT(ratio);
+  s.flux[0] = (s.flux[0] + tau_m[0]) * ratio;
+  s.flux[1] = (s.flux[1] + tau_m[1]) * ratio;
+  s.flux[2] = (s.flux[2] + tau_m[2]) * ratio;
+  return s;
+}
+
+/* The same update on a hitpoint's fields, and on a split state (pf_ppm_state, the hashed-grid
+ * gather's): one arithmetic, so both give the same bits. */
+PF_INLINE void pf_ppm_update(PF_GLOBAL pf_hitpoint* hp, pf_int m, const pf_float tau_m[3],
+                             pf_float alpha) {
+  if (m <= 0) return;
+  pf_ppm_state s = {hp->radius, hp->n_photons, {hp->flux[0], hp->flux[1], hp->flux[2]}};
+  s = pf_ppm_updated(s, m, tau_m, alpha);
+  hp->radius = s.radius;
+  hp->n_photons = s.n_photons;
+  hp->flux[0] = s.flux[0];
+  hp->flux[1] = s.flux[1];
+  hp->flux[2] = s.flux[2];
+}
+
+PF_INLINE void pf_ppm_update_state(PF_GLOBAL pf_ppm_state* st, pf_int m, const pf_float tau_m[3],
+                                   pf_float alpha) {
+  if (m <= 0) return;
+  *st = pf_ppm_updated(*st, m, tau_m, alpha);
 }
 
 /* Reflected radiance of one channel of a hitpoint, eq. 3.19: L = τ / (π R² N_emitted), where

@@ -159,6 +159,23 @@ typedef struct {
   pf_float flux[3];
 } pf_photon_payload;
 
+/* A hitpoint as the hashed-grid gather keeps it on the device (cl_gather.h), split by access: the
+ * fields a pass only reads, and the PPM state (R, N, τ: eq. 3.14–3.18) it reads and rewrites —
+ * the same values as pf_hitpoint's. A pass moves 32 + 2·20 bytes per hitpoint instead of 2·84
+ * (the gather's hitpoint stream is memory-bound on a CPU device, docs/BENCHMARKS.md). */
+typedef struct {
+  pf_float position[3];
+  pf_float normal[3];
+  pf_int mesh;
+  pf_int material;
+} pf_gather_site;
+
+typedef struct {
+  pf_float radius;    /* R (eq. 3.16) */
+  pf_float n_photons; /* N (eq. 3.14) */
+  pf_float flux[3];   /* τ (eq. 3.18) */
+} pf_ppm_state;
+
 /* Grid header of one mesh's photons (thesis ch. 7.3, eq. 7.1; photon_grid.h, grid_shared.h).
  * Bin of a point p: per axis c = clamp(floor((p − lo)/bin_size), 0, n−1) (eq. 7.1), linear
  * offset cx + cy·nx + cz·nx·ny. A mesh without photons has nx = ny = nz = 0 and one cell_start
@@ -194,6 +211,8 @@ static_assert(sizeof(pf_hitpoint) == 84, "pf_hitpoint layout");
 static_assert(sizeof(pf_photon) == 48, "pf_photon layout");
 static_assert(sizeof(pf_photon_keys4) == 64, "pf_photon_keys4 layout");
 static_assert(sizeof(pf_photon_payload) == 24, "pf_photon_payload layout");
+static_assert(sizeof(pf_gather_site) == 32, "pf_gather_site layout");
+static_assert(sizeof(pf_ppm_state) == 20, "pf_ppm_state layout");
 static_assert(sizeof(pf_mesh_grid) == 40, "pf_mesh_grid layout");
 static_assert(sizeof(pf_cluster) == 32, "pf_cluster layout");
 #endif

@@ -319,6 +319,53 @@ void check_cluster_count(const ClusterSet& cs, size_t hitpoints) {
 
 double since(ClContext& dev, double t0) { return dev.kernel_seconds() - t0; }
 
+// The hashed-grid gather's split hitpoints (pf_gather_site, pf_ppm_state; shared_types.h) in two
+// device buffers, the namespace's scratch buffers or a resident state's own.
+struct SplitHitpoints {
+  const ClBuffer* sites = nullptr;
+  const ClBuffer* states = nullptr;
+};
+
+// Writes hitpoints src[order[i]] (src[i] without an order) as entry i of the split buffers, through
+// mappings (no staging copy on a CPU device).
+void write_split(ClContext& dev, const SplitHitpoints& d, const pf_hitpoint* src,
+                 const int32_t* order, size_t n) {
+  using Mode = ClMapping::Mode;
+  ClMapping sites(dev, *d.sites, n * sizeof(pf_gather_site), Mode::Write);
+  ClMapping states(dev, *d.states, n * sizeof(pf_ppm_state), Mode::Write);
+  pf_gather_site* s = sites.as<pf_gather_site>();
+  pf_ppm_state* t = states.as<pf_ppm_state>();
+  for (size_t i = 0; i < n; ++i) {
+    const pf_hitpoint& hp = src[order ? size_t(order[i]) : i];
+    for (int a = 0; a < 3; ++a) {
+      s[i].position[a] = hp.position[a];
+      s[i].normal[a] = hp.normal[a];
+      t[i].flux[a] = hp.flux[a];
+    }
+    s[i].mesh = hp.mesh;
+    s[i].material = hp.material;
+    t[i].radius = hp.radius;
+    t[i].n_photons = hp.n_photons;
+  }
+  states.unmap();
+  sites.unmap();
+}
+
+// The states of entry i back into dst[order[i]] (dst[i] without an order): R, N and τ, the only
+// fields a hash-grid pass changes.
+void read_split_states(ClContext& dev, const SplitHitpoints& d, pf_hitpoint* dst,
+                       const int32_t* order, size_t n) {
+  ClMapping states(dev, *d.states, n * sizeof(pf_ppm_state), ClMapping::Mode::Read);
+  const pf_ppm_state* t = states.as<const pf_ppm_state>();
+  for (size_t i = 0; i < n; ++i) {
+    pf_hitpoint& hp = dst[order ? size_t(order[i]) : i];
+    hp.radius = t[i].radius;
+    hp.n_photons = t[i].n_photons;
+    for (int a = 0; a < 3; ++a) hp.flux[a] = t[i].flux[a];
+  }
+  states.unmap();
+}
+
 // A pass's photons for hash_grid_pass: n records on the host, or on the device (trace_photons_device).
 struct PassPhotons {
   const pf_photon* host = nullptr;
@@ -326,15 +373,15 @@ struct PassPhotons {
   size_t n = 0;
 };
 
-// One hash-grid pass over nh hitpoints already in `hps` (the scene's materials in `mats`), rmax
-// being their largest finite positive radius as max_radius computes it (the cell side is
+// One hash-grid pass over nh split hitpoints already in `hps` (the scene's materials in `mats`),
+// rmax being their largest finite positive radius as max_radius computes it (the cell side is
 // hash_cell·rmax): builds the hashed grid — on the host into mapped buffers (photons on the
 // device are mapped, no copy on a CPU device; order_hash_grid checks them), or with the device's
 // kernels (host photons are checked and uploaded; device photons, made by trace_photons_device
 // from the checked scene, are used where they are): opt.hash_order — then gathers and applies
 // eq. 3.14–3.18 in one kernel. Returns the new state's rmax (reduced by the kernel, so a state
 // kept on the device needs no copy to the host between passes).
-float hash_grid_pass(const Scene& scene, const ClBuffer& hps, const ClBuffer& mats, size_t nh,
+float hash_grid_pass(const Scene& scene, const SplitHitpoints& hps, const ClBuffer& mats, size_t nh,
                      DirectMode direct, float rmax, const PassPhotons& photons,
                      const PpmOptions& opt, ClContext& dev, GatherTimes& times) {
   const size_t np = photons.n;
@@ -381,7 +428,7 @@ float hash_grid_pass(const Scene& scene, const ClBuffer& hps, const ClBuffer& ma
   const size_t L = size_t(dev.work_group());
   const double t0 = dev.kernel_seconds();
   cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
-  dev.args(k, hps, cl_int(nh), *d.payload, *d.keys, *d.slot_start, g.origin[0],
+  dev.args(k, *hps.sites, *hps.states, cl_int(nh), *d.payload, *d.keys, *d.slot_start, g.origin[0],
            g.origin[1], g.origin[2], g.cell, cl_int(g.n[0]), cl_int(g.n[1]), cl_int(g.n[2]),
            cl_uint(g.mask), cl_int(g.unique), mats,
            cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha, next,
@@ -494,12 +541,13 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
     cl_kernel apply = dev.kernel("illuminate_methods", "ppm_apply");
 
     if (opt.method == GatherMethod::HashGrid) {
-      require_one_buffer(dev, nh, sizeof(pf_hitpoint), "hitpoints", opt.method);
-      const ClBuffer& hps = dev.scratch("ppm.hitpoints", nh * sizeof(pf_hitpoint));
-      dev.write(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
+      require_one_buffer(dev, nh, sizeof(pf_gather_site), "hitpoints", opt.method);
+      const SplitHitpoints hps{&dev.scratch("ppm.sites", nh * sizeof(pf_gather_site)),
+                               &dev.scratch("ppm.states", nh * sizeof(pf_ppm_state))};
+      write_split(dev, hps, h.hitpoints.data(), nullptr, nh);
       hash_grid_pass(scene, hps, mats, nh, h.direct_mode, max_radius(h),
                      PassPhotons{photons.data(), nullptr, np}, opt, dev, times);
-      dev.read(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
+      read_split_states(dev, hps, h.hitpoints.data(), nullptr, nh);
     } else if (opt.method == GatherMethod::Naive) {
       // Batches of hitpoints × batches of photons under the allocation limit, photons in index
       // order: the CPU's summation order, so the result equals the CPU gathers bit for bit.
@@ -660,8 +708,8 @@ GatherTimes DevicePpmState::hash_grid(const pf_photon* host, const ClBuffer* dev
   check_pass(opt, nh, np);
   if (nh > 0 && np > 0) {
     upload();
-    rmax_ = hash_grid_pass(scene_, hps_, mats_, nh, h_.direct_mode, rmax_,
-                           PassPhotons{host, device, np}, opt, dev_, times);
+    rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, nh, h_.direct_mode,
+                           rmax_, PassPhotons{host, device, np}, opt, dev_, times);
     host_current_ = false;
   }
   count_pass(h_, emitted);
@@ -675,16 +723,17 @@ void DevicePpmState::upload() {
   const size_t nh = h_.hitpoints.size();
   rmax_ = max_radius(h_);
   if (nh > 0) {
-    require_one_buffer(dev_, nh, sizeof(pf_hitpoint), "hitpoints", GatherMethod::HashGrid);
-    if (hps_.bytes() < nh * sizeof(pf_hitpoint)) hps_ = dev_.buffer(nh * sizeof(pf_hitpoint));
+    require_one_buffer(dev_, nh, sizeof(pf_gather_site), "hitpoints", GatherMethod::HashGrid);
+    if (sites_.bytes() < nh * sizeof(pf_gather_site)) {
+      sites_ = dev_.buffer(nh * sizeof(pf_gather_site));
+      states_ = dev_.buffer(nh * sizeof(pf_ppm_state));
+    }
     const size_t mat_bytes = scene_.materials.size() * sizeof(pf_material);
     if (!mats_.get()) mats_ = dev_.buffer(std::max<size_t>(mat_bytes, 4));
     dev_.write(mats_, mat_bytes, scene_.materials.data());
     const float origin[3] = {scene_.bounds.lo.x, scene_.bounds.lo.y, scene_.bounds.lo.z};
     order_ = hitpoint_cell_order(h_.hitpoints, origin, kHitpointOrderCell * rmax_);
-    std::vector<pf_hitpoint> staged(nh);
-    for (size_t i = 0; i < nh; ++i) staged[i] = h_.hitpoints[size_t(order_[i])];
-    dev_.write(hps_, nh * sizeof(pf_hitpoint), staged.data());
+    write_split(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(), order_.data(), nh);
   }
   device_current_ = true;
 }
@@ -692,9 +741,9 @@ void DevicePpmState::upload() {
 void DevicePpmState::sync() {
   if (host_current_) return;
   const size_t nh = h_.hitpoints.size();
-  std::vector<pf_hitpoint> staged(nh);
-  dev_.read(hps_, nh * sizeof(pf_hitpoint), staged.data());
-  for (size_t i = 0; i < nh; ++i) h_.hitpoints[size_t(order_[i])] = staged[i];
+  if (nh > 0)
+    read_split_states(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(), order_.data(),
+                      nh);
   host_current_ = true;
 }
 
