@@ -50,8 +50,9 @@ typedef struct {
   pf_acc t0, t1, t2;
 } pf_gather_hp;
 
-/* Loads hitpoint hi with zero accumulators. A hitpoint with a negative or NaN radius gathers
- * nothing (mesh −1 matches no photon), as on the CPU. */
+/* A hitpoint's gather state from its fields, with zero accumulators (the loaders below call it
+ * for whole and for split hitpoints). A hitpoint with a negative or NaN radius gathers nothing
+ * (mesh −1 matches no photon), as on the CPU. */
 static inline void pf_gather_start(pf_gather_hp* h, __global const float* position,
                                    __global const float* normal, float radius, int mesh,
                                    int material, __global const pf_material* mats) {
@@ -73,6 +74,7 @@ static inline void pf_gather_start(pf_gather_hp* h, __global const float* positi
   h->t2 = 0;
 }
 
+/* Loads hitpoint hi with zero accumulators. */
 static inline void pf_gather_load_fresh(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
                                         __global const pf_material* mats) {
   __global const pf_hitpoint* hp = &hps[hi];
