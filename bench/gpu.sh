@@ -11,7 +11,9 @@
 #                                  (default out/gpu):
 #       devices   the OpenCL platforms and devices the binaries see
 #       check     the OpenCL correctness tests (CPU backend vs device; every gather method
-#                 gathers the same photons as the CPU)
+#                 gathers the same photons as the CPU; the shared headers rng.h, ppm.h and
+#                 intersect_shared.h built by the driver give the host's results; the GA's
+#                 clusters and device-time fitness)
 #       gather    Tables 7.3–7.5 (bench_gather --runs 5)
 #       targets   issue 5's GPU targets alone (a few minutes): naive against hash-grid at 320×280
 #                 and 1920×1080 (bench_gather --runs 5), once with the GPU's default gather and
@@ -29,7 +31,8 @@
 set -euo pipefail
 
 BINS=(bench_gather bench_ga bench_opencl render)
-TESTS=(test_opencl_backend test_gather_methods)
+TESTS=(test_opencl_backend test_gather_methods test_cl_shared_headers test_intersect_shared_cl
+       test_ga_clusters)
 
 pack() {
   local build=${1:-build}
@@ -67,6 +70,8 @@ run() {
   local out=${OUT:-out/gpu}
   mkdir -p "$out"
   export LD_LIBRARY_PATH="$PWD/.gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  # The header tests build kernels from this tree's libcommon/ (tests/support.h, source_dir).
+  export PF_SOURCE_DIR=$PWD
   if [ -z "${OCL_ICD_VENDORS:-}" ]; then
     local icd
     icd=$(find_nvidia_icd || true)

@@ -38,6 +38,14 @@ struct TempDir {
   }
 };
 
+// The photonflow source folder: $PF_SOURCE_DIR when set (a copy of the tree somewhere else, as on
+// the GPU machine that bench/gpu.sh carries the test binaries to), else the tree this test was
+// built from.
+inline std::string source_dir() {
+  const char* s = std::getenv("PF_SOURCE_DIR");
+  return s && *s ? s : std::string(PF_SOURCE_DIR);
+}
+
 // Folder of the built tools (ctest sets PF_BIN; else the build tree's bin/).
 inline std::string bin_dir() {
   const char* b = std::getenv("PF_BIN");

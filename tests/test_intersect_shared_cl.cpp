@@ -13,9 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "photonflow/cl_runtime.h"
 #include "photonflow/intersect_shared.h"
 #include "photonflow/procedural.h"
 #include "photonflow/raycast.h"
+#include "support.h"
 
 namespace {
 
@@ -114,7 +116,8 @@ TEST_CASE("intersect_shared.h runs as OpenCL C and matches the host", "[raycast]
   REQUIRE(err == CL_SUCCESS);
   Program program(clCreateProgramWithSource(ctx.h, 1, &kKernel, nullptr, &err));
   REQUIRE(err == CL_SUCCESS);
-  const std::string options = std::string("-cl-std=CL1.2 -I ") + PF_SOURCE_DIR + "/libcommon";
+  const std::string options = "-cl-std=CL1.2 -I " + pf::test::source_dir() + "/libcommon" +
+                              pf::cl_float_options(device);
   err = clBuildProgram(program.h, 1, &device, options.c_str(), nullptr, nullptr);
   if (err != CL_SUCCESS) {
     size_t len = 0;

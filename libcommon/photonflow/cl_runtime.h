@@ -55,6 +55,12 @@ struct DeviceOptions {
   int work_group = 0;          // --work-group; 0 = each kernel's default (64)
 };
 
+// " -cl-fp32-correctly-rounded-divide-sqrt" when the device offers it (CL_DEVICE_SINGLE_FP_CONFIG),
+// else "": single-precision division and sqrt then round as the host's do (OpenCL C otherwise
+// allows 2.5 and 3 ulp, NVIDIA's driver uses that freedom). Every program photonflow builds, and
+// the tests that build the shared headers themselves, take it.
+std::string cl_float_options(cl_device_id device);
+
 // Default work-group size of every kernel (fixed, so PoCL's per-size kernel cache is reused).
 constexpr int kDefaultWorkGroup = 64;
 

@@ -53,10 +53,15 @@ PF_INLINE int pf_ppm_in_radius(pf_float dist2, pf_float radius) {
  *   R̂ = R·sqrt(ratio)      (eq. 3.16)
  *   τ̂ = (τ_N + τ_M)·ratio  (eq. 3.18)
  * α ∈ (0, 1] is the fraction of new photons kept (0.7 is usual; α = 1 keeps R fixed). A pass that
- * found no photons (m = 0) leaves the hitpoint unchanged. A device may differ from the host in the
- * last bit here (FMA contraction, device sqrt); only the gather rule is bit-exact. */
+ * found no photons (m = 0) leaves the hitpoint unchanged. The device gives the host's bits where
+ * it rounds division and sqrt correctly (cl_float_options adds the build option that asks for
+ * it): N + αM is not contracted into an FMA (the pragma, as in pf_ppm_dist2), every other step
+ * is one rounded operation. */
 PF_INLINE pf_ppm_state pf_ppm_updated(pf_ppm_state s, pf_int m, const pf_float tau_m[3],
                                       pf_float alpha) {
+#ifdef __OPENCL_VERSION__
+#pragma OPENCL FP_CONTRACT OFF
+#endif
   if (m <= 0) return s;
   pf_float n = s.n_photons;
   pf_float mf = (pf_float)m;

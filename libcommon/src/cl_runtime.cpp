@@ -201,6 +201,11 @@ std::vector<ClDeviceInfo> cl_list_devices() {
   return out;
 }
 
+std::string cl_float_options(cl_device_id device) {
+  const auto sp = num_info<cl_device_fp_config>(device, CL_DEVICE_SINGLE_FP_CONFIG);
+  return (sp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? " -cl-fp32-correctly-rounded-divide-sqrt" : "";
+}
+
 std::string cl_describe_devices() {
   std::vector<ClDeviceInfo> devs = cl_list_devices();
   std::ostringstream s;
@@ -323,8 +328,7 @@ cl_program ClContext::build(const std::string& name) {
   cl_check(err, "clCreateProgramWithSource");
   std::string options = "-cl-std=CL1.2 -DPF_FP64=" + std::string(info_.fp64 ? "1" : "0");
   options += " -DPF_DEVICE_CPU=" + std::string(info_.type == "CPU" ? "1" : "0") + defines_;
-  cl_device_fp_config sp = num_info<cl_device_fp_config>(info_.device_id, CL_DEVICE_SINGLE_FP_CONFIG);
-  if (sp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  options += cl_float_options(info_.device_id);
   options += includes;
   if (const char* extra = std::getenv("PF_CL_BUILD_OPTIONS")) options += std::string(" ") + extra;
   auto t0 = std::chrono::steady_clock::now();
