@@ -105,13 +105,15 @@ run() {
         exit $failed; } 2>&1 | tee "$out/check.log" ;;
     gather) "$g/bench_gather" --runs 5 "$@" > "$out/gather.md" 2> "$out/gather.log"; cat "$out/gather.md" ;;
     targets)
-      { echo "## default kernels"
+      targets() {
         "$g/bench_gather" --runs 5 --sizes 320x280,1920x1080 --cluster-sizes "" \
           --methods naive,hash-grid "$@"
+      }
+      { echo "## default kernels"
+        targets "$@"
         echo
         echo "## PF_CL_BUILD_OPTIONS=-DPF_GATHER_LIST=32"
-        PF_CL_BUILD_OPTIONS=-DPF_GATHER_LIST=32 "$g/bench_gather" --runs 5 --sizes 320x280,1920x1080 \
-          --cluster-sizes "" --methods naive,hash-grid "$@"
+        PF_CL_BUILD_OPTIONS=-DPF_GATHER_LIST=32 targets "$@"
       } > "$out/targets.md" 2> "$out/targets.log"
       cat "$out/targets.md" ;;
     ga)
