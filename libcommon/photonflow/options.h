@@ -10,6 +10,11 @@ namespace pf {
 // "x,y,z" → Vec3; throws InputError naming the option on anything else.
 Vec3 parse_vec3(const std::string& option, const std::string& text);
 
+// The shortest text that reads back to `value` ("3", "0.5"), for cxxopts default_value() of an
+// option whose default is a library struct's member, so --help and the tool cannot drift from it.
+std::string default_text(float value);
+std::string default_text(int value);
+
 // Range checks with one-line InputErrors naming the option.
 void require_positive(const std::string& option, double value);
 void require_in_unit_interval(const std::string& option, double value);  // (0, 1]

@@ -1,5 +1,6 @@
 #include "photonflow/options.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
@@ -22,6 +23,14 @@ Vec3 parse_vec3(const std::string& option, const std::string& text) {
     throw input_error("", "--" + option + " must be three finite numbers x,y,z, got '" + text + "'");
   return Vec3(v);
 }
+
+std::string default_text(float value) {
+  char buf[32];
+  auto r = std::to_chars(buf, buf + sizeof buf, value);  // shortest round-trip form
+  return std::string(buf, r.ptr);
+}
+
+std::string default_text(int value) { return std::to_string(value); }
 
 void require_positive(const std::string& option, double value) {
   if (!(value > 0.0))

@@ -15,6 +15,9 @@
 namespace {
 
 constexpr const char* kTool = "scene-bake";
+// The kd-tree defaults are KdBuildParams's (measured, kdtree.h), the same the benchmarks and
+// in-process bakes use.
+const pf::KdBuildParams kKd{};
 
 const char* material_type_name(int type) {
   switch (type) {
@@ -92,15 +95,15 @@ int run(int argc, char** argv) {
                         "default: insert-default, diffuse albedo 0.75)",
      cxxopts::value<std::vector<std::string>>())
     ("kd-ct", "kd-tree SAH cost of a traversal step C_ts (eq. 4.8), unitless",
-     cxxopts::value<float>()->default_value("1.0"))
+     cxxopts::value<float>()->default_value(pf::default_text(kKd.cost_traversal)))
     ("kd-ci", "kd-tree SAH cost of a triangle test C_L/C_R (eq. 4.8), unitless",
-     cxxopts::value<float>()->default_value("1.5"))
+     cxxopts::value<float>()->default_value(pf::default_text(kKd.cost_intersect)))
     ("kd-empty-bonus", "kd-tree SAH cost reduction for cutting off empty space, fraction",
-     cxxopts::value<float>()->default_value("0.2"))
+     cxxopts::value<float>()->default_value(pf::default_text(kKd.empty_bonus)))
     ("kd-max-depth", "kd-tree maximum depth, levels (0 = automatic: 8 + 1.3 log2 N)",
-     cxxopts::value<int>()->default_value("0"))
+     cxxopts::value<int>()->default_value(pf::default_text(kKd.max_depth)))
     ("kd-max-leaf", "kd-tree: never split nodes with this many triangles or fewer",
-     cxxopts::value<int>()->default_value("2"))
+     cxxopts::value<int>()->default_value(pf::default_text(kKd.max_leaf_size)))
     ("threads", "threads for the kd-tree build (0 = all cores; the result does not depend "
                 "on it)", cxxopts::value<int>()->default_value("0"))
     ("h,help", "print this help");
