@@ -276,10 +276,68 @@ TEST_CASE("OpenCL: image after 10 PPM passes equals the CPU backend's", "[opencl
   double rmse = relative_rmse(igpu, icpu);
   INFO("relative RMSE opencl vs cpu: " << rmse);
   CHECK(rmse <= 1e-3);
-  // Synthesis alone: the device's atomic adds give the CPU's image for the same state.
+  // Synthesis alone gives the CPU's image for the same state: bit for bit where the device rounds
+  // division correctly (synthesize.cl adds a pixel's hitpoints in the CPU's order).
   Image same = synthesize(cpu, *dev);
   CHECK(relative_rmse(same, icpu) <= 1e-6);
   CHECK(same.layers.at("hitpoints") == icpu.layers.at("hitpoints"));
+  if (!cl_float_options(dev->info().device_id).empty()) {
+    CHECK(same.rgb == icpu.rgb);
+    CHECK(same.layers.at("radius") == icpu.layers.at("radius"));
+    CHECK(same.layers.at("photons") == icpu.layers.at("photons"));
+  }
+}
+
+TEST_CASE("OpenCL: synthesis adds a pixel's hitpoints in array order, in any batch",
+          "[opencl][synthesize]") {
+  auto dev = test_device();
+  if (!dev) return;
+  // A state whose hitpoints are not in pixel order (shuffled): the device must still add each
+  // pixel's hitpoints in their array order, as synthesize.cpp does.
+  HitpointSet h;
+  h.width = 7;
+  h.height = 5;
+  const size_t npix = 35;
+  h.emitted.assign(npix * 3, 0.f);
+  h.direct.assign(npix * 3, 0.f);
+  for (size_t i = 0; i < npix * 3; ++i) {
+    h.emitted[i] = 0.01f * float(i % 7);
+    h.direct[i] = 0.1f + 0.003f * float(i);
+  }
+  h.photons_emitted = 12345;
+  for (int i = 0; i < 300; ++i) {
+    pf_hitpoint hp{};
+    const uint32_t r = uint32_t(i) * 2654435761u;
+    hp.pixel_x = int(r % 7u);
+    hp.pixel_y = int((r >> 8) % 5u);
+    hp.radius = 0.05f + 0.001f * float(i % 13);
+    hp.n_photons = float(i % 17) * 0.7f;
+    for (int c = 0; c < 3; ++c) {
+      hp.weight[c] = 0.3f + 0.01f * float((i + c) % 11);
+      hp.flux[c] = 1.f / float(3 + (i * 7 + c) % 29);  // values whose sums round
+    }
+    h.hitpoints.push_back(hp);
+  }
+  const Image cpu = synthesize(h);
+  const Image one = synthesize(h, *dev);
+  // A limit that forces batches of a few pixels.
+  ClContext small(dev->info(), 0);
+  small.set_max_alloc(20 * sizeof(pf_hitpoint));
+  const Image batched = synthesize(h, small);
+  const bool exact = !cl_float_options(dev->info().device_id).empty();
+  for (const Image* img : {&one, &batched}) {
+    CHECK(img->layers.at("hitpoints") == cpu.layers.at("hitpoints"));
+    CHECK(relative_rmse(*img, cpu) <= 1e-6);
+    if (exact) {
+      CHECK(img->rgb == cpu.rgb);
+      CHECK(img->layers.at("radius") == cpu.layers.at("radius"));
+      CHECK(img->layers.at("photons") == cpu.layers.at("photons"));
+    }
+  }
+  CHECK(one.rgb == batched.rgb);
+  // A hitpoint outside the image is refused, not written out of bounds.
+  h.hitpoints[5].pixel_x = 7;
+  CHECK_THROWS_AS(synthesize(h, *dev), InputError);
 }
 
 TEST_CASE("OpenCL: buffers over the allocation limit are processed in batches", "[opencl][batch]") {

@@ -12,7 +12,8 @@
 //                     hitpoint loops over all photons; thesis Table 7.1 "Hitpoint Illumination",
 //                     the CPU's summation order) and the accelerated variants of thesis ch. 7.3
 //                     (gather_method.h), all with the CPU's acceptance rule;
-//   synthesize      — kernels/synthesize.cl: atomic float adds (compare-and-swap loop).
+//   synthesize      — kernels/synthesize.cl: one work-item per pixel adds its hitpoints in array
+//                     order (the CPU's bits).
 //
 // Both backends use the same counter-based random numbers (rng.h) in the same dimension order and
 // the same sampling formulas (sampling_shared.h), so they trace the same rays and photon paths up

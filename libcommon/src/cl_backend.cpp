@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "photonflow/camera.h"
 #include "photonflow/error.h"
@@ -257,6 +258,36 @@ Image synthesize(const HitpointSet& h, ClContext& dev) {
                           "largest allocation", "use --device cpu");
   if (h.emitted.size() < npix * 3 || h.direct.size() < npix * 3)
     throw input_error("", "hitpoint state without emitted/direct layers of the image size");
+  const size_t nh = h.hitpoints.size();
+  if (nh > size_t(std::numeric_limits<cl_int>::max()))
+    throw input_error("", "more than 2^31 hitpoints", "use --device cpu");
+
+  // Stable counting sort by pixel (synthesize.cl): start[o] is the first of pixel o's hitpoints in
+  // `order`, which keeps the array order within a pixel. Hitpoints the eye pass wrote are already
+  // in pixel order; then `order` is the identity and is not built.
+  std::vector<cl_int> start(npix + 1, 0);
+  bool sorted = true;
+  size_t prev = 0;
+  for (const pf_hitpoint& hp : h.hitpoints) {
+    if (hp.pixel_x < 0 || hp.pixel_x >= h.width || hp.pixel_y < 0 || hp.pixel_y >= h.height)
+      throw input_error("", "a hitpoint's pixel lies outside the " + std::to_string(h.width) +
+                                "x" + std::to_string(h.height) + " image");
+    const size_t o = img.offset(hp.pixel_x, hp.pixel_y);
+    sorted = sorted && o >= prev;
+    prev = o;
+    ++start[o + 1];
+  }
+  for (size_t o = 0; o < npix; ++o) start[o + 1] += start[o];
+  std::vector<size_t> order;
+  if (!sorted) {
+    order.resize(nh);
+    std::vector<cl_int> next(start.begin(), start.end() - 1);
+    for (size_t i = 0; i < nh; ++i) {
+      const pf_hitpoint& hp = h.hitpoints[i];
+      order[size_t(next[img.offset(hp.pixel_x, hp.pixel_y)]++)] = i;
+    }
+  }
+
   const ClBuffer& em = dev.scratch("synth.emitted", npix * 3 * sizeof(float));
   const ClBuffer& di = dev.scratch("synth.direct", npix * 3 * sizeof(float));
   const ClBuffer& rgb = dev.scratch("synth.rgb", npix * 3 * sizeof(float));
@@ -265,26 +296,43 @@ Image synthesize(const HitpointSet& h, ClContext& dev) {
   const ClBuffer& cnt = dev.scratch("synth.count", npix * sizeof(float));
   dev.write(em, npix * 3 * sizeof(float), h.emitted.data());
   dev.write(di, npix * 3 * sizeof(float), h.direct.data());
-  cl_kernel init = dev.kernel("synthesize", "synth_init");
-  cl_kernel splat = dev.kernel("synthesize", "synth_splat");
-  cl_kernel finish = dev.kernel("synthesize", "synth_finish");
-  dev.args(init, em, di, cl_int(npix), rgb, rad, pho, cnt);
-  dev.run(init, npix);
-  const size_t nh = h.hitpoints.size();
-  if (nh > 0) {
-    const size_t hb = dev.batch_items(sizeof(pf_hitpoint), nh);
-    const ClBuffer& hps = dev.scratch("synth.hitpoints", hb * sizeof(pf_hitpoint));
-    const float n_emitted = float(h.photons_emitted);
-    const cl_int has = h.photons_emitted > 0 ? 1 : 0;
-    for (size_t off = 0; off < nh; off += hb) {
-      const cl_int n = cl_int(std::min(hb, nh - off));
-      dev.write(hps, size_t(n) * sizeof(pf_hitpoint), &h.hitpoints[off]);
-      dev.args(splat, hps, n, cl_int(h.width), n_emitted, has, rgb, rad, pho, cnt);
-      dev.run(splat, size_t(n));
+  cl_kernel k = dev.kernel("synthesize", "synth_pixels");
+
+  // Batches of whole pixels whose hitpoints fit one allocation (every pixel's hitpoints in one).
+  const size_t hb = dev.batch_items(sizeof(pf_hitpoint), std::max<size_t>(nh, 1));
+  const size_t pb = dev.batch_items(sizeof(cl_int), npix + 1) - 1;
+  size_t max_pixel = 0;
+  for (size_t o = 0; o < npix; ++o) max_pixel = std::max(max_pixel, size_t(start[o + 1] - start[o]));
+  if (max_pixel > hb)
+    throw input_error("", "one pixel's hitpoints exceed the device's largest allocation",
+                      "use --device cpu");
+  const ClBuffer& hps = dev.scratch("synth.hitpoints",
+                                    std::max<size_t>(1, std::min(hb, nh)) * sizeof(pf_hitpoint));
+  const ClBuffer& sb = dev.scratch("synth.start", (std::min(pb, npix) + 1) * sizeof(cl_int));
+  const float n_emitted = float(h.photons_emitted);
+  const cl_int has = h.photons_emitted > 0 ? 1 : 0;
+  std::vector<pf_hitpoint> staged;
+  std::vector<cl_int> local_start;
+  for (size_t p0 = 0; p0 < npix;) {
+    size_t p1 = p0 + 1;
+    while (p1 < npix && p1 - p0 < pb && size_t(start[p1 + 1] - start[p0]) <= hb) ++p1;
+    const size_t h0 = size_t(start[p0]), hn = size_t(start[p1]) - h0;
+    local_start.assign(start.begin() + long(p0), start.begin() + long(p1) + 1);
+    for (cl_int& v : local_start) v -= cl_int(h0);
+    if (hn > 0) {
+      const pf_hitpoint* src = &h.hitpoints[h0];
+      if (!sorted) {
+        staged.resize(hn);
+        for (size_t j = 0; j < hn; ++j) staged[j] = h.hitpoints[order[h0 + j]];
+        src = staged.data();
+      }
+      dev.write(hps, hn * sizeof(pf_hitpoint), src);
     }
+    dev.write(sb, local_start.size() * sizeof(cl_int), local_start.data());
+    dev.args(k, hps, sb, cl_int(p0), cl_int(p1 - p0), n_emitted, has, em, di, rgb, rad, pho, cnt);
+    dev.run(k, p1 - p0);
+    p0 = p1;
   }
-  dev.args(finish, cl_int(npix), rad, pho, cnt);
-  dev.run(finish, npix);
   dev.read(rgb, npix * 3 * sizeof(float), img.rgb.data());
   dev.read(rad, npix * sizeof(float), radius.data());
   dev.read(pho, npix * sizeof(float), photons.data());
