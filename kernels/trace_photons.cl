@@ -33,10 +33,14 @@ __kernel void trace_photons(PF_SCENE_PARAMS, uint seed, uint pass, int max_bounc
   const float u2 = pf_rng_next(&rng);
   const float u3 = pf_rng_next(&rng);
   const float u4 = pf_rng_next(&rng);
+  if (s.light_count <= 0) { /* no light_cdf[-1] read, whatever the host launches */
+    stored[local_i] = 0;
+    return;
+  }
   float p_light;
   const int li = pf_pick_light(&s, ul, &p_light);
   __global const pf_light* l = &s.lights[li];
-  if (s.light_count <= 0 || p_light <= 0.0f) {
+  if (p_light <= 0.0f) {
     stored[local_i] = 0;
     return;
   }

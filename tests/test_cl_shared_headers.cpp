@@ -18,7 +18,9 @@
 
 namespace {
 
+// FP_CONTRACT OFF at file level, as every kernel file has it (ppm.h also sets it in its own bodies).
 const char* kKernels = R"CLC(
+#pragma OPENCL FP_CONTRACT OFF
 #include "photonflow/rng.h"
 #include "photonflow/ppm.h"
 

@@ -446,6 +446,36 @@ TEST_CASE("gather methods: hitpoint sorting pads each mesh to work-group multipl
   }
 }
 
+// NVIDIA reports 48 KiB of local memory. A work-group of 512 fits every kernel's tiles there except
+// gather_clusters's (2·512 photons + 512 ints = 50 KiB): only kmeans-clusters may be refused.
+TEST_CASE("gather methods: local memory is checked per kernel (48 KiB, as on NVIDIA)",
+          "[gather][opencl]") {
+  auto dev = test_device();
+  if (!dev) return;
+  ClDeviceInfo info = dev->info();
+  if (info.local_mem < 64 * 1024) return;  // the device itself has less: nothing to emulate
+  info.local_mem = 48 * 1024;
+  ClContext nv(info, 512);
+  Fixture f = make_fixture(24, 20, 1, 2000, DirectMode::Photons);
+  for (GatherMethod m : device_methods()) {
+    INFO(gather_method_name(m));
+    PpmOptions opt;
+    opt.method = m;
+    HitpointSet h = f.fresh;
+    if (m == GatherMethod::KmeansClusters) {
+      try {
+        ppm_pass(f.scene, h, f.passes[0].photons, f.passes[0].emitted, opt, nv);
+        FAIL("no error");
+      } catch (const InputError& e) {
+        CHECK(std::string(e.what()).find("--wg-size") != std::string::npos);
+      }
+    } else {
+      ppm_pass(f.scene, h, f.passes[0].photons, f.passes[0].emitted, opt, nv);
+      CHECK(h.passes == 1);
+    }
+  }
+}
+
 TEST_CASE("gather methods: wrong backend and oversized passes are refused", "[gather][opencl]") {
   Fixture f = make_fixture(16, 16, 1, 2000, DirectMode::Photons);
   PpmOptions opt;

@@ -302,7 +302,8 @@ Image synthesize(const HitpointSet& h, ClContext& dev) {
   const size_t hb = dev.batch_items(sizeof(pf_hitpoint), std::max<size_t>(nh, 1));
   const size_t pb = dev.batch_items(sizeof(cl_int), npix + 1) - 1;
   size_t max_pixel = 0;
-  for (size_t o = 0; o < npix; ++o) max_pixel = std::max(max_pixel, size_t(start[o + 1] - start[o]));
+  for (size_t o = 0; o < npix; ++o)
+    max_pixel = std::max(max_pixel, size_t(start[o + 1] - start[o]));
   if (max_pixel > hb)
     throw input_error("", "one pixel's hitpoints exceed the device's largest allocation",
                       "use --device cpu");
