@@ -57,10 +57,13 @@ struct ToolRun {
   std::string out, err;
 };
 
-// Runs `tool args` from bin_dir(), capturing stdout and stderr.
-inline ToolRun run_tool(const std::string& tool, const std::string& args, const TempDir& tmp) {
+// Runs `tool args` from bin_dir(), capturing stdout and stderr; `env` ("NAME=value ...") is set
+// for the tool alone.
+inline ToolRun run_tool(const std::string& tool, const std::string& args, const TempDir& tmp,
+                        const std::string& env = "") {
   std::string out = tmp / ".stdout", err = tmp / ".stderr";
-  std::string cmd = bin_dir() + "/" + tool + " " + args + " >" + out + " 2>" + err;
+  std::string cmd = (env.empty() ? "" : "env " + env + " ") + bin_dir() + "/" + tool + " " + args +
+                    " >" + out + " 2>" + err;
   int status = std::system(cmd.c_str());
   ToolRun r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

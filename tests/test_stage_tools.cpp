@@ -95,7 +95,7 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
   }
   SECTION("radius or alpha out of range") {
     check_refused(run_tool("trace-hitpoints", "--scene " + box + " -o " + out + " --radius -1", tmp),
-                  out, "--radius must be positive");
+                  out, "--radius must be 0 (automatic) or a positive length");
     for (const char* a : {"0", "1.5", "-0.2"})
       check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
                                                ph + " -o " + out + " --alpha " + a, tmp),

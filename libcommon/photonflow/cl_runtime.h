@@ -244,7 +244,7 @@ class ClMapping {
   void* p_ = nullptr;
 };
 
-// Opens the backend `opt` asks for and says which on `log` (one line "<tool>: device: ..."):
+// Opens the backend `opt` asks for and says which on stdout (one line "<tool>: device: ..."):
 //   cpu    → nullptr (the CPU backend), nothing printed;
 //   opencl → the chosen device (--cl-platform/--cl-device, else the first GPU, else the first CPU
 //            device, else the first), InputError when there is none;

@@ -42,6 +42,10 @@ struct EyePassResult {
 // the camera-to-scene distance:  R0 = max(diag / 200, 4 · pixel_angle · |look_at − eye|).
 float default_radius(const Scene& scene);
 
+// InputError naming the option (--spp, --max-depth, --shadow-samples, --radius, --threads) when
+// one is out of range; trace-hitpoints and render check their options with it.
+void check_options(const EyePassOptions& opt);
+
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt);
 
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with

@@ -36,6 +36,10 @@ struct PhotonPassResult {
   uint64_t emitted = 0;            // photons emitted in this pass
 };
 
+// InputError naming the option (--photons, --max-bounces, --threads) when one is out of range;
+// trace-photons and render check their options with it.
+void check_options(const PhotonPassOptions& opt);
+
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt);
 
 // The photons of a pass as traced: one buffer per chunk of kChunk emitted photons (chunk c holds

@@ -9,6 +9,7 @@
 // routes give the same image.
 #pragma once
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -91,6 +92,20 @@ struct RenderStatus {
   double mean_radius = 0;         // mean gather radius R of the hitpoints (eq. 3.16), world units
   bool resumed = false;           // the run continued a checkpoint
 };
+
+// InputError naming the option when one is out of range: the eye and photon pass options
+// (check_options), --passes > 0, --alpha in (0, 1], --max-bins > 0, --checkpoint-every > 0 with
+// a checkpoint, --snapshot-every >= 0, --snapshot-at within 1..--passes. render_progressive
+// calls it first.
+void check_options(const RenderOptions& opt);
+
+// The options a PPM state depends on, as canonical text under their tool option names ("alpha" →
+// "0.7", "seed", "photons", "spp", "max-depth", "max-bounces", "direct", "shadow-samples",
+// "radius"). render_progressive records them in every checkpoint's provenance parameters as
+// "state.<name>" and resumes only a checkpoint whose record equals this run's: a state continued
+// under other options would be neither run's image. (Passes, snapshots, threads, device, method
+// and work-group size may change: every gather method gathers the same photons.)
+std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final

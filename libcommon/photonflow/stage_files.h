@@ -68,6 +68,8 @@ HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::s
 
 void save_hitpoints(const HitpointSet& h, const std::string& path, const Provenance& prov);
 HitpointSet load_hitpoints(const std::string& path);
+// The provenance group of a hitpoints file (the render driver checks a checkpoint's with it).
+Provenance load_hitpoints_provenance(const std::string& path);
 void save_photons(const PhotonSet& p, const std::string& path, const Provenance& prov);
 PhotonSet load_photons(const std::string& path);
 void save_grids(const GridSet& g, const std::string& path, const Provenance& prov);

@@ -1,7 +1,8 @@
 // tool_main.h — the shared shell of every stage executable's main().
 //
-// A tool's main parses options, reads inputs, calls one library function and writes outputs, all
-// inside run_tool(), which turns failures into one line on stderr and an exit code:
+// A tool's main parses options (parse_options), checks its outputs before any work (check_outputs,
+// output_file.h), reads inputs, calls one library function and writes outputs, all inside
+// run_tool(), which turns failures into one line on stderr and an exit code:
 //   pf::InputError / cxxopts option errors → "<tool>: <message>", exit 2 (bad input)
 //   any other std::exception              → "<tool>: internal error: <message>", exit 1
 #pragma once
@@ -9,13 +10,19 @@
 #include <exception>
 #include <functional>
 #include <iostream>
+#include <initializer_list>
+#include <string>
+#include <vector>
 
 #include "photonflow/error.h"
+#include "photonflow/output_file.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
 inline int run_tool(const char* tool, const std::function<int()>& body) {
   try {
+    check_thread_environment();
     return body();
   } catch (const InputError& e) {
     std::cerr << tool << ": " << e.what() << "\n";
@@ -27,6 +34,38 @@ inline int run_tool(const char* tool, const std::function<int()>& body) {
     std::cerr << tool << ": internal error: " << e.what() << "\n";
     return 1;
   }
+}
+
+// Parses the command line and refuses what it does not take: a stray argument (also the value
+// "2" left over by "-o --spp 2", where --spp became the output's name) and a --threads option out
+// of 0..kMaxThreads.
+inline cxxopts::ParseResult parse_options(cxxopts::Options& options, int argc, char** argv) {
+  cxxopts::ParseResult r = options.parse(argc, argv);
+  if (!r.unmatched().empty())
+    throw input_error("", "unexpected argument '" + r.unmatched().front() + "'",
+                      "see " + options.program() + " --help");
+  for (const auto& kv : r.arguments())
+    if (kv.key() == "threads") require_threads(kv.as<int>());
+  return r;
+}
+
+// A path option's value: given, else its default, else "" (for check_outputs' lists).
+inline std::string path_option(const cxxopts::ParseResult& r, const std::string& name) {
+  if (r.count(name)) return r[name].as<std::string>();
+  for (const auto& kv : r.defaults())
+    if (kv.key() == name) return kv.value();
+  return "";
+}
+
+// check_outputs (output_file.h) on the files named by options: `inputs` and `outputs` are option
+// names ("scene", "output"); options not given are skipped.
+inline void check_output_options(const cxxopts::ParseResult& r,
+                                 std::initializer_list<const char*> inputs,
+                                 std::initializer_list<const char*> outputs) {
+  std::vector<std::string> in, out;
+  for (const char* name : inputs) in.push_back(path_option(r, name));
+  for (const char* name : outputs) out.push_back(path_option(r, name));
+  check_outputs(in, out);
 }
 
 // Records every option of a parsed command line, defaults included, as provenance parameters.

@@ -527,7 +527,8 @@ std::unique_ptr<ClContext> open_device(const DeviceOptions& opt, const std::stri
     throw input_error("", "--device must be one of cpu, opencl, auto, got '" + opt.device + "'");
   if (opt.work_group < 0) throw input_error("", "--work-group must be positive");
   if (opt.device == "cpu") return nullptr;
-  auto say = [&](const std::string& line) { std::cerr << tool << ": device: " << line << "\n"; };
+  // On stdout with the tool's other report lines: stderr holds only the one line of a failure.
+  auto say = [&](const std::string& line) { std::cout << tool << ": device: " << line << "\n"; };
   std::vector<ClDeviceInfo> devs = cl_list_devices();
   const bool pinned = opt.platform >= 0 || opt.device_index >= 0;
   const ClDeviceInfo* pick = nullptr;

@@ -14,6 +14,7 @@
 #include "photonflow/hash.h"
 #include "photonflow/morton.h"
 #include "photonflow/photon_grid.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
@@ -353,7 +354,7 @@ ClusterSet cluster_kmeans(const HitpointSet& h, int wg_size, int iterations, uin
   (void)seed;  // the Morton seeding is deterministic (clusters.h)
   if (iterations < 0) throw std::invalid_argument("clusters: negative iteration count");
   ClusterSet c = empty_cluster_set(h, wg_size, "kmeans");
-  const int nt = threads > 0 ? threads : omp_get_max_threads();
+  const int nt = worker_threads(threads);
   auto per_mesh = split_by_mesh(h);
   c.order.reserve(h.hitpoints.size() + h.hitpoints.size() / 4);
   for (size_t m = 0; m < per_mesh.size(); ++m)

@@ -7,9 +7,11 @@
 #include <cmath>
 
 #include "photonflow/camera.h"
+#include "photonflow/options.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
 #include "photonflow/surface.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
@@ -81,6 +83,15 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
   return mat_color(m) * kInvPi * sum * (1.f / float(samples));
 }
 
+void check_options(const EyePassOptions& opt) {
+  require_positive("spp", opt.spp);
+  require_positive("max-depth", opt.max_depth);
+  require_positive("shadow-samples", opt.shadow_samples);
+  if (!(opt.radius >= 0.f) || !std::isfinite(opt.radius))
+    throw input_error("", "--radius must be 0 (automatic) or a positive length");
+  require_threads(opt.threads);
+}
+
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
   const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
   const int strata = int(std::ceil(std::sqrt(double(spp))));
@@ -96,7 +107,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
   // Each image row collects its hitpoints in (pixel, sample) order; the rows are concatenated in
   // order afterwards, so the result does not depend on the thread count.
   std::vector<std::vector<pf_hitpoint>> rows(size_t(std::max(H, 0)));
-  int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  int threads = worker_threads(opt.threads);
 
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
   for (int y = 0; y < H; ++y) {

@@ -23,6 +23,7 @@
 #include "photonflow/h5io.h"
 #include "photonflow/hash.h"
 #include "photonflow/provenance.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
@@ -1130,7 +1131,7 @@ GaResult evolve_clusters(const GaFitnessInputs& in, const GaOptions& opt,
   std::optional<GridGatherTimer> timer;  // device-time: the photons' grid, built once per run
   if (device) timer.emplace(device_timer(in));
   res.kmeans_fitness = device ? measure_device_us(*timer, km, in) : cluster_fitness(km, in, f);
-  const int threads = device ? 1 : (opt.threads > 0 ? opt.threads : omp_get_max_threads());
+  const int threads = device ? 1 : worker_threads(opt.threads);
   const std::string id = opt.checkpoint.empty() ? "" : inputs_id(in, f);
   const std::string hp_hash = opt.checkpoint.empty() ? "" : hitpoints_hash(h);
 

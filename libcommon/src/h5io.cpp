@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "photonflow/output_file.h"
+
 namespace pf::h5 {
 
 void quiet_hdf5() {
@@ -59,7 +61,7 @@ bool FileBase::exists(const std::string& obj) const {
 Writer::Writer(const std::string& final_path, const std::string& format, int version)
     : final_path_(final_path) {
   quiet_hdf5();
-  path_ = final_path + ".tmp." + std::to_string(getpid());
+  path_ = temp_path(final_path);
   file_ = Handle(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
   if (!file_.valid())
     throw input_error(final_path, "cannot create output file",
@@ -164,11 +166,8 @@ void Writer::commit() {
   if (H5Fflush(file_.get(), H5F_SCOPE_GLOBAL) < 0)
     throw input_error(final_path_, "cannot flush output", "is the disk full?");
   file_ = Handle();
-  if (std::rename(path_.c_str(), final_path_.c_str()) != 0) {
-    std::remove(path_.c_str());
-    throw input_error(final_path_, "cannot rename temporary output into place");
-  }
-  committed_ = true;
+  committed_ = true;  // commit_temp removes the temporary file if it fails
+  commit_temp(path_, final_path_);
 }
 
 // ---- Reader ----------------------------------------------------------------------------------

@@ -15,6 +15,7 @@
 #include "photonflow/grid_shared.h"
 #include "photonflow/morton.h"
 #include "photonflow/photon_grid.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
@@ -90,7 +91,7 @@ void order_hash_grid(const HashGridLayout& g, const pf_photon* photons, size_t n
     std::vector<uint32_t>().swap(sc.slot);
     sc.slot.resize(n + n / 16);
   }
-  int workers = threads > 0 ? threads : omp_get_max_threads();
+  int workers = worker_threads(threads);
   if (n < kParallelMin) workers = 1;
   workers = std::max(1, std::min<int>(workers, int(std::max<size_t>(n / 4096, 1))));
   // Worker w's run of photons. (Computed once per worker into locals: in the loops, the stores

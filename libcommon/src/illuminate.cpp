@@ -8,12 +8,13 @@
 
 #include "photonflow/ppm.h"
 #include "photonflow/sampling.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
 namespace {
 
-int thread_count(int t) { return t > 0 ? t : omp_get_max_threads(); }
+int thread_count(int t) { return worker_threads(t); }
 
 // f_r of the hitpoint's surface: Lambertian albedo / π.
 Vec3 brdf(const Scene& s, const pf_hitpoint& hp) {

@@ -18,23 +18,11 @@
 #include <stdexcept>
 
 #include "photonflow/error.h"
+#include "photonflow/output_file.h"
 
 namespace pf {
 
 namespace {
-
-// Temporary name beside the final file, unique per process.
-std::string temp_name(const std::string& path) {
-  return path + ".tmp." + std::to_string(static_cast<long>(getpid()));
-}
-
-// Renames the finished temporary file onto `path`, or removes it and throws.
-void commit_file(const std::string& tmp, const std::string& path) {
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw input_error(path, "cannot write the file", "check the directory and its permissions");
-  }
-}
 
 // CRC-32 (ISO 3309 / PNG, reflected polynomial 0xEDB88320), table-driven.
 uint32_t crc32(const uint8_t* data, size_t n, uint32_t crc = 0) {
@@ -106,7 +94,7 @@ std::vector<uint8_t> zlib_stored(const std::vector<uint8_t>& raw) {
 }
 
 void write_bytes(const std::string& path, const std::vector<uint8_t>& bytes) {
-  std::string tmp = temp_name(path);
+  std::string tmp = temp_path(path);
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
     if (!f)
@@ -119,7 +107,7 @@ void write_bytes(const std::string& path, const std::vector<uint8_t>& bytes) {
       throw input_error(path, "cannot write the file", "disk full?");
     }
   }
-  commit_file(tmp, path);
+  commit_temp(tmp, path);
 }
 
 bool is_rgb_channel(const std::string& name) { return name == "R" || name == "G" || name == "B"; }
@@ -163,7 +151,7 @@ void write_exr(const Image& img, const std::string& path) {
                                reinterpret_cast<char*>(const_cast<float*>(data.data())), px,
                                px * img.width));
   }
-  std::string tmp = temp_name(path);
+  std::string tmp = temp_path(path);
   try {
     Imf::OutputFile out(tmp.c_str(), header);
     out.setFrameBuffer(fb);
@@ -172,7 +160,7 @@ void write_exr(const Image& img, const std::string& path) {
     std::remove(tmp.c_str());
     throw input_error(path, std::string("cannot write EXR: ") + e.what());
   }
-  commit_file(tmp, path);
+  commit_temp(tmp, path);
 }
 
 Image read_exr(const std::string& path) {

@@ -5,6 +5,7 @@
 // split clipping); S. Popov et al., "Stackless kd-tree traversal for high performance GPU ray
 // tracing", 2007 (ropes and their optimisation).
 #include "photonflow/kdtree.h"
+#include "photonflow/threads.h"
 
 #include <omp.h>
 
@@ -544,7 +545,7 @@ KdTree build_kdtree(const std::vector<pf_triangle>& tris, const KdBuildParams& p
 
   Piece piece;
   Builder builder(tris, params, auto_max_depth(tris.size(), params.max_depth));
-  const int threads = params.threads > 0 ? params.threads : omp_get_max_threads();
+  const int threads = worker_threads(params.threads);
 #pragma omp parallel num_threads(threads)
 #pragma omp single
   builder.build_binned(piece, root, refs, 0);

@@ -20,6 +20,7 @@
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
 #include "photonflow/surface.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
@@ -226,7 +227,7 @@ Image pathtrace(const Scene& scene, const PathTraceOptions& opt,
   const size_t npix = size_t(W) * size_t(H);
   const CameraFrame cam(scene.camera);
   const PathTracer tracer(scene, opt);
-  const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  const int threads = worker_threads(opt.threads);
 
   // Per-pixel sums in double: RGB, and luminance and its square (for the variance layer).
   std::vector<double> sum(3 * npix, 0.0), lum(npix, 0.0), lum2(npix, 0.0);

@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "photonflow/threads.h"
 #include "photonflow/vec.h"
 
 namespace pf {
@@ -175,7 +176,7 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
     }
   }
   const int nblocks = int(sc.blocks.size());
-  int workers = threads > 0 ? threads : omp_get_max_threads();
+  int workers = worker_threads(threads);
   if (n < kParallelMin) workers = 1;
   workers = std::max(1, std::min(workers, nblocks));
   // Worker w owns blocks [block_begin(w), block_begin(w + 1)): contiguous, in photon order.

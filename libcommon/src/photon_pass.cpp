@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "photonflow/options.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
 #include "photonflow/surface.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
@@ -94,6 +96,12 @@ void PhotonBuffers::concatenate(std::vector<pf_photon>& out) const {
   for (const auto& c : chunks) out.insert(out.end(), c.begin(), c.end());
 }
 
+void check_options(const PhotonPassOptions& opt) {
+  require_positive("photons", double(opt.photons));
+  require_positive("max-bounces", opt.max_bounces);
+  require_threads(opt.threads);
+}
+
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt) {
   // The calling thread's chunk buffers, reused by its next pass.
   thread_local PhotonBuffers buffers;
@@ -116,7 +124,7 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
   if (nchunks == 0) return opt.photons;
   const float eps = ray_epsilon(scene);
   const std::vector<LightInfo> info = light_info(scene);
-  const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  const int threads = worker_threads(opt.threads);
   const pf_uint key = pf_rng_key(opt.seed, pass);
 
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)

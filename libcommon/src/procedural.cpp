@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "photonflow/error.h"
+#include "photonflow/output_file.h"
 
 namespace pf {
 
@@ -222,7 +223,7 @@ std::vector<pf_triangle> make_cornell_room(size_t sphere_triangles) {
 }
 
 void write_obj(const std::string& path, const std::vector<pf_triangle>& tris) {
-  const std::string tmp = path + ".tmp." + std::to_string(long(getpid()));
+  const std::string tmp = temp_path(path);
   {
     std::ofstream out(tmp);
     if (!out) throw input_error(path, "cannot create the output file", "check the directory");
@@ -266,10 +267,7 @@ void write_obj(const std::string& path, const std::vector<pf_triangle>& tris) {
       throw input_error(path, "cannot write the output file", "disk full?");
     }
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw input_error(path, "cannot rename the temporary output into place");
-  }
+  commit_temp(tmp, path);
 }
 
 }  // namespace pf

@@ -30,6 +30,7 @@ static int pf_host_cleaf_test4(int first_packet, int count, const pf_hh_triangle
                                    &(hit)->tri, &(hit)->u, &(hit)->v))
 
 #include "photonflow/intersect_shared.h"
+#include "photonflow/threads.h"
 
 namespace pf {
 
@@ -379,7 +380,7 @@ bool cast(const Scene& scene, const Ray& ray, bool any_hit, Traversal trav, pf_r
   return false;
 }
 
-int thread_count(int threads) { return threads > 0 ? threads : omp_get_max_threads(); }
+int thread_count(int threads) { return worker_threads(threads); }
 
 }  // namespace
 

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "photonflow/cl_backend.h"
+#include "photonflow/options.h"
 #include "photonflow/text_file.h"
 
 namespace pf {
@@ -71,11 +72,61 @@ void ProgressiveRenderer::save_state(const std::string& path, const Provenance& 
   save_hitpoints(state(), path, prov);
 }
 
+void check_options(const RenderOptions& opt) {
+  check_options(opt.eye);
+  check_options(opt.photons);
+  require_positive("passes", opt.passes);
+  require_in_unit_interval("alpha", opt.ppm.alpha);
+  require_positive("max-bins", opt.ppm.max_bins);
+  if (!opt.checkpoint.empty()) require_positive("checkpoint-every", opt.checkpoint_every);
+  if (opt.snapshot_every < 0) throw input_error("", "--snapshot-every must be >= 0");
+  for (int p : opt.snapshot_at)
+    if (p < 1 || p > opt.passes)
+      throw input_error("", "--snapshot-at " + std::to_string(p) +
+                                " is not a pass of this run (1.." + std::to_string(opt.passes) + ")",
+                        "list passes up to --passes");
+}
+
+std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
+  return {{"spp", std::to_string(opt.eye.spp)},
+          {"max-depth", std::to_string(opt.eye.max_depth)},
+          {"direct", direct_mode_name(opt.eye.direct)},
+          {"shadow-samples", std::to_string(opt.eye.shadow_samples)},
+          {"radius", default_text(opt.eye.radius)},
+          {"seed", opt.eye.seed == opt.photons.seed  // render's one --seed
+                       ? std::to_string(opt.eye.seed)
+                       : std::to_string(opt.eye.seed) + "/" + std::to_string(opt.photons.seed)},
+          {"photons", std::to_string(opt.photons.photons)},
+          {"max-bounces", std::to_string(opt.photons.max_bounces)},
+          {"alpha", default_text(opt.ppm.alpha)}};
+}
+
+namespace {
+
+// Refuses a checkpoint whose recorded state options differ from this run's (state_parameters).
+void require_same_state(const std::string& checkpoint, const RenderOptions& opt) {
+  const Provenance made = load_hitpoints_provenance(checkpoint);
+  for (const auto& [name, value] : state_parameters(opt)) {
+    const auto it = made.parameters.find("state." + name);
+    if (it == made.parameters.end())
+      throw input_error(checkpoint, "records no '" + name + "' of the run that wrote it, so it "
+                                    "cannot be resumed safely",
+                        "start without --resume");
+    if (it->second != value)
+      throw input_error(checkpoint, "was made with --" + name + " " + it->second +
+                                        ", this run has " + value,
+                        "use the checkpoint's options or start without --resume");
+  }
+}
+
+}  // namespace
+
 HitpointSet render_progressive(
     const Scene& scene, const RenderOptions& opt, bool resume, const Provenance& prov,
     const std::function<void(int, double)>& on_pass,
     const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot,
     RenderStatus* status) {
+  check_options(opt);
   bool from_checkpoint = resume && !opt.checkpoint.empty() && access(opt.checkpoint.c_str(), F_OK) == 0;
   std::unique_ptr<ProgressiveRenderer> r;
   HitpointSet loaded;
@@ -89,7 +140,11 @@ HitpointSet render_progressive(
       throw input_error(opt.checkpoint,
                         "already has " + std::to_string(loaded.passes) + " passes, more than --passes",
                         "raise --passes or start without --resume");
+    require_same_state(opt.checkpoint, opt);
   }
+  Provenance checkpoint_prov = prov;  // the run's, with the options its state depends on
+  for (const auto& [name, value] : state_parameters(opt))
+    checkpoint_prov.parameters["state." + name] = value;
   // The rendering clock (RenderStatus::seconds): starts before the eye pass; the time spent in
   // checkpoints, snapshot callbacks and OpenCL program builds is taken off it.
   Stopwatch clock;
@@ -130,7 +185,7 @@ HitpointSet render_progressive(
     const double built_before = opt.device ? opt.device->build_seconds() : 0.0;
     if (!opt.checkpoint.empty() && opt.checkpoint_every > 0 &&
         (r->passes_done() % opt.checkpoint_every == 0 || r->passes_done() == opt.passes))
-      r->save_state(opt.checkpoint, prov);
+      r->save_state(opt.checkpoint, checkpoint_prov);
     const bool snapshot = on_snapshot && snapshot_due(opt, r->passes_done());
     if (snapshot || r->passes_done() == opt.passes) st.mean_radius = mean_radius();
     if (snapshot) on_snapshot(r->state(), st);

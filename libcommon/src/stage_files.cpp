@@ -94,6 +94,10 @@ void save_hitpoints(const HitpointSet& h, const std::string& path, const Provena
   w.commit();
 }
 
+Provenance load_hitpoints_provenance(const std::string& path) {
+  return read_provenance(h5::Reader(path, kHitpointsFormat, kHitpointsVersion));
+}
+
 HitpointSet load_hitpoints(const std::string& path) {
   h5::Reader r(path, kHitpointsFormat, kHitpointsVersion);
   HitpointSet h;

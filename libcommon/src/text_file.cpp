@@ -11,6 +11,7 @@
 #include "photonflow/version.h"
 
 #include "photonflow/error.h"
+#include "photonflow/output_file.h"
 
 namespace pf {
 
@@ -74,7 +75,7 @@ std::string numbered_name(const std::string& pattern, const std::string& key, in
 }
 
 void write_text_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp." + std::to_string(long(getpid()));
+  const std::string tmp = temp_path(path);
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
     if (!f) throw input_error(path, "cannot create the file", "check the directory");
@@ -85,10 +86,7 @@ void write_text_atomic(const std::string& path, const std::string& text) {
       throw input_error(path, "cannot write the file", "disk full?");
     }
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw input_error(path, "cannot write the file", "check the directory and its permissions");
-  }
+  commit_temp(tmp, path);
 }
 
 }  // namespace pf

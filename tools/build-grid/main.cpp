@@ -28,11 +28,12 @@ int main(int argc, char** argv) {
        "--hitpoints", cxxopts::value<float>()->default_value("0"))
       ("h,help", "print this help");
     pf::add_device_options(o);
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("photons") || !a.count("output"))
       throw pf::input_error("", "--scene, --photons and --output are required");
+    pf::check_output_options(a, {"scene", "photons", "hitpoints"}, {"output"});
     pf::PhotonGridParams gp;
     gp.max_bins = a["max-bins"].as<int>();
     gp.default_radius = a["radius"].as<float>();

@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
       ("resume", "continue the evolution from the checkpoint when it exists (same inputs, "
        "fitness, seed, population and work-group size)");
     pf::add_device_options(o);
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("hitpoints") || !a.count("output"))
@@ -111,6 +111,11 @@ int main(int argc, char** argv) {
       if (ga.fitness == pf::GaFitness::DeviceTime && !a.count("photons"))
         throw pf::input_error("", "--fitness device-time needs --photons (and --device opencl)");
     }
+
+    // The GA checkpoint is read back by --resume: an output here, never one of the other inputs.
+    pf::check_outputs({pf::path_option(a, "scene"), pf::path_option(a, "hitpoints"),
+                       pf::path_option(a, "distribution"), pf::path_option(a, "photons")},
+                      {out_path, method == "ga" ? ga.checkpoint : ""});
 
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>(), hp_path = a["hitpoints"].as<std::string>();

@@ -25,10 +25,11 @@ int main(int argc, char** argv) {
       ("threads", "worker threads, 0 = all cores", cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
     // clang-format on
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (!a.count("scene") || !a.count("output"))
       throw pf::input_error("", "--scene and --output are required");
+    pf::check_output_options(a, {"scene"}, {"output"});
     pf::EmitterMaskOptions opt;
     opt.spp = a["spp"].as<int>();
     opt.dilate = a["dilate"].as<int>();

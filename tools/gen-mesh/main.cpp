@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
        cxxopts::value<std::string>())
       ("h,help", "print this help");
     // clang-format on
-    const auto args = opts.parse(argc, argv);
+    const auto args = pf::parse_options(opts, argc, argv);
     if (args.count("help")) {
       std::cout << opts.help() << "\nAll meshes are centred at the origin, outward-facing.\n";
       return 0;
@@ -65,7 +65,8 @@ int main(int argc, char** argv) {
     const std::string out = args["out"].as<std::string>();
     const std::filesystem::path dir = std::filesystem::path(out).parent_path();
     std::error_code ec;
-    if (!dir.empty()) std::filesystem::create_directories(dir, ec);  // write_obj reports failure
+    if (!dir.empty()) std::filesystem::create_directories(dir, ec);  // check_outputs reports it
+    pf::check_outputs({}, {out});
     pf::write_obj(out, tris);
     std::cout << "gen-mesh: wrote " << tris.size() << " triangles to " << out << "\n";
     return 0;

@@ -45,12 +45,13 @@ int main(int argc, char** argv) {
       ("h,help", "print this help");
     pf::add_method_option(o);
     pf::add_device_options(o);
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("hitpoints") || !a.count("output") ||
         (!a.count("photons") && !a.count("grid")))
       throw pf::input_error("", "--scene, --hitpoints, --photons (or --grid) and --output are required");
+    pf::check_output_options(a, {"scene", "hitpoints", "photons", "grid", "clusters"}, {"output"});
     std::string estimator = a["estimator"].as<std::string>();
     pf::require_choice("estimator", estimator, {"ppm", "classic"});
     pf::PpmOptions ppm;

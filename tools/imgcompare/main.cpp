@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
     // clang-format on
     o.parse_positional({"test", "reference"});
     o.positional_help("test.exr reference.exr");
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) {
       std::cout << o.help()
                 << "\nDefinitions (N = 3 x compared pixels, a = test, b = reference, per "
@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
     const std::string ref_path = a["reference"].as<std::string>();
     const std::string mask_path = a["mask"].as<std::string>();
     const std::string json = a["json"].as<std::string>();
+    pf::check_outputs({test_path, ref_path, mask_path}, {json == "-" ? std::string() : json});
 
     const pf::Image test = pf::read_exr(test_path);
     const pf::Image ref = pf::read_exr(ref_path);

@@ -14,13 +14,6 @@
 
 namespace {
 
-// Refuses an output whose directory does not exist, before hours of rendering.
-void require_directory_of(const std::string& path) {
-  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  if (!dir.empty() && !std::filesystem::is_directory(dir))
-    throw pf::input_error(path, "its directory does not exist", "create it first");
-}
-
 // The snapshot file name: `pattern` with "{spp}" replaced by the sample count, zero-padded to the
 // digits of the total so that names sort in sample order.
 std::string snapshot_name(const std::string& pattern, int samples, int total) {
@@ -71,7 +64,7 @@ int main(int argc, char** argv) {
        cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
     // clang-format on
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) {
       std::cout << o.help() << "\nThe image after N samples is the same for any --threads, "
                                "--snapshot-every and --time-limit.\n";
@@ -106,10 +99,9 @@ int main(int argc, char** argv) {
     std::string pattern = a["snapshot"].as<std::string>();
     if (pattern.empty()) pattern = stem + "-{spp}spp" + (ext.empty() ? ".exr" : ext);
     const std::string stats = a["stats"].as<std::string>();
-    require_directory_of(out);
-    if (png != "none") require_directory_of(png);
-    if (opt.snapshot_every > 0) require_directory_of(pattern);
-    if (!stats.empty()) require_directory_of(stats);
+    pf::check_outputs({pf::path_option(a, "scene")},
+                      {out, png == "none" ? "" : png, stats,
+                       opt.snapshot_every > 0 ? snapshot_name(pattern, opt.spp, opt.spp) : ""});
 
     pf::Stopwatch clock;
     const std::string scene_path = a["scene"].as<std::string>();

@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
       ("h,help", "print this help");
     pf::add_method_option(o);
     pf::add_device_options(o);
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("output"))
@@ -65,7 +65,6 @@ int main(int argc, char** argv) {
     pf::RenderOptions opt;
     opt.passes = a["passes"].as<int>();
     int64_t photons = a["photons"].as<int64_t>();
-    pf::require_positive("passes", opt.passes);
     pf::require_positive("photons", double(photons));
     if (photons > int64_t(UINT32_MAX)) throw pf::input_error("", "--photons must be below 2^32");
     std::string direct = a["direct"].as<std::string>();
@@ -88,15 +87,11 @@ int main(int argc, char** argv) {
     opt.ppm.threads = threads;
     opt.checkpoint = a["checkpoint"].as<std::string>();
     opt.checkpoint_every = a["checkpoint-every"].as<int>();
-    pf::require_in_unit_interval("alpha", opt.ppm.alpha);
-    pf::require_positive("spp", opt.eye.spp);
-    pf::require_positive("max-bins", opt.ppm.max_bins);
-    if (!(opt.eye.radius >= 0.f)) pf::require_positive("radius", opt.eye.radius);
     if (a.count("resume") && opt.checkpoint.empty())
       throw pf::input_error("", "--resume needs --checkpoint FILE");
     opt.snapshot_every = a["snapshot-every"].as<int>();
-    if (opt.snapshot_every < 0) throw pf::input_error("", "--snapshot-every must be >= 0");
     opt.snapshot_at = pf::parse_pass_list(a["snapshot-at"].as<std::string>(), "snapshot-at");
+    pf::check_options(opt);
     const std::string out = a["output"].as<std::string>();
     std::string pattern = a["snapshot"].as<std::string>();
     if (pattern.empty()) {
@@ -105,11 +100,13 @@ int main(int argc, char** argv) {
                 (p.extension().empty() ? std::string(".exr") : p.extension().string());
     }
     const std::string stats = a["stats"].as<std::string>();
-    for (const std::string& file : {out, pattern, stats}) {
-      const std::filesystem::path dir = std::filesystem::path(file).parent_path();
-      if (!file.empty() && !dir.empty() && !std::filesystem::is_directory(dir))
-        throw pf::input_error(file, "its directory does not exist", "create it first");
-    }
+    const std::string png = pf::preview_path(out);
+    const bool snapshots = opt.snapshot_every > 0 || !opt.snapshot_at.empty();
+    // The last snapshot's name stands for all of them (same directory); the checkpoint is read
+    // back by --resume, an output all the same.
+    pf::check_outputs({pf::path_option(a, "scene")},
+                      {out, png, stats, opt.checkpoint,
+                       snapshots ? pf::render_snapshot_name(pattern, opt.passes, opt.passes) : ""});
 
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();
@@ -147,7 +144,7 @@ int main(int argc, char** argv) {
     pf::Image img = image_of(h);
     pf::write_exr(img, out);
     written.push_back({out, status});
-    pf::write_png(img, out.substr(0, out.rfind('.')) + ".png", a["exposure"].as<float>());
+    pf::write_png(img, png, a["exposure"].as<float>());
     prov.wall_time_s = clock.seconds();
     if (!stats.empty()) pf::write_render_record(stats, prov, written);
     std::cout << "render: " << out << " (" << h.width << "x" << h.height << ", " << h.passes

@@ -109,14 +109,11 @@ int run(int argc, char** argv) {
     ("h,help", "print this help");
   // clang-format on
   opts.parse_positional({"input"});
-  auto args = opts.parse(argc, argv);
+  auto args = pf::parse_options(opts, argc, argv);  // one INPUT: a second is unexpected
   if (args.count("help")) {
     std::cout << opts.help() << "\n";
     return 0;
   }
-  if (!args.unmatched().empty())
-    throw pf::input_error("", "unexpected argument '" + args.unmatched().front() + "'",
-                          "give one INPUT; see scene-bake --help");
   if (!args.count("input"))
     throw pf::input_error("", "no INPUT scene file given", "see scene-bake --help");
   if (!args.count("output"))
@@ -145,7 +142,6 @@ int run(int argc, char** argv) {
   if (o.kd.max_depth < 0 || o.kd.max_depth > pf::kKdMaxDepth)
     throw pf::input_error("", "--kd-max-depth must be in 0.." + std::to_string(pf::kKdMaxDepth));
   pf::require_positive("kd-max-leaf", o.kd.max_leaf_size);
-  if (o.kd.threads < 0) throw pf::input_error("", "--threads must be 0 (all cores) or more");
 
   std::vector<std::string> inserts, materials;
   std::vector<float> boxes;
@@ -168,6 +164,9 @@ int run(int argc, char** argv) {
     if (i < materials.size()) ins.material = materials[i];
     o.inserts.push_back(ins);
   }
+  std::vector<std::string> inputs = inserts;
+  inputs.push_back(o.input);
+  pf::check_outputs(inputs, {out});
 
   pf::Provenance prov;
   prov.tool = kTool;

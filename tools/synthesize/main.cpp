@@ -21,14 +21,14 @@ int main(int argc, char** argv) {
        cxxopts::value<float>()->default_value("0"))
       ("h,help", "print this help");
     pf::add_device_options(o);
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     if (!a.count("hitpoints") || !a.count("output"))
       throw pf::input_error("", "--hitpoints and --output are required");
     std::string out = a["output"].as<std::string>();
-    std::string png = a.count("png") ? a["png"].as<std::string>()
-                                     : out.substr(0, out.rfind('.')) + ".png";
+    std::string png = a.count("png") ? a["png"].as<std::string>() : pf::preview_path(out);
+    pf::check_outputs({pf::path_option(a, "hitpoints")}, {out, png});
     pf::HitpointSet h = pf::load_hitpoints(a["hitpoints"].as<std::string>());
     if (h.estimator == "none")
       throw pf::input_error(a["hitpoints"].as<std::string>(), "has no photons gathered yet",

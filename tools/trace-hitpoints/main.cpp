@@ -37,11 +37,12 @@ int main(int argc, char** argv) {
        cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
     pf::add_device_options(o);
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("output"))
       throw pf::input_error("", "--scene and --output are required");
+    pf::check_output_options(a, {"scene"}, {"output"});
 
     pf::EyePassOptions opt;
     opt.spp = a["spp"].as<int>();
@@ -53,10 +54,7 @@ int main(int argc, char** argv) {
     opt.radius = a["radius"].as<float>();
     opt.seed = a["seed"].as<uint32_t>();
     opt.threads = a["threads"].as<int>();
-    pf::require_positive("spp", opt.spp);
-    pf::require_positive("max-depth", opt.max_depth);
-    pf::require_positive("shadow-samples", opt.shadow_samples);
-    if (!(opt.radius >= 0.f)) pf::require_positive("radius", opt.radius);
+    pf::check_options(opt);
 
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();

@@ -30,11 +30,12 @@ int main(int argc, char** argv) {
        cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
     pf::add_device_options(o);
-    auto a = o.parse(argc, argv);
+    auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     if (!a.count("scene") || !a.count("output"))
       throw pf::input_error("", "--scene and --output are required");
+    pf::check_output_options(a, {"scene"}, {"output"});
     int64_t photons = a["photons"].as<int64_t>();
     int passes = a["passes"].as<int>(), first = a["first-pass"].as<int>();
     pf::require_positive("photons", double(photons));
@@ -47,7 +48,7 @@ int main(int argc, char** argv) {
     opt.seed = a["seed"].as<uint32_t>();
     opt.max_bounces = a["max-bounces"].as<int>();
     opt.threads = a["threads"].as<int>();
-    pf::require_positive("max-bounces", opt.max_bounces);
+    pf::check_options(opt);
 
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();

@@ -1,0 +1,32 @@
+// output_file.h — the output files of a stage: written under a temporary name and renamed into
+// place (a killed stage never leaves a file that looks whole), and checked before any work, so a
+// run that would fail to write its last output fails before it writes its first.
+//
+// Used by every writer (h5io.h, image.h, text_file.h, procedural.h) and by every tool's main.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace pf {
+
+// "<path>.tmp.<pid>": the temporary name beside `path`, unique per process.
+std::string temp_path(const std::string& path);
+
+// Renames the finished `tmp` onto `path`. Refuses (InputError naming `path`, `tmp` removed) when
+// `path` exists and is not a regular file — a rename would replace a device node such as /dev/null
+// or fail on a directory — or when the rename fails.
+void commit_temp(const std::string& tmp, const std::string& path);
+
+// Checks a run's outputs before any work (empty paths are skipped). InputError naming the path
+// when an output
+//   - is one of the inputs (the same file, also through another name or a link) or is named twice,
+//   - exists and is not a regular file,
+//   - cannot be created: its directory is missing, or a probe file "<path>.tmp.<pid>" cannot be
+//     created there (read-only, /proc, no permission).
+void check_outputs(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs);
+
+// The PNG preview beside an image: "dir/img.exr" → "dir/img.png", "a.d/img" → "a.d/img.png" (only
+// the file name's extension is replaced).
+std::string preview_path(const std::string& image);
+
+}  // namespace pf

@@ -1,0 +1,242 @@
+// The shell every stage shares (tool_main.h, output_file.h, threads.h) and the render driver's
+// option checks, through the executables:
+//   - an output that is an input (also under another name), is named twice, is not a regular file
+//     (a FIFO here: as root a rename would have replaced /dev/null), or cannot be created is
+//     refused before any work, with one line, exit 2, the input untouched and no output at all —
+//     also no first output of a run whose later output would have failed;
+//   - the PNG preview goes beside the image even when a directory name has a dot;
+//   - stray arguments and --threads / OMP_NUM_THREADS beyond kMaxThreads are refused (libgomp
+//     crashed on 100 000 threads);
+//   - render checks its options as trace-hitpoints and trace-photons do, and --resume continues
+//     only a checkpoint made with the same state options (state_parameters).
+// Plus the library pieces themselves: preview_path, check_outputs, commit_temp.
+#include <catch2/catch.hpp>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "photonflow/error.h"
+#include "photonflow/hash.h"
+#include "photonflow/image.h"
+#include "photonflow/output_file.h"
+#include "photonflow/render_driver.h"
+#include "photonflow/threads.h"
+#include "support.h"
+
+using namespace pf;
+using test::run_tool;
+using test::TempDir;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Checks a refused run: exit 2, one line on stderr containing `needle`, none of `absent` exists,
+// and no temporary file is left in the folder.
+void check_refused(const test::ToolRun& r, const TempDir& tmp, const std::string& needle,
+                   const std::vector<std::string>& absent = {}) {
+  INFO("stderr: " << r.err);
+  CHECK(r.exit_code == 2);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.find(needle) != std::string::npos);
+  for (const std::string& p : absent) {
+    INFO("must not exist: " << p);
+    CHECK_FALSE(fs::exists(p));
+  }
+  for (auto& e : fs::recursive_directory_iterator(tmp.dir))
+    CHECK(e.path().string().find(".tmp.") == std::string::npos);
+}
+
+// A small chain: scene, hitpoints, photons, gathered state.
+struct Chain {
+  std::string scene, hp, ph, st;
+};
+
+Chain make_chain(const TempDir& tmp) {
+  Chain c{tmp / "scene.h5", tmp / "hp.h5", tmp / "ph.h5", tmp / "st.h5"};
+  REQUIRE(run_tool("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o " +
+                                     c.scene + " --width 16 --height 12",
+                   tmp)
+              .exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + c.hp, tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-photons", "--scene " + c.scene + " -o " + c.ph + " --photons 2000", tmp)
+              .exit_code == 0);
+  REQUIRE(run_tool("illuminate",
+                   "--scene " + c.scene + " --hitpoints " + c.hp + " --photons " + c.ph + " -o " +
+                       c.st,
+                   tmp)
+              .exit_code == 0);
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("outputs: preview_path replaces only the file name's extension", "[tools][outputs]") {
+  CHECK(preview_path("img.exr") == "img.png");
+  CHECK(preview_path("dir/img.exr") == "dir/img.png");
+  CHECK(preview_path("sub.d/img") == "sub.d/img.png");
+  CHECK(preview_path("a.b/c.d.exr") == "a.b/c.d.png");
+}
+
+TEST_CASE("outputs: check_outputs and commit_temp refuse what a rename would destroy",
+          "[tools][outputs]") {
+  TempDir tmp("outputs-lib");
+  const std::string in = tmp / "in.h5";
+  { std::ofstream(in) << "x"; }
+  fs::create_directories(tmp / "sub");
+  CHECK_NOTHROW(check_outputs({in}, {tmp / "out.h5", "", tmp / "out.png"}));
+  CHECK_THROWS_AS(check_outputs({in}, {in}), InputError);
+  CHECK_THROWS_AS(check_outputs({in}, {tmp / "sub/../in.h5"}), InputError);  // another name
+  fs::create_symlink(in, tmp / "link.h5");
+  CHECK_THROWS_AS(check_outputs({tmp / "link.h5"}, {in}), InputError);  // through a link
+  CHECK_THROWS_AS(check_outputs({}, {tmp / "a.h5", tmp / "./a.h5"}), InputError);
+  CHECK_THROWS_AS(check_outputs({}, {tmp / "missing/a.h5"}), InputError);
+  CHECK_THROWS_AS(check_outputs({}, {tmp / "sub"}), InputError);  // a directory
+  REQUIRE(mkfifo((tmp / "fifo").c_str(), 0600) == 0);
+  CHECK_THROWS_AS(check_outputs({}, {tmp / "fifo"}), InputError);
+  // commit_temp over the FIFO: refused, the FIFO kept, the temporary file removed.
+  const std::string t = temp_path(tmp / "fifo");
+  { std::ofstream(t) << "data"; }
+  CHECK_THROWS_AS(commit_temp(t, tmp / "fifo"), InputError);
+  CHECK(fs::is_fifo(tmp / "fifo"));
+  CHECK_FALSE(fs::exists(t));
+  // The probe leaves nothing behind.
+  for (auto& e : fs::directory_iterator(tmp.dir))
+    CHECK(e.path().string().find(".tmp.") == std::string::npos);
+}
+
+TEST_CASE("outputs: stages never overwrite an input and fail before their first output",
+          "[tools][outputs]") {
+  TempDir tmp("outputs");
+  const Chain c = make_chain(tmp);
+  const std::string scene_hash = sha256_file(c.scene), st_hash = sha256_file(c.st);
+
+  SECTION("an output that is an input") {
+    check_refused(run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + c.scene, tmp), tmp,
+                  "is also an input");
+    check_refused(run_tool("trace-hitpoints",
+                           "--scene " + c.scene + " -o " + (tmp / "x/../scene.h5"), tmp),
+                  tmp, "is also an input");
+    check_refused(run_tool("synthesize", "--hitpoints " + c.st + " -o " + c.st, tmp), tmp,
+                  "is also an input");
+    check_refused(run_tool("render", "--scene " + c.scene + " -o " + (tmp / "r.exr") +
+                                         " --passes 1 --photons 500 --checkpoint " + c.scene,
+                           tmp),
+                  tmp, "is also an input", {tmp / "r.exr"});
+    CHECK(sha256_file(c.scene) == scene_hash);
+    CHECK(sha256_file(c.st) == st_hash);
+  }
+  SECTION("the preview and the image under one name") {
+    check_refused(run_tool("synthesize", "--hitpoints " + c.st + " -o " + (tmp / "o.png"), tmp),
+                  tmp, "two outputs", {tmp / "o.png"});
+    check_refused(run_tool("synthesize", "--hitpoints " + c.st + " -o " + (tmp / "o.exr") +
+                                             " --png " + (tmp / "o.exr"), tmp),
+                  tmp, "two outputs", {tmp / "o.exr"});
+  }
+  SECTION("an output that is not a regular file") {
+    REQUIRE(mkfifo((tmp / "fifo").c_str(), 0600) == 0);
+    check_refused(run_tool("trace-photons", "--scene " + c.scene + " -o " + (tmp / "fifo"), tmp),
+                  tmp, "not a regular file");
+    CHECK(fs::is_fifo(tmp / "fifo"));
+  }
+  SECTION("a later output that cannot be written: no earlier output either") {
+    check_refused(run_tool("synthesize", "--hitpoints " + c.st + " -o " + (tmp / "o.exr") +
+                                             " --png " + (tmp / "missing/x.png"), tmp),
+                  tmp, "directory does not exist", {tmp / "o.exr"});
+    check_refused(run_tool("render", "--scene " + c.scene + " -o " + (tmp / "r.exr") +
+                                         " --passes 1 --photons 500 --stats /proc/pf-st.json",
+                           tmp),
+                  tmp, "cannot be created", {tmp / "r.exr", tmp / "r.png"});
+  }
+  SECTION("the PNG goes beside the image when a directory name has a dot") {
+    fs::create_directories(tmp / "sub.d");
+    REQUIRE(run_tool("synthesize", "--hitpoints " + c.st + " -o " + (tmp / "sub.d/img"), tmp)
+                .exit_code == 0);
+    CHECK(fs::exists(tmp / "sub.d/img"));
+    CHECK(fs::exists(tmp / "sub.d/img.png"));
+    CHECK_FALSE(fs::exists(tmp / "sub.png"));
+  }
+}
+
+TEST_CASE("outputs: stray arguments and thread counts beyond the limit are refused",
+          "[tools][outputs]") {
+  TempDir tmp("args");
+  const Chain c = make_chain(tmp);
+  const std::string out = tmp / "o.h5";
+  check_refused(run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + out + " stray", tmp),
+                tmp, "unexpected argument 'stray'", {out});
+  // "-o --spp 2": --spp becomes the output's name, "2" is left over.
+  check_refused(run_tool("trace-hitpoints", "--scene " + c.scene + " -o --spp 2", tmp), tmp,
+                "unexpected argument '2'", {tmp / "--spp"});
+  const std::string big = std::to_string(kMaxThreads + 1);
+  check_refused(run_tool("trace-photons", "--scene " + c.scene + " -o " + out + " --threads " + big,
+                         tmp),
+                tmp, "--threads must be 0 (all cores) to", {out});
+  check_refused(run_tool("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o " +
+                                           out + " --threads -1", tmp),
+                tmp, "--threads", {out});
+  check_refused(run_tool("trace-photons", "--scene " + c.scene + " -o " + out, tmp,
+                         "OMP_NUM_THREADS=100000"),
+                tmp, "OMP_NUM_THREADS=100000", {out});
+  CHECK(worker_threads(kMaxThreads * 4) == kMaxThreads);
+  CHECK(worker_threads(3) == 3);
+  CHECK(worker_threads(0) >= 1);
+}
+
+TEST_CASE("render: options out of range are refused as the stages refuse them",
+          "[tools][render][options]") {
+  TempDir tmp("render-options");
+  const Chain c = make_chain(tmp);
+  const std::string base = "--scene " + c.scene + " -o " + (tmp / "r.exr") + " --photons 500 ";
+  const std::vector<std::string> none = {tmp / "r.exr", tmp / "r.png"};
+  check_refused(run_tool("render", base + "--max-depth 0", tmp), tmp, "--max-depth", none);
+  check_refused(run_tool("render", base + "--max-bounces -5", tmp), tmp, "--max-bounces", none);
+  check_refused(run_tool("render", base + "--shadow-samples 0 --direct shadow-rays", tmp), tmp,
+                "--shadow-samples", none);
+  check_refused(run_tool("render", base + "--checkpoint " + (tmp / "ck.h5") +
+                                       " --checkpoint-every 0", tmp),
+                tmp, "--checkpoint-every", none);
+  check_refused(run_tool("render", base + "--passes 2 --snapshot-at 1,99", tmp), tmp,
+                "--snapshot-at 99", none);
+  // The library refuses the same (render_progressive calls check_options first).
+  RenderOptions opt;
+  opt.eye.max_depth = 0;
+  CHECK_THROWS_AS(check_options(opt), InputError);
+  opt = RenderOptions{};
+  opt.snapshot_at = {opt.passes + 1};
+  CHECK_THROWS_AS(check_options(opt), InputError);
+  CHECK_NOTHROW(check_options(RenderOptions{}));
+}
+
+TEST_CASE("render: --resume continues only a checkpoint made with the same state options",
+          "[tools][render][resume]") {
+  TempDir tmp("render-resume");
+  const Chain c = make_chain(tmp);
+  const std::string ck = tmp / "ck.h5";
+  const std::string common = "--scene " + c.scene + " --photons 1000 --checkpoint " + ck +
+                             " --checkpoint-every 1 --resume ";
+  REQUIRE(run_tool("render", common + "--passes 2 -o " + (tmp / "a.exr"), tmp).exit_code == 0);
+  const std::string ck_hash = sha256_file(ck);
+  for (const std::string& change :
+       {"--alpha 0.3", "--seed 9", "--spp 2", "--direct shadow-rays", "--photons 999",
+        "--radius 0.05", "--max-depth 3", "--max-bounces 4"}) {
+    INFO(change);
+    check_refused(run_tool("render", common + "--passes 3 -o " + (tmp / "b.exr") + " " + change,
+                           tmp),
+                  tmp, "was made with --", {tmp / "b.exr"});
+    CHECK(sha256_file(ck) == ck_hash);
+  }
+  // Options the state does not depend on may change (more passes, threads), and a value may be
+  // spelled another way (0.70).
+  auto r = run_tool("render", common + "--passes 3 -o " + (tmp / "c.exr") +
+                                  " --threads 1 --alpha 0.70",
+                    tmp);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  // A fresh 3-pass run gives the same image as the resumed one.
+  REQUIRE(run_tool("render", "--scene " + c.scene + " --photons 1000 --passes 3 -o " +
+                                 (tmp / "d.exr"),
+                   tmp)
+              .exit_code == 0);
+  CHECK(read_exr(tmp / "c.exr").rgb == read_exr(tmp / "d.exr").rgb);
+}
