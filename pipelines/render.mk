@@ -97,7 +97,15 @@ $(DIR)/image.exr: $(DIR)/state.h5 $(BIN)/synthesize $(call param_stamp,$(DIR)/sy
 	$(BIN)/synthesize --hitpoints $< -o $@ $(SYN_P)
 
 # The driver's parameters are all of the above in one stamp; its checkpoint makes reruns resume.
+# render --resume refuses a checkpoint made with other state options (render_driver.h
+# state_parameters), so one older than their own stamp (or than the scene) is removed first: a
+# rerun after e.g. an ALPHA change starts afresh, one after a PASSES change (or an interruption)
+# resumes.
 DRIVER_P := $(EYE_P) --passes $(PASSES) --photons $(PHOTONS) $(ILL_P) $(SYN_P)
-$(DIR)/render.exr: $(DIR)/scene.h5 $(BIN)/render $(call param_stamp,$(DIR)/render.params,$(DRIVER_P))
+STATE_P  := $(EYE_P) --photons $(PHOTONS) --alpha $(ALPHA)
+CHECKPOINT := $(DIR)/render-checkpoint.h5
+$(DIR)/render.exr: $(DIR)/scene.h5 $(BIN)/render $(call param_stamp,$(DIR)/render.params,$(DRIVER_P)) \
+                   $(call param_stamp,$(DIR)/render-state.params,$(STATE_P))
+	@[ $(CHECKPOINT) -nt $(DIR)/render-state.params ] && [ $(CHECKPOINT) -nt $< ] || rm -f $(CHECKPOINT)
 	$(BIN)/render --scene $< -o $@ $(DRIVER_P) $(T) \
-	  --checkpoint $(DIR)/render-checkpoint.h5 --checkpoint-every $(CHECKPOINT_EVERY) --resume
+	  --checkpoint $(CHECKPOINT) --checkpoint-every $(CHECKPOINT_EVERY) --resume

@@ -194,3 +194,31 @@ TEST_CASE("the Make DAG reruns exactly the stages whose parameters changed", "[t
   CHECK(stages("PHOTONS=4000 ALPHA=0.5 SPP=2 EXPOSURE=1") == "synthesize ");
   CHECK(stages("PHOTONS=4000 ALPHA=0.5 SPP=2 EXPOSURE=1") == "");
 }
+
+// Long runs go through the render driver with a checkpoint (render.mk). A rerun after a state
+// option changed starts afresh (render --resume would refuse the old checkpoint), one after more
+// PASSES resumes; both give the image of an uninterrupted run with those options.
+TEST_CASE("the Make DAG's render driver restarts after a state option changed, resumes otherwise",
+          "[tools][dag][resume]") {
+  TempDir tmp("dag-driver");
+  const std::string make = "make -s --no-print-directory -C " + std::string(PF_SOURCE_DIR) +
+                           " -f pipelines/render.mk BIN=" + test::bin_dir() + " OUT=" +
+                           tmp.dir.string() + " WIDTH=32 HEIGHT=24 PHOTONS=2000 STAGED_MAX_PASSES=2";
+  const std::string dir = tmp / "cornell-box";
+  auto make_ok = [&](const std::string& vars) {
+    const std::string cmd = make + " " + vars + " render > " + (tmp / "make.log") + " 2>&1";
+    REQUIRE(std::system(cmd.c_str()) == 0);
+  };
+  auto fresh = [&](const std::string& opts, const std::string& name) {
+    REQUIRE(run_tool("render", "--scene " + dir + "/scene.h5 --photons 2000 " + opts + " -o " +
+                                   (tmp / name), tmp)
+                .exit_code == 0);
+    return read_exr(tmp / name);
+  };
+  make_ok("PASSES=3 ALPHA=0.7");
+  REQUIRE(std::filesystem::exists(dir + "/render-checkpoint.h5"));
+  make_ok("PASSES=3 ALPHA=0.5");
+  CHECK(same_pixels(read_exr(dir + "/render.exr"), fresh("--passes 3 --alpha 0.5", "a.exr")));
+  make_ok("PASSES=5 ALPHA=0.5");
+  CHECK(same_pixels(read_exr(dir + "/render.exr"), fresh("--passes 5 --alpha 0.5", "b.exr")));
+}
