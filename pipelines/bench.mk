@@ -1,6 +1,8 @@
 # bench.mk — the benchmarks of docs/BENCHMARKS.md, each writing its table to $(OUT)/bench/.
 #
-#   make bench                    all of them (about an hour on 2 cores; gather alone ~40 min)
+#   make bench                    all of them (the whole target has not been timed; gather alone
+#                                 = bench_gather --runs 5: 8 min 25 s on 2 idle cores, the
+#                                 Table 7.3 run of docs/BENCHMARKS.md)
 #   make bench BENCH=raycast      one: raycast | pipeline | memory | opencl | gather
 #
 # Results are measured numbers for this machine; copy them into docs/BENCHMARKS.md by hand with the

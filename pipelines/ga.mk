@@ -2,7 +2,8 @@
 # 8.1–8.4 on this machine, and the staged route that precomputes GA clusters once for a static
 # scene and camera and reuses them.
 #
-#   make -f pipelines/ga.mk                  both (tables: about an hour on 2 free cores, most of it Table 8.4)
+#   make -f pipelines/ga.mk                  both (tables: 50 min wall on 2 cores, 43 of them Table 8.4,
+#                                            in the run of docs/results/ga.md)
 #   make -f pipelines/ga.mk tables           Tables 8.1–8.4 + rank correlations → docs/results/ga-tables.md
 #   make -f pipelines/ga.mk stages           scene → hitpoints → photon distribution → cluster --method ga
 #                                            → illuminate --method grid-kmeans --clusters → image
@@ -11,9 +12,9 @@
 # tables: bench_ga (bench/bench_ga.cpp) at SIZE, hitpoints of MESH (the thesis: the floor), a map
 # of DIST_PASSES passes, RUNS runs of ITERATIONS generations × POPULATION per CPU fitness, and
 # DEVICE_FITNESS_RUNS runs of the device-time fitness (DEVICE_ITERATIONS × DEVICE_POPULATION,
-# DEVICE_RUNS gathers per evaluation: the thesis's 10 runs of 300 × 50, about 45 minutes on PoCL
-# with 2 cores; DEVICE_FITNESS_RUNS=0 leaves Table 8.4 out). The table is measured again when
-# bench_ga changed or a parameter did.
+# DEVICE_RUNS gathers per evaluation: the thesis's 10 runs of 300 × 50, 43 minutes on PoCL
+# with 2 cores in the run of docs/results/ga.md; DEVICE_FITNESS_RUNS=0 leaves Table 8.4 out).
+# The table is measured again when bench_ga changed or a parameter did.
 #
 # stages: every stage's parameters go into a stamp (pipelines/stamp.mk) as in render.mk: the GA
 # (minutes) reruns only when its inputs or parameters change; an interrupted `cluster` resumes from
