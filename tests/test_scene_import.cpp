@@ -286,6 +286,11 @@ TEST_CASE("bad camera options are input errors", "[scene_import]") {
     o.eye = Vec3(1, 1, 1);
     o.look_at = Vec3(1, 1, 1);
     CHECK_THROWS_AS(bake("tests/data/camera.dae", o), InputError);
+    // Closer than rounding: the printed digits of a point typed back in.
+    o.look_at = Vec3(1.f, 1.f, std::nextafter(1.f, 2.f));
+    CHECK_THROWS_AS(bake("tests/data/camera.dae", o), InputError);
+    o.look_at = Vec3(1.f, 1.f, 1.01f);  // close but a real direction
+    CHECK_NOTHROW(bake("tests/data/camera.dae", o));
   }
   SECTION("up along the view") {
     o.up = Vec3(-1, 0, 0);

@@ -450,7 +450,10 @@ pf_camera resolve_camera(const BakeOptions& o, const std::optional<FileCamera>& 
   if (o.look_at) look_at = *o.look_at;
   if (o.up) up = *o.up;
   const Vec3 dir = look_at - eye;
-  if (!finite(eye) || !finite(look_at) || !finite(up) || !(length(dir) > 0.f))
+  // A direction from two points closer than float rounding of the scene's coordinates is noise
+  // (an --eye typed onto the file's look-at point by its printed digits): refused, not normalised.
+  const float min_dist = 1e-5f * std::max({1.f, length(bounds.extent()), length(eye)});
+  if (!finite(eye) || !finite(look_at) || !finite(up) || !(length(dir) > min_dist))
     throw input_error(file, "camera eye " + fmt_vec(eye) + " and look-at " + fmt_vec(look_at) +
                                 " do not give a view direction",
                       "give distinct finite --eye and --look-at");
