@@ -232,6 +232,20 @@ TEST_CASE("provenance round-trips with input hashes", "[h5io][provenance]") {
   CHECK(q.command_line == p.command_line);
   CHECK_FALSE(q.version.empty());
   CHECK_FALSE(q.git_hash.empty());
+  // The hash is the source tree's current commit (regenerated at every build, git_version.cmake),
+  // not the one cmake was first run at; "-dirty" with uncommitted changes to tracked files.
+  std::string head;
+  if (FILE* g = popen(("git -C '" + std::string(PF_SOURCE_DIR) +
+                       "' rev-parse --short=12 HEAD 2>/dev/null").c_str(), "r")) {
+    char buf[64] = {0};
+    if (fgets(buf, sizeof buf, g)) head = buf;
+    pclose(g);
+  }
+  if (!head.empty() && head.back() == '\n') head.pop_back();
+  if (!head.empty()) {
+    INFO("HEAD " << head << ", recorded " << q.git_hash << " (rebuild after committing)");
+    CHECK(q.git_hash.rfind(head, 0) == 0);
+  }
   REQUIRE(q.inputs.size() == 1);
   CHECK(q.inputs[0].role == "source");
   CHECK(q.inputs[0].sha256 == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
