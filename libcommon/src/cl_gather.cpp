@@ -106,6 +106,7 @@ DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int me
   if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
     throw std::invalid_argument("photon grid: default_radius must be positive and finite");
   if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
+  check_max_bins(params.max_bins, "the photon grid");
   DeviceGrid g;
   const size_t meshes = size_t(mesh_count);
   // 1. Per-mesh bounds and counts (local reduction, then one atomic per mesh and work-group).
@@ -140,9 +141,8 @@ DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int me
     h = mesh_grid_header(lo, hi, count, params);
     h.first_bin = pf_int(entries);
     h.first_photon = first_photon;
-    entries += count == 0 ? 1 : int64_t(h.nx) * h.ny * h.nz + 1;
-    if (entries > std::numeric_limits<int32_t>::max() - 1)
-      throw std::invalid_argument("photon grid: more than 2^31-1 bins (lower max_bins)");
+    entries += count == 0 ? 1 : mesh_grid_bins(h) + 1;
+    check_grid_entries(entries, "the photon grid", kGridBinsHint);  // as the CPU build
     first_photon += count;
   }
   g.entries = size_t(entries);
