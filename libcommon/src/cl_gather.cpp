@@ -530,6 +530,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   GatherTimes times;
   const size_t nh = h.hitpoints.size(), np = photons.size();
   check_pass(opt, nh, np);
+  check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
   const int mesh_count = int(scene.mesh_names.size());
   const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
   const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
@@ -682,7 +683,9 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
 // ---- DevicePpmState ---------------------------------------------------------------------------
 
 DevicePpmState::DevicePpmState(const Scene& scene, HitpointSet& h, ClContext& dev)
-    : scene_(scene), h_(h), dev_(dev) {}
+    : scene_(scene), h_(h), dev_(dev) {
+  check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
+}
 
 GatherTimes DevicePpmState::pass(const std::vector<pf_photon>& photons, uint64_t emitted,
                                  const PpmOptions& opt) {

@@ -82,6 +82,7 @@ HitpointSet render_progressive(
   if (from_checkpoint) {
     loaded = load_hitpoints(opt.checkpoint);
     require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
+    check_against_scene(opt.checkpoint, loaded, scene);
     if (loaded.estimator == "classic")
       throw input_error(opt.checkpoint, "holds a classic photon-mapping estimate, not a PPM state",
                         "delete it or pass another --checkpoint");

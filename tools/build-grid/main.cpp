@@ -45,15 +45,13 @@ int main(int argc, char** argv) {
     pf::PhotonSet photons = pf::load_photons(photons_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    pf::accept_input(prov, "photons", photons_path, pf::kPhotonsFormat, photons.scene_id,
-                     scene.scene_id, scene_path);
+    pf::accept_input(prov, "photons", photons_path, photons, scene, scene_path);
     if (gp.default_radius <= 0.f) {
       if (!a.count("hitpoints"))
         throw pf::input_error("", "give --radius or --hitpoints (whose R0 sets the bin size)");
       std::string hp_path = a["hitpoints"].as<std::string>();
       pf::HitpointSet h = pf::load_hitpoints(hp_path);
-      pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
-                       scene_path);
+      pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
       gp.default_radius = h.radius0;
     }
     pf::require_positive("radius", gp.default_radius);

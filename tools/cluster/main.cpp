@@ -118,8 +118,7 @@ int main(int argc, char** argv) {
     pf::HitpointSet h = pf::load_hitpoints(hp_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
-                     scene_path);
+    pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
 
     pf::ClusterSet c;
     pf::GaResult result;
@@ -143,8 +142,7 @@ int main(int argc, char** argv) {
       if (ga.fitness == pf::GaFitness::DeviceTime) {
         const std::string ppath = a["photons"].as<std::string>();
         pf::PhotonSet ps = pf::load_photons(ppath);
-        pf::accept_input(prov, "photons", ppath, pf::kPhotonsFormat, ps.scene_id, scene.scene_id,
-                         scene_path);
+        pf::accept_input(prov, "photons", ppath, ps, scene, scene_path);
         if (ps.pass_count() < 1) throw pf::input_error(ppath, "holds no photon pass");
         photons = ps.pass(0);
         in.emitted = ps.pass_emitted[0];
