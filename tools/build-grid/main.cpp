@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
       ("max-bins", "bins along a mesh's longest extent, at most",
        cxxopts::value<int>()->default_value("64"))
       ("radius", "default radius in world units (lower bound of the bin size); 0 = R0 of "
-       "--hitpoints", cxxopts::value<float>()->default_value("0"))
+       "--hitpoints (give one of the two)", cxxopts::value<float>()->default_value("0"))
       ("h,help", "print this help");
     pf::add_device_options(o);
     auto a = o.parse(argc, argv);
@@ -37,6 +37,10 @@ int main(int argc, char** argv) {
     gp.max_bins = a["max-bins"].as<int>();
     gp.default_radius = a["radius"].as<float>();
     pf::require_positive("max-bins", gp.max_bins);
+    if (!(gp.default_radius >= 0.f))
+      throw pf::input_error("", "--radius must be >= 0 (0 = R0 of --hitpoints)");
+    if (gp.default_radius > 0.f && a.count("hitpoints"))
+      throw pf::input_error("", "give --radius or --hitpoints, not both (--radius 0 takes R0 of --hitpoints)");
 
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "build-grid");
     pf::Stopwatch clock;
