@@ -117,6 +117,11 @@ int main(int argc, char** argv) {
     pf::Scene scene = pf::load_scene(scene_path);
     pf::HitpointSet h = pf::load_hitpoints(hp_path);
     pf::Provenance prov;
+    prov.tool = "cluster";
+    pf::record_options(prov, a);
+    prov.seed = a["seed"].as<uint32_t>();
+    prov.command_line = pf::join_command_line(argc, argv);
+    ga.provenance = &prov;  // the GA checkpoints carry it (inputs as added below)
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
     pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
 
@@ -173,10 +178,6 @@ int main(int argc, char** argv) {
     }
     pf::ClusterStats s = pf::stats(c);
 
-    prov.tool = "cluster";
-    pf::record_options(prov, a);
-    prov.seed = a["seed"].as<uint32_t>();
-    prov.command_line = pf::join_command_line(argc, argv);
     prov.wall_time_s = clock.seconds();
     if (method == "ga") {
       prov.param("best_fitness", result.fitness);
