@@ -281,6 +281,7 @@ void save_grids(const GridSet& g, const std::string& path, const Provenance& pro
   w.attr("/", "scene_id", g.scene_id);
   w.attr("/", "first_pass", int64_t(g.first_pass));
   w.write("/pass_emitted", g.pass_emitted);
+  w.describe("/pass_emitted", "photons", "photons emitted in each pass");
   for (size_t k = 0; k < g.grids.size(); ++k) {
     const PhotonGrid& grid = g.grids[k];
     std::string p = "/pass" + std::to_string(g.first_pass + int(k));
