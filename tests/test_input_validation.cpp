@@ -19,6 +19,7 @@
 
 #include "photonflow/clusters.h"
 #include "photonflow/h5io.h"
+#include "photonflow/illuminate.h"
 #include "photonflow/photon_distribution.h"
 #include "photonflow/photon_pass.h"
 #include "photonflow/stage_files.h"
@@ -189,6 +190,27 @@ TEST_CASE("hitpoints.h5: indices out of range are refused", "[inputs][hitpoints]
     const std::string p = copy_of(f.tmp, f.hp);
     test::set_int_attr(p, "/", name, value);
     refused([&] { load_hitpoints(p); }, p, std::string("attribute ") + name);
+  }
+}
+
+TEST_CASE("the gathers refuse hitpoints that index past the scene's tables", "[inputs][hitpoints]") {
+  // In-process callers that skip accept_input: brdf() reads materials[hitpoint.material].
+  Files& f = files();
+  PhotonPassOptions po;
+  po.photons = 2000;
+  const PhotonPassResult pass = trace_photons(f.scene, 0, po);
+  for (int32_t bad : {int32_t(f.scene.materials.size()), int32_t(100000000)}) {
+    HitpointSet h = f.h;
+    h.hitpoints[h.hitpoints.size() / 2].material = bad;
+    PpmOptions ppm;
+    for (GatherMethod m : {GatherMethod::Grid, GatherMethod::Flann}) {
+      ppm.method = m;
+      CHECK_THROWS_WITH(ppm_pass(f.scene, h, pass.photons, pass.emitted, ppm),
+                        Catch::Contains("material id " + std::to_string(bad)));
+    }
+    CHECK_THROWS_WITH(classic_estimate(f.scene, h, pass.photons, pass.emitted, ClassicOptions{}),
+                      Catch::Contains("material id " + std::to_string(bad)));
+    CHECK(h.passes == 0);  // refused before any gather
   }
 }
 
