@@ -69,7 +69,8 @@ int main(int argc, char** argv) {
       ("checkpoint-every", "generations between checkpoints",
        cxxopts::value<int>()->default_value("50"))
       ("resume", "continue the evolution from the checkpoint when it exists (same inputs, "
-       "fitness, seed, population and work-group size)");
+       "fitness, seed, population and work-group size; --ga-iterations at least the iterations "
+       "it has run)");
     pf::add_device_options(o);
     auto a = o.parse(argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
