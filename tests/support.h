@@ -1,5 +1,6 @@
 // support.h — helpers shared by the tests: temporary folders, running tools, scenes in memory.
 #pragma once
+#include <hdf5.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -8,11 +9,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "photonflow/clusters.h"
+#include "photonflow/h5io.h"
 #include "photonflow/image.h"
 #include "photonflow/procedural.h"
 #include "photonflow/scene.h"
@@ -78,6 +81,37 @@ inline ToolRun run_tool(const std::string& tool, const std::string& args, const 
   std::filesystem::remove(out);
   std::filesystem::remove(err);
   return r;
+}
+
+// Fuzz-style edits of a written file (Catch's REQUIRE: include catch.hpp first).
+// Rewrites dataset `dset` of `file` in place: reads it as T (memory type `type`, fields matched by
+// name), lets `edit` change it, writes it back.
+template <class T>
+void edit_dataset(const std::string& file, const std::string& dset, hid_t type,
+                  const std::function<void(std::vector<T>&)>& change) {
+  h5::Handle f(H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+  REQUIRE(f.valid());
+  h5::Handle d(H5Dopen2(f.get(), dset.c_str(), H5P_DEFAULT));
+  REQUIRE(d.valid());
+  h5::Handle space(H5Dget_space(d.get()));
+  std::vector<T> v(size_t(H5Sget_simple_extent_npoints(space.get())));
+  REQUIRE(H5Dread(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0);
+  change(v);
+  REQUIRE(H5Dwrite(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0);
+}
+
+// Sets the int64 attribute `name` of object `obj` of `file`.
+inline void set_int_attr(const std::string& file, const std::string& obj, const std::string& name, int64_t v) {
+  INFO("set " << file << " " << obj << "@" << name << " = " << v);
+  h5::Handle f(H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+  REQUIRE(f.valid());
+  // The object first, then its attribute: HDF5 1.10 cannot write an attribute opened with
+  // H5Aopen_by_name on a group ("can't locate open attribute").
+  h5::Handle o(H5Oopen(f.get(), obj.c_str(), H5P_DEFAULT));
+  REQUIRE(o.valid());
+  h5::Handle a(H5Aopen(o.get(), name.c_str(), H5P_DEFAULT));
+  REQUIRE(a.valid());
+  REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &v) >= 0);
 }
 
 // Reverses a triangle's winding (and its normals): an outward mesh becomes inward.

@@ -451,6 +451,46 @@ TEST_CASE("evolution: resume after an interruption = an uninterrupted run", "[ga
   // A checkpoint of another run (other seed) is refused, one line naming it.
   o.seed = 99;
   CHECK_THROWS_WITH(evolve_clusters(in, o), Catch::Contains(tmp / "c.ck.h5") && Catch::Contains("seed"));
+  o.seed = 1;
+
+  // Every checkpoint carries /provenance (FORMATS.md: every file does): without the caller's,
+  // tool "cluster", the GA's parameters and seed, and the seconds so far.
+  {
+    const Provenance p = read_provenance(h5::Reader(tmp / "c.ck.h5", kGaCheckpointFormat, 1));
+    CHECK(p.tool == "cluster");
+    CHECK(p.seed == 1);
+    CHECK(p.parameters.at("ga-iterations") == "40");
+    CHECK(p.parameters.at("fitness") == ga_fitness_name(o.fitness));
+    CHECK(p.wall_time_s > 0.0);
+    CHECK_FALSE(p.version.empty());
+  }
+  // A resume asking for fewer iterations than the checkpoint has run is refused: its record would
+  // say iterations 20 but generations 41.
+  o.iterations = 20;
+  CHECK_THROWS_WITH(evolve_clusters(in, o), Catch::Contains(tmp / "c.ck.h5") &&
+                                                Catch::Contains("--ga-iterations 20") &&
+                                                Catch::Contains("40 iterations"));
+  o.iterations = 40;
+  // A centroid on a mesh without hitpoints (an index past the hitpoints' meshes, or negative) is
+  // refused naming the checkpoint, not left to the GA's internal checks.
+  const h5::Compound centroid = [] {
+    h5::Compound c(sizeof(GaCentroid));
+    c.f32("position", offsetof(GaCentroid, position), 3).i32("mesh", offsetof(GaCentroid, mesh));
+    c.u32("id", offsetof(GaCentroid, id));
+    return c;
+  }();
+  for (int32_t mesh : {99, -1, 3}) {  // 3: the light, which the eye pass sees as an emitter only
+    const std::string bad = tmp / ("bad" + std::to_string(mesh) + ".ck.h5");
+    std::filesystem::copy_file(tmp / "c.ck.h5", bad);
+    test::edit_dataset<GaCentroid>(bad, "/centroids", centroid.id(),
+                                   [&](std::vector<GaCentroid>& v) { v[0].mesh = mesh; });
+    o.checkpoint = bad;
+    bool has_hitpoints = false;
+    for (const pf_hitpoint& x : f.h.hitpoints) has_hitpoints |= x.mesh == mesh;
+    if (has_hitpoints) continue;
+    INFO("mesh " << mesh);
+    CHECK_THROWS_WITH(evolve_clusters(in, o), Catch::Contains(bad) && Catch::Contains("centroid 0"));
+  }
 }
 
 // ---- images (OpenCL) ---------------------------------------------------------------------------------
@@ -595,6 +635,19 @@ TEST_CASE("cluster --method ga and photon-distribution: files, provenance, refus
     CHECK(p.parameters.at("population") == "6");
   }
   CHECK(std::filesystem::exists(tmp / "ga.h5.checkpoint.h5"));
+  {  // the checkpoint's provenance: the run's tool, parameters, seed and inputs with hashes
+    const Provenance p =
+        read_provenance(h5::Reader(tmp / "ga.h5.checkpoint.h5", kGaCheckpointFormat, 1));
+    CHECK(p.tool == "cluster");
+    CHECK(p.seed == 1);
+    CHECK(p.parameters.at("ga-iterations") == "12");
+    CHECK(p.parameters.at("method") == "ga");
+    CHECK(p.command_line.find("--ga-iterations 12") != std::string::npos);
+    std::map<std::string, std::string> hashes;
+    for (const InputRef& i : p.inputs) hashes[i.role] = i.sha256;
+    CHECK(hashes.size() == 3);
+    for (const char* role : {"scene", "hitpoints", "distribution"}) CHECK(hashes[role].size() == 64);
+  }
   // Resuming a finished run gives the same clusters.
   auto again = test::run_tool("cluster", GA + " -o " + (tmp / "ga2.h5") + " --resume --checkpoint " +
                                              (tmp / "ga.h5.checkpoint.h5"), tmp);
@@ -630,6 +683,11 @@ TEST_CASE("cluster --method ga and photon-distribution: files, provenance, refus
   refuse(S + HP + " --method ga --distribution " + (tmp / "hp.h5"), "hp.h5");
   // The checkpoint of another run.
   refuse(GA + " --seed 2 --resume --checkpoint " + (tmp / "ga.h5.checkpoint.h5"), "checkpoint");
+  // Resuming the 12-iteration run with --ga-iterations 5 (it once wrote iterations 5 with
+  // generations 13).
+  refuse(S + HP + " --method ga --wg-size 16 --population 6 --ga-iterations 5 --distribution " +
+             (tmp / "d.h5") + " --resume --checkpoint " + (tmp / "ga.h5.checkpoint.h5"),
+         "--ga-iterations 5");
   // photon-distribution: hitpoints of another scene.
   auto pd = test::run_tool("photon-distribution", S + " --hitpoints " + (tmp / "hp-other.h5") +
                                                        " -o " + (tmp / "bad.h5"), tmp);

@@ -7,7 +7,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include "photonflow/h5io.h"
 #include "photonflow/image.h"
+#include "photonflow/stage_files.h"
 #include "support.h"
 
 using namespace pf;
@@ -116,6 +118,108 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
   }
 }
 
+TEST_CASE("indices out of the scene's range are refused by every stage, never a crash",
+          "[tools][badinput][indices]") {
+  TempDir tmp("indices");
+  bake(tmp, "cornell-box.dae", "box.h5");
+  const std::string box = tmp / "box.h5", out = tmp / "out.h5";
+  REQUIRE(run_tool("trace-hitpoints", "--scene " + box + " -o " + (tmp / "hp.h5"), tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-photons", "--scene " + box + " -o " + (tmp / "ph.h5") + " --photons 3000", tmp).exit_code == 0);
+  const std::string S = "--scene " + box;
+  Provenance prov;
+  prov.tool = "test";
+  // Hitpoints whose material (or mesh) indexes past the scene's tables: the material of the
+  // reviewer's segfault (100000000) and one that silently read garbage (999).
+  HitpointSet h = load_hitpoints(tmp / "hp.h5");
+  REQUIRE(h.hitpoints.size() > 10);
+  auto bad_hitpoints = [&](const std::string& name, auto change) {
+    HitpointSet b = h;
+    change(b.hitpoints[b.hitpoints.size() / 2]);
+    save_hitpoints(b, tmp / name, prov);
+    return tmp / name;
+  };
+  for (int32_t material : {100000000, 999}) {
+    const std::string hp = bad_hitpoints("hp-mat.h5", [&](pf_hitpoint& x) { x.material = material; });
+    for (const std::string est : {"--estimator ppm", "--estimator ppm --method flann", "--estimator classic"})
+      check_refused(run_tool("illuminate", S + " --hitpoints " + hp + " --photons " + (tmp / "ph.h5") +
+                                               " -o " + out + " " + est, tmp),
+                    out, hp + ": hitpoint");
+    check_refused(run_tool("cluster", S + " --hitpoints " + hp + " -o " + out, tmp), out,
+                  "material id " + std::to_string(material));
+  }
+  const std::string hp_mesh = bad_hitpoints("hp-mesh.h5", [](pf_hitpoint& x) { x.mesh = -1; });
+  check_refused(run_tool("cluster", S + " --hitpoints " + hp_mesh + " -o " + out, tmp), out,
+                hp_mesh + ": hitpoint");
+  check_refused(run_tool("illuminate", S + " --hitpoints " + hp_mesh + " --photons " +
+                                           (tmp / "ph.h5") + " -o " + out, tmp),
+                out, hp_mesh + ": hitpoint");
+  // Photons on a mesh the scene does not have.
+  PhotonSet p = load_photons(tmp / "ph.h5");
+  p.photons[p.photons.size() / 2].mesh = 1000;
+  const std::string ph = tmp / "ph-mesh.h5";
+  save_photons(p, ph, prov);
+  check_refused(run_tool("build-grid", S + " --photons " + ph + " --radius 0.1 -o " + out, tmp), out,
+                ph + ": photon");
+  check_refused(run_tool("illuminate", S + " --hitpoints " + (tmp / "hp.h5") + " --photons " + ph +
+                                           " -o " + out, tmp),
+                out, ph + ": photon");
+  // A render checkpoint with a bad material, resumed.
+  const std::string ck = bad_hitpoints("ck.h5", [](pf_hitpoint& x) { x.material = 100000000; });
+  check_refused(run_tool("render", S + " --photons 1000 --passes 2 -o " + (tmp / "r.exr") +
+                                       " --checkpoint " + ck + " --resume", tmp),
+                tmp / "r.exr", ck + ": hitpoint");
+}
+
+TEST_CASE("option values past the grids' and clusters' limits are refused with one line",
+          "[tools][badinput][limits]") {
+  TempDir tmp("limits");
+  bake(tmp, "cornell-box.dae", "box.h5");
+  const std::string box = tmp / "box.h5", out = tmp / "out.h5", S = "--scene " + box;
+  REQUIRE(run_tool("trace-hitpoints", S + " -o " + (tmp / "hp.h5"), tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", S + " -o " + (tmp / "tiny.h5") + " --radius 1e-6", tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-photons", S + " -o " + (tmp / "ph.h5") + " --photons 3000", tmp).exit_code == 0);
+  const std::string hp = tmp / "hp.h5", tiny = tmp / "tiny.h5", ph = tmp / "ph.h5";
+  // Work-group sizes: a 2e9-item work-group once asked for 8 GB of fillers (std::bad_alloc).
+  check_refused(run_tool("cluster", S + " --hitpoints " + hp + " -o " + out + " --wg-size 2000000000", tmp),
+                out, "--wg-size");
+  // Grids of max_bins³ bins of size R0: refused before they are allocated.
+  check_refused(run_tool("cluster", S + " --hitpoints " + tiny + " -o " + out +
+                                        " --method grid --max-bins 100000", tmp),
+                out, "--max-bins");
+  check_refused(run_tool("build-grid", S + " --photons " + ph + " -o " + out +
+                                           " --radius 1e-6 --max-bins 5000", tmp),
+                out, "--max-bins");
+  check_refused(run_tool("illuminate", S + " --hitpoints " + tiny + " --photons " + ph + " -o " +
+                                           out + " --max-bins 5000", tmp),
+                out, "--max-bins");
+  check_refused(run_tool("render", S + " -o " + (tmp / "r.exr") + " --radius 1e-6 --max-bins 5000 "
+                                       "--passes 1 --photons 1000", tmp),
+                tmp / "r.exr", "--max-bins");
+  check_refused(run_tool("build-grid", S + " --photons " + ph + " -o " + out +
+                                           " --radius 0.1 --max-bins 20000000", tmp),
+                out, "--max-bins");
+  // Pass indices are int32: 2147483647 + 1 once wrapped to -2147483648 in the file.
+  check_refused(run_tool("trace-photons", S + " -o " + out + " --photons 100 --first-pass 2147483647 "
+                                              "--passes 2", tmp),
+                out, "--first-pass");
+  // build-grid: a negative radius, and --radius with --hitpoints (the latter once ignored, even
+  // when the file did not exist).
+  check_refused(run_tool("build-grid", S + " --photons " + ph + " -o " + out + " --radius -1 "
+                                           "--hitpoints " + hp, tmp),
+                out, "--radius must be >= 0");
+  check_refused(run_tool("build-grid", S + " --photons " + ph + " -o " + out + " --radius 0.1 "
+                                           "--hitpoints " + (tmp / "nonexist.h5"), tmp),
+                out, "not both");
+  // The edges that stay valid.
+  CHECK(run_tool("trace-photons", S + " -o " + out + " --photons 100 --first-pass 2147483647", tmp)
+            .exit_code == 0);
+  CHECK(run_tool("build-grid", S + " --photons " + ph + " -o " + (tmp / "g.h5") + " --hitpoints " + hp, tmp)
+            .exit_code == 0);
+  // grid.h5 gives /pass_emitted its unit, as photons.h5 does.
+  h5::Reader g(tmp / "g.h5", kGridFormat, 1);
+  CHECK(g.attr_string("/pass_emitted", "unit") == "photons");
+}
+
 TEST_CASE("the staged route gives the render driver's image", "[tools][staged]") {
   TempDir tmp("staged");
   bake(tmp, "cornell-spheres.dae", "scene.h5");
@@ -159,6 +263,12 @@ TEST_CASE("a killed render resumes to the uninterrupted image", "[tools][resume]
   REQUIRE(run_tool("render", common + " -o " + (tmp / "resumed.exr") + " --checkpoint " + ck +
                                  " --checkpoint-every 1 --resume", tmp).exit_code == 0);
   CHECK(same_pixels(read_exr(tmp / "full.exr"), read_exr(tmp / "resumed.exr")));
+  // The checkpoint records the wall-clock seconds of the run so far (it once said 0).
+  {
+    const Provenance p = read_provenance(h5::Reader(ck, kHitpointsFormat, 1));
+    CHECK(p.tool == "render");
+    CHECK(p.wall_time_s > 0.0);
+  }
   // Resuming a finished run with fewer passes than it has is refused.
   auto r = run_tool("render", "--scene " + scene + " --photons 20000 --passes 5 -o " +
                                   (tmp / "y.exr") + " --checkpoint " + ck + " --resume", tmp);

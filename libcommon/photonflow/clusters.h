@@ -39,6 +39,16 @@ namespace pf {
 
 constexpr const char* kClustersFormat = "photonflow.clusters";
 
+// Size limits of a clustering, refused with an InputError before anything is allocated:
+//   kMaxWorkGroupSize  work-items per work-group (cluster --wg-size, the OpenCL --work-group):
+//                      1 … 8192, above every device's CL_DEVICE_MAX_WORK_GROUP_SIZE we know of;
+//   kMaxOrderEntries   entries of the order array, Σ padded_count (hitpoints plus fillers):
+//                      2^28 (1 GiB of int32); fillers grow with the work-group size, up to
+//                      wg_size − 1 per cluster;
+//   the hitpoint grid of cluster_grid: at most kMaxGridEntries cells per mesh (photon_grid.h).
+constexpr int kMaxWorkGroupSize = 8192;
+constexpr int64_t kMaxOrderEntries = int64_t(1) << 28;
+
 struct ClusterSet {
   std::vector<pf_cluster> clusters;  // ordered by mesh, then as the method made them
   std::vector<int32_t> order;        // Σ padded_count entries: hitpoint index or −1 (filler)

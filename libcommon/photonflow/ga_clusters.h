@@ -175,7 +175,14 @@ struct GaOptions {
   int threads = 0;             // 0 = all cores; results do not depend on it
   std::string checkpoint;      // checkpoint file ("" = none), written atomically
   int checkpoint_every = 50;   // generations between checkpoints (and after the last)
-  bool resume = false;         // continue from `checkpoint` when it exists
+  // Continue from `checkpoint` when it exists. A checkpoint that has done more generations than
+  // iterations + 1 is refused (InputError): the record would say fewer iterations than were run.
+  bool resume = false;
+  // The run's provenance (tool, parameters, seed, command line, inputs), written as /provenance
+  // of every checkpoint with wall_time_s = its own wall_time_s (the caller's seconds before this
+  // call) + the seconds of this call so far. nullptr: tool "cluster", the seed and the GA's
+  // parameters, no inputs.
+  const Provenance* provenance = nullptr;
 };
 
 struct GaProgress {

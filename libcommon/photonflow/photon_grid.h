@@ -15,6 +15,7 @@
 #pragma once
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "photonflow/grid_shared.h"
@@ -29,6 +30,37 @@ struct PhotonGridParams {
   int max_bins = 64;           // bins along the longest extent of a mesh's photons, at most
   float default_radius = 0.f;  // lower bound of the bin size (the initial hitpoint radius); > 0
 };
+
+// Size limits of a grid (photon grids here and in cl_gather.h, the hitpoint grids of
+// cluster_grid, photon-distribution maps):
+//   kMaxBinsPerAxis  bins along one axis (and so max_bins): pf_grid_coord clamps to n − 1 in
+//                    float, exact only for n <= 2^24;
+//   kMaxGridEntries  bin-start entries of one grid, Σ over meshes of (bins + 1): 2^28, i.e. at
+//                    most 1 GiB per int32 table (cell_start, and the build's histograms). Eq. 7.1
+//                    makes bins at least the default radius R0 wide and at most max_bins along a
+//                    mesh's longest extent, so a small R0 with a large max_bins can ask for
+//                    max_bins³ bins per mesh; such a grid is refused (InputError), not allocated.
+constexpr int kMaxBinsPerAxis = 1 << 24;
+constexpr int64_t kMaxGridEntries = int64_t(1) << 28;
+// What to do about a photon grid past kMaxGridEntries.
+constexpr const char* kGridBinsHint =
+    "raise --radius (R0, the smallest bin size) or lower --max-bins";
+
+// Bins of a header, nx·ny·nz, in 64 bits (0 for a mesh without bins).
+inline int64_t mesh_grid_bins(const pf_mesh_grid& g) {
+  return int64_t(g.nx) * int64_t(g.ny) * int64_t(g.nz);
+}
+
+// "" when `g` is a well-formed header: nx = ny = nz = 0 (no bins), or each in
+// [1, kMaxBinsPerAxis] with at most kMaxGridEntries bins, a positive finite bin size and a
+// finite corner; else what is wrong (for the loaders of grid.h5 and photon_distribution.h5).
+std::string mesh_grid_problem(const pf_mesh_grid& g);
+
+// Refuses (InputError naming --max-bins) a max_bins above kMaxBinsPerAxis; `what` names the grid.
+void check_max_bins(int max_bins, const std::string& what);
+// Refuses (InputError) a grid of `entries` bin-start entries above kMaxGridEntries: "<what> would
+// have <entries> bins, more than 2^28 (<hint>)".
+void check_grid_entries(int64_t entries, const std::string& what, const std::string& hint);
 
 // Bin coordinate of x along one axis (eq. 7.1), clamped to [0, n−1] (grid_shared.h, the code the
 // kernels run). Monotone in x, so the bins overlapping an interval [x0, x1] are those from
@@ -75,7 +107,9 @@ void check_photon_count(size_t n, int mesh_count);
 
 // Sorts one pass's photons into per-mesh grids. mesh_count = number of meshes of the scene; every
 // photon's mesh must lie in [0, mesh_count) and its position must be finite
-// (std::invalid_argument otherwise, also for default_radius <= 0 or max_bins < 1).
+// (std::invalid_argument otherwise, also for default_radius <= 0 or max_bins < 1). A max_bins
+// above kMaxBinsPerAxis, or a grid of more than kMaxGridEntries entries, is an InputError that
+// says to raise the radius or lower --max-bins (before anything is allocated).
 PhotonGrid build_photon_grid(const std::vector<pf_photon>& photons, int mesh_count,
                              const PhotonGridParams& params);
 

@@ -40,6 +40,12 @@ struct PhotonPassResult {
 // trace-photons and render check their options with it.
 void check_options(const PhotonPassOptions& opt);
 
+// Pass indices are int32 in the files (a photon's `pass`, grid.h5's /pass<k>, the hitpoints'
+// `passes`): passes first … first + count − 1 must end at 2^31 − 1 at most. InputError naming
+// --first-pass and --passes otherwise (also for first < 0 or count < 0). Every trace_photons
+// checks its own pass index.
+void check_pass_range(int64_t first, int64_t count);
+
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt);
 
 // The photons of a pass as traced: one buffer per chunk of kChunk emitted photons (chunk c holds

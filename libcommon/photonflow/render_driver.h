@@ -109,7 +109,8 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final
-// state. `on_pass(done, photons)` is called after every pass (progress display);
+// state. Each checkpoint carries `prov` with wall_time_s = prov.wall_time_s (the caller's seconds
+// before the call, 0 if it does not say) + the wall-clock seconds of this call so far. `on_pass(done, photons)` is called after every pass (progress display);
 // `on_snapshot(state, status)` after every pass whose count is a multiple of opt.snapshot_every
 // (> 0) or is listed in opt.snapshot_at, including the last when it is one. `status`, when
 // given, receives the final status.

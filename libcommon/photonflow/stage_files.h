@@ -17,6 +17,7 @@ namespace pf {
 namespace h5 {
 class Compound;
 }
+struct Scene;  // scene.h
 
 // HDF5 record type of pf_mesh_grid (grid.h5's mesh_grid; photon_distribution.h5).
 const h5::Compound& h5_type_mesh_grid();
@@ -75,15 +76,32 @@ PhotonSet load_photons(const std::string& path);
 void save_grids(const GridSet& g, const std::string& path, const Provenance& prov);
 GridSet load_grids(const std::string& path);
 
+// The loaders check everything a file holds on its own: array lengths, the pass table, every
+// index into the file's own arrays (pixels, bins, cell_start, order), finite positions, and
+// attributes that must fit an int (passes, first_pass, image size). Indices into the SCENE's
+// tables (a hitpoint's mesh and material, a photon's mesh, a grid's mesh count) can only be
+// checked against the scene: check_against_scene does it, and accept_input calls it wherever a
+// stage file meets its scene. Either throws InputError, one line naming `path`.
+
 // Throws InputError (one line naming `path`) unless scene_id equals `expected` (the scene's).
 void require_scene(const std::string& path, const std::string& scene_id,
                    const std::string& expected, const std::string& scene_path);
 
-// A stage's input file `path` (format `format`, made from scene `scene_id`): refused by
-// require_scene unless made from the scene at scene_path (id `expected`), then recorded in prov
-// under `role` (hashed; InputError when unreadable).
+// Throws InputError naming `path` when the set indexes outside the scene's tables: a hitpoint's
+// mesh (mesh_names) or material (materials), a photon's mesh, a grid set's mesh count (one
+// mesh_grid per scene mesh) or one of its photons' meshes.
+void check_against_scene(const std::string& path, const HitpointSet& h, const Scene& scene);
+void check_against_scene(const std::string& path, const PhotonSet& p, const Scene& scene);
+void check_against_scene(const std::string& path, const GridSet& g, const Scene& scene);
+
+// A stage's input set loaded from `path` meets the scene loaded from scene_path: refused unless
+// made from that scene (require_scene) and its indices lie in the scene's tables
+// (check_against_scene); then recorded in prov under `role` (hashed; InputError when unreadable).
 void accept_input(Provenance& prov, const std::string& role, const std::string& path,
-                  const std::string& format, const std::string& scene_id,
-                  const std::string& expected, const std::string& scene_path);
+                  const HitpointSet& h, const Scene& scene, const std::string& scene_path);
+void accept_input(Provenance& prov, const std::string& role, const std::string& path,
+                  const PhotonSet& p, const Scene& scene, const std::string& scene_path);
+void accept_input(Provenance& prov, const std::string& role, const std::string& path,
+                  const GridSet& g, const Scene& scene, const std::string& scene_path);
 
 }  // namespace pf

@@ -155,7 +155,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
 namespace {
 
 // Checks a photon pass for the device (InputError); false when there is nothing to trace.
-bool photon_pass_work(const Scene& scene, const PhotonPassOptions& opt) {
+bool photon_pass_work(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt) {
+  check_pass_range(pass, 1);  // the photons' int32 `pass`, as on the CPU
   if (scene.lights.empty() || opt.photons == 0) return false;
   if (opt.photons > uint32_t(INT32_MAX))
     throw input_error("", "--photons must be below 2^31 per pass with --device opencl");
@@ -185,7 +186,7 @@ PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPa
                                ClContext& dev) {
   PhotonPassResult res;
   res.emitted = opt.photons;
-  if (!photon_pass_work(scene, opt)) return res;
+  if (!photon_pass_work(scene, pass, opt)) return res;
   const size_t per = photon_slots(opt);
   const size_t batch = dev.batch_items(per * sizeof(pf_photon), opt.photons);
   const ClBuffer& slots = dev.scratch("photon.slots", batch * per * sizeof(pf_photon));
@@ -213,7 +214,7 @@ DevicePhotons trace_photons_device(const Scene& scene, uint32_t pass, const Phot
   DevicePhotons out;
   out.emitted = opt.photons;
   out.photons = &dev.scratch("photon.compact", sizeof(pf_photon));
-  if (!photon_pass_work(scene, opt)) return out;
+  if (!photon_pass_work(scene, pass, opt)) return out;
   const size_t per = photon_slots(opt), n = opt.photons;
   // (One batch of slots fits, so do the n + 1 counts and the compacted photons: both are smaller.)
   if (dev.batch_items(per * sizeof(pf_photon), n) < n) {  // more than one batch: the host concatenates

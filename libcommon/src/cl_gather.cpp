@@ -106,6 +106,7 @@ DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int me
   if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
     throw std::invalid_argument("photon grid: default_radius must be positive and finite");
   if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
+  check_max_bins(params.max_bins, "the photon grid");
   DeviceGrid g;
   const size_t meshes = size_t(mesh_count);
   // 1. Per-mesh bounds and counts (local reduction, then one atomic per mesh and work-group).
@@ -140,9 +141,8 @@ DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int me
     h = mesh_grid_header(lo, hi, count, params);
     h.first_bin = pf_int(entries);
     h.first_photon = first_photon;
-    entries += count == 0 ? 1 : int64_t(h.nx) * h.ny * h.nz + 1;
-    if (entries > std::numeric_limits<int32_t>::max() - 1)
-      throw std::invalid_argument("photon grid: more than 2^31-1 bins (lower max_bins)");
+    entries += count == 0 ? 1 : mesh_grid_bins(h) + 1;
+    check_grid_entries(entries, "the photon grid", kGridBinsHint);  // as the CPU build
     first_photon += count;
   }
   g.entries = size_t(entries);
@@ -537,6 +537,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   GatherTimes times;
   const size_t nh = h.hitpoints.size(), np = photons.size();
   check_pass(opt, nh, np);
+  check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
   const int mesh_count = int(scene.mesh_names.size());
   const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
   const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
@@ -689,7 +690,9 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
 // ---- DevicePpmState ---------------------------------------------------------------------------
 
 DevicePpmState::DevicePpmState(const Scene& scene, HitpointSet& h, ClContext& dev)
-    : scene_(scene), h_(h), dev_(dev) {}
+    : scene_(scene), h_(h), dev_(dev) {
+  check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
+}
 
 GatherTimes DevicePpmState::pass(const std::vector<pf_photon>& photons, uint64_t emitted,
                                  const PpmOptions& opt) {

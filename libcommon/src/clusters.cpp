@@ -289,8 +289,27 @@ void kmeans_mesh(ClusterSet& out, int mesh, const std::vector<int32_t>& idx, con
 
 }  // namespace
 
-ClusterSet empty_cluster_set(const HitpointSet& h, int wg_size, const std::string& method) {
+namespace {
+// Work-group sizes the clusterings take (clusters.h: kMaxWorkGroupSize).
+void check_wg_size(int wg_size) {
   if (wg_size < 1) throw std::invalid_argument("clusters: work-group size must be >= 1");
+  if (wg_size > kMaxWorkGroupSize)
+    throw input_error("", "work-group size " + std::to_string(wg_size) + " is too large: at most " +
+                              std::to_string(kMaxWorkGroupSize) + " work-items",
+                      "give a smaller --wg-size or --work-group");
+}
+
+// An order array growing from `size` by `more` entries stays within kMaxOrderEntries.
+void check_order_size(size_t size, size_t more, int wg_size) {
+  if (int64_t(size) + int64_t(more) > kMaxOrderEntries)
+    throw input_error("", "the clusters padded to work-groups of " + std::to_string(wg_size) +
+                              " need more than 2^28 = 268435456 hitpoint and filler entries",
+                      "lower --wg-size (or --max-bins of grid clusters)");
+}
+}  // namespace
+
+ClusterSet empty_cluster_set(const HitpointSet& h, int wg_size, const std::string& method) {
+  check_wg_size(wg_size);
   ClusterSet c;
   c.wg_size = wg_size;
   c.method = method;
@@ -318,19 +337,22 @@ void append_cluster(ClusterSet& c, int mesh, const int32_t* members, size_t n, c
   cl.first = pf_int(c.order.size());
   cl.count = pf_int(n);
   const size_t wg = size_t(c.wg_size);
-  cl.padded_count = pf_int((n + wg - 1) / wg * wg);
+  const size_t padded = (n + wg - 1) / wg * wg;
+  check_order_size(c.order.size(), padded, c.wg_size);
+  cl.padded_count = pf_int(padded);
   c.order.insert(c.order.end(), members, members + n);
   c.order.insert(c.order.end(), size_t(cl.padded_count) - n, -1);
   c.clusters.push_back(cl);
 }
 
 std::vector<int32_t> mesh_sorted_order(const HitpointSet& h, int wg_size) {
-  if (wg_size < 1) throw std::invalid_argument("clusters: work-group size must be >= 1");
+  check_wg_size(wg_size);
   std::vector<int32_t> order;
   for (const std::vector<int32_t>& idx : split_by_mesh(h)) {
     if (idx.empty()) continue;
-    order.insert(order.end(), idx.begin(), idx.end());
     const size_t padded = (idx.size() + size_t(wg_size) - 1) / size_t(wg_size) * size_t(wg_size);
+    check_order_size(order.size(), padded, wg_size);
+    order.insert(order.end(), idx.begin(), idx.end());
     order.insert(order.end(), padded - idx.size(), -1);
   }
   return order;
@@ -364,6 +386,7 @@ ClusterSet cluster_kmeans(const HitpointSet& h, int wg_size, int iterations, uin
 
 pf_mesh_grid hitpoint_mesh_grid(const HitpointSet& h, int mesh, int max_bins) {
   if (max_bins < 1) throw std::invalid_argument("clusters: max_bins must be >= 1");
+  check_max_bins(max_bins, "grid clusters");
   std::vector<int32_t> idx;
   for (size_t i = 0; i < h.hitpoints.size(); ++i)
     if (h.hitpoints[i].mesh == mesh) idx.push_back(int32_t(i));
@@ -384,6 +407,7 @@ size_t occupied_cells(const pf_mesh_grid& g, const HitpointSet& h, const std::ve
 
 ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins) {
   if (max_bins < 0) throw std::invalid_argument("clusters: max_bins must be >= 0");
+  check_max_bins(max_bins, "grid clusters");
   ClusterSet c = empty_cluster_set(h, wg_size, "grid");
   auto per_mesh = split_by_mesh(h);
   c.order.reserve(h.hitpoints.size() + h.hitpoints.size() / 8);
@@ -402,7 +426,11 @@ ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins) {
         g = grid_header(box, idx.size(), bins, h.radius0);
       }
     }
-    const size_t cells = size_t(g.nx) * size_t(g.ny) * size_t(g.nz);
+    // Before the cell table is allocated (photon_grid.h: kMaxGridEntries).
+    check_grid_entries(mesh_grid_bins(g) + 1, "the grid of mesh " + std::to_string(m) + "'s hitpoints",
+                       "lower --max-bins, or trace the hitpoints with a larger --radius: the "
+                       "cells are at least R0 wide");
+    const size_t cells = size_t(mesh_grid_bins(g));
     std::vector<int32_t> key(idx.size()), start(cells + 1, 0);
     for (size_t t = 0; t < idx.size(); ++t) {
       key[t] = cell_of(g, h.hitpoints[size_t(idx[t])].position);

@@ -963,9 +963,30 @@ struct Checkpoint {
   std::vector<double> history;
 };
 
+// The checkpoint's /provenance (GaOptions::provenance): the run's, or a minimal one.
+Provenance checkpoint_provenance(const GaFitnessInputs& in, const GaOptions& opt, double seconds) {
+  Provenance p;
+  if (opt.provenance) {
+    p = *opt.provenance;
+  } else {
+    p.tool = "cluster";
+    p.param("method", "ga");
+    p.param("fitness", ga_fitness_name(opt.fitness));
+    p.param("population", opt.population);
+    p.param("ga-iterations", opt.iterations);
+    p.param("seed", int64_t(opt.seed));
+    p.param("iterations", opt.kmeans_iterations);
+    p.param("wg-size", in.wg_size);
+    p.param("checkpoint-every", opt.checkpoint_every);
+    p.seed = opt.seed;
+  }
+  p.wall_time_s += seconds;
+  return p;
+}
+
 void save_checkpoint(const std::string& path, const GaState& st, const GaFitnessInputs& in,
                      const GaOptions& opt, const std::string& hp_hash, const std::string& id,
-                     const Checkpoint& ck) {
+                     const Checkpoint& ck, double call_seconds) {
   h5::Writer w(path, kGaCheckpointFormat, kCheckpointVersion);
   w.attr("/", "scene_id", in.hitpoints->scene_id);
   w.attr("/", "hitpoints_sha256", hp_hash);
@@ -984,6 +1005,7 @@ void save_checkpoint(const std::string& path, const GaState& st, const GaFitness
   w.describe("/centroids", "world units", "the parent chromosome: centroids per mesh in order");
   w.write("/best_fitness", ck.history);
   w.describe("/best_fitness", ga_fitness_unit(opt.fitness), "best fitness after each generation");
+  write_provenance(w, checkpoint_provenance(in, opt, call_seconds));
   w.commit();
 }
 
@@ -1017,6 +1039,40 @@ Checkpoint load_checkpoint(const std::string& path, const GaFitnessInputs& in, c
   ck.seconds = r.attr_double("/", "seconds");
   if (ck.generations < 1 || size_t(ck.generations) != ck.history.size() || ck.centroids.empty())
     throw input_error(path, "is a damaged checkpoint (generation count and history disagree)", hint);
+  // The chromosome indexes the hitpoints' meshes: every centroid on a mesh with hitpoints, every
+  // such mesh with a centroid (what GaState's constructor assumes).
+  const HitpointSet& h = *in.hitpoints;
+  std::vector<size_t> hitpoints_of, centroids_of;
+  for (const pf_hitpoint& p : h.hitpoints) {
+    if (p.mesh < 0) continue;  // refused by the GA itself
+    if (size_t(p.mesh) >= hitpoints_of.size()) hitpoints_of.resize(size_t(p.mesh) + 1, 0);
+    ++hitpoints_of[size_t(p.mesh)];
+  }
+  centroids_of.assign(hitpoints_of.size(), 0);
+  for (size_t k = 0; k < ck.centroids.size(); ++k) {
+    const GaCentroid& c = ck.centroids[k];
+    if (c.mesh < 0 || size_t(c.mesh) >= hitpoints_of.size() || hitpoints_of[size_t(c.mesh)] == 0)
+      throw input_error(path, "centroid " + std::to_string(k) + " lies on mesh " +
+                                  std::to_string(c.mesh) + ", which has no hitpoints",
+                        "the file is damaged; delete it and rerun");
+    ++centroids_of[size_t(c.mesh)];
+  }
+  for (size_t m = 0; m < hitpoints_of.size(); ++m)
+    if (hitpoints_of[m] > 0 && centroids_of[m] == 0)
+      throw input_error(path, "mesh " + std::to_string(m) + " has hitpoints but no centroid",
+                        "the file is damaged; delete it and rerun");
+  const int64_t next_id = r.attr_int("/", "next_id");
+  if (next_id < 0 || next_id > int64_t(UINT32_MAX))
+    throw input_error(path, "next_id " + std::to_string(next_id) + " is outside [0, 2^32)",
+                      "the file is damaged; delete it and rerun");
+  // A resumed run continues to opt.iterations; its record must not claim fewer iterations than
+  // the checkpoint has already run (generations = iterations + 1 when finished).
+  if (ck.generations > opt.iterations + 1)
+    throw input_error(path, "has already run " + std::to_string(ck.generations - 1) +
+                                " iterations, more than --ga-iterations " +
+                                std::to_string(opt.iterations),
+                      "resume with --ga-iterations " + std::to_string(ck.generations - 1) +
+                          " or more, or delete it to start over");
   return ck;
 }
 
@@ -1210,7 +1266,7 @@ GaResult evolve_clusters(const GaFitnessInputs& in, const GaOptions& opt,
       stop = !on_generation(p);
     }
     if (!opt.checkpoint.empty() && (stop || last || (g + 1) % opt.checkpoint_every == 0))
-      save_checkpoint(opt.checkpoint, copies[0], in, opt, hp_hash, id, ck);
+      save_checkpoint(opt.checkpoint, copies[0], in, opt, hp_hash, id, ck, clock.seconds());
     if (stop && !last) {
       res.interrupted = true;
       res.generations = ck.generations;

@@ -16,7 +16,8 @@ namespace {
 
 int thread_count(int t) { return worker_threads(t); }
 
-// f_r of the hitpoint's surface: Lambertian albedo / π.
+// f_r of the hitpoint's surface: Lambertian albedo / π. Every entry point checks the hitpoints'
+// material (and mesh) ids against the scene first (check_against_scene), so the index is valid.
 Vec3 brdf(const Scene& s, const pf_hitpoint& hp) {
   return Vec3(s.materials[size_t(hp.material)].color) * kInvPi;
 }
@@ -75,6 +76,7 @@ void sort_keys(uint64_t* k, size_t n) {
 void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, uint64_t emitted,
                    const PpmOptions& opt) {
   check_alpha(opt.alpha);
+  check_against_scene("", h, scene);
   const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
   const float alpha = opt.alpha;
   const int64_t count = int64_t(h.hitpoints.size());
@@ -168,6 +170,7 @@ void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& 
     ppm_pass_grid(scene, h, grid, emitted, opt);
     return;
   }
+  check_against_scene("", h, scene);
   const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
   const float alpha = opt.alpha;
   const int64_t count = int64_t(h.hitpoints.size());
@@ -193,6 +196,7 @@ void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& 
 void classic_estimate(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
                       uint64_t emitted, const ClassicOptions& opt) {
   if (opt.k <= 0) throw input_error("", "k must be positive, got " + std::to_string(opt.k));
+  check_against_scene("", h, scene);
   const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
   std::vector<pf_photon> global, caustic;
   for (auto& p : photons) {

@@ -3,6 +3,7 @@
 #include "photonflow/photon_distribution.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <stdexcept>
 
@@ -145,7 +146,11 @@ PhotonDistribution load_photon_distribution(const std::string& path) {
   h5::Reader r(path, kPhotonDistributionFormat, kDistributionVersion);
   PhotonDistribution d;
   d.scene_id = r.scene_id();
-  d.passes = int(r.attr_int("/", "passes"));
+  const int64_t passes = r.attr_int("/", "passes");
+  if (passes < 1 || passes > INT32_MAX)
+    throw input_error(path, "attribute passes = " + std::to_string(passes) + " is outside [1, 2^31-1]",
+                      "remake it with photon-distribution");
+  d.passes = int(passes);
   d.first_pass = int(r.attr_int("/", "first_pass"));
   d.emitted = uint64_t(r.attr_int("/", "photons_emitted"));
   d.params.max_bins = int(r.attr_int("/", "max_bins"));
@@ -156,12 +161,12 @@ PhotonDistribution load_photon_distribution(const std::string& path) {
   size_t next = 0;
   for (size_t m = 0; m < d.mesh_grid.size(); ++m) {
     const pf_mesh_grid& g = d.mesh_grid[m];
-    const bool empty = g.nx == 0 && g.ny == 0 && g.nz == 0;
-    if (!empty && (g.nx < 1 || g.ny < 1 || g.nz < 1 || !(g.bin_size > 0.f) ||
-                   !std::isfinite(g.lo[0]) || !std::isfinite(g.lo[1]) || !std::isfinite(g.lo[2])))
-      throw input_error(path, "mesh " + std::to_string(m) + " has a malformed grid header",
+    // mesh_grid_problem bounds every n (so the product below cannot wrap) and the bins.
+    const std::string problem = mesh_grid_problem(g);
+    if (!problem.empty())
+      throw input_error(path, "mesh " + std::to_string(m) + " has a malformed grid header: " + problem,
                         "remake it with photon-distribution");
-    if (size_t(g.first_bin) != next)
+    if (g.first_bin < 0 || size_t(g.first_bin) != next)
       throw input_error(path, "bins of mesh " + std::to_string(m) + " are not contiguous",
                         "remake it with photon-distribution");
     next += bins_of(g);

@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "photonflow/error.h"
 #include "photonflow/threads.h"
 #include "photonflow/vec.h"
 
@@ -118,6 +119,32 @@ void check_photon_count(size_t n, int mesh_count) {
     throw std::invalid_argument("photon grid: more than 2^31-1 photons");
 }
 
+std::string mesh_grid_problem(const pf_mesh_grid& g) {
+  if (g.nx == 0 && g.ny == 0 && g.nz == 0) return "";
+  for (int n : {g.nx, g.ny, g.nz})
+    if (n < 1 || n > kMaxBinsPerAxis)
+      return "bins per axis " + std::to_string(g.nx) + " x " + std::to_string(g.ny) + " x " +
+             std::to_string(g.nz) + " outside 1 … 2^24";
+  // nx·ny <= 2^48 fits; compare before multiplying by nz (2^72 would wrap).
+  if (int64_t(g.nx) * g.ny > kMaxGridEntries / g.nz) return "more than 2^28 bins";
+  if (!(g.bin_size > 0.f) || !std::isfinite(g.bin_size)) return "bin size not positive and finite";
+  if (!std::isfinite(g.lo[0]) || !std::isfinite(g.lo[1]) || !std::isfinite(g.lo[2]))
+    return "corner lo not finite";
+  return "";
+}
+
+void check_max_bins(int max_bins, const std::string& what) {
+  if (max_bins > kMaxBinsPerAxis)
+    throw input_error("", "--max-bins " + std::to_string(max_bins) + " is too large for " + what +
+                              ": at most 16777216 (2^24) bins per axis");
+}
+
+void check_grid_entries(int64_t entries, const std::string& what, const std::string& hint) {
+  if (entries > kMaxGridEntries)
+    throw input_error("", what + " would have " + std::to_string(entries) +
+                              " bins, more than 2^28 = 268435456", hint);
+}
+
 std::vector<int32_t> PhotonGrid::gather(int mesh, const float q[3], float radius) const {
   std::vector<int32_t> out;
   for_each_in_radius(mesh, q, radius, [&](int i) { out.push_back(i); });
@@ -161,6 +188,7 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
   if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
     throw std::invalid_argument("photon grid: default_radius must be positive and finite");
   if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
+  check_max_bins(params.max_bins, "the photon grid");
   size_t n = 0;
   for (size_t s = 0; s < span_count; ++s) n += spans[s].size;
   check_photon_count(n, mesh_count);
@@ -240,9 +268,9 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
     g = mesh_grid_header(a.lo, a.hi, a.count, params);
     g.first_bin = static_cast<pf_int>(total_entries);
     g.first_photon = first_photon;
-    total_entries += a.count == 0 ? 1 : static_cast<int64_t>(g.nx) * g.ny * g.nz + 1;
-    if (total_entries > std::numeric_limits<int32_t>::max())
-      throw std::invalid_argument("photon grid: more than 2^31-1 bins (lower max_bins)");
+    total_entries += a.count == 0 ? 1 : mesh_grid_bins(g) + 1;
+    // Checked before anything is allocated (photon_grid.h: kMaxGridEntries).
+    check_grid_entries(total_entries, "the photon grid", kGridBinsHint);
     first_photon += a.count;
   }
   const size_t entries = size_t(total_entries);

@@ -4,8 +4,11 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <string>
 
+#include "photonflow/error.h"
 #include "photonflow/options.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
@@ -102,6 +105,16 @@ void check_options(const PhotonPassOptions& opt) {
   require_threads(opt.threads);
 }
 
+void check_pass_range(int64_t first, int64_t count) {
+  if (first < 0 || count < 0)
+    throw input_error("", "--first-pass and --passes must be >= 0");
+  if (count > 0 && first + count - 1 > int64_t(INT32_MAX))
+    throw input_error("", "passes " + std::to_string(first) + " … " +
+                              std::to_string(first + count - 1) +
+                              " run past 2147483647 (2^31 - 1), the largest pass index",
+                      "lower --first-pass or --passes");
+}
+
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt) {
   // The calling thread's chunk buffers, reused by its next pass.
   thread_local PhotonBuffers buffers;
@@ -113,6 +126,7 @@ PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPa
 
 uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
                             PhotonBuffers& out_buffers) {
+  check_pass_range(pass, 1);  // the photons' int32 `pass`
   // Fixed-size chunks of photon indices, kept in chunk order: the output order does not depend on
   // the thread count or on scheduling.
   const uint32_t nchunks = (scene.lights.empty() || opt.photons == 0)

@@ -127,12 +127,16 @@ HitpointSet render_progressive(
     const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot,
     RenderStatus* status) {
   check_options(opt);
+  // Wall-clock seconds of the run, for the checkpoints' provenance (prov.wall_time_s holds the
+  // caller's seconds before this call).
+  Stopwatch wall;
   bool from_checkpoint = resume && !opt.checkpoint.empty() && access(opt.checkpoint.c_str(), F_OK) == 0;
   std::unique_ptr<ProgressiveRenderer> r;
   HitpointSet loaded;
   if (from_checkpoint) {
     loaded = load_hitpoints(opt.checkpoint);
     require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
+    check_against_scene(opt.checkpoint, loaded, scene);
     if (loaded.estimator == "classic")
       throw input_error(opt.checkpoint, "holds a classic photon-mapping estimate, not a PPM state",
                         "delete it or pass another --checkpoint");
@@ -184,8 +188,11 @@ HitpointSet render_progressive(
     Stopwatch outside;
     const double built_before = opt.device ? opt.device->build_seconds() : 0.0;
     if (!opt.checkpoint.empty() && opt.checkpoint_every > 0 &&
-        (r->passes_done() % opt.checkpoint_every == 0 || r->passes_done() == opt.passes))
-      r->save_state(opt.checkpoint, checkpoint_prov);
+        (r->passes_done() % opt.checkpoint_every == 0 || r->passes_done() == opt.passes)) {
+      Provenance at = checkpoint_prov;
+      at.wall_time_s += wall.seconds();
+      r->save_state(opt.checkpoint, at);
+    }
     const bool snapshot = on_snapshot && snapshot_due(opt, r->passes_done());
     if (snapshot || r->passes_done() == opt.passes) st.mean_radius = mean_radius();
     if (snapshot) on_snapshot(r->state(), st);

@@ -278,9 +278,21 @@ Scene load_scene(const std::string& path) {
     if (t.mesh < 0 || size_t(t.mesh) >= s.mesh_names.size())
       throw input_error(path, "a triangle's mesh id is out of range", hint);
   }
-  for (auto& l : s.lights)
+  for (auto& m : s.materials)
+    if (m.type < PF_MAT_DIFFUSE || m.type > PF_MAT_EMITTER)
+      throw input_error(path, "a material has unknown type " + std::to_string(m.type), hint);
+  for (auto& l : s.lights) {
+    if (l.type != PF_LIGHT_AREA && l.type != PF_LIGHT_POINT)
+      throw input_error(path, "a light has unknown type " + std::to_string(l.type), hint);
     if (l.type == PF_LIGHT_AREA && (l.triangle < 0 || size_t(l.triangle) >= s.triangles.size()))
       throw input_error(path, "an area light's triangle id is out of range", hint);
+  }
+  // The image size (scene-bake: 1 … 65536 pixels per side) sizes every image buffer.
+  if (s.camera.width < 1 || s.camera.width > 65536 || s.camera.height < 1 ||
+      s.camera.height > 65536)
+    throw input_error(path, "camera image size " + std::to_string(s.camera.width) + "x" +
+                                std::to_string(s.camera.height) + " is outside 1 … 65536 pixels",
+                      hint);
   std::string problem = validate_kdtree(s.kd, s.triangles.size());
   if (!problem.empty()) throw input_error(path, "invalid kd-tree: " + problem, hint);
   if (!s.kd.nodes.empty()) {

@@ -1,7 +1,9 @@
 // Render-stage intermediates: see stage_files.h and docs/FORMATS.md.
 #include "photonflow/stage_files.h"
 
+#include <cmath>
 #include <cstddef>
+#include <limits>
 
 #include "photonflow/h5io.h"
 #include "photonflow/scene.h"
@@ -24,6 +26,43 @@ void check_image(const std::string& path, const std::vector<float>& v, int w, in
   if (v.size() != size_t(w) * size_t(h) * 3)
     throw input_error(path, std::string("image layer ") + name + " does not match width × height",
                       "the file is damaged; remake it");
+}
+
+// An int64 attribute that must lie in [lo, hi] (it is kept in an int).
+int64_t attr_in(const h5::Reader& r, const std::string& path, const std::string& obj,
+                const std::string& name, int64_t lo, int64_t hi, const std::string& hint) {
+  const int64_t v = r.attr_int(obj, name);
+  if (v < lo || v > hi)
+    throw input_error(path,
+                      "attribute " + (obj == "/" ? "" : obj + "/") + name + " = " +
+                          std::to_string(v) + " is outside [" + std::to_string(lo) + ", " +
+                          std::to_string(hi) + "]",
+                      hint);
+  return v;
+}
+
+constexpr int64_t kIntMax = std::numeric_limits<int32_t>::max();
+
+// first_pass of a file of `passes` passes: pass indices first_pass … first_pass + passes − 1 are
+// int32 (the photons' `pass` field, the grid's /pass<k> groups, the hitpoints' pass count).
+int check_first_pass(const h5::Reader& r, const std::string& path, size_t passes,
+                     const std::string& hint) {
+  const int64_t first = attr_in(r, path, "/", "first_pass", 0, kIntMax, hint);
+  if (passes > 0 && first + int64_t(passes) - 1 > kIntMax)
+    throw input_error(path, "its passes " + std::to_string(first) + " … " +
+                                std::to_string(first + int64_t(passes) - 1) + " run past 2^31-1",
+                      hint);
+  return int(first);
+}
+
+bool finite3(const float* p) {
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
+
+// "<what> id <value> is outside the scene's <size> <table>", for the messages.
+std::string out_of(const char* what, int32_t value, size_t size, const char* table) {
+  return std::string(what) + " id " + std::to_string(value) + " is outside the scene's " +
+         std::to_string(size) + " " + table;
 }
 }  // namespace
 
@@ -49,11 +88,65 @@ void require_scene(const std::string& path, const std::string& scene_id,
                       "rerun the stages from the same scene.h5");
 }
 
+void check_against_scene(const std::string& path, const HitpointSet& h, const Scene& scene) {
+  const size_t meshes = scene.mesh_names.size(), materials = scene.materials.size();
+  const std::string hint = "the file does not belong to this scene or is damaged; remake it with "
+                           "trace-hitpoints";
+  for (size_t i = 0; i < h.hitpoints.size(); ++i) {
+    const pf_hitpoint& hp = h.hitpoints[i];
+    if (hp.mesh < 0 || size_t(hp.mesh) >= meshes)
+      throw input_error(path, "hitpoint " + std::to_string(i) + ": " + out_of("mesh", hp.mesh, meshes, "meshes"),
+                        hint);
+    if (hp.material < 0 || size_t(hp.material) >= materials)
+      throw input_error(path, "hitpoint " + std::to_string(i) + ": " +
+                                  out_of("material", hp.material, materials, "materials"), hint);
+  }
+}
+
+void check_against_scene(const std::string& path, const PhotonSet& p, const Scene& scene) {
+  const size_t meshes = scene.mesh_names.size();
+  for (size_t i = 0; i < p.photons.size(); ++i)
+    if (p.photons[i].mesh < 0 || size_t(p.photons[i].mesh) >= meshes)
+      throw input_error(path, "photon " + std::to_string(i) + ": " +
+                                  out_of("mesh", p.photons[i].mesh, meshes, "meshes"),
+                        "the file does not belong to this scene or is damaged; remake it with "
+                        "trace-photons");
+}
+
+void check_against_scene(const std::string& path, const GridSet& g, const Scene& scene) {
+  const size_t meshes = scene.mesh_names.size();
+  // load_grids checked that every photon lies in the range of its own mesh's grid, so one grid
+  // per scene mesh bounds the photons' meshes too.
+  for (size_t k = 0; k < g.grids.size(); ++k)
+    if (g.grids[k].mesh_grid.size() != meshes)
+      throw input_error(path, "pass " + std::to_string(g.first_pass + int(k)) + " has grids for " +
+                                  std::to_string(g.grids[k].mesh_grid.size()) +
+                                  " meshes, the scene has " + std::to_string(meshes),
+                        "the file does not belong to this scene or is damaged; remake it with "
+                        "build-grid");
+}
+
+namespace {
+template <class Set>
+void accept_set(Provenance& prov, const std::string& role, const std::string& path, const Set& set,
+                const char* format, const Scene& scene, const std::string& scene_path) {
+  require_scene(path, set.scene_id, scene.scene_id, scene_path);
+  check_against_scene(path, set, scene);
+  prov.add_input(role, path, format, set.scene_id);
+}
+}  // namespace
+
 void accept_input(Provenance& prov, const std::string& role, const std::string& path,
-                  const std::string& format, const std::string& scene_id,
-                  const std::string& expected, const std::string& scene_path) {
-  require_scene(path, scene_id, expected, scene_path);
-  prov.add_input(role, path, format, scene_id);
+                  const HitpointSet& h, const Scene& scene, const std::string& scene_path) {
+  accept_set(prov, role, path, h, kHitpointsFormat, scene, scene_path);
+}
+void accept_input(Provenance& prov, const std::string& role, const std::string& path,
+                  const PhotonSet& p, const Scene& scene, const std::string& scene_path) {
+  accept_set(prov, role, path, p, kPhotonsFormat, scene, scene_path);
+}
+void accept_input(Provenance& prov, const std::string& role, const std::string& path,
+                  const GridSet& g, const Scene& scene, const std::string& scene_path) {
+  accept_set(prov, role, path, g, kGridFormat, scene, scene_path);
 }
 
 // ---- hitpoints.h5 ---------------------------------------------------------------------------
@@ -100,24 +193,35 @@ Provenance load_hitpoints_provenance(const std::string& path) {
 
 HitpointSet load_hitpoints(const std::string& path) {
   h5::Reader r(path, kHitpointsFormat, kHitpointsVersion);
+  const std::string hint = "the file is damaged; remake it with trace-hitpoints";
   HitpointSet h;
   h.scene_id = r.scene_id();
-  h.width = int(r.attr_int("/", "width"));
-  h.height = int(r.attr_int("/", "height"));
+  // The camera's image size (scene-bake: 1 … 65536 pixels per side).
+  h.width = int(attr_in(r, path, "/", "width", 1, 65536, hint));
+  h.height = int(attr_in(r, path, "/", "height", 1, 65536, hint));
   h.direct_mode = parse_direct(r.attr_string("/", "direct_mode"), path);
   h.radius0 = float(r.attr_double("/", "radius0"));
   h.estimator = r.attr_string("/", "estimator");
-  h.photons_emitted = uint64_t(r.attr_int("/", "photons_emitted"));
-  h.passes = int(r.attr_int("/", "passes"));
+  h.photons_emitted = uint64_t(attr_in(r, path, "/", "photons_emitted", 0,
+                                       std::numeric_limits<int64_t>::max(), hint));
+  h.passes = int(attr_in(r, path, "/", "passes", 0, kIntMax, hint));
   h.hitpoints = r.read<pf_hitpoint>("/hitpoints", h5_type_hitpoint());
   h.emitted = r.read<float>("/image/emitted");
   h.direct = r.read<float>("/image/direct");
   check_image(path, h.emitted, h.width, h.height, "emitted");
   check_image(path, h.direct, h.width, h.height, "direct");
-  for (auto& hp : h.hitpoints)
+  for (size_t i = 0; i < h.hitpoints.size(); ++i) {
+    const pf_hitpoint& hp = h.hitpoints[i];
     if (hp.pixel_x < 0 || hp.pixel_x >= h.width || hp.pixel_y < 0 || hp.pixel_y >= h.height)
-      throw input_error(path, "a hitpoint's pixel lies outside the image",
-                        "the file is damaged; remake it with trace-hitpoints");
+      throw input_error(path, "a hitpoint's pixel lies outside the image", hint);
+    // mesh and material index the scene's tables: their upper bounds are check_against_scene's.
+    if (hp.mesh < 0 || hp.material < 0)
+      throw input_error(path, "hitpoint " + std::to_string(i) + " has a negative " +
+                                  (hp.mesh < 0 ? "mesh" : "material") + " id", hint);
+    if (!finite3(hp.position))
+      throw input_error(path, "hitpoint " + std::to_string(i) + " has a non-finite position",
+                        hint);
+  }
   return h;
 }
 
@@ -147,9 +251,9 @@ void save_photons(const PhotonSet& p, const std::string& path, const Provenance&
 
 PhotonSet load_photons(const std::string& path) {
   h5::Reader r(path, kPhotonsFormat, kPhotonsVersion);
+  const std::string hint = "the file is damaged; remake it with trace-photons";
   PhotonSet p;
   p.scene_id = r.scene_id();
-  p.first_pass = int(r.attr_int("/", "first_pass"));
   p.seed = uint32_t(r.attr_int("/", "seed"));
   p.photons = r.read<pf_photon>("/photons", h5_type_photon());
   p.pass_begin = r.read<uint64_t>("/pass_begin");
@@ -157,9 +261,20 @@ PhotonSet load_photons(const std::string& path) {
   bool ok = p.pass_begin.size() == p.pass_emitted.size() + 1 && !p.pass_begin.empty() &&
             p.pass_begin.front() == 0 && p.pass_begin.back() == p.photons.size();
   for (size_t i = 1; ok && i < p.pass_begin.size(); ++i) ok = p.pass_begin[i - 1] <= p.pass_begin[i];
-  if (!ok)
-    throw input_error(path, "pass table does not match the photons",
-                      "the file is damaged; remake it with trace-photons");
+  if (!ok) throw input_error(path, "pass table does not match the photons", hint);
+  p.first_pass = check_first_pass(r, path, p.pass_emitted.size(), hint);
+  // Every photon: mesh id not negative (its upper bound is the scene's: check_against_scene),
+  // finite position, and the pass index of the pass it is stored in.
+  for (size_t k = 0; k < p.pass_emitted.size(); ++k)
+    for (uint64_t i = p.pass_begin[k]; i < p.pass_begin[k + 1]; ++i) {
+      const pf_photon& ph = p.photons[size_t(i)];
+      const std::string which = "photon " + std::to_string(i);
+      if (ph.mesh < 0) throw input_error(path, which + " has a negative mesh id", hint);
+      if (!finite3(ph.position)) throw input_error(path, which + " has a non-finite position", hint);
+      if (int64_t(ph.pass) != int64_t(p.first_pass) + int64_t(k))
+        throw input_error(path, which + " has pass " + std::to_string(ph.pass) + " but is stored in pass " +
+                                    std::to_string(int64_t(p.first_pass) + int64_t(k)), hint);
+    }
   return p;
 }
 
@@ -170,6 +285,7 @@ void save_grids(const GridSet& g, const std::string& path, const Provenance& pro
   w.attr("/", "scene_id", g.scene_id);
   w.attr("/", "first_pass", int64_t(g.first_pass));
   w.write("/pass_emitted", g.pass_emitted);
+  w.describe("/pass_emitted", "photons", "photons emitted in each pass");
   for (size_t k = 0; k < g.grids.size(); ++k) {
     const PhotonGrid& grid = g.grids[k];
     std::string p = "/pass" + std::to_string(g.first_pass + int(k));
@@ -191,10 +307,11 @@ void save_grids(const GridSet& g, const std::string& path, const Provenance& pro
 
 GridSet load_grids(const std::string& path) {
   h5::Reader r(path, kGridFormat, kGridVersion);
+  const std::string hint = "the file is damaged; remake it with build-grid";
   GridSet g;
   g.scene_id = r.scene_id();
-  g.first_pass = int(r.attr_int("/", "first_pass"));
   g.pass_emitted = r.read<uint64_t>("/pass_emitted");
+  g.first_pass = check_first_pass(r, path, g.pass_emitted.size(), hint);
   for (size_t k = 0; k < g.pass_emitted.size(); ++k) {
     std::string p = "/pass" + std::to_string(g.first_pass + int(k));
     PhotonGrid grid;
@@ -202,17 +319,52 @@ GridSet load_grids(const std::string& path) {
     grid.cell_start = r.read<int32_t>(p + "/cell_start");
     grid.photons = r.read<pf_photon>(p + "/photons", h5_type_photon());
     grid.order = r.read<int32_t>(p + "/order");
-    grid.params.max_bins = int(r.attr_int(p, "max_bins"));
+    grid.params.max_bins = int(attr_in(r, path, p, "max_bins", 1, kMaxBinsPerAxis, hint));
     grid.params.default_radius = float(r.attr_double(p, "default_radius"));
-    // Every bin range must lie inside the photon array.
-    for (auto& m : grid.mesh_grid) {
-      size_t bins = size_t(m.nx) * size_t(m.ny) * size_t(m.nz);
-      if (m.first_bin < 0 || size_t(m.first_bin) + bins + 1 > grid.cell_start.size())
-        throw input_error(path, "a mesh grid's bins lie outside cell_start", "remake it");
+    auto bad = [&](const std::string& what) {
+      return input_error(path, p + ": " + what, hint);
+    };
+    if (!(grid.params.default_radius > 0.f) || !std::isfinite(grid.params.default_radius))
+      throw bad("default_radius is not positive and finite");
+    // The layout build_photon_grid makes (photon_grid.h), which the gathers index without
+    // checks: per mesh, a well-formed header (eq. 7.1) whose bins + 1 entries follow the previous
+    // mesh's in cell_start and whose photons follow the previous mesh's in photons.
+    const size_t n = grid.photons.size();
+    int64_t entries = 0, first_photon = 0;
+    for (size_t m = 0; m < grid.mesh_grid.size(); ++m) {
+      const pf_mesh_grid& mg = grid.mesh_grid[m];
+      const std::string mesh = "mesh " + std::to_string(m);
+      const std::string problem = mesh_grid_problem(mg);
+      if (!problem.empty()) throw bad(mesh + ": " + problem);
+      if (mg.photon_count < 0 || (mg.photon_count == 0) != (mg.nx == 0))
+        throw bad(mesh + ": photon_count " + std::to_string(mg.photon_count) +
+                  " does not match its bins");
+      if (mg.first_bin != entries || mg.first_photon != first_photon)
+        throw bad(mesh + ": first_bin or first_photon does not follow the previous mesh");
+      entries += mesh_grid_bins(mg) + 1;
+      first_photon += mg.photon_count;
+      if (entries > int64_t(grid.cell_start.size()) || first_photon > int64_t(n))
+        throw bad(mesh + ": its bins or photons lie outside cell_start or photons");
+      if (grid.cell_start[size_t(mg.first_bin)] != mg.first_photon ||
+          grid.cell_start[size_t(entries - 1)] != first_photon)
+        throw bad(mesh + ": cell_start does not span the mesh's photons");
+      for (int64_t i = mg.first_photon; i < first_photon; ++i)
+        if (grid.photons[size_t(i)].mesh != int32_t(m))
+          throw bad("photon " + std::to_string(i) + " lies in the grid of another mesh");
     }
-    for (int32_t c : grid.cell_start)
-      if (c < 0 || size_t(c) > grid.photons.size())
-        throw input_error(path, "cell_start points outside the photons", "remake it");
+    if (entries != int64_t(grid.cell_start.size()) || first_photon != int64_t(n))
+      throw bad("cell_start or photons are longer than the mesh grids");
+    for (size_t e = 1; e < grid.cell_start.size(); ++e)
+      if (grid.cell_start[e] < grid.cell_start[e - 1]) throw bad("cell_start decreases");
+    // order: the photons' indices in the pass, each once.
+    if (grid.order.size() != n) throw bad("order and photons differ in length");
+    std::vector<uint8_t> seen(n, 0);
+    for (int32_t i : grid.order)
+      if (i < 0 || size_t(i) >= n || seen[size_t(i)]++)
+        throw bad("order is not a permutation of the photons");
+    for (size_t i = 0; i < n; ++i)
+      if (!finite3(grid.photons[i].position))
+        throw bad("photon " + std::to_string(i) + " has a non-finite position");
     g.grids.push_back(std::move(grid));
   }
   return g;

@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
       ("max-bins", "bins along a mesh's longest extent, at most",
        cxxopts::value<int>()->default_value("64"))
       ("radius", "default radius in world units (lower bound of the bin size); 0 = R0 of "
-       "--hitpoints", cxxopts::value<float>()->default_value("0"))
+       "--hitpoints (give one of the two)", cxxopts::value<float>()->default_value("0"))
       ("h,help", "print this help");
     pf::add_device_options(o);
     auto a = pf::parse_options(o, argc, argv);
@@ -38,6 +38,10 @@ int main(int argc, char** argv) {
     gp.max_bins = a["max-bins"].as<int>();
     gp.default_radius = a["radius"].as<float>();
     pf::require_positive("max-bins", gp.max_bins);
+    if (!(gp.default_radius >= 0.f))
+      throw pf::input_error("", "--radius must be >= 0 (0 = R0 of --hitpoints)");
+    if (gp.default_radius > 0.f && a.count("hitpoints"))
+      throw pf::input_error("", "give --radius or --hitpoints, not both (--radius 0 takes R0 of --hitpoints)");
 
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "build-grid");
     pf::Stopwatch clock;
@@ -46,15 +50,13 @@ int main(int argc, char** argv) {
     pf::PhotonSet photons = pf::load_photons(photons_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    pf::accept_input(prov, "photons", photons_path, pf::kPhotonsFormat, photons.scene_id,
-                     scene.scene_id, scene_path);
+    pf::accept_input(prov, "photons", photons_path, photons, scene, scene_path);
     if (gp.default_radius <= 0.f) {
       if (!a.count("hitpoints"))
         throw pf::input_error("", "give --radius or --hitpoints (whose R0 sets the bin size)");
       std::string hp_path = a["hitpoints"].as<std::string>();
       pf::HitpointSet h = pf::load_hitpoints(hp_path);
-      pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
-                       scene_path);
+      pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
       gp.default_radius = h.radius0;
     }
     pf::require_positive("radius", gp.default_radius);

@@ -69,7 +69,8 @@ int main(int argc, char** argv) {
       ("checkpoint-every", "generations between checkpoints",
        cxxopts::value<int>()->default_value("50"))
       ("resume", "continue the evolution from the checkpoint when it exists (same inputs, "
-       "fitness, seed, population and work-group size)");
+       "fitness, seed, population and work-group size; --ga-iterations at least the iterations "
+       "it has run)");
     pf::add_device_options(o);
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
@@ -122,9 +123,13 @@ int main(int argc, char** argv) {
     pf::Scene scene = pf::load_scene(scene_path);
     pf::HitpointSet h = pf::load_hitpoints(hp_path);
     pf::Provenance prov;
+    prov.tool = "cluster";
+    pf::record_options(prov, a);
+    prov.seed = a["seed"].as<uint32_t>();
+    prov.command_line = pf::join_command_line(argc, argv);
+    ga.provenance = &prov;  // the GA checkpoints carry it (inputs as added below)
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
-                     scene_path);
+    pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
 
     pf::ClusterSet c;
     pf::GaResult result;
@@ -148,8 +153,7 @@ int main(int argc, char** argv) {
       if (ga.fitness == pf::GaFitness::DeviceTime) {
         const std::string ppath = a["photons"].as<std::string>();
         pf::PhotonSet ps = pf::load_photons(ppath);
-        pf::accept_input(prov, "photons", ppath, pf::kPhotonsFormat, ps.scene_id, scene.scene_id,
-                         scene_path);
+        pf::accept_input(prov, "photons", ppath, ps, scene, scene_path);
         if (ps.pass_count() < 1) throw pf::input_error(ppath, "holds no photon pass");
         photons = ps.pass(0);
         in.emitted = ps.pass_emitted[0];
@@ -180,10 +184,6 @@ int main(int argc, char** argv) {
     }
     pf::ClusterStats s = pf::stats(c);
 
-    prov.tool = "cluster";
-    pf::record_options(prov, a);
-    prov.seed = a["seed"].as<uint32_t>();
-    prov.command_line = pf::join_command_line(argc, argv);
     prov.wall_time_s = clock.seconds();
     if (method == "ga") {
       prov.param("best_fitness", result.fitness);

@@ -97,8 +97,7 @@ int main(int argc, char** argv) {
     pf::HitpointSet h = pf::load_hitpoints(hp_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
-                     scene_path);
+    pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
     if (estimator == "ppm" && h.estimator == "classic")
       throw pf::input_error(hp_path, "holds a classic estimate; PPM continues only a PPM state",
                             "start from trace-hitpoints' output");
@@ -126,8 +125,7 @@ int main(int argc, char** argv) {
     if (a.count("grid") && estimator == "ppm") {
       std::string grid_path = a["grid"].as<std::string>();
       pf::GridSet grids = pf::load_grids(grid_path);
-      pf::accept_input(prov, "grid", grid_path, pf::kGridFormat, grids.scene_id, scene.scene_id,
-                       scene_path);
+      pf::accept_input(prov, "grid", grid_path, grids, scene, scene_path);
       if (grids.first_pass != h.passes)
         throw pf::input_error(grid_path, "starts at pass " + std::to_string(grids.first_pass) +
                               " but the hitpoints have " + std::to_string(h.passes) + " passes",
@@ -141,8 +139,7 @@ int main(int argc, char** argv) {
       if (!a.count("photons")) throw pf::input_error("", "--photons is required here");
       std::string ph_path = a["photons"].as<std::string>();
       pf::PhotonSet photons = pf::load_photons(ph_path);
-      pf::accept_input(prov, "photons", ph_path, pf::kPhotonsFormat, photons.scene_id,
-                       scene.scene_id, scene_path);
+      pf::accept_input(prov, "photons", ph_path, photons, scene, scene_path);
       if (estimator == "ppm") {
         if (photons.first_pass != h.passes)
           throw pf::input_error(ph_path, "starts at pass " + std::to_string(photons.first_pass) +

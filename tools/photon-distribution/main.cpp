@@ -61,8 +61,7 @@ int main(int argc, char** argv) {
     pf::HitpointSet h = pf::load_hitpoints(hp_path);
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
-    pf::accept_input(prov, "hitpoints", hp_path, pf::kHitpointsFormat, h.scene_id, scene.scene_id,
-                     scene_path);
+    pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
 
     pf::PpmOptions ppm;
     ppm.max_bins = max_bins;
@@ -71,8 +70,7 @@ int main(int argc, char** argv) {
     if (a.count("photons")) {
       const std::string ph_path = a["photons"].as<std::string>();
       pf::PhotonSet ps = pf::load_photons(ph_path);
-      pf::accept_input(prov, "photons", ph_path, pf::kPhotonsFormat, ps.scene_id, scene.scene_id,
-                       scene_path);
+      pf::accept_input(prov, "photons", ph_path, ps, scene, scene_path);
       prov.seed = ps.seed;
       d.first_pass = ps.first_pass;
       for (int p = 0; p < ps.pass_count(); ++p)

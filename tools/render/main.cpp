@@ -124,6 +124,7 @@ int main(int argc, char** argv) {
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
 
+    prov.wall_time_s = clock.seconds();  // so far; checkpoints add the run's (render_driver.cpp)
     pf::Progress progress("pass", opt.passes, "photons");
     std::vector<pf::RenderImageRecord> written;
     auto image_of = [&](const pf::HitpointSet& h) {

@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
       throw pf::input_error("", "--photons must be below 2^32 per pass");
     pf::require_positive("passes", passes);
     if (first < 0) throw pf::input_error("", "--first-pass must be >= 0");
+    pf::check_pass_range(first, passes);  // pass indices are int32 in the files
     pf::PhotonPassOptions opt;
     opt.photons = uint32_t(photons);
     opt.seed = a["seed"].as<uint32_t>();
