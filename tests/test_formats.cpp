@@ -109,14 +109,11 @@ TEST_CASE("hitpoints, photons and grid files round-trip every dataset", "[format
   p.first_pass = 5;
   p.seed = 77;
   p.scene_id = s.scene_id;
-  p.pass_begin.push_back(0);
   PhotonPassOptions po;
   po.photons = 3000;
   for (uint32_t pass = 5; pass < 7; ++pass) {
     PhotonPassResult r = trace_photons(s, pass, po);
-    p.photons.insert(p.photons.end(), r.photons.begin(), r.photons.end());
-    p.pass_begin.push_back(p.photons.size());
-    p.pass_emitted.push_back(r.emitted);
+    p.append_pass(r.photons, r.emitted);
   }
   save_photons(p, tmp / "ph.h5", prov_for("ph"));
   PhotonSet pr = load_photons(tmp / "ph.h5");

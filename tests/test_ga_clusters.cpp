@@ -595,14 +595,11 @@ TEST_CASE("cluster --method ga and photon-distribution: files, provenance, refus
   PhotonSet ps;
   ps.scene_id = s.scene_id;
   ps.seed = 1;
-  ps.pass_begin.push_back(0);
   PhotonPassOptions po;
   po.photons = 3000;
   for (int p = 0; p < 3; ++p) {
     PhotonPassResult r = trace_photons(s, uint32_t(p), po);
-    ps.photons.insert(ps.photons.end(), r.photons.begin(), r.photons.end());
-    ps.pass_begin.push_back(ps.photons.size());
-    ps.pass_emitted.push_back(r.emitted);
+    ps.append_pass(r.photons, r.emitted);
   }
   save_photons(ps, tmp / "ph.h5", prov());
   auto d2 = test::run_tool("photon-distribution", S + HP + " -o " + (tmp / "d2.h5") + " --photons " +

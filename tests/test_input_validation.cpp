@@ -86,14 +86,11 @@ struct Files {
     PhotonSet p;
     p.first_pass = 0;
     p.scene_id = scene.scene_id;
-    p.pass_begin.push_back(0);
     PhotonPassOptions po;
     po.photons = 2000;
     for (uint32_t pass = 0; pass < 2; ++pass) {
       PhotonPassResult r = trace_photons(scene, pass, po);
-      p.photons.insert(p.photons.end(), r.photons.begin(), r.photons.end());
-      p.pass_begin.push_back(p.photons.size());
-      p.pass_emitted.push_back(r.emitted);
+      p.append_pass(r.photons, r.emitted);
     }
     ph = tmp / "ph.h5";
     save_photons(p, ph, prov());

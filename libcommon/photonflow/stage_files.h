@@ -49,6 +49,14 @@ struct PhotonSet {
   uint32_t seed = 0;
   std::string scene_id;
   int pass_count() const { return int(pass_emitted.size()); }
+  // Appends the next pass (index first_pass + pass_count()) as traced: its photons, its
+  // pass_begin entry (the leading 0 too, on an empty set) and its photons emitted.
+  void append_pass(const std::vector<pf_photon>& pass_photons, uint64_t emitted) {
+    if (pass_begin.empty()) pass_begin.push_back(0);
+    photons.insert(photons.end(), pass_photons.begin(), pass_photons.end());
+    pass_begin.push_back(photons.size());
+    pass_emitted.push_back(emitted);
+  }
   // Photons of the k-th pass of the set (k from 0).
   std::vector<pf_photon> pass(int k) const {
     return {photons.begin() + long(pass_begin[size_t(k)]),

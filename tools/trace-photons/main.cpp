@@ -59,14 +59,11 @@ int main(int argc, char** argv) {
     set.first_pass = first;
     set.seed = opt.seed;
     set.scene_id = scene.scene_id;
-    set.pass_begin.push_back(0);
     pf::Progress progress("pass", passes, "photons");
     for (int p = 0; p < passes; ++p) {
       pf::PhotonPassResult r = dev ? pf::trace_photons(scene, uint32_t(first + p), opt, *dev)
                                    : pf::trace_photons(scene, uint32_t(first + p), opt);
-      set.photons.insert(set.photons.end(), r.photons.begin(), r.photons.end());
-      set.pass_begin.push_back(set.photons.size());
-      set.pass_emitted.push_back(r.emitted);
+      set.append_pass(r.photons, r.emitted);
       progress.update(p + 1, double(photons) * (p + 1));
     }
     pf::Provenance prov;
