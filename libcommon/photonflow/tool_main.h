@@ -9,8 +9,8 @@
 #include <cxxopts.hpp>
 #include <exception>
 #include <functional>
-#include <iostream>
 #include <initializer_list>
+#include <iostream>
 #include <string>
 #include <vector>
 
