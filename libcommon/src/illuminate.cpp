@@ -75,8 +75,13 @@ void sort_keys(uint64_t* k, size_t n) {
 
 void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, uint64_t emitted,
                    const PpmOptions& opt) {
-  check_alpha(opt.alpha);
   check_against_scene("", h, scene);
+  ppm_pass_grid_prechecked(scene, h, grid, emitted, opt);
+}
+
+void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGrid& grid,
+                              uint64_t emitted, const PpmOptions& opt) {
+  check_alpha(opt.alpha);
   const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
   const float alpha = opt.alpha;
   const int64_t count = int64_t(h.hitpoints.size());

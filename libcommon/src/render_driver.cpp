@@ -21,12 +21,18 @@ HitpointSet fresh_state(const Scene& scene, const EyePassOptions& eye, ClContext
 }
 }  // namespace
 
+// Both constructors check the state's ids against the scene once; a pass never changes them, so
+// the CPU grid gather of every pass skips that check (ppm_pass_grid_prechecked).
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
-    : scene_(scene), opt_(opt), state_(fresh_state(scene, opt.eye, opt.device)) {}
+    : scene_(scene), opt_(opt), state_(fresh_state(scene, opt.eye, opt.device)) {
+  check_against_scene("", state_, scene_);
+}
 
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt,
                                          HitpointSet state)
-    : scene_(scene), opt_(opt), state_(std::move(state)) {}
+    : scene_(scene), opt_(opt), state_(std::move(state)) {
+  check_against_scene("", state_, scene_);
+}
 
 void ProgressiveRenderer::run_iteration() {
   if (opt_.device) {  // OpenCL backend: device photon tracing and opt.ppm.method's gather
@@ -61,7 +67,7 @@ void ProgressiveRenderer::run_iteration() {
     const std::vector<PhotonSpan> spans = photon_chunks_.spans();
     build_photon_grid_into(grid_, spans.data(), spans.size(), int(scene_.mesh_names.size()),
                            ppm_grid_params(state_, opt_.ppm), opt_.ppm.threads);
-    ppm_pass_grid(scene_, state_, grid_, emitted, opt_.ppm);
+    ppm_pass_grid_prechecked(scene_, state_, grid_, emitted, opt_.ppm);
   } else {
     photon_chunks_.concatenate(photons_);
     ppm_pass(scene_, state_, photons_, emitted, opt_.ppm);

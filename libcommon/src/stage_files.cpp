@@ -95,8 +95,8 @@ void check_against_scene(const std::string& path, const HitpointSet& h, const Sc
   for (size_t i = 0; i < h.hitpoints.size(); ++i) {
     const pf_hitpoint& hp = h.hitpoints[i];
     if (hp.mesh < 0 || size_t(hp.mesh) >= meshes)
-      throw input_error(path, "hitpoint " + std::to_string(i) + ": " + out_of("mesh", hp.mesh, meshes, "meshes"),
-                        hint);
+      throw input_error(path, "hitpoint " + std::to_string(i) + ": " +
+                                  out_of("mesh", hp.mesh, meshes, "meshes"), hint);
     if (hp.material < 0 || size_t(hp.material) >= materials)
       throw input_error(path, "hitpoint " + std::to_string(i) + ": " +
                                   out_of("material", hp.material, materials, "materials"), hint);
