@@ -427,7 +427,8 @@ ClusterSet cluster_grid(const HitpointSet& h, int wg_size, int max_bins) {
       }
     }
     // Before the cell table is allocated (photon_grid.h: kMaxGridEntries).
-    check_grid_entries(mesh_grid_bins(g) + 1, "the grid of mesh " + std::to_string(m) + "'s hitpoints",
+    check_grid_entries(mesh_grid_bins(g) + 1,
+                       "the grid of mesh " + std::to_string(m) + "'s hitpoints",
                        "lower --max-bins, or trace the hitpoints with a larger --radius: the "
                        "cells are at least R0 wide");
     const size_t cells = size_t(mesh_grid_bins(g));

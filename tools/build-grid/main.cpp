@@ -41,7 +41,8 @@ int main(int argc, char** argv) {
     if (!(gp.default_radius >= 0.f))
       throw pf::input_error("", "--radius must be >= 0 (0 = R0 of --hitpoints)");
     if (gp.default_radius > 0.f && a.count("hitpoints"))
-      throw pf::input_error("", "give --radius or --hitpoints, not both (--radius 0 takes R0 of --hitpoints)");
+      throw pf::input_error("", "give --radius or --hitpoints, not both (--radius 0 takes R0 of "
+                                "--hitpoints)");
 
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "build-grid");
     pf::Stopwatch clock;

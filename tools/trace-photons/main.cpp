@@ -42,8 +42,7 @@ int main(int argc, char** argv) {
     if (photons > int64_t(UINT32_MAX))
       throw pf::input_error("", "--photons must be below 2^32 per pass");
     pf::require_positive("passes", passes);
-    if (first < 0) throw pf::input_error("", "--first-pass must be >= 0");
-    pf::check_pass_range(first, passes);  // pass indices are int32 in the files
+    pf::check_pass_range(first, passes);  // >= 0, and int32 pass indices in the files
     pf::PhotonPassOptions opt;
     opt.photons = uint32_t(photons);
     opt.seed = a["seed"].as<uint32_t>();
