@@ -84,7 +84,6 @@ int main(int argc, char** argv) {
     pf::require_positive("wg-size", wg);
     if (max_bins < 0) throw pf::input_error("", "--max-bins must be >= 0 (0 = automatic)");
     if (iterations < 0) throw pf::input_error("", "--iterations must be >= 0");
-    if (threads < 0) throw pf::input_error("", "--threads must be >= 0");
     const std::string out_path = a["output"].as<std::string>();
 
     pf::GaOptions ga;
