@@ -228,7 +228,9 @@ TEST_CASE("OpenCL: photons compacted on the device equal the host's concatenatio
     CHECK(on.emitted == host.emitted);
     const std::vector<pf_photon> down = download_photons(on, c);
     REQUIRE(down.size() == host.photons.size());
-    CHECK(std::memcmp(down.data(), host.photons.data(), down.size() * sizeof(pf_photon)) == 0);
+    // (memcmp may not be given the null data() of empty vectors, even for 0 bytes)
+    CHECK((down.empty() ||
+           std::memcmp(down.data(), host.photons.data(), down.size() * sizeof(pf_photon)) == 0));
     return down.size();
   };
   PhotonPassOptions opt;
