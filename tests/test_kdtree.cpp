@@ -88,7 +88,7 @@ TEST_CASE("ropes point at nodes covering the face, -1 only on the scene box", "[
   const auto tris = big_blob();
   const pf::KdTree tree = pf::build_kdtree(tris, {});
   const pf_kd_node& root = tree.nodes[0];
-  size_t bad = 0, optimised = 0;
+  size_t bad = 0, optimised = 0, shallow = 0;
   for (const pf_kd_node& n : tree.nodes) {
     if (n.axis != PF_KD_LEAF) continue;
     for (int f = 0; f < 6; ++f) {
@@ -105,9 +105,14 @@ TEST_CASE("ropes point at nodes covering the face, -1 only on the scene box", "[
         if (k != a) touches = touches && r.lo[k] <= n.lo[k] && r.hi[k] >= n.hi[k];
       bad += touches ? 0 : 1;
       optimised += r.axis == PF_KD_LEAF ? 1 : 0;
+      // Popov et al. 2007, sec. 4.1: the rope goes down to the deepest node covering the whole
+      // face, so an inner target's children do not: its plane cuts across the face.
+      if (r.axis != PF_KD_LEAF)
+        shallow += (r.axis != a && n.lo[r.axis] < r.split && n.hi[r.axis] > r.split) ? 0 : 1;
     }
   }
   CHECK(bad == 0);
+  CHECK(shallow == 0);
   CHECK(optimised > 0);  // rope optimisation reached leaves
 }
 
