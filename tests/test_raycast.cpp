@@ -189,17 +189,22 @@ TEST_CASE("hits are accepted for t in (tmin, tmax] only", "[raycast]") {
     pf::Hit h;
     REQUIRE(pf::intersect_closest(room(), r, h, trav));
     CHECK(h.t == Approx(0.5f));
+    const float t = h.t;  // (a miss below resets h)
     pf::Ray at = r;
-    at.tmax = h.t;  // tmax itself is included
+    at.tmax = t;  // tmax itself is included
     CHECK(pf::intersect_closest(room(), at, h, trav));
     CHECK(pf::intersect_any(room(), at, trav));
     pf::Ray before = r;
-    before.tmax = std::nextafter(h.t, 0.f);
+    before.tmax = std::nextafter(t, 0.f);
     CHECK_FALSE(pf::intersect_closest(room(), before, h, trav));
     CHECK_FALSE(pf::intersect_any(room(), before, trav));
     pf::Ray after = r;
-    after.tmin = h.t;  // tmin itself is excluded
+    after.tmin = t;  // tmin itself is excluded
     CHECK_FALSE(pf::intersect_closest(room(), after, h, trav));
+    CHECK_FALSE(pf::intersect_any(room(), after, trav));
+    after.tmin = std::nextafter(t, 0.f);  // just before it: found
+    CHECK(pf::intersect_closest(room(), after, h, trav));
+    CHECK(h.t == t);
   }
 }
 
