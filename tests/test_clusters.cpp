@@ -407,3 +407,28 @@ TEST_CASE("k-means ends at a Lloyd fixed point: each hitpoint's nearest centre i
     CHECK(moved == 1);
   }
 }
+
+TEST_CASE("k-means makes K = hitpoints / work-group size clusters per mesh (ch. 7.3)", "[clusters]") {
+  // Meshes whose hitpoint counts are multiples of wg: evenly spaced on a line (mesh 0), in two
+  // tight, far-apart groups of wg (mesh 1). With K = n / wg, k-means cuts them into runs of wg
+  // exactly, with no filler (Table 7.5's count with fillers equals the hitpoint count); one
+  // cluster more (K + 1) leaves clusters short of wg: fillers.
+  const int wg = 8;
+  HitpointSet h;
+  for (int i = 0; i < 4 * wg; ++i) h.hitpoints.push_back(hp(0.1f * float(i), 0, 0, 0, 0.05f));
+  for (int g = 0; g < 2; ++g)  // mesh 1: two groups of wg on a line
+    for (int i = 0; i < wg; ++i) h.hitpoints.push_back(hp(5, 5, 3.f * float(g) + 0.01f * float(i), 1, 0.05f));
+  h.width = int(h.hitpoints.size());
+  h.height = 1;
+  for (size_t i = 0; i < h.hitpoints.size(); ++i) h.hitpoints[i].pixel_x = int(i);
+  h.scene_id = "s";
+  const ClusterSet c = cluster_kmeans(h, wg, 10, 1, 1);
+  REQUIRE(check_clusters(c, h) == "");
+  const ClusterStats s = stats(c);
+  CHECK(s.clusters == 6);
+  CHECK(s.fillers == 0);
+  for (const pf_cluster& cl : c.clusters) {  // runs of wg neighbours
+    CHECK(cl.count == wg);
+    CHECK(cl.radius < 0.1f * float(wg) / 2 + 0.06f);
+  }
+}
