@@ -15,6 +15,7 @@
 #include "photonflow/error.h"
 #include "photonflow/grid_shared.h"
 #include "photonflow/hash_grid.h"
+#include "photonflow/morton.h"
 #include "photonflow/rng.h"
 
 using namespace pf;
@@ -257,4 +258,26 @@ TEST_CASE("hash grid: a cell's slot is its linear index modulo the table (grid_s
     if (g.unique) CHECK(shared == 0);
     else CHECK(shared == size_t(g.n[0]) * g.n[1] * g.n[2] - g.slots());  // every slot used
   }
+}
+
+TEST_CASE("Morton codes interleave all 21 bits of each coordinate (morton.h)", "[hash_grid]") {
+  // Bit i of x goes to bit 3i, of y to 3i + 1, of z to 3i + 2 (x in the lowest bit), for every
+  // i < 21; higher bits are ignored. Reference: the interleaving bit by bit.
+  auto reference = [](uint64_t x, uint64_t y, uint64_t z) {
+    uint64_t c = 0;
+    for (int b = 0; b < 21; ++b)
+      c |= ((x >> b) & 1) << (3 * b) | ((y >> b) & 1) << (3 * b + 1) | ((z >> b) & 1) << (3 * b + 2);
+    return c;
+  };
+  size_t wrong = 0;
+  for (uint32_t k = 0; k < 20000; ++k) {
+    pf_rng r = pf_rng_start(11, 0, k);
+    uint64_t c[3];
+    for (uint64_t& v : c) v = uint64_t(pf_rng_next(&r) * 16777216.f);  // 24 random bits
+    if (k < 64) c[k % 3] = (uint64_t(1) << 21) - 1 - (k / 3);          // near the top bit
+    wrong += morton3(c[0], c[1], c[2]) != reference(c[0], c[1], c[2]);
+    wrong += morton_spread3(c[k % 3]) != reference(c[k % 3], 0, 0);
+  }
+  CHECK(wrong == 0);
+  CHECK(morton3(0x1fffff, 0x1fffff, 0x1fffff) == (uint64_t(1) << 63) - 1);
 }
