@@ -66,6 +66,25 @@ bool radii_contain(const ClusterSet& c, const HitpointSet& h) {
   return true;
 }
 
+// Every cluster's R is the rule of clusters.h, not merely large enough: max over its members of
+// |x − centre| + r (in double), rounded up to float — within one float step of that maximum.
+bool radii_tight(const ClusterSet& c, const HitpointSet& h) {
+  for (auto& cl : c.clusters) {
+    double m = 0;
+    for (int t = cl.first; t < cl.first + cl.count; ++t) {
+      const pf_hitpoint& p = h.hitpoints[size_t(c.order[size_t(t)])];
+      double d2 = 0;
+      for (int a = 0; a < 3; ++a) {
+        double d = double(p.position[a]) - double(cl.centre[a]);
+        d2 += d * d;
+      }
+      m = std::max(m, std::sqrt(d2) + double(p.radius));
+    }
+    if (!(double(cl.radius) >= m && double(std::nextafter(cl.radius, 0.f)) < m)) return false;
+  }
+  return true;
+}
+
 Provenance prov() {
   Provenance p;
   p.tool = "test";
@@ -147,6 +166,7 @@ TEST_CASE("k-means and grid clusters of a traced room are valid partitions", "[c
       CHECK(pure);
       CHECK(std::all_of(seen.begin(), seen.end(), [](int s) { return s == 1; }));
       CHECK(radii_contain(c, h));
+      CHECK(radii_tight(c, h));
       ClusterStats s = stats(c);
       CHECK(s.hitpoints == h.hitpoints.size());
       CHECK(s.hitpoints_with_fillers == padded_sum(c));
@@ -287,6 +307,7 @@ TEST_CASE("update_cluster_radii tightens radii as hitpoint radii shrink", "[clus
       CHECK(never_grew);
       CHECK(some_shrank);
       CHECK(radii_contain(c, cur));
+      CHECK(radii_tight(c, cur));
       CHECK(c.order == before.order);  // membership kept
     }
   }
@@ -348,4 +369,66 @@ TEST_CASE("automatic grid-cluster bins keep fillers low", "[clusters][fillers]")
   }
   for (auto& kv : members)
     if (kv.second >= size_t(4 * wg)) CHECK(2 * fillers[kv.first] <= kv.second);
+}
+
+TEST_CASE("k-means ends at a Lloyd fixed point: each hitpoint's nearest centre is its own",
+          "[clusters]") {
+  // Lloyd's iteration (clusters.h) alternates "each hitpoint to its nearest centre" and "each
+  // centre to the mean of its hitpoints"; when it has converged, the clusters' centres (means of
+  // their members) are the centres the last assignment used, so every hitpoint's nearest centre of
+  // its mesh — by brute force over all clusters — is its own cluster's. Seeds alone (no update
+  // step) or a nearest-centre search that stops early do not give that.
+  const HitpointSet h = room_hitpoints(48, 32);
+  for (int wg : {16, 64}) {
+    const ClusterSet c = cluster_kmeans(h, wg, 1000, 1, 2);
+    REQUIRE(check_clusters(c, h) == "");
+    size_t farther = 0, moved = 0;
+    for (size_t k = 0; k < c.clusters.size(); ++k) {
+      const pf_cluster& own = c.clusters[k];
+      for (int t = own.first; t < own.first + own.count; ++t) {
+        const float* x = h.hitpoints[size_t(c.order[size_t(t)])].position;
+        auto d2 = [&](const pf_cluster& cl) {
+          double s = 0;
+          for (int a = 0; a < 3; ++a) s += (double(x[a]) - cl.centre[a]) * (double(x[a]) - cl.centre[a]);
+          return s;
+        };
+        const double mine = d2(own);
+        double best = mine;
+        for (const pf_cluster& other : c.clusters)
+          if (other.mesh == own.mesh) best = std::min(best, d2(other));
+        farther += mine > best * (1 + 1e-6) + 1e-12;
+      }
+    }
+    // The iteration did move the seeds: k-means clusters are not the Morton runs of the seeding.
+    const ClusterSet seeds = cluster_kmeans(h, wg, 0, 1, 2);
+    moved = same_clusters(seeds, c) ? 0 : 1;
+    INFO("wg " << wg << ", " << c.clusters.size() << " clusters");
+    CHECK(farther == 0);
+    CHECK(moved == 1);
+  }
+}
+
+TEST_CASE("k-means makes K = hitpoints / work-group size clusters per mesh (ch. 7.3)", "[clusters]") {
+  // Meshes whose hitpoint counts are multiples of wg: evenly spaced on a line (mesh 0), in two
+  // tight, far-apart groups of wg (mesh 1). With K = n / wg, k-means cuts them into runs of wg
+  // exactly, with no filler (Table 7.5's count with fillers equals the hitpoint count); one
+  // cluster more (K + 1) leaves clusters short of wg: fillers.
+  const int wg = 8;
+  HitpointSet h;
+  for (int i = 0; i < 4 * wg; ++i) h.hitpoints.push_back(hp(0.1f * float(i), 0, 0, 0, 0.05f));
+  for (int g = 0; g < 2; ++g)  // mesh 1: two groups of wg on a line
+    for (int i = 0; i < wg; ++i) h.hitpoints.push_back(hp(5, 5, 3.f * float(g) + 0.01f * float(i), 1, 0.05f));
+  h.width = int(h.hitpoints.size());
+  h.height = 1;
+  for (size_t i = 0; i < h.hitpoints.size(); ++i) h.hitpoints[i].pixel_x = int(i);
+  h.scene_id = "s";
+  const ClusterSet c = cluster_kmeans(h, wg, 10, 1, 1);
+  REQUIRE(check_clusters(c, h) == "");
+  const ClusterStats s = stats(c);
+  CHECK(s.clusters == 6);
+  CHECK(s.fillers == 0);
+  for (const pf_cluster& cl : c.clusters) {  // runs of wg neighbours
+    CHECK(cl.count == wg);
+    CHECK(cl.radius < 0.1f * float(wg) / 2 + 0.06f);
+  }
 }

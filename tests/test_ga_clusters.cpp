@@ -318,6 +318,64 @@ TEST_CASE("the merge rule follows the cluster sizes (ch. 8.1)", "[ga][mutation]"
   CHECK(merged_mid < merged_small - size_t(tries) / 10);
 }
 
+TEST_CASE("the remove mutation takes the smaller of two clusters (ch. 8.1)", "[ga][mutation]") {
+  // Mutation 3 removes 1–5 centroids, each the smaller of two clusters picked at random, so small
+  // clusters are removed more often: the clusters removed are smaller than the clusters on
+  // average. 30 tight groups of 1 … 30 hitpoints (sizes shuffled over the positions), one
+  // centroid each; a removed centroid is recognised by its position.
+  const int groups = 30;
+  HitpointSet h;
+  std::vector<int> size_at;
+  for (int g = 0; g < groups; ++g) {
+    const int n = (g * 7) % groups + 1;
+    size_at.push_back(n);
+    for (int i = 0; i < n; ++i) {
+      pf_hitpoint p{};
+      p.position[0] = float(g % 6) + 0.001f * float(i);
+      p.position[1] = float(g / 6);
+      p.radius = 0.01f;
+      h.hitpoints.push_back(p);
+    }
+  }
+  h.radius0 = 0.01f;
+  h.scene_id = "s";
+  GaFitnessInputs in;
+  in.hitpoints = &h;
+  in.wg_size = 4;
+  ClusterSet start = empty_cluster_set(h, in.wg_size, "test");
+  int32_t first = 0;
+  for (int g = 0; g < groups; ++g) {
+    std::vector<int32_t> m(size_t(size_at[size_t(g)]));
+    for (int32_t& i : m) i = first++;
+    append_cluster(start, 0, m.data(), m.size(), h);
+  }
+  double removed_size = 0;
+  size_t removed = 0;
+  for (uint32_t k = 0; k < 200; ++k) {
+    GaState st(in, GaFitness::Filler, start);
+    REQUIRE(st.cluster_count() == size_t(groups));
+    pf_rng rng = pf_rng_start(3, 5, k);
+    st.mutate(GaState::Mutation::Remove, rng);
+    st.evaluate();
+    REQUIRE(check_clusters(st.clusters(), h) == "");
+    const std::vector<GaCentroid> left = st.centroids();
+    for (int g = 0; g < groups; ++g) {
+      bool kept = false;
+      for (const GaCentroid& c : left)
+        kept |= std::fabs(c.position[0] - float(g % 6)) < 0.5f && std::fabs(c.position[1] - float(g / 6)) < 0.5f;
+      if (!kept) {
+        removed_size += size_at[size_t(g)];
+        ++removed;
+      }
+    }
+  }
+  const double mean_size = (groups + 1) / 2.0;
+  INFO(removed << " centroids removed, mean size " << removed_size / double(removed) << " vs "
+               << mean_size);
+  REQUIRE(removed > 200);
+  CHECK(removed_size / double(removed) < 0.85 * mean_size);
+}
+
 TEST_CASE("incremental fitness equals a full recomputation after random mutation sequences",
           "[ga][incremental]") {
   const Fixture& f = fixture();
@@ -404,6 +462,55 @@ TEST_CASE("evolution: elitist, never worse than its start; it improves on k-mean
     CHECK(r.fitness <= r.kmeans_fitness);
     CHECK(r.kmeans_fitness == cluster_fitness(cluster_kmeans(f.h, 16, 10, 1, 2), in, fit));
     REQUIRE(check_clusters(r.clusters, f.h) == "");
+  }
+}
+
+TEST_CASE("evolution: each generation's parent is the best of parent and children (1+λ)",
+          "[ga][evolve]") {
+  // ga_clusters.h, ch. 8.1: child c of generation g mutates the parent with the stream
+  // (seed, g, c); the child of lowest fitness (the lowest-numbered on equal fitness) replaces the
+  // parent when it is not worse — on equal fitness too. Replayed here with GaState alone: the
+  // evolution's history and final clusters must be those of the replay.
+  const Fixture& f = fixture();
+  const GaFitnessInputs in = inputs(f, 16);
+  for (GaFitness fit : {GaFitness::Filler, GaFitness::MemoryAccess}) {
+    INFO("fitness " << ga_fitness_name(fit));
+    GaOptions o;
+    o.fitness = fit;
+    o.population = 5;
+    o.iterations = 12;
+    o.seed = 7;
+    o.threads = 2;
+    const GaResult r = evolve_clusters(in, o);
+    GaState parent(in, fit, cluster_kmeans(f.h, 16, o.kmeans_iterations, o.seed, o.threads));
+    double best_so_far = parent.fitness();
+    std::vector<double> history;
+    size_t ties = 0, replaced = 0;
+    for (int g = 0; g <= o.iterations; ++g) {
+      std::vector<double> child;
+      for (int c = 0; c + 1 < o.population; ++c) {
+        pf_rng rng = pf_rng_start(o.seed, uint32_t(g), uint32_t(c));
+        parent.mutate_child(rng);
+        parent.evaluate();
+        child.push_back(parent.fitness());
+        parent.undo();
+      }
+      const size_t best = size_t(std::min_element(child.begin(), child.end()) - child.begin());
+      if (child[best] <= best_so_far) {
+        ties += child[best] == best_so_far;
+        ++replaced;
+        pf_rng rng = pf_rng_start(o.seed, uint32_t(g), uint32_t(best));
+        parent.mutate_child(rng);
+        parent.evaluate();
+        parent.commit();
+        best_so_far = child[best];
+      }
+      history.push_back(best_so_far);
+    }
+    INFO(replaced << " generations took a child, " << ties << " of them on equal fitness");
+    CHECK(r.history == history);
+    CHECK(same_clusters(r.clusters, parent.clusters()));
+    CHECK(ties > 0);  // the equal-fitness rule was exercised
   }
 }
 

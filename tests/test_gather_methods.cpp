@@ -31,6 +31,7 @@
 #include "photonflow/error.h"
 #include "photonflow/eye_pass.h"
 #include "photonflow/photon_pass.h"
+#include "photonflow/rng.h"
 #include "photonflow/synthesize.h"
 #include "support.h"
 #include "support_cl.h"
@@ -126,6 +127,37 @@ TEST_CASE("gather methods: every method gathers the CPU grid's photons", "[gathe
         CHECK(same_hitpoints(h.hitpoints, cpu.hitpoints));
     }
   }
+}
+
+TEST_CASE("gather methods: hash-grid with small tables reads every slot of a sphere's box once",
+          "[gather][opencl][hash]") {
+  // With fewer slots than cells, rows of a gather sphere's box share slots: gather_hash_grid
+  // reads a slot only if no earlier row of the box read it (arithmetic on the slots, exact).
+  // Over cell sizes and table sizes that make rows wrap around the table at many offsets, the
+  // photons gathered must stay the CPU grid's.
+  auto dev = test_device();
+  if (!dev) return;
+  Fixture f = make_fixture(24, 20, 1, 6000, DirectMode::Photons);
+  HitpointSet cpu = f.fresh;
+  ppm_pass(f.scene, cpu, f.passes[0].photons, f.passes[0].emitted, PpmOptions{});
+  REQUIRE(gathered_hitpoints(cpu.hitpoints) > cpu.hitpoints.size() / 4);
+  PpmOptions opt;
+  opt.method = GatherMethod::HashGrid;
+  opt.hash_order = HashOrder::Host;
+  size_t differ = 0;
+  for (float cell : {0.6f, 1.f, 1.5f, 2.f, 3.f})
+    for (int slots : {4, 8, 16, 32}) {
+      opt.hash_cell = cell;
+      opt.hash_slots = slots;
+      HitpointSet h = f.fresh;
+      ppm_pass(f.scene, h, f.passes[0].photons, f.passes[0].emitted, opt, *dev);
+      size_t same = 0;
+      for (size_t i = 0; i < h.hitpoints.size(); ++i)
+        same += h.hitpoints[i].n_photons == cpu.hitpoints[i].n_photons;
+      if (same != h.hitpoints.size()) WARN("cell " << cell << " slots " << slots << ": " << h.hitpoints.size() - same << " differ");
+      differ += same != h.hitpoints.size();
+    }
+  CHECK(differ == 0);
 }
 
 TEST_CASE("gather methods: images equal naive's over 20 passes", "[gather][opencl][passes]") {
@@ -385,6 +417,81 @@ TEST_CASE("gather methods: the grid-cluster gather timer gathers the pass's phot
   // Clusters of other hitpoints are refused.
   Fixture g = make_fixture(40, 40, 1, 1000, DirectMode::Photons);
   CHECK_THROWS_AS(timer.time(cluster_grid(g.fresh, wg, 0)), InputError);
+}
+
+TEST_CASE("gather methods: a photon on a bin edge accepted by the float distance rule is gathered",
+          "[gather][opencl][grid]") {
+  // The rule pf_ppm_in_radius(pf_ppm_dist2(x, p), R) is evaluated in float, so a photon a few ulps
+  // beyond x + R (itself rounded) can pass it; when it lies exactly on the lower edge of the next
+  // grid bin, a box of bins from x − R to x + R misses it. The kernels widen their boxes
+  // (PF_SLACK) as the CPU grid does: every method must gather what the CPU grid gathers. Found
+  // by a deterministic search along x; the bins are d = R0 = p wide, so p is the edge of bin 1.
+  auto dev = test_device();
+  if (!dev) return;
+  float q = 0, r = 0, p = 0;
+  bool found = false;
+  for (uint32_t k = 0; k < 100000 && !found; ++k) {
+    q = 0.1f + 0.3f * pf_rng_float(3, 0, k, 0);
+    r = 0.2f + 0.2f * pf_rng_float(3, 0, k, 1);
+    p = q + r;
+    for (int ulps = 1; ulps <= 3 && !found; ++ulps) {
+      p = std::nextafter(p, INFINITY);
+      found = pf_ppm_in_radius(pf_ppm_dist2(q, 0.5f, 0.5f, p, 0.5f, 0.5f), r);
+    }
+  }
+  REQUIRE(found);
+  INFO("x " << q << " R " << r << " photon " << p);
+  REQUIRE(pf_grid_coord(q + r, 0.f, p, 2) == 0);
+  REQUIRE(pf_grid_coord(p, 0.f, p, 2) == 1);
+  const Scene scene = room_scene(PF_MAT_DIFFUSE, 4, 4);  // (materials and meshes only)
+  HitpointSet h;
+  h.scene_id = scene.scene_id;
+  h.width = h.height = 1;
+  h.radius0 = p;  // the grid's bin size: d = max(extent / max_bins, R0) = p
+  pf_hitpoint hp{};
+  hp.position[0] = q;
+  hp.position[1] = hp.position[2] = 0.5f;
+  hp.normal[1] = 1.f;
+  hp.dir[1] = -1.f;
+  hp.weight[0] = hp.weight[1] = hp.weight[2] = 1.f;
+  hp.radius = r;
+  h.hitpoints = {hp};
+  std::vector<pf_photon> photons;
+  for (float x : {p, 1.5f * p, 0.f}) {  // mesh 0's photons span [0, 1.5p] along x: two bins
+    pf_photon ph{};
+    ph.position[0] = x;
+    ph.position[1] = ph.position[2] = 0.5f;
+    ph.dir[1] = -1.f;
+    ph.flux[0] = ph.flux[1] = ph.flux[2] = 1.f;
+    photons.push_back(ph);
+  }
+  PpmOptions opt;
+  opt.alpha = 1.f;  // N after one pass = M, the photons gathered
+  HitpointSet cpu = h;
+  ppm_pass(scene, cpu, photons, 100, opt);
+  REQUIRE(cpu.hitpoints[0].n_photons >= 1.f);  // (the photon at p at least)
+  for (GatherMethod m : device_methods()) {
+    INFO("method " << gather_method_name(m));
+    opt.method = m;
+    HitpointSet d = h;
+    ppm_pass(scene, d, photons, 100, opt, *dev);
+    CHECK(d.hitpoints[0].n_photons == cpu.hitpoints[0].n_photons);
+  }
+  // hash-grid's cells start at the scene's corner and are hash_cell · R_max · 1.0001² wide
+  // (hash_grid.h): a hash_cell that makes them p wide puts the photon on a cell edge as well.
+  REQUIRE((scene.bounds.lo.x == 0.f && scene.bounds.hi.x > 2 * p));
+  float hc = p / (r * 1.0001f * 1.0001f);
+  for (int k = 0; k < 64 && hc * r * 1.0001f * 1.0001f != p; ++k)
+    hc = std::nextafter(hc, hc * r * 1.0001f * 1.0001f < p ? INFINITY : 0.f);
+  REQUIRE(hc * r * 1.0001f * 1.0001f == p);
+  opt.method = GatherMethod::HashGrid;
+  opt.hash_cell = hc;
+  for (HashOrder order : {HashOrder::Device, HashOrder::Host}) {
+    opt.hash_order = order;
+    HitpointSet d = h;
+    ppm_pass(scene, d, photons, 100, opt, *dev);
+    CHECK(d.hitpoints[0].n_photons == cpu.hitpoints[0].n_photons);
+  }
 }
 
 TEST_CASE("gather methods: photon sorting is the stable sort by mesh", "[gather][opencl]") {

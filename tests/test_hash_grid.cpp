@@ -15,6 +15,7 @@
 #include "photonflow/error.h"
 #include "photonflow/grid_shared.h"
 #include "photonflow/hash_grid.h"
+#include "photonflow/morton.h"
 #include "photonflow/rng.h"
 
 using namespace pf;
@@ -228,4 +229,55 @@ TEST_CASE("hash grid: hitpoints in cell order (Z-order of cells, stable)", "[has
   CHECK(std::is_sorted(run.begin(), run.end()));
   CHECK(std::find(run.begin(), run.end(), 20) != run.end());
   CHECK(with_nan[8] == 20);
+}
+
+TEST_CASE("hash grid: a cell's slot is its linear index modulo the table (grid_shared.h)",
+          "[hash_grid]") {
+  // pf_hash_slot(x, y, z) = (x + nx·(y + ny·z)) mod (mask + 1): the linear index of eq. 7.1's
+  // offset, so that cells next to each other along x get consecutive slots, and a table with at
+  // least as many slots as cells (`unique`) gives every cell a slot of its own — which the gather
+  // relies on when it reads a row of cells as one run of slots. Checked on a grid that is not a
+  // cube (nx, ny, nz all different).
+  const float o[3] = {0, 0, 0}, e[3] = {1, 0.5f, 0.25f};
+  for (int slots : {0, 4096}) {
+    const HashGridLayout g = hash_grid_layout(o, e, 1.f / 64, 10000, slots);
+    INFO("slots " << g.slots());
+    REQUIRE((g.n[0] == 64 && g.n[1] == 32 && g.n[2] == 16));
+    const uint32_t nx = uint32_t(g.n[0]), ny = uint32_t(g.n[1]);
+    std::vector<uint8_t> taken(g.slots(), 0);
+    size_t wrong = 0, shared = 0;
+    for (int z = 0; z < g.n[2]; ++z)
+      for (int y = 0; y < g.n[1]; ++y)
+        for (int x = 0; x < g.n[0]; ++x) {
+          const uint32_t linear = uint32_t(x) + uint32_t(y) * nx + uint32_t(z) * nx * ny;
+          const uint32_t s = pf_hash_slot(x, y, z, nx, ny, g.mask);
+          wrong += s != linear % uint32_t(g.slots());
+          shared += taken[s]++ > 0;
+        }
+    CHECK(wrong == 0);
+    if (g.unique) CHECK(shared == 0);
+    else CHECK(shared == size_t(g.n[0]) * g.n[1] * g.n[2] - g.slots());  // every slot used
+  }
+}
+
+TEST_CASE("Morton codes interleave all 21 bits of each coordinate (morton.h)", "[hash_grid]") {
+  // Bit i of x goes to bit 3i, of y to 3i + 1, of z to 3i + 2 (x in the lowest bit), for every
+  // i < 21; higher bits are ignored. Reference: the interleaving bit by bit.
+  auto reference = [](uint64_t x, uint64_t y, uint64_t z) {
+    uint64_t c = 0;
+    for (int b = 0; b < 21; ++b)
+      c |= ((x >> b) & 1) << (3 * b) | ((y >> b) & 1) << (3 * b + 1) | ((z >> b) & 1) << (3 * b + 2);
+    return c;
+  };
+  size_t wrong = 0;
+  for (uint32_t k = 0; k < 20000; ++k) {
+    pf_rng r = pf_rng_start(11, 0, k);
+    uint64_t c[3];
+    for (uint64_t& v : c) v = uint64_t(pf_rng_next(&r) * 16777216.f);  // 24 random bits
+    if (k < 64) c[k % 3] = (uint64_t(1) << 21) - 1 - (k / 3);          // near the top bit
+    wrong += morton3(c[0], c[1], c[2]) != reference(c[0], c[1], c[2]);
+    wrong += morton_spread3(c[k % 3]) != reference(c[k % 3], 0, 0);
+  }
+  CHECK(wrong == 0);
+  CHECK(morton3(0x1fffff, 0x1fffff, 0x1fffff) == (uint64_t(1) << 63) - 1);
 }

@@ -175,7 +175,15 @@ TEST_CASE("hitpoints.h5: indices out of range are refused", "[inputs][hitpoints]
   refused([&] { load_hitpoints(hit([](pf_hitpoint& x) { x.mesh = -1; })); }, "case", "negative mesh");
   refused([&] { load_hitpoints(hit([](pf_hitpoint& x) { x.material = -7; })); }, "case",
           "negative material");
+  // The first pixel past each edge of the 16 × 12 image (synthesis indexes y·width + x).
+  REQUIRE((f.h.width == 16 && f.h.height == 12));
   refused([&] { load_hitpoints(hit([](pf_hitpoint& x) { x.pixel_y = 12; })); }, "case",
+          "outside the image");
+  refused([&] { load_hitpoints(hit([](pf_hitpoint& x) { x.pixel_x = 16; })); }, "case",
+          "outside the image");
+  refused([&] { load_hitpoints(hit([](pf_hitpoint& x) { x.pixel_x = -1; })); }, "case",
+          "outside the image");
+  refused([&] { load_hitpoints(hit([](pf_hitpoint& x) { x.pixel_y = -1; })); }, "case",
           "outside the image");
   refused([&] { load_hitpoints(hit([](pf_hitpoint& x) { x.position[1] = NAN; })); }, "case",
           "non-finite");

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <numeric>
 #include <stdexcept>
@@ -155,6 +156,27 @@ TEST_CASE("photon grid: layout invariants and stable counting sort", "[grid]") {
   }
   CHECK(entries == g.cell_start.size());
   CHECK(misplaced == 0);
+  // Eq. 7.1 from the photons' own bounds: d = max(longest extent / max_bins, R0), and per axis
+  // enough bins of size d to cover the extent, ceil(extent / d), at least 1, at most max_bins.
+  for (int m : {0, 1, 3}) {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (const pf_photon& p : in)
+      if (p.mesh == m)
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = std::min(lo[a], p.position[a]);
+          hi[a] = std::max(hi[a], p.position[a]);
+        }
+    const float ext[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    const float d = std::max(std::max({ext[0], ext[1], ext[2]}) / float(params.max_bins),
+                             params.default_radius);
+    const pf_mesh_grid& h = g.mesh_grid[size_t(m)];
+    INFO("mesh " << m);
+    CHECK(h.bin_size == d);
+    CHECK(std::memcmp(h.lo, lo, sizeof lo) == 0);
+    const int n[3] = {h.nx, h.ny, h.nz};
+    for (int a = 0; a < 3; ++a)
+      CHECK(n[a] == std::clamp(int(std::ceil(ext[a] / d)), 1, params.max_bins));
+  }
   CHECK(unstable == 0);
   CHECK(g.mesh_grid[2].photon_count == 0);
 
@@ -210,4 +232,40 @@ TEST_CASE("photon grid: bad input is refused", "[grid]") {
   params.max_bins = 8;
   PhotonGrid g = build_photon_grid({}, 3, params);
   CHECK(g.cell_start == std::vector<int32_t>{0, 0, 0});
+}
+
+TEST_CASE("photon grid: a photon on a bin edge that the distance rule accepts by rounding is found",
+          "[grid]") {
+  // pf_ppm_in_radius(pf_ppm_dist2(q, p), R) is evaluated in float: a photon a few ulps beyond
+  // q + R (itself rounded) can pass it. When that photon sits exactly on the lower edge of the
+  // next bin, the bins of the box [q − R, q + R] miss it; for_each_in_radius widens the box
+  // (photon_grid.h) so that it equals the brute-force rule even then. Search (deterministically)
+  // for such q, R, p along x, then put p on a bin edge: d = p, bins [0, p) and [p, 2p).
+  float q = 0, r = 0, p = 0;
+  bool found = false;
+  for (uint32_t k = 0; k < 100000 && !found; ++k) {  // (about one in 50 qualifies)
+    q = 0.1f + 0.3f * pf_rng_float(3, 0, k, 0);         // (products: all mantissa bits used)
+    r = 0.2f + 0.2f * pf_rng_float(3, 0, k, 1);
+    p = q + r;
+    for (int ulps = 1; ulps <= 3 && !found; ++ulps) {
+      p = std::nextafter(p, INFINITY);
+      found = pf_ppm_in_radius(pf_ppm_dist2(q, 0, 0, p, 0, 0), r);
+    }
+  }
+  REQUIRE(found);
+  INFO("q " << q << " R " << r << " p " << p);
+  REQUIRE(grid_coord(q + r, 0.f, p, 2) == 0);  // the unwidened box ends in bin 0 ...
+  REQUIRE(grid_coord(p, 0.f, p, 2) == 1);      // ... and the photon lies in bin 1
+  // Mesh 0: photons at 0, p (the one in question) and 1.5p: extent 1.5p, d = R0 = p, two bins.
+  std::vector<pf_photon> in = {photon_at(0, 0, 0, 0), photon_at(p, 0, 0, 0),
+                               photon_at(1.5f * p, 0, 0, 0)};
+  PhotonGridParams params;
+  params.default_radius = p;
+  params.max_bins = 64;
+  const PhotonGrid g = build_photon_grid(in, 1, params);
+  REQUIRE(g.mesh_grid[0].bin_size == p);
+  REQUIRE(g.mesh_grid[0].nx == 2);
+  const float qq[3] = {q, 0, 0};
+  CHECK(grid_gather(g, 0, qq, r) == brute_gather(in, 0, qq, r));
+  CHECK(brute_gather(in, 0, qq, r) == std::vector<int32_t>{0, 1});
 }

@@ -189,17 +189,22 @@ TEST_CASE("hits are accepted for t in (tmin, tmax] only", "[raycast]") {
     pf::Hit h;
     REQUIRE(pf::intersect_closest(room(), r, h, trav));
     CHECK(h.t == Approx(0.5f));
+    const float t = h.t;  // (a miss below resets h)
     pf::Ray at = r;
-    at.tmax = h.t;  // tmax itself is included
+    at.tmax = t;  // tmax itself is included
     CHECK(pf::intersect_closest(room(), at, h, trav));
     CHECK(pf::intersect_any(room(), at, trav));
     pf::Ray before = r;
-    before.tmax = std::nextafter(h.t, 0.f);
+    before.tmax = std::nextafter(t, 0.f);
     CHECK_FALSE(pf::intersect_closest(room(), before, h, trav));
     CHECK_FALSE(pf::intersect_any(room(), before, trav));
     pf::Ray after = r;
-    after.tmin = h.t;  // tmin itself is excluded
+    after.tmin = t;  // tmin itself is excluded
     CHECK_FALSE(pf::intersect_closest(room(), after, h, trav));
+    CHECK_FALSE(pf::intersect_any(room(), after, trav));
+    after.tmin = std::nextafter(t, 0.f);  // just before it: found
+    CHECK(pf::intersect_closest(room(), after, h, trav));
+    CHECK(h.t == t);
   }
 }
 
@@ -255,6 +260,14 @@ TEST_CASE("closed meshes are watertight from inside", "[raycast]") {
       if (pf::dot(r.d, pf::cross(b - a, e - a)) > 0) r.d = -r.d;  // against the geometric normal
       rays.push_back(r);
     }
+    {
+      std::vector<pf::Hit> r1, s1;
+      pf::intersect_closest_batch(s, rays, r1, pf::Traversal::Ropes);
+      pf::intersect_closest_batch(s, rays, s1, pf::Traversal::Stack);
+      size_t rs = 0, rst = 0;
+      for (size_t i = 0; i < rays.size(); ++i) { rs += r1[i].tri != s1[i].tri; rst += r1[i].t != s1[i].t; }
+      WARN("ropes vs stack: tri differ " << rs << ", t differ " << rst << " of " << rays.size());
+    }
     for (pf::Traversal trav : {pf::Traversal::Ropes, pf::Traversal::Stack}) {
       std::vector<pf::Hit> hits;
       pf::intersect_closest_batch(s, rays, hits, trav);
@@ -297,6 +310,14 @@ TEST_CASE("rays aimed exactly at vertices and edges never slip through, from man
           r.d = target - o;
           rays.push_back(r);
         }
+    {
+      std::vector<pf::Hit> r1, s1;
+      pf::intersect_closest_batch(s, rays, r1, pf::Traversal::Ropes);
+      pf::intersect_closest_batch(s, rays, s1, pf::Traversal::Stack);
+      size_t rs = 0, rst = 0;
+      for (size_t i = 0; i < rays.size(); ++i) { rs += r1[i].tri != s1[i].tri; rst += r1[i].t != s1[i].t; }
+      WARN("ropes vs stack: tri differ " << rs << ", t differ " << rst << " of " << rays.size());
+    }
     for (pf::Traversal trav : {pf::Traversal::Ropes, pf::Traversal::Stack}) {
       std::vector<pf::Hit> hits;
       pf::intersect_closest_batch(s, rays, hits, trav);
@@ -501,4 +522,84 @@ TEST_CASE("the compact rope copy of a tree stored right-first casts the same", "
   size_t hits = 0;
   CHECK(compact_differences(s, nodes, moved, rays, hits) == 0);
   CHECK(hits > rays.size() / 4);
+}
+
+TEST_CASE("a hit on a split plane goes on into the next leaf: ties to the lower index",
+          "[raycast]") {
+  // Two congruent coplanar triangles in the plane z = 0.5 share the edge x = 0.5, which is the
+  // root's split plane: the left leaf lists triangle 1, the right leaf triangle 0 (a tree built by
+  // hand, ropes included). A ray through the shared edge hits both at the same t, and the closest
+  // hit is the lower index (intersect_shared.h) whichever leaf the ray meets first: a hit exactly
+  // on the exit plane must not end the traversal (pf_kd_traverse_ropes; the stack traversal's
+  // far node starting at that t).
+  pf::Scene s;
+  auto tri = [](Vec3 a, Vec3 b, Vec3 c) {
+    pf_triangle t{};
+    for (int k = 0; k < 3; ++k) {
+      t.v0[k] = a[k];
+      t.v1[k] = b[k];
+      t.v2[k] = c[k];
+      t.n0[k] = t.n1[k] = t.n2[k] = k == 2 ? 1.f : 0.f;
+    }
+    return t;
+  };
+  s.triangles = {tri({0.5f, 0, 0.5f}, {1, 0, 0.5f}, {0.5f, 1, 0.5f}),   // 0: right of x = 0.5
+                 tri({0, 0, 0.5f}, {0.5f, 0, 0.5f}, {0.5f, 1, 0.5f})};  // 1: left of it
+  s.compute_hh();
+  s.compute_bounds();
+  pf::KdTree& kd = s.kd;
+  kd.nodes.resize(3);
+  for (pf_kd_node& n : kd.nodes) {
+    n = pf_kd_node{};
+    for (int k = 0; k < 3; ++k) {
+      n.lo[k] = 0.f;
+      n.hi[k] = 1.f;
+    }
+    for (int32_t& r : n.ropes) r = -1;
+  }
+  kd.nodes[0].axis = 0;
+  kd.nodes[0].split = 0.5f;
+  kd.nodes[0].left = 1;
+  kd.nodes[0].right = 2;
+  kd.nodes[1].hi[0] = kd.nodes[2].lo[0] = 0.5f;
+  for (int i : {1, 2}) {
+    kd.nodes[size_t(i)].axis = PF_KD_LEAF;
+    kd.nodes[size_t(i)].first = i - 1;
+    kd.nodes[size_t(i)].count = 1;
+    kd.nodes[size_t(i)].left = kd.nodes[size_t(i)].right = -1;
+  }
+  kd.nodes[1].ropes[1] = 2;  // face x high → the right leaf
+  kd.nodes[2].ropes[0] = 1;  // face x low → the left leaf
+  kd.leaf_tris = {1, 0};
+  kd.bounds = pf::Bounds{Vec3(0, 0, 0), Vec3(1, 1, 1)};
+  REQUIRE(pf::validate_kdtree(kd, s.triangles.size()) == "");
+  std::vector<pf::Ray> rays;
+  for (float ox : {0.1f, 0.3f, 0.7f, 0.95f})
+    for (float oz : {0.f, 1.f})
+      for (float y : {0.1f, 0.25f, 0.5f}) {
+        pf::Ray r;
+        r.o = Vec3(ox, 0.3f, oz);
+        r.d = Vec3(0.5f, y, 0.5f) - r.o;
+        rays.push_back(r);
+      }
+  size_t ties = 0;
+  for (const pf::Ray& r : rays) {
+    pf::Hit a, b;
+    pf::Scene one;
+    one.hh = {s.hh[0]};
+    REQUIRE(pf::intersect_closest(one, r, a, pf::Traversal::Brute));
+    one.hh = {s.hh[1]};
+    REQUIRE(pf::intersect_closest(one, r, b, pf::Traversal::Brute));
+    ties += a.t == b.t;
+  }
+  REQUIRE(ties == rays.size());  // both triangles at the same t: a tie on every ray
+  for (pf::Traversal trav : {pf::Traversal::Brute, pf::Traversal::Ropes, pf::Traversal::Stack}) {
+    INFO(pf::traversal_name(trav));
+    size_t lowest = 0;
+    for (const pf::Ray& r : rays) {
+      pf::Hit h;
+      lowest += pf::intersect_closest(s, r, h, trav) && h.tri == 0;
+    }
+    CHECK(lowest == rays.size());
+  }
 }
