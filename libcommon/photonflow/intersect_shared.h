@@ -229,7 +229,9 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
     }
     /* The closest hit lies in this leaf, or tmax is reached. A hit exactly on the exit plane goes
      * on into the next leaf, which may hold a triangle hit at the same t with a lower index (the
-     * tie rule of pf_kd_leaf_intersect; the stack traversal of raycast.cpp does the same). */
+     * tie rule of pf_kd_leaf_intersect; the stack traversal of raycast.cpp does the same). Ties
+     * at a point where leaves meet only by a corner or an edge are not resolved across them
+     * (raycast.h, Stack). */
     if (face < 0 || hit->t < t_exit) break;
     node = n->ropes[face];
     if (node < 0) break; /* left the scene box */
