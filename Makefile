@@ -2,19 +2,20 @@
 #
 #   make render   install missing Debian packages, build (Release), render the default scene
 #   make test     install missing Debian packages, build (Release), run the test suite (ctest)
+#   make test-sanitize  the test suite under AddressSanitizer + UBSan (build-sanitize/; slow build)
 #   make bench    build and run the benchmarks (long; results go to docs/BENCHMARKS.md by hand)
 #   make ch6      the thesis's ch. 6 experiments: tables and charts into docs/results/
 #   make accuracy speed against accuracy: error vs time and passes, charts into docs/results/
 #
 # Variables: SCENE (a name in data/, default cornell-box), OUT (default out), BUILD (default build),
-# JOBS (default: all cores).
+# JOBS (default: all cores), SAN_BUILD (default build-sanitize).
 BUILD ?= build
 JOBS  ?= $(shell nproc)
 SCENE ?= cornell-box
 OUT   ?= out
 BIN   := $(abspath $(BUILD))/bin
 
-.PHONY: all deps configure build render test bench ch6 accuracy clean help
+.PHONY: all deps configure build render test test-sanitize bench ch6 accuracy clean help
 all: build
 
 help:
@@ -36,6 +37,25 @@ render: build
 
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
+
+# Every process the tests start (the tools too) writes its sanitizer reports into
+# $(SAN_BUILD)/sanitizer-logs/; any report fails the target, also one from a tool whose exit status
+# a test expected to be non-zero. Leak checking is off: PoCL's and LLVM's own allocations are
+# never freed.
+SAN_BUILD ?= build-sanitize
+SAN_LOGS  := $(abspath $(SAN_BUILD))/sanitizer-logs
+test-sanitize: deps
+	@mkdir -p $(SAN_BUILD)
+	@cmake -S . -B $(SAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPHOTONFLOW_SANITIZE=ON \
+	  -DPHOTONFLOW_BENCH=OFF > $(SAN_BUILD)/configure.log 2>&1 || { cat $(SAN_BUILD)/configure.log; exit 1; }
+	@cmake --build $(SAN_BUILD) -j$(JOBS)
+	@rm -rf $(SAN_LOGS) && mkdir -p $(SAN_LOGS)
+	@cd $(SAN_BUILD) && ASAN_OPTIONS=detect_leaks=0:log_path=$(SAN_LOGS)/asan \
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1:log_path=$(SAN_LOGS)/ubsan \
+	  ctest --output-on-failure -j$(JOBS); rc=$$?; \
+	if [ -n "$$(ls -A $(SAN_LOGS))" ]; then \
+	  echo "test-sanitize: sanitizer reports in $(SAN_LOGS):" >&2; head -n 20 $(SAN_LOGS)/* >&2; exit 1; \
+	fi; [ $$rc -eq 0 ] && echo "test-sanitize: tests passed, no sanitizer reports"; exit $$rc
 
 bench: build
 	@$(MAKE) --no-print-directory -f pipelines/bench.mk BIN=$(BIN) OUT=$(OUT)
