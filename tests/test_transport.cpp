@@ -286,6 +286,49 @@ TEST_CASE("eye pass: spp samples of a pixel are stratified and independently jit
   CHECK(sum_fy / double(e.hitpoints.size()) == Approx(0.5).margin(0.1));
 }
 
+TEST_CASE("eye pass: the samples of a pixel cover it uniformly for any spp (box filter)",
+          "[transport][eye]") {
+  // Each of a pixel's spp samples weighs 1/spp (the box filter of eye_pass.h), so the samples'
+  // positions, taken together, must be uniform over the pixel whatever spp is, a perfect square
+  // or not: mean offset (1/2, 1/2) and a quarter of them in each quadrant of the pixel. The camera
+  // and plane are those of the test above; 24 × 24 pixels. Standard deviations for independent
+  // uniform positions (stratification only lowers them): mean 0.289/sqrt(576·spp), quadrant share
+  // 0.433/sqrt(576·spp); tolerance 5 of them. A strata × strata grid (strata = ⌈√spp⌉) filled
+  // in order misses the last cells when spp is not a square: spp = 2 put both samples in the
+  // pixel's upper half (mean v = 1/4), spp = 8 left its lower-right ninth empty.
+  Scene s;
+  s.triangles = square(Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 1, 0), 3.f, 0);
+  s.mesh_names = {"plane"};
+  s.materials = {material(PF_MAT_DIFFUSE, Vec3(0.5f, 0.5f, 0.5f))};
+  s.material_names = {"plane"};
+  const int W = 24, H = 24;
+  s.camera = pf_camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 50.f, W, H};
+  finish_scene(s);
+  CameraFrame cam(s.camera);
+  for (int spp : {2, 3, 4, 5, 6, 8, 9, 12}) {
+    EyePassOptions eo;
+    eo.spp = spp;
+    EyePassResult e = trace_hitpoints(s, eo);
+    REQUIRE(e.hitpoints.size() == size_t(W * H * spp));
+    double su = 0, sv = 0;
+    double quadrant[4] = {0, 0, 0, 0};
+    const double n = double(e.hitpoints.size());
+    for (const pf_hitpoint& hp : e.hitpoints) {
+      const double u = (hp.position[0] / cam.tan_half_x() + 1.0) * 0.5 * W - hp.pixel_x;
+      const double v = (1.0 - hp.position[1] / cam.tan_half_y()) * 0.5 * H - hp.pixel_y;
+      su += u / n;
+      sv += v / n;
+      quadrant[(u >= 0.5 ? 1 : 0) + (v >= 0.5 ? 2 : 0)] += 1.0 / n;
+    }
+    const double sd_mean = 0.289 / std::sqrt(n), sd_share = 0.433 / std::sqrt(n);
+    INFO("spp " << spp << ": mean offset (" << su << ", " << sv << "), quadrants " << quadrant[0]
+                << " " << quadrant[1] << " " << quadrant[2] << " " << quadrant[3]);
+    CHECK(su == Approx(0.5).margin(5 * sd_mean));
+    CHECK(sv == Approx(0.5).margin(5 * sd_mean));
+    for (double q : quadrant) CHECK(q == Approx(0.25).margin(5 * sd_share));
+  }
+}
+
 TEST_CASE("direct light: two point lights, L = rho/pi * sum I_k cos_k / d_k^2",
           "[transport][direct]") {
   // direct_light picks one light per sample with probability p_k ∝ its power (4π I_k) and weights
