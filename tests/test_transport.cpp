@@ -531,3 +531,46 @@ TEST_CASE("classic estimate: caustic photons are rescaled to the global radius (
   REQUIRE(mean_r < 0.07);  // the rescaling is exercised: r_g well below r_c
   CHECK(mean == Approx(expected).epsilon(0.03));
 }
+
+TEST_CASE("synthesis: a pixel adds its hitpoints' weighted eq. 3.19 radiance and averages the layers",
+          "[transport][synthesize]") {
+  // Two hitpoints in pixel (1, 0) of a 2 × 1 image, none in pixel (0, 0):
+  //   A: weight (0.5, 0.25, 1), τ = (2π, 4π, π), R = 1, N = 10
+  //   B: weight (0.5, 0.5, 0.5), τ = (8π, 8π, 8π), R = 2, N = 30
+  // with N_emitted = 4 (eq. 3.19: L = τ / (π R² N_emitted)): L_A = (0.5, 1, 0.25), L_B = (0.5, 0.5,
+  // 0.5), so the pixel is Σ weight·L + emitted + direct = (0.25 + 0.25, 0.25 + 0.25, 0.25 + 0.25)
+  // + (0.1, 0.2, 0.3) + (0.01, 0.02, 0.03). The "radius" and "photons" layers are the means over the
+  // pixel's hitpoints (1.5, 20), "hitpoints" their count; an empty pixel keeps 0 and its own
+  // emitted + direct. Caught (without an OpenCL device): the layers summed instead of averaged.
+  HitpointSet h;
+  h.width = 2;
+  h.height = 1;
+  h.emitted = {0.f, 0.f, 0.f, 0.1f, 0.2f, 0.3f};
+  h.direct = {0.5f, 0.f, 0.f, 0.01f, 0.02f, 0.03f};
+  h.photons_emitted = 4;
+  auto hitpoint = [](Vec3 w, Vec3 tau_over_pi, float r, float n) {
+    pf_hitpoint hp{};
+    w.store(hp.weight);
+    (tau_over_pi * kPi).store(hp.flux);
+    hp.radius = r;
+    hp.n_photons = n;
+    hp.pixel_x = 1;
+    return hp;
+  };
+  h.hitpoints = {hitpoint(Vec3(0.5f, 0.25f, 1.f), Vec3(2, 4, 1), 1.f, 10.f),
+                 hitpoint(Vec3(0.5f, 0.5f, 0.5f), Vec3(8, 8, 8), 2.f, 30.f)};
+  const Image img = synthesize(h);
+  const Vec3 p = img.get(1, 0);
+  CHECK(p.x == Approx(0.5f + 0.1f + 0.01f));
+  CHECK(p.y == Approx(0.5f + 0.2f + 0.02f));
+  CHECK(p.z == Approx(0.5f + 0.3f + 0.03f));
+  CHECK(img.get(0, 0).x == 0.5f);
+  CHECK(img.layers.at("radius")[1] == Approx(1.5f));
+  CHECK(img.layers.at("photons")[1] == Approx(20.f));
+  CHECK(img.layers.at("hitpoints")[1] == 2.f);
+  CHECK(img.layers.at("radius")[0] == 0.f);
+  CHECK(img.layers.at("hitpoints")[0] == 0.f);
+  // Before any photon pass (N_emitted = 0) only emitted + direct remain.
+  h.photons_emitted = 0;
+  CHECK(synthesize(h).get(1, 0).x == Approx(0.1f + 0.01f));
+}
