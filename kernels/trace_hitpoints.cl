@@ -85,7 +85,7 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
  * Pixels pixel_offset .. pixel_offset + pixel_count − 1 (row-major) form this batch; outputs are
  * indexed from the batch's start. */
 __kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int width, int height,
-                              int spp, int strata, int max_depth, int shadow_rays,
+                              int spp, int columns, int max_depth, int shadow_rays,
                               int shadow_samples, float radius, uint seed, float eps,
                               int pixel_offset, int pixel_count, __global pf_hitpoint* slots,
                               __global int* used, __global float* emitted_out,
@@ -104,8 +104,9 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int wi
     pf_rng rng = pf_rng_start(seed, PF_EYE_STREAM, index);
     float jx = 0.5f, jy = 0.5f;
     if (spp > 1) {
-      jx = ((float)(smp % strata) + pf_rng_next(&rng)) / (float)strata;
-      jy = ((float)((smp / strata) % strata) + pf_rng_next(&rng)) / (float)strata;
+      /* one sample per cell of a columns × (spp / columns) grid (eye_strata_columns) */
+      jx = ((float)(smp % columns) + pf_rng_next(&rng)) / (float)columns;
+      jy = ((float)(smp / columns) + pf_rng_next(&rng)) / (float)(spp / columns);
     }
     /* CameraFrame::direction */
     const float px = (float)x + jx, py = (float)y + jy;

@@ -197,6 +197,25 @@ TEST_CASE("OpenCL: hitpoints agree with the CPU backend", "[opencl][eye]") {
   CHECK(std::sqrt(se / ref) <= 1e-3);
 }
 
+TEST_CASE("OpenCL: the eye pass stratifies any spp as the CPU does", "[opencl][eye]") {
+  // spp that are not perfect squares (a columns × rows grid, eye_strata_columns) and a square one:
+  // the kernel must put every sample at the CPU's pixel position.
+  auto dev = test_device();
+  if (!dev) return;
+  Scene scene = test::room_scene(PF_MAT_DIFFUSE, 24, 16);
+  for (int spp : {2, 3, 6, 8, 9}) {
+    EyePassOptions opt;
+    opt.spp = spp;
+    opt.seed = 5;
+    EyePassResult cpu = trace_hitpoints(scene, opt);
+    EyePassResult gpu = trace_hitpoints(scene, opt, *dev);
+    REQUIRE(cpu.hitpoints.size() == size_t(24 * 16 * spp));
+    Agreement a = compare_hitpoints(cpu.hitpoints, gpu.hitpoints, 1e-4f * scene_diag(scene));
+    INFO("spp " << spp << ": hitpoints agreeing " << a.matched << " of " << a.total);
+    CHECK(a.fraction() >= 0.999);
+  }
+}
+
 TEST_CASE("OpenCL: photons agree with the CPU backend", "[opencl][photons]") {
   auto dev = test_device();
   if (!dev) return;

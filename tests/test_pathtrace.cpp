@@ -328,6 +328,66 @@ TEST_CASE("pathtrace: point light over a plane: L = rho I h / (pi d^3)", "[patht
   CHECK(worst < 0.05);
 }
 
+TEST_CASE("pathtrace: two point lights over a plane: L = rho/pi sum I_k h_k / d_k^3",
+          "[pathtrace][analytic]") {
+  // As above with two isotropic point lights of unequal intensity at different places: next-event
+  // estimation picks one per sample with probability p_k = I_k / (I_1 + I_2) (power 4π I_k) and
+  // must divide by it, L = ρ/π Σ_k I_k h_k / d_k³. With a single light p = 1 hides a missing 1/p_k
+  // (it passed the test above); here it would give Σ_k p_k·(ρ/π) I_k h_k / d_k³ (−50% or more).
+  // The pixel means are compared as above: exact box-filter averages on a 16 × 16 sub-pixel grid,
+  // each pixel within 5 of its standard errors (variance layer: jitter and light choice).
+  const float rho = 0.8f;
+  const Vec3 pos[2] = {Vec3(0.3f, 1.f, 0.f), Vec3(-0.5f, 1.5f, 0.4f)};
+  const float intensity[2] = {5.f, 2.f};
+  Scene s;
+  s.triangles = make_box(Vec3(-4, -1, -4), Vec3(4, 0, 4), false, {0, 0});  // top face is y = 0
+  s.mesh_names = {"floor"};
+  s.materials = {material(PF_MAT_DIFFUSE, rho, 0.f)};
+  s.material_names = {"floor"};
+  for (int k = 0; k < 2; ++k) {
+    pf_light l{};
+    l.type = PF_LIGHT_POINT;
+    l.triangle = -1;
+    pos[k].store(l.position);
+    for (int c = 0; c < 3; ++c) l.radiance[c] = intensity[k];
+    s.lights.push_back(l);
+  }
+  s.camera = pf_camera{{0.f, 3.f, 0.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 40.f, 16, 16};
+  finish_scene(s);
+  REQUIRE(s.lights.size() == 2);
+  PathTraceOptions opt;
+  opt.spp = 64;
+  Image img = pathtrace(s, opt);
+  const std::vector<float>& var = img.layers.at("variance");
+  CameraFrame cam(s.camera);
+  auto analytic = [&](float px, float py) {
+    Vec3 d = cam.direction(px, py);
+    Vec3 p = cam.eye() + d * (cam.eye().y / -d.y);  // where the ray meets the floor
+    double l = 0;
+    for (int k = 0; k < 2; ++k) {
+      const double dist = length(pos[k] - p);
+      l += rho * intensity[k] * pos[k].y / (kPi * dist * dist * dist);
+    }
+    return l;
+  };
+  size_t bad = 0;
+  double sum = 0, sum_expected = 0;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) {
+      double expected = 0;
+      for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 16; ++i) expected += analytic(x + (i + 0.5f) / 16, y + (j + 0.5f) / 16);
+      expected /= 256.0;
+      const double got = img.get(x, y).x, se = std::sqrt(double(var[size_t(y * 16 + x)]));
+      sum += got;
+      sum_expected += expected;
+      bad += std::fabs(got - expected) > 5.0 * se + 1e-3 * expected;
+    }
+  INFO("image mean " << sum / 256 << ", expected " << sum_expected / 256);
+  CHECK(bad == 0);
+  CHECK(sum / sum_expected == Approx(1.0).epsilon(0.02));
+}
+
 TEST_CASE("pathtrace: glass plate under a lamp ceiling: light only through specular paths",
           "[pathtrace][specular][analytic]") {
   // Between a black ceiling emitting Le downwards and a diffuse floor (albedo ρ) lies a clear

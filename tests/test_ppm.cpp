@@ -86,6 +86,11 @@ TEST_CASE("ppm: M = 0 leaves the hitpoint bit-identical", "[ppm]") {
   pf_hitpoint fresh_before = fresh;
   pf_ppm_update(&fresh, 0, tau_m, 0.7f);
   CHECK(std::memcmp(&fresh, &fresh_before, sizeof fresh) == 0);
+  // pf_ppm_updated itself (not only its two wrappers, which test m first) keeps the state: with
+  // N = 0 and M = 0 the ratio (N + αM)/(N + M) would be 0/0.
+  const pf_ppm_state st = {1.f, 0.f, {0.f, 0.f, 0.f}};
+  const pf_ppm_state same = pf_ppm_updated(st, 0, tau_m, 0.7f);
+  CHECK(std::memcmp(&same, &st, sizeof st) == 0);
 }
 
 TEST_CASE("ppm: alpha = 1 keeps the radius and sums flux and counts", "[ppm]") {

@@ -38,6 +38,13 @@ struct EyePassResult {
   int width = 0, height = 0;
 };
 
+// Columns of the eye pass's stratification grid for `spp` samples per pixel (both backends): the
+// grid has columns × rows = spp cells exactly, rows being the largest divisor of spp not above
+// √spp (a square grid when spp is a perfect square, one row of strips when it is prime), and
+// sample s jitters within cell (s mod columns, s / columns). Every cell holding one sample makes
+// the samples, taken together, uniform over the pixel, as the box filter weight 1/spp requires.
+int eye_strata_columns(int spp);
+
 // The automatic initial radius: a fraction of the scene, never below a few pixel footprints at
 // the camera-to-scene distance:  R0 = max(diag / 200, 4 · pixel_angle · |look_at − eye|).
 float default_radius(const Scene& scene);

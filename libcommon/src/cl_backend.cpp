@@ -102,7 +102,7 @@ std::vector<float> camera_frame(const pf_camera& c) {
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClContext& dev) {
   const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
-  const int strata = int(std::ceil(std::sqrt(double(spp))));
+  const int columns = eye_strata_columns(spp);  // the CPU eye pass's grid
   EyePassResult res;
   res.width = W;
   res.height = H;
@@ -132,7 +132,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
     const cl_int count = cl_int(std::min(batch, npix - off));
     dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
              sb.leaf_groups, sb.mats, sb.lights,
-             sb.light_cdf, sb.light_count, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(strata),
+             sb.light_cdf, sb.light_count, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              cl_uint(opt.seed), eps, cl_int(off), count, slots, used, emitted, direct);
     dev.run(k, size_t(count));

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "photonflow/camera.h"
 #include "photonflow/options.h"
@@ -17,6 +18,13 @@ namespace pf {
 
 const char* direct_mode_name(DirectMode m) {
   return m == DirectMode::Photons ? "photons" : "shadow-rays";
+}
+
+int eye_strata_columns(int spp) {
+  int rows = 1;
+  for (int r = 1; int64_t(r) * r <= int64_t(spp); ++r)
+    if (spp % r == 0) rows = r;
+  return std::max(1, spp / rows);
 }
 
 float default_radius(const Scene& scene) {
@@ -94,7 +102,7 @@ void check_options(const EyePassOptions& opt) {
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
   const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
-  const int strata = int(std::ceil(std::sqrt(double(spp))));
+  const int columns = eye_strata_columns(spp), strata_rows = spp / columns;
   CameraFrame cam(scene.camera);
   EyePassResult res;
   res.width = W;
@@ -120,9 +128,9 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
         uint32_t index = uint32_t(pix * spp + s);
         pf_rng rng = pf_rng_start(opt.seed, kEyeStream, index);
         float jx = 0.5f, jy = 0.5f;
-        if (spp > 1) {  // stratified jitter on a strata × strata grid
-          jx = (float(s % strata) + pf_rng_next(&rng)) / float(strata);
-          jy = (float((s / strata) % strata) + pf_rng_next(&rng)) / float(strata);
+        if (spp > 1) {  // stratified jitter, one sample per cell of a columns × rows grid
+          jx = (float(s % columns) + pf_rng_next(&rng)) / float(columns);
+          jy = (float(s / columns) + pf_rng_next(&rng)) / float(strata_rows);
         }
         Ray ray{cam.eye(), cam.direction(float(x) + jx, float(y) + jy)};
         Vec3 T(1.f / spp, 1.f / spp, 1.f / spp);  // throughput × box filter weight
