@@ -19,7 +19,8 @@ Vec3 parse_vec3(const std::string& option, const std::string& text) {
       throw input_error("", "--" + option + " must be three finite numbers x,y,z, got '" + text + "'");
     v[n++] = float(d);
   }
-  if (n != 3)
+  // getline drops an empty last field, so "1,2,3," would read as three numbers: refuse it.
+  if (n != 3 || text.back() == ',')
     throw input_error("", "--" + option + " must be three finite numbers x,y,z, got '" + text + "'");
   return Vec3(v);
 }

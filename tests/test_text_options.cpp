@@ -1,0 +1,122 @@
+// Small text helpers of text_file.h and options.h: JSON string literals decoded by an RFC 8259
+// decoder written here, JSON numbers read back with strtod, numbered snapshot names that sort in
+// order, and parse_vec3's refusals.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "photonflow/error.h"
+#include "photonflow/options.h"
+#include "photonflow/text_file.h"
+
+using namespace pf;
+
+namespace {
+
+// Decodes a JSON string literal (RFC 8259 §7) holding only ASCII/byte escapes; fails the test on
+// anything a JSON parser would refuse (a raw control character, a lone backslash, a bad escape).
+std::string json_decode(const std::string& lit) {
+  REQUIRE(lit.size() >= 2);
+  REQUIRE(lit.front() == '"');
+  REQUIRE(lit.back() == '"');
+  std::string out;
+  for (size_t i = 1; i + 1 < lit.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(lit[i]);
+    REQUIRE(c >= 0x20);  // control characters must be escaped
+    REQUIRE(c != '"');   // an unescaped quote would end the string
+    if (c != '\\') {
+      out += char(c);
+      continue;
+    }
+    REQUIRE(i + 2 < lit.size());
+    const char e = lit[++i];
+    switch (e) {
+      case '"': out += '"'; break;
+      case '\\': out += '\\'; break;
+      case '/': out += '/'; break;
+      case 'b': out += '\b'; break;
+      case 'f': out += '\f'; break;
+      case 'n': out += '\n'; break;
+      case 'r': out += '\r'; break;
+      case 't': out += '\t'; break;
+      case 'u': {
+        REQUIRE(i + 5 < lit.size());
+        const std::string hex = lit.substr(i + 1, 4);
+        REQUIRE(std::all_of(hex.begin(), hex.end(), [](char h) { return std::isxdigit(h); }));
+        const long v = std::strtol(hex.c_str(), nullptr, 16);
+        REQUIRE(v < 0x80);  // only what json_string escapes: control characters
+        out += char(v);
+        i += 4;
+        break;
+      }
+      default: FAIL("bad escape \\" << e);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("json_string: every byte round-trips through an RFC 8259 decoder", "[text]") {
+  std::string all;
+  for (int c = 1; c < 256; ++c) all += char(c);
+  CHECK(json_decode(json_string(all)) == all);
+  for (const std::string s : {std::string(), std::string("plain"), std::string("a\"b"),
+                              std::string("back\\slash"), std::string("C:\\dir\\\"x\""),
+                              std::string("line\nbreak\ttab\r"), std::string("\x01\x1f")}) {
+    INFO(s);
+    CHECK(json_decode(json_string(s)) == s);
+  }
+  CHECK(json_string("abc") == "\"abc\"");
+}
+
+TEST_CASE("json_number: 17 digits read back exactly, non-finite values are null", "[text]") {
+  for (double v : {0.0, 1.0, -2.5, 0.1, 1.0 / 3.0, 6.02214076e23, 1e-300,
+                   std::numeric_limits<double>::max(), std::numeric_limits<double>::denorm_min()}) {
+    INFO(v);
+    const std::string t = json_number(v);
+    char* end = nullptr;
+    CHECK(std::strtod(t.c_str(), &end) == v);
+    CHECK(*end == '\0');
+  }
+  CHECK(json_number(std::numeric_limits<double>::infinity()) == "null");
+  CHECK(json_number(-std::numeric_limits<double>::infinity()) == "null");
+  CHECK(json_number(std::nan("")) == "null");
+}
+
+TEST_CASE("numbered_name: zero-padded to the total's digits, so the names sort in order",
+          "[text]") {
+  // Every key replaced, the rest kept.
+  CHECK(numbered_name("a{n}b{n}.exr", "{n}", 7, 100) == "a007b007.exr");
+  CHECK(numbered_name("x.exr", "{n}", 7, 100) == "x.exr");
+  CHECK(numbered_name("{n}", "{n}", 12345, 99) == "12345");  // never cut
+  for (int total : {9, 10, 64, 1000}) {
+    INFO("total " << total);
+    std::vector<std::string> names;
+    for (int n = 1; n <= total; ++n) {
+      names.push_back(numbered_name("snap_{spp}.exr", "{spp}", n, total));
+      CHECK(names.back().size() == std::string("snap_.exr").size() + std::to_string(total).size());
+      CHECK(std::stoi(names.back().substr(5)) == n);
+    }
+    CHECK(std::is_sorted(names.begin(), names.end()));
+  }
+}
+
+TEST_CASE("parse_vec3: three finite numbers, anything else an InputError naming the option",
+          "[options]") {
+  const Vec3 v = parse_vec3("eye", "1,-2.5,3e2");
+  CHECK(v.x == 1.f);
+  CHECK(v.y == -2.5f);
+  CHECK(v.z == 300.f);
+  for (const char* bad : {"", "1,2", "1,2,3,4", "1,2,3,", "1,,3", "1,2,", ",1,2", "a,b,c", "1,2,3x",
+                          "1,2,inf", "nan,0,0", "1 2 3"}) {
+    INFO("'" << bad << "'");
+    CHECK_THROWS_WITH(parse_vec3("look-at", bad), Catch::Contains("--look-at"));
+    CHECK_THROWS_AS(parse_vec3("look-at", bad), InputError);
+  }
+}
