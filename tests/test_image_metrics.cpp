@@ -298,6 +298,69 @@ TEST_CASE("image_metrics: a mask excludes pixels", "[image_metrics][mask]") {
   CHECK_THROWS_AS(compare_images(test, ref, &none), InputError);
 }
 
+TEST_CASE("image_metrics: PSNR's peak is the reference's largest value over the compared pixels",
+          "[image_metrics][psnr]") {
+  // Reference values in [0, 2) with a largest value 4 at (3, 3); the test adds 0.5 everywhere:
+  // MSE = 0.25 and PSNR = 10 log10(4² / 0.25) — neither 1 (a fixed LDR peak) nor the test's 4.5.
+  Image ref = random_image(14, 12, 41, 0.f, 2.f);
+  ref.set(3, 3, Vec3(1.f, 4.f, 2.f));
+  Image test = ref;
+  for (float& v : test.rgb) v += 0.5f;
+  ImageMetrics m = compare_images(test, ref);
+  CHECK(m.peak == 4.0);
+  CHECK(m.mse == Approx(0.25).epsilon(1e-6));
+  CHECK(m.psnr == Approx(10.0 * std::log10(16.0 / 0.25)).epsilon(1e-6));
+  // A brighter pixel outside the mask is not the peak.
+  Image bright_ref = ref, bright_test = test;
+  bright_ref.set(9, 9, Vec3(50.f, 50.f, 50.f));
+  bright_test.set(9, 9, Vec3(50.5f, 50.5f, 50.5f));
+  Image mask = constant_image(14, 12, 1.f);
+  mask.set(9, 9, Vec3(0.f, 0.f, 0.f));
+  ImageMetrics mm = compare_images(bright_test, bright_ref, &mask);
+  CHECK(mm.peak == 4.0);
+  CHECK(mm.psnr == Approx(m.psnr).epsilon(1e-9));
+  // A reference without a positive value has no peak: PSNR undefined.
+  ImageMetrics dark = compare_images(constant_image(12, 12, 0.5f), constant_image(12, 12, 0.f));
+  CHECK(std::isnan(dark.psnr));
+}
+
+TEST_CASE("image_metrics: SSIM averages only the masked-in centres, L over the masked-in pixels",
+          "[image_metrics][ssim][mask]") {
+  // 24×24: the images differ only at (20, 20). The windows that see it are those centred at
+  // x, y in 15..20; the valid centres are 5..18, so 4×4 of them see it. A mask that keeps the
+  // pixels with x < 15 or y < 15 keeps 14² − 4² = 180 valid centres, none of whose windows sees the
+  // difference: SSIM exactly 1 over them.
+  Image ref = random_image(24, 24, 51);
+  Image test = ref;
+  test.set(20, 20, test.get(20, 20) + Vec3(0.7f, 0.7f, 0.7f));
+  // A masked-out reference pixel far outside the others' range must not set L (or the peak).
+  ref.set(23, 23, Vec3(30.f, 30.f, 30.f));
+  test.set(23, 23, Vec3(30.f, 30.f, 30.f));
+  Image mask = constant_image(24, 24, 1.f);
+  for (int y = 15; y < 24; ++y)
+    for (int x = 15; x < 24; ++x) mask.set(x, y, Vec3(0.f, 0.f, 0.f));
+  ImageMetrics m = compare_images(test, ref, &mask);
+  CHECK(m.pixels == 24u * 24u - 81u);
+  CHECK(m.ssim_window == SsimWindow::Valid);
+  CHECK(m.ssim_centres == 180u);
+  CHECK(m.ssim == Approx(1.0).epsilon(1e-12));
+  CHECK(m.peak < 1.0);
+  double ymin = 1e30, ymax = -1e30;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      if (x >= 15 && y >= 15) continue;
+      const Vec3 c = ref.get(x, y);
+      const double Y = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+      ymin = std::min(ymin, Y);
+      ymax = std::max(ymax, Y);
+    }
+  CHECK(m.ssim_range == Approx(ymax - ymin).epsilon(1e-12));
+  // Without the mask the centres that see the difference lower SSIM.
+  ImageMetrics all = compare_images(test, ref);
+  CHECK(all.ssim_centres == 196u);
+  CHECK(all.ssim < 1.0);
+}
+
 TEST_CASE("image_metrics: non-finite pixels are left out and counted", "[image_metrics]") {
   Image ref = random_image(12, 12, 31), test = ref;
   test.rgb[3 * 7 + 1] = std::nanf("");
