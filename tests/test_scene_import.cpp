@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <string>
 
 #include "photonflow/error.h"
 #include "photonflow/scene_import.h"
+#include "support.h"
 
 using namespace pf;
 
@@ -251,6 +253,78 @@ TEST_CASE("camera from the file, and overrides", "[scene_import]") {
     CHECK(w.camera.height == 48);
     CHECK(w.scene_id != s.scene_id);  // the camera is part of the scene's identity
   }
+}
+
+TEST_CASE("the file's horizontal angle converts with the file's aspect, not the image's",
+          "[scene_import]") {
+  // camera.dae: xfov 90 degrees, aspect 2. A square image asked for on the command line does not
+  // change the camera's vertical angle (scene_import.cpp: "converted to the vertical one with the
+  // camera's aspect (mAspect, or width/height when the file has none)").
+  BakeOptions o;
+  o.width = 64;
+  o.height = 64;
+  Scene s = bake("tests/data/camera.dae", o);
+  CHECK(s.camera.width == 64);
+  CHECK(s.camera.height == 64);
+  CHECK(s.camera.fov_y_deg == Approx(2 * std::atan(0.5) * 180 / kPi).epsilon(1e-4));
+}
+
+TEST_CASE("the light CDF is the cumulative fraction of the lights' power", "[scene_import]") {
+  // camera.dae: an emissive triangle and a point light of different powers.
+  Scene s = bake("tests/data/camera.dae");
+  REQUIRE(s.lights.size() == 2);
+  CHECK(s.lights[0].power != Approx(s.lights[1].power));
+  REQUIRE(s.light_cdf.size() == s.lights.size());
+  double total = 0;
+  for (const pf_light& l : s.lights) total += l.power;
+  REQUIRE(total > 0);
+  double acc = 0;
+  for (size_t i = 0; i < s.lights.size(); ++i) {
+    acc += s.lights[i].power;
+    INFO("light " << i);
+    CHECK(s.light_cdf[i] == Approx(acc / total).epsilon(1e-5));
+  }
+  // Sampling: the probability of picking a light is its power fraction.
+  for (size_t i = 0; i < s.lights.size(); ++i) {
+    const float lo = i ? s.light_cdf[i - 1] : 0.f;
+    const float u = 0.5f * (lo + s.light_cdf[i]);
+    float p = 0;
+    CHECK(s.pick_light(u, p) == i);
+    CHECK(p == Approx(s.lights[i].power / total).epsilon(1e-5));
+  }
+}
+
+TEST_CASE("OBJ illum 5 is a mirror, illum 6 glass, a coloured Kd with Ks stays diffuse",
+          "[scene_import]") {
+  // The mapping table of scene_import.cpp: illum 4, 6, 7 or d < 1 → glass; illum 3 or 5, or a
+  // black Kd with Ks → mirror (colour Ks); Ke > 0 → emitter (negative Ke channels clamp to 0).
+  test::TempDir tmp("scene-import-illum");
+  std::ofstream(tmp / "m.mtl") << "newmtl mirror5\nillum 5\nKs 0.5 0.6 0.7\n"
+                                  "newmtl glass6\nillum 6\nNi 1.7\n"
+                                  "newmtl plastic\nKd 0.3 0.2 0.1\nKs 0.5 0.5 0.5\n"
+                                  "newmtl lamp\nKd 0.2 0.2 0.2\nKe 2 0 -1\n";
+  std::ofstream obj(tmp / "m.obj");
+  obj << "mtllib m.mtl\n";
+  const char* names[4] = {"mirror5", "glass6", "plastic", "lamp"};
+  for (int k = 0; k < 4; ++k)
+    obj << "v " << 2 * k << " 0 0\nv " << 2 * k + 1 << " 0 0\nv " << 2 * k << " 1 0\no "
+        << names[k] << "\nusemtl " << names[k] << "\nf " << 3 * k + 1 << " " << 3 * k + 2 << " "
+        << 3 * k + 3 << "\n";
+  obj.close();
+  BakeOptions o;
+  o.input = tmp / "m.obj";
+  BakeReport report;
+  Scene s = bake_scene(o, report);
+  REQUIRE(s.triangles.size() == 4);
+  CHECK(material(s, "mirror5").type == PF_MAT_MIRROR);
+  check_vec(material(s, "mirror5").color, Vec3(0.5f, 0.6f, 0.7f));
+  CHECK(material(s, "glass6").type == PF_MAT_GLASS);
+  CHECK(material(s, "glass6").ior == Approx(1.7f));
+  CHECK(material(s, "plastic").type == PF_MAT_DIFFUSE);
+  check_vec(material(s, "plastic").color, Vec3(0.3f, 0.2f, 0.1f));
+  CHECK(material(s, "lamp").type == PF_MAT_EMITTER);
+  check_vec(material(s, "lamp").emission, Vec3(2, 0, 0));
+  check_vec(material(s, "lamp").color, Vec3(0.2f, 0.2f, 0.2f));
 }
 
 TEST_CASE("default camera frames the bounds", "[scene_import]") {
