@@ -165,6 +165,44 @@ TEST_CASE("photon distribution: file round trip and refusal of foreign maps", "[
   CHECK_THROWS_AS(load_photon_distribution(tmp / "c.h5"), InputError);
 }
 
+TEST_CASE("photon distribution: first_pass and the per-pass mean are stored", "[ga][distribution][formats]") {
+  // Two passes of hand-placed photons on one mesh, the first pass numbered 3: /mean_photons is
+  // /photon_count / passes (docs/FORMATS.md), first_pass reads back.
+  TempDir tmp("ga-dist-mean");
+  PhotonGridParams gp;
+  gp.max_bins = 4;
+  gp.default_radius = 0.1f;
+  PhotonDistribution d = empty_photon_distribution(gp, std::string(64, 'a'));
+  d.first_pass = 3;
+  std::vector<pf_photon> ph(5);
+  for (size_t i = 0; i < ph.size(); ++i) {
+    ph[i] = pf_photon{};
+    ph[i].position[0] = float(i) * 0.25f;  // 0 .. 1 along x
+    ph[i].mesh = 0;
+    ph[i].pass = 3;
+  }
+  d.add_pass(ph, 10, 1);
+  for (auto& p : ph) p.pass = 4;
+  ph.resize(3);
+  d.add_pass(ph, 7, 1);
+  REQUIRE(d.passes == 2);
+  save_photon_distribution(d, tmp / "d.h5", prov());
+  const PhotonDistribution r = load_photon_distribution(tmp / "d.h5");
+  CHECK(r.first_pass == 3);
+  CHECK(r.emitted == 17u);
+  CHECK(r.scene_id == d.scene_id);
+  h5::Reader reader(tmp / "d.h5", kPhotonDistributionFormat, 1);
+  const std::vector<uint64_t> counts = reader.read<uint64_t>("/photon_count");
+  const std::vector<float> mean = reader.read<float>("/mean_photons");
+  REQUIRE(mean.size() == counts.size());
+  uint64_t total = 0;
+  for (size_t b = 0; b < counts.size(); ++b) {
+    total += counts[b];
+    CHECK(mean[b] == float(double(counts[b]) / 2.0));
+  }
+  CHECK(total == 8u);
+}
+
 // ---- fitness on hand-built cases -----------------------------------------------------------------
 
 TEST_CASE("fitness eq. 8.1-8.3 and work on hand-built clusters", "[ga][fitness]") {
