@@ -445,6 +445,47 @@ TEST_CASE("image_metrics: PNG masks: stored and compressed, all filters, grey, R
         for (int c = 0; c < 3; ++c)
           CHECK(m.get(x, y)[c] == float(uint8_t(palette[size_t(3 * idx(x, y) + c)]) / 255.0));
   }
+  SECTION("8-bit grey + alpha and RGBA: alpha dropped") {
+    const int w = 5, h = 3;
+    auto val = [](int x, int y, int c) { return uint8_t((x * 50 + y * 30 + c * 70) % 256); };
+    std::vector<std::string> ga, rgba;
+    for (int y = 0; y < h; ++y) {
+      std::string a, b;
+      for (int x = 0; x < w; ++x) {
+        a += char(val(x, y, 0));
+        a += char(255 - val(x, y, 3));  // alpha, ignored
+        for (int c = 0; c < 4; ++c) b += char(val(x, y, c));
+      }
+      ga.push_back(a);
+      rgba.push_back(b);
+    }
+    Image g = decode_png(make_png(w, h, 8, 4, ga, 2), "ga.png");
+    Image c = decode_png(make_png(w, h, 8, 6, rgba, 4), "rgba.png");
+    REQUIRE(g.width == w);
+    REQUIRE(c.width == w);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int k = 0; k < 3; ++k) {
+          CHECK(g.get(x, y)[k] == float(val(x, y, 0) / 255.0));
+          CHECK(c.get(x, y)[k] == float(val(x, y, k) / 255.0));
+        }
+  }
+  SECTION("interlaced files and palette indices past the palette are refused") {
+    std::vector<std::string> rows(3, std::string(3, '\x10'));
+    std::string png = make_png(3, 3, 8, 0, rows, 1);
+    // IHDR data starts at byte 16; its interlace byte is the 13th; the CRC follows the data.
+    png[16 + 12] = 1;
+    std::string interlaced = png.substr(0, 29);
+    const uint32_t crc = uint32_t(crc32(0L, reinterpret_cast<const Bytef*>(png.data() + 12), 17));
+    put_be32(interlaced, crc);
+    interlaced += png.substr(33);
+    CHECK_THROWS_WITH(decode_png(interlaced, "i.png"), Catch::Contains("interlaced"));
+    // Index 2 with a palette of two entries.
+    std::string palette = {char(0), char(0), char(0), char(255), char(255), char(255)};
+    std::vector<std::string> idx(2, std::string{char(0), char(1), char(2)});
+    CHECK_THROWS_WITH(decode_png(make_png(3, 2, 8, 3, idx, 1, palette), "p.png"),
+                      Catch::Contains("palette index"));
+  }
   SECTION("damaged or foreign files are refused") {
     std::vector<std::string> rows(3, std::string(3, '\x7f'));
     std::string png = make_png(3, 3, 8, 0, rows, 1);
