@@ -334,6 +334,35 @@ TEST_CASE("provenance round-trips with input hashes", "[h5io][provenance]") {
   CHECK(q.inputs[0].sha256 == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
 }
 
+TEST_CASE("the recorded command line reads back as the same arguments in a POSIX shell",
+          "[provenance]") {
+  // join_command_line's text is meant to be pasted into a shell to repeat the run: /bin/sh must
+  // split it back into exactly the original arguments (no expansion, globbing, comments, ...).
+  TempDir tmp;
+  std::vector<std::string> args = {"trace-photons", "--scene", "plain/path.h5", "a b", "it's",
+                                   "$HOME", "", "x;rm -rf y", "a*b", "back\\slash", "tab\there",
+                                   "new\nline", "`id`", "q\"uote", "p|q&r", "(x)", "~user",
+                                   "#hash", "--seed=1", "'both' \"kinds\""};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  const std::string line = join_command_line(int(argv.size()), argv.data());
+  CHECK(line.find("--scene plain/path.h5") != std::string::npos);  // plain words stay plain
+  std::ofstream(tmp / "echo.sh") << "printf '%s\\0' " << line << "\n";
+  std::string out;
+  if (FILE* p = popen(("/bin/sh '" + (tmp / "echo.sh") + "' 2>&1").c_str(), "r")) {
+    char buf[4096];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+    pclose(p);
+  }
+  std::vector<std::string> back;
+  size_t at = 0;
+  for (size_t z; (z = out.find('\0', at)) != std::string::npos; at = z + 1)
+    back.push_back(out.substr(at, z - at));
+  INFO("command line: " << line);
+  CHECK(back == args);
+}
+
 TEST_CASE("provenance keeps each input's path, hash, format and scene_id apart", "[h5io][provenance]") {
   TempDir tmp;
   std::string a = tmp / "a.txt", b = tmp / "b.txt";

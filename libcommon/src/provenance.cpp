@@ -58,12 +58,23 @@ Provenance read_provenance(const h5::Reader& r) {
 }
 
 std::string join_command_line(int argc, char** argv) {
+  // POSIX shell quoting: words of only safe characters stay as they are; any other word is put in
+  // single quotes (inside which nothing is special), each ' in it written as '\'' (close the
+  // quotes, an escaped quote, reopen). Before, only blanks, " ' and $ led to quoting and a ' was
+  // not escaped, so "it's", a;b, *, `…`, # or a newline did not read back as the same argument.
+  static const char* safe =
+      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=.,/:@%";
   std::string out;
   for (int i = 0; i < argc; ++i) {
-    std::string a = argv[i];
-    bool quote = a.empty() || a.find_first_of(" \t\"'$") != std::string::npos;
+    const std::string a = argv[i];
     if (i) out += ' ';
-    out += quote ? "'" + a + "'" : a;
+    if (!a.empty() && a.find_first_not_of(safe) == std::string::npos) {
+      out += a;
+      continue;
+    }
+    out += '\'';
+    for (char c : a) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    out += '\'';
   }
   return out;
 }
