@@ -201,6 +201,9 @@ TEST_CASE("photon distribution: first_pass and the per-pass mean are stored", "[
     CHECK(mean[b] == float(double(counts[b]) / 2.0));
   }
   CHECK(total == 8u);
+  // /mesh_grid photon_count: the mesh's photons over all passes (5 + 3), not the first pass's.
+  REQUIRE(r.mesh_grid.size() == 1);
+  CHECK(r.mesh_grid[0].photon_count == 8);
 }
 
 // ---- fitness on hand-built cases -----------------------------------------------------------------

@@ -4,6 +4,7 @@
 // and write_obj's shared vertices read back by a small OBJ parser.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -122,6 +123,22 @@ TEST_CASE("procedural: height field over its rectangle, facing +y, within base Â
   CHECK(ymin >= 0.5f - 0.2f - 1e-6f);
   CHECK(ymax <= 0.5f + 0.2f + 1e-6f);
   CHECK(ymax - ymin > 0.01f);
+  // Relief along both axes (noise over the unit square): heights differ along some line of
+  // constant x and along some line of constant z.
+  std::map<float, std::vector<float>> along_z, along_x;  // keyed by x, by z
+  for (const auto& t : tris)
+    for (const float* v : {t.v0, t.v1, t.v2}) {
+      along_z[v[0]].push_back(v[1]);
+      along_x[v[2]].push_back(v[1]);
+    }
+  auto varies = [](const std::map<float, std::vector<float>>& m) {
+    for (const auto& [k, ys] : m)
+      if (*std::max_element(ys.begin(), ys.end()) - *std::min_element(ys.begin(), ys.end()) > 1e-3f)
+        return true;
+    return false;
+  };
+  CHECK(varies(along_z));
+  CHECK(varies(along_x));
   // Shared vertices: no directed edge twice (consistent winding), and the interior edges
   // (3 per cell pair, minus the border) are each used once in each direction.
   size_t twice = 0;
