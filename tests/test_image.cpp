@@ -3,6 +3,11 @@
 // (signature, IHDR, chunk CRCs, zlib header, stored deflate blocks, Adler-32, pixels).
 #include <catch2/catch.hpp>
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfOutputFile.h>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -189,6 +194,55 @@ TEST_CASE("image: EXR round trip is bit-exact with layers", "[image]") {
     REQUIRE(back.layers.count(name) == 1);
     CHECK(std::memcmp(back.layers[name].data(), data.data(), data.size() * sizeof(float)) == 0);
   }
+}
+
+TEST_CASE("image: an EXR from elsewhere: half channels, a data window not at the origin",
+          "[image]") {
+  // Written here with the OpenEXR API as another program would: display window 0..31 × 0..19,
+  // data window (5, 7)..(9, 10), so 5 × 4 pixels; R, G, B and a layer "Z" as half floats with
+  // values that half represents exactly. read_exr keeps the data window (row y of the image is
+  // row 7 + y of the file) and converts half to float.
+  const int x0 = 5, y0 = 7, w = 5, h = 4;
+  auto value = [](int x, int y, int c) { return 0.125f * float(x + 8 * y + 64 * c) - 4.f; };
+  std::vector<half> rgb(size_t(w) * h * 3), z(size_t(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      for (int c = 0; c < 3; ++c) rgb[3 * (size_t(y) * w + x) + c] = half(value(x, y, c));
+      z[size_t(y) * w + x] = half(value(x, y, 3));
+    }
+  fs::path path = scratch_dir() / "foreign.exr";
+  {
+    Imath::Box2i display({0, 0}, {31, 19}), data({x0, y0}, {x0 + w - 1, y0 + h - 1});
+    Imf::Header header(display, data);
+    Imf::FrameBuffer fb;
+    const char* names[3] = {"R", "G", "B"};
+    const size_t hs = sizeof(half);
+    // Slice base pointers for a data window off the origin: pointer of pixel (0, 0).
+    char* base = reinterpret_cast<char*>(rgb.data()) - (ptrdiff_t(x0) + ptrdiff_t(y0) * w) * 3 * hs;
+    for (int c = 0; c < 3; ++c) {
+      header.channels().insert(names[c], Imf::Channel(Imf::HALF));
+      fb.insert(names[c], Imf::Slice(Imf::HALF, base + c * hs, 3 * hs, 3 * hs * w));
+    }
+    char* zbase = reinterpret_cast<char*>(z.data()) - (ptrdiff_t(x0) + ptrdiff_t(y0) * w) * hs;
+    header.channels().insert("Z", Imf::Channel(Imf::HALF));
+    fb.insert("Z", Imf::Slice(Imf::HALF, zbase, hs, hs * w));
+    Imf::OutputFile out(path.string().c_str(), header);
+    out.setFrameBuffer(fb);
+    out.writePixels(h);
+  }
+  Image img = read_exr(path.string());
+  REQUIRE(img.width == w);
+  REQUIRE(img.height == h);
+  REQUIRE(img.layers.count("Z") == 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      INFO("pixel " << x << "," << y);
+      const Vec3 c = img.get(x, y);
+      CHECK(c.x == value(x, y, 0));
+      CHECK(c.y == value(x, y, 1));
+      CHECK(c.z == value(x, y, 2));
+      CHECK(img.layers["Z"][size_t(y) * w + x] == value(x, y, 3));
+    }
 }
 
 TEST_CASE("image: EXR errors are one-line input errors", "[image]") {
