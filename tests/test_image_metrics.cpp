@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -514,6 +515,52 @@ TEST_CASE("image_metrics: JSON output", "[image_metrics][json]") {
   for (const char* key : {"\"mae\"", "\"psnr\"", "\"ssim\"", "\"ssim_dynamic_range\"",
                           "\"psnr_peak\"", "\"pixels\"", "\"ssim_window\""})
     CHECK(diff.find(key) != std::string::npos);
+}
+
+TEST_CASE("image_metrics: every JSON number is the metric of its name", "[image_metrics][json]") {
+  // A case where all metrics differ from each other, masked and with a non-finite pixel, so that a
+  // value written under another metric's name shows.
+  Image ref = random_image(20, 18, 61, 0.f, 3.f);
+  Image test = ref;
+  Image noise = random_image(20, 18, 62, -0.5f, 0.5f);
+  for (size_t i = 0; i < test.rgb.size(); ++i) test.rgb[i] += noise.rgb[i];
+  test.rgb[3 * 5] = std::nanf("");
+  Image mask = constant_image(20, 18, 1.f);
+  mask.set(3, 4, Vec3(0, 0, 0));
+  mask.set(7, 9, Vec3(0, 0, 0));
+  const ImageMetrics m = compare_images(test, ref, &mask);
+  const std::string js = metrics_json(m, "t.exr", "r.exr", "m.exr");
+  CHECK(json_number(js, "width") == 20);
+  CHECK(json_number(js, "height") == 18);
+  CHECK(json_number(js, "pixels") == double(m.pixels));
+  CHECK(json_number(js, "masked_out") == 2);
+  CHECK(json_number(js, "nonfinite") == 1);
+  CHECK(json_number(js, "mse") == m.mse);
+  CHECK(json_number(js, "rmse") == m.rmse);
+  CHECK(json_number(js, "relmse") == m.rel_mse);
+  CHECK(json_number(js, "mae") == m.mae);
+  CHECK(json_number(js, "psnr") == m.psnr);
+  CHECK(json_number(js, "psnr_peak") == m.peak);
+  CHECK(json_number(js, "ssim") == m.ssim);
+  CHECK(json_number(js, "ssim_dynamic_range") == m.ssim_range);
+  CHECK(json_number(js, "ssim_centres") == double(m.ssim_centres));
+  CHECK(js.find("\"ssim_window\": \"valid\"") != std::string::npos);
+  CHECK(js.find("\"reference\": \"r.exr\"") != std::string::npos);
+  CHECK(js.find("\"test\": \"t.exr\"") != std::string::npos);
+  // The values differ from each other, so the checks above tell the names apart.
+  CHECK(m.mse != m.rmse);
+  CHECK(m.rmse != m.mae);
+  CHECK(m.mse != m.rel_mse);
+  CHECK(m.masked_out != m.nonfinite);
+  // The text form shows the same numbers (6 significant digits).
+  const std::string text = metrics_text(m);
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "RMSE     %.6g\n", m.rmse);
+  CHECK(text.find(buf) != std::string::npos);
+  std::snprintf(buf, sizeof buf, "MAE      %.6g\n", m.mae);
+  CHECK(text.find(buf) != std::string::npos);
+  std::snprintf(buf, sizeof buf, "relMSE   %.6g ", m.rel_mse);
+  CHECK(text.find(buf) != std::string::npos);
 }
 
 TEST_CASE("image_metrics: imgcompare tool: metrics printed and written, bad input refused",
