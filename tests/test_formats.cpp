@@ -72,6 +72,24 @@ TEST_CASE("scene.h5 whose content was changed after baking is refused", "[format
     save_scene(s, tmp / "s.h5", prov_for("test"));
     CHECK_THROWS_WITH(load_scene(tmp / "s.h5"), Catch::Contains("material id is out of range"));
   }
+  SECTION("lights or camera edited: scene_id no longer matches") {
+    // The id names the lights and the camera too (scene.h: the scene's content), not only the
+    // geometry and materials.
+    const std::string id = s.scene_id;
+    SECTION("a light's power") { s.lights[0].power *= 2.f; }
+    SECTION("the camera") { s.camera.fov_y_deg += 1.f; }
+    s.scene_id = id;
+    save_scene(s, tmp / "s.h5", prov_for("test"));
+    CHECK_THROWS_WITH(load_scene(tmp / "s.h5"), Catch::Contains("scene_id does not match"));
+  }
+  SECTION("tables of different lengths") {
+    // Not covered by scene_id: each must still match its table, or a later stage indexes past it.
+    SECTION("light cdf") { s.light_cdf.pop_back(); }
+    SECTION("hh planes") { s.hh.pop_back(); }
+    SECTION("material names") { s.material_names.push_back("extra"); }
+    save_scene(s, tmp / "s.h5", prov_for("test"));
+    CHECK_THROWS_WITH(load_scene(tmp / "s.h5"), Catch::Contains("differ in length"));
+  }
   SECTION("broken kd-tree") {
     s.kd.nodes[0].left = 100000;
     save_scene(s, tmp / "s.h5", prov_for("test"));
