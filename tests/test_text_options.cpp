@@ -120,3 +120,33 @@ TEST_CASE("parse_vec3: three finite numbers, anything else an InputError naming 
     CHECK_THROWS_AS(parse_vec3("look-at", bad), InputError);
   }
 }
+
+TEST_CASE("option checks: positive, (0, 1], one of a list; defaults read back", "[options]") {
+  CHECK_NOTHROW(require_positive("photons", 1e-300));
+  CHECK_NOTHROW(require_positive("photons", 5));
+  for (double bad : {0.0, -0.0, -1.0, std::nan("")}) {
+    INFO(bad);
+    CHECK_THROWS_WITH(require_positive("photons", bad), Catch::Contains("--photons must be positive"));
+  }
+  CHECK_NOTHROW(require_in_unit_interval("alpha", 1.0));  // closed at 1
+  CHECK_NOTHROW(require_in_unit_interval("alpha", 1e-9));
+  for (double bad : {0.0, -0.5, std::nextafter(1.0, 2.0), 2.0, std::nan("")}) {
+    INFO(bad);
+    CHECK_THROWS_WITH(require_in_unit_interval("alpha", bad), Catch::Contains("--alpha must be in (0, 1]"));
+  }
+  CHECK_NOTHROW(require_choice("method", "grid", {"kd", "grid", "hash"}));
+  CHECK_NOTHROW(require_choice("method", "hash", {"kd", "grid", "hash"}));
+  CHECK_THROWS_WITH(require_choice("method", "gridx", {"kd", "grid", "hash"}),
+                    Catch::Contains("--method must be one of kd|grid|hash") && Catch::Contains("'gridx'"));
+  CHECK_THROWS_AS(require_choice("method", "", {"kd"}), InputError);
+  // default_text: the shortest text that reads back to the value.
+  for (float f : {0.7f, 0.1f, 3.f, 1e-3f, 123456.79f, -2.5f}) {
+    INFO(f);
+    const std::string t = default_text(f);
+    CHECK(std::strtof(t.c_str(), nullptr) == f);
+    CHECK(t.size() <= 12);
+  }
+  CHECK(default_text(0.5f) == "0.5");
+  CHECK(default_text(3.f) == "3");
+  CHECK(default_text(-42) == "-42");
+}
