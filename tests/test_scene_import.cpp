@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "photonflow/error.h"
 #include "photonflow/scene_import.h"
@@ -345,6 +346,33 @@ TEST_CASE("default camera frames the bounds", "[scene_import]") {
            (k & 4) ? s.bounds.hi.z : s.bounds.lo.z);
     const Vec3 v = p - Vec3(c.eye);
     CHECK(std::acos(dot(normalize(v), dir)) <= half + 1e-4f);
+  }
+}
+
+TEST_CASE("default camera frames the bounds in a wide and in a tall image", "[scene_import]") {
+  // The bounding sphere must fit the narrower of the two angles: every corner of the bounds lies
+  // within the vertical and the horizontal half-angle, whichever of them is smaller.
+  for (const auto& [w, h] : {std::pair<int, int>{400, 100}, std::pair<int, int>{100, 400}}) {
+    INFO(w << "x" << h);
+    BakeOptions o;
+    o.width = w;
+    o.height = h;
+    Scene s = bake("tests/data/materials.obj", o);
+    const pf_camera& c = s.camera;
+    const float half_y = 0.5f * c.fov_y_deg * kPi / 180.f;
+    const float half_x = std::atan(std::tan(half_y) * float(w) / float(h));
+    const Vec3 fwd = normalize(Vec3(c.look_at) - Vec3(c.eye));
+    const Vec3 right = normalize(cross(fwd, Vec3(c.up)));
+    const Vec3 up = cross(right, fwd);
+    for (int k = 0; k < 8; ++k) {
+      Vec3 p((k & 1) ? s.bounds.hi.x : s.bounds.lo.x, (k & 2) ? s.bounds.hi.y : s.bounds.lo.y,
+             (k & 4) ? s.bounds.hi.z : s.bounds.lo.z);
+      const Vec3 v = p - Vec3(c.eye);
+      const float depth = dot(v, fwd);
+      REQUIRE(depth > 0.f);
+      CHECK(std::atan(std::fabs(dot(v, up)) / depth) <= half_y + 1e-4f);
+      CHECK(std::atan(std::fabs(dot(v, right)) / depth) <= half_x + 1e-4f);
+    }
   }
 }
 
