@@ -122,6 +122,14 @@ TEST_CASE("hitpoints, photons and grid files round-trip every dataset", "[format
   CHECK(hr.photons_emitted == h.photons_emitted);
   CHECK(hr.passes == 7);
   CHECK(hr.scene_id == s.scene_id);
+  // Both direct modes read back as themselves (the round trip above is shadow-rays).
+  h.direct_mode = DirectMode::Photons;
+  save_hitpoints(h, tmp / "hp2.h5", prov_for("hp"));
+  CHECK(load_hitpoints(tmp / "hp2.h5").direct_mode == DirectMode::Photons);
+  CHECK(h5::Reader(tmp / "hp2.h5", kHitpointsFormat, 1).attr_string("/", "direct_mode") ==
+        "photons");
+  CHECK(h5::Reader(tmp / "hp.h5", kHitpointsFormat, 1).attr_string("/", "direct_mode") ==
+        "shadow-rays");
 
   PhotonSet p;
   p.first_pass = 5;

@@ -204,6 +204,18 @@ TEST_CASE("photon distribution: first_pass and the per-pass mean are stored", "[
   // /mesh_grid photon_count: the mesh's photons over all passes (5 + 3), not the first pass's.
   REQUIRE(r.mesh_grid.size() == 1);
   CHECK(r.mesh_grid[0].photon_count == 8);
+  // A bin table that does not match the grid headers is refused: one count short, or a mesh
+  // whose bins do not start where the previous mesh's end (here: not at 0).
+  PhotonDistribution shorter = d;
+  shorter.counts.pop_back();
+  save_photon_distribution(shorter, tmp / "short.h5", prov());
+  CHECK_THROWS_WITH(load_photon_distribution(tmp / "short.h5"),
+                    Catch::Contains("bin table does not match"));
+  PhotonDistribution shifted = d;
+  shifted.mesh_grid[0].first_bin = 1;
+  shifted.counts.push_back(0);
+  save_photon_distribution(shifted, tmp / "shifted.h5", prov());
+  CHECK_THROWS_WITH(load_photon_distribution(tmp / "shifted.h5"), Catch::Contains("not contiguous"));
 }
 
 // ---- fitness on hand-built cases -----------------------------------------------------------------
