@@ -6,12 +6,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
+#include <unistd.h>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "photonflow/error.h"
 #include "photonflow/options.h"
+#include "photonflow/provenance.h"
 #include "photonflow/text_file.h"
 
 using namespace pf;
@@ -149,4 +152,35 @@ TEST_CASE("option checks: positive, (0, 1], one of a list; defaults read back", 
   CHECK(default_text(0.5f) == "0.5");
   CHECK(default_text(3.f) == "3");
   CHECK(default_text(-42) == "-42");
+}
+
+TEST_CASE("provenance_json_fields: each input's members under their own names", "[text][provenance]") {
+  const std::string dir = "/tmp/pf-text-prov-" + std::to_string(getpid());
+  const std::string a = dir + "-a.txt", b = dir + "-b.txt";
+  std::ofstream(a) << "abc";
+  std::ofstream(b) << "";
+  Provenance p;
+  p.tool = "trace-photons";
+  p.seed = 42;
+  p.wall_time_s = 0.5;
+  p.command_line = "trace-photons --x 'y z'";
+  p.param("photons", 1000);
+  p.param("method", "grid");
+  p.add_input("scene", a, "photonflow.scene", "id-a");
+  p.add_input("hitpoints", b, "photonflow.hitpoints", "id-b");
+  const std::string js = provenance_json_fields(p);
+  std::remove(a.c_str());
+  std::remove(b.c_str());
+  CHECK(js.find("\"tool\": \"trace-photons\"") != std::string::npos);
+  CHECK(js.find("\"seed\": 42") != std::string::npos);
+  CHECK(js.find("\"command_line\": " + json_string(p.command_line)) != std::string::npos);
+  CHECK(js.find("\"wall_time_s\": 0.5") != std::string::npos);
+  CHECK(js.find("\"photons\": \"1000\"") != std::string::npos);
+  CHECK(js.find("\"method\": \"grid\"") != std::string::npos);
+  CHECK(js.find("{\"role\": \"scene\", \"path\": " + json_string(a) +
+                ", \"sha256\": \"ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad\", "
+                "\"format\": \"photonflow.scene\", \"scene_id\": \"id-a\"}") != std::string::npos);
+  CHECK(js.find("{\"role\": \"hitpoints\", \"path\": " + json_string(b) +
+                ", \"sha256\": \"e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855\", "
+                "\"format\": \"photonflow.hitpoints\", \"scene_id\": \"id-b\"}") != std::string::npos);
 }
