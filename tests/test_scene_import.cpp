@@ -298,12 +298,13 @@ TEST_CASE("the light CDF is the cumulative fraction of the lights' power", "[sce
 TEST_CASE("OBJ illum 5 is a mirror, illum 6 glass, a coloured Kd with Ks stays diffuse",
           "[scene_import]") {
   // The mapping table of scene_import.cpp: illum 4, 6, 7 or d < 1 → glass; illum 3 or 5, or a
-  // black Kd with Ks → mirror (colour Ks); Ke > 0 → emitter (negative Ke channels clamp to 0).
+  // black Kd with Ks → mirror (colour Ks, clamped to 1); Ke > 0 → emitter (negative Ke channels
+  // clamp to 0; its albedo clamped to 0.99 like a diffuse one).
   test::TempDir tmp("scene-import-illum");
-  std::ofstream(tmp / "m.mtl") << "newmtl mirror5\nillum 5\nKs 0.5 0.6 0.7\n"
+  std::ofstream(tmp / "m.mtl") << "newmtl mirror5\nillum 5\nKs 1.2 0.6 0.7\n"
                                   "newmtl glass6\nillum 6\nNi 1.7\n"
                                   "newmtl plastic\nKd 0.3 0.2 0.1\nKs 0.5 0.5 0.5\n"
-                                  "newmtl lamp\nKd 0.2 0.2 0.2\nKe 2 0 -1\n";
+                                  "newmtl lamp\nKd 1.5 0.2 0.2\nKe 2 0 -1\n";
   std::ofstream obj(tmp / "m.obj");
   obj << "mtllib m.mtl\n";
   const char* names[4] = {"mirror5", "glass6", "plastic", "lamp"};
@@ -318,14 +319,15 @@ TEST_CASE("OBJ illum 5 is a mirror, illum 6 glass, a coloured Kd with Ks stays d
   Scene s = bake_scene(o, report);
   REQUIRE(s.triangles.size() == 4);
   CHECK(material(s, "mirror5").type == PF_MAT_MIRROR);
-  check_vec(material(s, "mirror5").color, Vec3(0.5f, 0.6f, 0.7f));
+  check_vec(material(s, "mirror5").color, Vec3(1.f, 0.6f, 0.7f));  // reflectance clamped to 1
   CHECK(material(s, "glass6").type == PF_MAT_GLASS);
   CHECK(material(s, "glass6").ior == Approx(1.7f));
   CHECK(material(s, "plastic").type == PF_MAT_DIFFUSE);
   check_vec(material(s, "plastic").color, Vec3(0.3f, 0.2f, 0.1f));
   CHECK(material(s, "lamp").type == PF_MAT_EMITTER);
   check_vec(material(s, "lamp").emission, Vec3(2, 0, 0));
-  check_vec(material(s, "lamp").color, Vec3(0.2f, 0.2f, 0.2f));
+  check_vec(material(s, "lamp").color, Vec3(0.99f, 0.2f, 0.2f));  // the emitter's albedo too
+  CHECK(has_warning(report, "'lamp'"));
 }
 
 TEST_CASE("default camera frames the bounds", "[scene_import]") {
