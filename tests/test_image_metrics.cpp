@@ -487,6 +487,32 @@ TEST_CASE("image_metrics: PNG masks: stored and compressed, all filters, grey, R
     CHECK_THROWS_WITH(decode_png(make_png(3, 2, 8, 3, idx, 1, palette), "p.png"),
                       Catch::Contains("palette index"));
   }
+  SECTION("image data short of the header's rows, or an unknown filter type, is refused") {
+    // A PNG from raw (already filtered) scanline bytes, whatever the header says.
+    auto png_from_raw = [](int w, int h, const std::string& raw) {
+      uLongf zlen = compressBound(uLong(raw.size()));
+      std::string z(zlen, '\0');
+      REQUIRE(compress2(reinterpret_cast<Bytef*>(&z[0]), &zlen,
+                        reinterpret_cast<const Bytef*>(raw.data()), uLong(raw.size()), 9) == Z_OK);
+      z.resize(zlen);
+      std::string png = "\x89PNG\r\n\x1a\n", ihdr;
+      put_be32(ihdr, uint32_t(w));
+      put_be32(ihdr, uint32_t(h));
+      ihdr += char(8);  // 8-bit grey
+      ihdr += std::string(4, '\0');
+      put_chunk(png, "IHDR", ihdr);
+      put_chunk(png, "IDAT", z);
+      put_chunk(png, "IEND", "");
+      return png;
+    };
+    const std::string row = std::string(1, '\0') + "abc";  // filter None, 3 samples
+    CHECK_NOTHROW(decode_png(png_from_raw(3, 3, row + row + row), "ok.png"));
+    CHECK_THROWS_WITH(decode_png(png_from_raw(3, 4, row + row + row), "short.png"),
+                      Catch::Contains("damaged PNG image data"));
+    const std::string bad_filter = std::string(1, '\x05') + "abc";
+    CHECK_THROWS_WITH(decode_png(png_from_raw(3, 3, row + bad_filter + row), "filter.png"),
+                      Catch::Contains("unknown PNG filter type"));
+  }
   SECTION("damaged or foreign files are refused") {
     std::vector<std::string> rows(3, std::string(3, '\x7f'));
     std::string png = make_png(3, 3, 8, 0, rows, 1);
