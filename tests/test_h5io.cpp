@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -315,6 +316,17 @@ TEST_CASE("provenance round-trips with input hashes", "[h5io][provenance]") {
   CHECK(q.command_line == p.command_line);
   CHECK_FALSE(q.version.empty());
   CHECK_FALSE(q.git_hash.empty());
+  // created_utc: ISO 8601 UTC "YYYY-MM-DDTHH:MM:SSZ", the time of writing (within a minute).
+  {
+    std::tm t{};
+    REQUIRE(q.created_utc.size() == 20);
+    CHECK(q.created_utc[10] == 'T');
+    CHECK(q.created_utc.back() == 'Z');
+    REQUIRE(strptime(q.created_utc.c_str(), "%Y-%m-%dT%H:%M:%SZ", &t) != nullptr);
+    const double age = std::difftime(std::time(nullptr), timegm(&t));
+    CHECK(age >= -1.0);
+    CHECK(age < 60.0);
+  }
   // The hash is the source tree's current commit (regenerated at every build, git_version.cmake),
   // not the one cmake was first run at; "-dirty" with uncommitted changes to tracked files.
   std::string head;
