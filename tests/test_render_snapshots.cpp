@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "photonflow/camera.h"
+#include "photonflow/cl_runtime.h"
 #include "photonflow/emitter_mask.h"
 #include "photonflow/error.h"
 #include "photonflow/image_metrics.h"
@@ -19,6 +20,7 @@
 #include "photonflow/render_driver.h"
 #include "photonflow/synthesize.h"
 #include "support.h"
+#include "support_cl.h"
 
 using namespace pf;
 using test::run_tool;
@@ -96,6 +98,62 @@ TEST_CASE("render driver: snapshots every K passes and at listed passes equal sh
   render_progressive(s, small_run(2), false, prov, {},
                      [&](const HitpointSet&, const RenderStatus&) { ++calls; });
   CHECK(calls == 0);
+}
+
+// A resumed run continues the photon passes where the checkpoint left them (pass p's random
+// streams are (seed, p, i) on both backends): it equals the uninterrupted run bit for bit, on the
+// CPU and on every device route of the driver (hash-grid keeps the photons on the device, naive
+// reads them back). A resumed device run restarting its pass counter at 0 reused passes 0.. and
+// went unnoticed: the tools' resume tests run on the CPU only.
+TEST_CASE("render driver: a resumed run equals the uninterrupted one on every route",
+          "[render][resume][opencl]") {
+  const Scene s = test::room_scene(PF_MAT_GLASS, 16, 12);
+  TempDir tmp("resume-routes");
+  std::unique_ptr<ClContext> dev = test::test_device();
+  struct Route {
+    const char* name;
+    GatherMethod method;
+    bool device;
+  };
+  std::vector<Route> routes = {{"cpu grid", GatherMethod::Grid, false},
+                               {"cpu flann", GatherMethod::Flann, false}};
+  if (dev) {
+    routes.push_back({"opencl hash-grid", GatherMethod::HashGrid, true});
+    routes.push_back({"opencl naive", GatherMethod::Naive, true});
+  }
+  Provenance prov;
+  prov.tool = "test";
+  for (const Route& route : routes) {
+    INFO("route " << route.name);
+    RenderOptions opt = small_run(4);
+    opt.ppm.method = route.method;
+    opt.device = route.device ? dev.get() : nullptr;
+    RenderStatus full_st;
+    const HitpointSet full = render_progressive(s, opt, false, prov, {}, {}, &full_st);
+    REQUIRE(full.passes == 4);
+    CHECK_FALSE(full_st.resumed);
+    // Two passes with a checkpoint, then --resume to four.
+    const std::string ck = tmp / (std::string(route.device ? "cl-" : "cpu-") +
+                                  gather_method_name(route.method) + ".h5");
+    RenderOptions first = opt;
+    first.passes = 2;
+    first.checkpoint = ck;
+    first.checkpoint_every = 1;
+    render_progressive(s, first, false, prov);
+    REQUIRE(load_hitpoints(ck).passes == 2);
+    RenderOptions rest = opt;
+    rest.checkpoint = ck;
+    rest.checkpoint_every = 1;
+    RenderStatus st;
+    const HitpointSet resumed = render_progressive(s, rest, true, prov, {}, {}, &st);
+    CHECK(st.resumed);
+    CHECK(resumed.passes == 4);
+    CHECK(resumed.photons_emitted == full.photons_emitted);
+    CHECK(resumed.photons_emitted == 4u * opt.photons.photons);
+    CHECK(test::same_hitpoints(resumed.hitpoints, full.hitpoints));
+    CHECK(synthesize(resumed).rgb == synthesize(full).rgb);
+    CHECK(load_hitpoints(ck).passes == 4);  // the last pass is checkpointed too
+  }
 }
 
 TEST_CASE("render driver: time spent in snapshot callbacks is not rendering time",
