@@ -156,6 +156,32 @@ TEST_CASE("render driver: a resumed run equals the uninterrupted one on every ro
   }
 }
 
+// RenderStatus::build_seconds is the OpenCL program builds of this run (ClContext::build_seconds):
+// positive on a context that builds its programs during the run, zero on one that built them
+// before (programs are built once per context). Builds not counted made a first device run look
+// slower than the CPU in the accuracy charts.
+TEST_CASE("render driver: OpenCL program builds are counted apart, once per context",
+          "[render][opencl]") {
+  std::unique_ptr<ClContext> dev = test::test_device();
+  if (!dev) return;
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
+  ClContext fresh(dev->info(), 0);
+  CHECK(fresh.build_seconds() == 0.0);
+  RenderOptions opt = small_run(2);
+  opt.device = &fresh;
+  opt.ppm.method = GatherMethod::HashGrid;
+  Provenance prov;
+  RenderStatus first, second;
+  render_progressive(s, opt, false, prov, {}, {}, &first);
+  CHECK(first.build_seconds > 0.0);
+  CHECK(first.build_seconds == Approx(fresh.build_seconds()).epsilon(1e-12));
+  CHECK(first.seconds > 0.0);
+  const double built = fresh.build_seconds();
+  render_progressive(s, opt, false, prov, {}, {}, &second);
+  CHECK(fresh.build_seconds() == built);  // nothing built again
+  CHECK(second.build_seconds == 0.0);
+}
+
 TEST_CASE("render driver: time spent in snapshot callbacks is not rendering time",
           "[render][snapshots]") {
   const Scene s = test::room_scene(PF_MAT_DIFFUSE, 16, 12);
