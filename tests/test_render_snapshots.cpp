@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "photonflow/camera.h"
+#include "photonflow/cl_backend.h"
 #include "photonflow/cl_runtime.h"
 #include "photonflow/emitter_mask.h"
 #include "photonflow/error.h"
@@ -132,6 +133,13 @@ TEST_CASE("render driver: a resumed run equals the uninterrupted one on every ro
     const HitpointSet full = render_progressive(s, opt, false, prov, {}, {}, &full_st);
     REQUIRE(full.passes == 4);
     CHECK_FALSE(full_st.resumed);
+    // photons_stored: the photons this process traced, i.e. those of its passes' photon maps.
+    uint64_t stored[4] = {};
+    for (uint32_t p = 0; p < 4; ++p)
+      stored[p] = (route.device ? trace_photons(s, p, opt.photons, *dev)
+                                : trace_photons(s, p, opt.photons)).photons.size();
+    CHECK(full_st.photons_stored == stored[0] + stored[1] + stored[2] + stored[3]);
+    CHECK(full_st.photons_emitted == 4u * opt.photons.photons);
     // Two passes with a checkpoint, then --resume to four.
     const std::string ck = tmp / (std::string(route.device ? "cl-" : "cpu-") +
                                   gather_method_name(route.method) + ".h5");
@@ -147,6 +155,7 @@ TEST_CASE("render driver: a resumed run equals the uninterrupted one on every ro
     RenderStatus st;
     const HitpointSet resumed = render_progressive(s, rest, true, prov, {}, {}, &st);
     CHECK(st.resumed);
+    CHECK(st.photons_stored == stored[2] + stored[3]);  // passes 2 and 3 only
     CHECK(resumed.passes == 4);
     CHECK(resumed.photons_emitted == full.photons_emitted);
     CHECK(resumed.photons_emitted == 4u * opt.photons.photons);
