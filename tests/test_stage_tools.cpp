@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "photonflow/h5io.h"
+#include "photonflow/illuminate.h"
 #include "photonflow/image.h"
 #include "photonflow/stage_files.h"
 #include "support.h"
@@ -253,6 +254,58 @@ TEST_CASE("the staged route gives the render driver's image", "[tools][staged]")
     double sum = 0;
     for (float v : driver.rgb) sum += v;
     CHECK(sum > 0);
+  }
+}
+
+// The classic route of the illuminate stage is classic_estimate (illuminate.h) with the tool's
+// -k, --caustic-radius and --eps: the tool adds option handling only. Each option is checked to
+// change the estimate here, so an option the tool dropped (it once could, silently) shows.
+TEST_CASE("illuminate --estimator classic is classic_estimate with the tool's options",
+          "[tools][classic]") {
+  TempDir tmp("classic-tool");
+  bake(tmp, "cornell-spheres.dae", "scene.h5");
+  const std::string scene = tmp / "scene.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5";
+  REQUIRE(run_tool("trace-hitpoints", "--scene " + scene + " -o " + hp, tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + ph + " --photons 20000 --passes 2", tmp).exit_code == 0);
+  const Scene sc = load_scene(scene);
+  const PhotonSet photons = load_photons(ph);
+  uint64_t emitted = 0;
+  for (uint64_t e : photons.pass_emitted) emitted += e;
+  REQUIRE(emitted == 40000u);
+  auto library = [&](const ClassicOptions& o) {
+    HitpointSet h = load_hitpoints(hp);
+    classic_estimate(sc, h, photons.photons, emitted, o);
+    return h;
+  };
+  const HitpointSet fresh = load_hitpoints(hp);
+  ClassicOptions base;
+  base.k = 20;
+  ClassicOptions wide = base;
+  wide.caustic_radius = 0.375f;  // exact in decimal: the tool reads the same float
+  REQUIRE(wide.caustic_radius != fresh.radius0);
+  ClassicOptions fewer = base;
+  fewer.k = 7;
+  ClassicOptions approx = base;
+  approx.eps = 20.f;
+  const HitpointSet ref = library(base);
+  struct Case {
+    std::string args;
+    ClassicOptions opt;
+  };
+  for (const Case& c : {Case{"-k 20", base},
+                        Case{"-k 20 --caustic-radius 0.375", wide},
+                        Case{"-k 7", fewer}, Case{"-k 20 --eps 20", approx}}) {
+    INFO("illuminate " << c.args);
+    const std::string out = tmp / "out.h5";
+    std::filesystem::remove(out);
+    REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + hp + " --photons " + ph +
+                                       " --estimator classic " + c.args + " -o " + out, tmp)
+                .exit_code == 0);
+    const HitpointSet tool = load_hitpoints(out), lib = library(c.opt);
+    CHECK(tool.estimator == "classic");
+    CHECK(test::same_hitpoints(tool.hitpoints, lib.hitpoints));
+    if (c.args != "-k 20")  // the option is observable at all
+      CHECK_FALSE(test::same_hitpoints(lib.hitpoints, ref.hitpoints));
   }
 }
 
