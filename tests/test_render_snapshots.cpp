@@ -191,6 +191,47 @@ TEST_CASE("render driver: OpenCL program builds are counted apart, once per cont
   CHECK(second.build_seconds == 0.0);
 }
 
+// --resume continues a checkpoint only when it records every option its state depends on
+// (state_parameters) with this run's values: a hitpoint file written elsewhere (trace-hitpoints,
+// illuminate: no state.* parameters) or one missing a single state option is refused, unchanged.
+TEST_CASE("render driver: resume refuses a state that does not record its options",
+          "[render][resume]") {
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
+  TempDir tmp("resume-unrecorded");
+  RenderOptions opt = small_run(3);
+  opt.checkpoint = tmp / "ck.h5";
+  opt.checkpoint_every = 1;
+  Provenance prov;
+  prov.tool = "test";
+  RenderOptions two = opt;
+  two.passes = 2;
+  render_progressive(s, two, false, prov);
+  const HitpointSet saved = load_hitpoints(opt.checkpoint);
+  const Provenance made = load_hitpoints_provenance(opt.checkpoint);
+  // Each state option left out in turn, and all of them.
+  std::vector<std::string> names;
+  for (const auto& [name, value] : state_parameters(opt)) names.push_back(name);
+  REQUIRE(names.size() >= 5);
+  names.push_back("");  // "": every state.* entry removed
+  for (const std::string& left_out : names) {
+    INFO("left out: " << (left_out.empty() ? "all" : left_out));
+    Provenance p = made;
+    for (auto it = p.parameters.begin(); it != p.parameters.end();)
+      it = (it->first == "state." + left_out || (left_out.empty() && it->first.rfind("state.", 0) == 0))
+               ? p.parameters.erase(it)
+               : std::next(it);
+    REQUIRE(p.parameters.size() < made.parameters.size());
+    const std::string ck = tmp / "partial.h5";
+    save_hitpoints(saved, ck, p);
+    RenderOptions o = opt;
+    o.checkpoint = ck;
+    CHECK_THROWS_AS(render_progressive(s, o, true, prov), InputError);
+    CHECK(load_hitpoints(ck).passes == 2);  // not continued
+  }
+  // The checkpoint as written resumes.
+  CHECK(render_progressive(s, opt, true, prov).passes == 3);
+}
+
 TEST_CASE("render driver: time spent in snapshot callbacks is not rendering time",
           "[render][snapshots]") {
   const Scene s = test::room_scene(PF_MAT_DIFFUSE, 16, 12);
