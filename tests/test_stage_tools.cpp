@@ -112,6 +112,14 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
     check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
                                              (tmp / "ph3.h5") + " -o " + out, tmp),
                   out, "--first-pass 0");
+    // The same for a photon grid of those passes (illuminate --grid): its photons are not the
+    // next pass's either (the check once went untested: no test built a grid of other passes).
+    REQUIRE(run_tool("build-grid", "--scene " + box + " --photons " + (tmp / "ph3.h5") +
+                                       " --hitpoints " + hp + " -o " + (tmp / "grid3.h5"), tmp)
+                .exit_code == 0);
+    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --grid " +
+                                             (tmp / "grid3.h5") + " -o " + out, tmp),
+                  out, "starts at pass 3");
   }
   SECTION("a fresh hitpoint file cannot be synthesized") {
     check_refused(run_tool("synthesize", "--hitpoints " + hp + " -o " + (tmp / "img.exr"), tmp),
