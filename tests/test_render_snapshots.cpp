@@ -232,6 +232,30 @@ TEST_CASE("render driver: resume refuses a state that does not record its option
   CHECK(render_progressive(s, opt, true, prov).passes == 3);
 }
 
+// Checkpoints every checkpoint_every passes and after the last one, written before the pass's
+// on_pass callback: the file holds the last multiple of checkpoint_every (or the final pass).
+TEST_CASE("render driver: checkpoints every K passes and at the end", "[render][resume]") {
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
+  TempDir tmp("checkpoint-every");
+  for (int every : {1, 2, 3}) {
+    INFO("checkpoint every " << every);
+    RenderOptions opt = small_run(5);
+    opt.checkpoint = tmp / ("ck" + std::to_string(every) + ".h5");
+    opt.checkpoint_every = every;
+    Provenance prov;
+    std::vector<int> seen;  // the checkpoint's passes after each pass (0: none yet)
+    render_progressive(s, opt, false, prov, [&](int done, double) {
+      CHECK(done == int(seen.size()) + 1);
+      seen.push_back(std::filesystem::exists(opt.checkpoint) ? load_hitpoints(opt.checkpoint).passes : 0);
+    });
+    REQUIRE(seen.size() == 5);
+    for (int done = 1; done <= 5; ++done) {
+      const int expect = done == 5 ? 5 : done / every * every;
+      CHECK(seen[size_t(done - 1)] == expect);
+    }
+  }
+}
+
 TEST_CASE("render driver: time spent in snapshot callbacks is not rendering time",
           "[render][snapshots]") {
   const Scene s = test::room_scene(PF_MAT_DIFFUSE, 16, 12);
