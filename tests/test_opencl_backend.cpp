@@ -356,6 +356,24 @@ TEST_CASE("OpenCL: synthesis adds a pixel's hitpoints in array order, in any bat
     }
   }
   CHECK(one.rgb == batched.rgb);
+  // A state before its first photon pass (the eye pass's, N_emitted = 0): no photon term, the
+  // image is emitted + direct by definition, on both backends (not τ/(π R² · 0) = inf or NaN).
+  {
+    HitpointSet fresh = h;
+    fresh.photons_emitted = 0;
+    fresh.passes = 0;
+    for (pf_hitpoint& hp : fresh.hitpoints)
+      for (float& f : hp.flux) f = 0.f;
+    const Image dimg = synthesize(fresh, *dev);
+    const Image cimg = synthesize(fresh);
+    REQUIRE(dimg.rgb.size() == npix * 3);
+    for (size_t i = 0; i < npix * 3; ++i) {
+      INFO("channel " << i);
+      CHECK(dimg.rgb[i] == h.emitted[i] + h.direct[i]);
+      CHECK(cimg.rgb[i] == h.emitted[i] + h.direct[i]);
+    }
+    CHECK(dimg.layers.at("radius") == cimg.layers.at("radius"));
+  }
   // A hitpoint outside the image is refused, not written out of bounds.
   h.hitpoints[5].pixel_x = 7;
   CHECK_THROWS_AS(synthesize(h, *dev), InputError);

@@ -12,6 +12,8 @@
 #include <thread>
 
 #include "photonflow/camera.h"
+#include "photonflow/cl_backend.h"
+#include "photonflow/cl_runtime.h"
 #include "photonflow/emitter_mask.h"
 #include "photonflow/error.h"
 #include "photonflow/image_metrics.h"
@@ -19,6 +21,7 @@
 #include "photonflow/render_driver.h"
 #include "photonflow/synthesize.h"
 #include "support.h"
+#include "support_cl.h"
 
 using namespace pf;
 using test::run_tool;
@@ -96,6 +99,161 @@ TEST_CASE("render driver: snapshots every K passes and at listed passes equal sh
   render_progressive(s, small_run(2), false, prov, {},
                      [&](const HitpointSet&, const RenderStatus&) { ++calls; });
   CHECK(calls == 0);
+}
+
+// A resumed run continues the photon passes where the checkpoint left them (pass p's random
+// streams are (seed, p, i) on both backends): it equals the uninterrupted run bit for bit, on the
+// CPU and on every device route of the driver (hash-grid keeps the photons on the device, naive
+// reads them back). A resumed device run restarting its pass counter at 0 reused passes 0.. and
+// went unnoticed: the tools' resume tests run on the CPU only.
+TEST_CASE("render driver: a resumed run equals the uninterrupted one on every route",
+          "[render][resume][opencl]") {
+  const Scene s = test::room_scene(PF_MAT_GLASS, 16, 12);
+  TempDir tmp("resume-routes");
+  std::unique_ptr<ClContext> dev = test::test_device();
+  struct Route {
+    const char* name;
+    GatherMethod method;
+    bool device;
+  };
+  std::vector<Route> routes = {{"cpu grid", GatherMethod::Grid, false},
+                               {"cpu flann", GatherMethod::Flann, false}};
+  if (dev) {
+    routes.push_back({"opencl hash-grid", GatherMethod::HashGrid, true});
+    routes.push_back({"opencl naive", GatherMethod::Naive, true});
+  }
+  Provenance prov;
+  prov.tool = "test";
+  for (const Route& route : routes) {
+    INFO("route " << route.name);
+    RenderOptions opt = small_run(4);
+    opt.ppm.method = route.method;
+    opt.device = route.device ? dev.get() : nullptr;
+    RenderStatus full_st;
+    const HitpointSet full = render_progressive(s, opt, false, prov, {}, {}, &full_st);
+    REQUIRE(full.passes == 4);
+    CHECK_FALSE(full_st.resumed);
+    // photons_stored: the photons this process traced, i.e. those of its passes' photon maps.
+    uint64_t stored[4] = {};
+    for (uint32_t p = 0; p < 4; ++p)
+      stored[p] = (route.device ? trace_photons(s, p, opt.photons, *dev)
+                                : trace_photons(s, p, opt.photons)).photons.size();
+    CHECK(full_st.photons_stored == stored[0] + stored[1] + stored[2] + stored[3]);
+    CHECK(full_st.photons_emitted == 4u * opt.photons.photons);
+    // Two passes with a checkpoint, then --resume to four.
+    const std::string ck = tmp / (std::string(route.device ? "cl-" : "cpu-") +
+                                  gather_method_name(route.method) + ".h5");
+    RenderOptions first = opt;
+    first.passes = 2;
+    first.checkpoint = ck;
+    first.checkpoint_every = 1;
+    render_progressive(s, first, false, prov);
+    REQUIRE(load_hitpoints(ck).passes == 2);
+    RenderOptions rest = opt;
+    rest.checkpoint = ck;
+    rest.checkpoint_every = 1;
+    RenderStatus st;
+    const HitpointSet resumed = render_progressive(s, rest, true, prov, {}, {}, &st);
+    CHECK(st.resumed);
+    CHECK(st.photons_stored == stored[2] + stored[3]);  // passes 2 and 3 only
+    CHECK(resumed.passes == 4);
+    CHECK(resumed.photons_emitted == full.photons_emitted);
+    CHECK(resumed.photons_emitted == 4u * opt.photons.photons);
+    CHECK(test::same_hitpoints(resumed.hitpoints, full.hitpoints));
+    CHECK(synthesize(resumed).rgb == synthesize(full).rgb);
+    CHECK(load_hitpoints(ck).passes == 4);  // the last pass is checkpointed too
+  }
+}
+
+// RenderStatus::build_seconds is the OpenCL program builds of this run (ClContext::build_seconds):
+// positive on a context that builds its programs during the run, zero on one that built them
+// before (programs are built once per context). Builds not counted made a first device run look
+// slower than the CPU in the accuracy charts.
+TEST_CASE("render driver: OpenCL program builds are counted apart, once per context",
+          "[render][opencl]") {
+  std::unique_ptr<ClContext> dev = test::test_device();
+  if (!dev) return;
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
+  ClContext fresh(dev->info(), 0);
+  CHECK(fresh.build_seconds() == 0.0);
+  RenderOptions opt = small_run(2);
+  opt.device = &fresh;
+  opt.ppm.method = GatherMethod::HashGrid;
+  Provenance prov;
+  RenderStatus first, second;
+  render_progressive(s, opt, false, prov, {}, {}, &first);
+  CHECK(first.build_seconds > 0.0);
+  CHECK(first.build_seconds == Approx(fresh.build_seconds()).epsilon(1e-12));
+  CHECK(first.seconds > 0.0);
+  const double built = fresh.build_seconds();
+  render_progressive(s, opt, false, prov, {}, {}, &second);
+  CHECK(fresh.build_seconds() == built);  // nothing built again
+  CHECK(second.build_seconds == 0.0);
+}
+
+// --resume continues a checkpoint only when it records every option its state depends on
+// (state_parameters) with this run's values: a hitpoint file written elsewhere (trace-hitpoints,
+// illuminate: no state.* parameters) or one missing a single state option is refused, unchanged.
+TEST_CASE("render driver: resume refuses a state that does not record its options",
+          "[render][resume]") {
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
+  TempDir tmp("resume-unrecorded");
+  RenderOptions opt = small_run(3);
+  opt.checkpoint = tmp / "ck.h5";
+  opt.checkpoint_every = 1;
+  Provenance prov;
+  prov.tool = "test";
+  RenderOptions two = opt;
+  two.passes = 2;
+  render_progressive(s, two, false, prov);
+  const HitpointSet saved = load_hitpoints(opt.checkpoint);
+  const Provenance made = load_hitpoints_provenance(opt.checkpoint);
+  // Each state option left out in turn, and all of them.
+  std::vector<std::string> names;
+  for (const auto& [name, value] : state_parameters(opt)) names.push_back(name);
+  REQUIRE(names.size() >= 5);
+  names.push_back("");  // "": every state.* entry removed
+  for (const std::string& left_out : names) {
+    INFO("left out: " << (left_out.empty() ? "all" : left_out));
+    Provenance p = made;
+    for (auto it = p.parameters.begin(); it != p.parameters.end();)
+      it = (it->first == "state." + left_out || (left_out.empty() && it->first.rfind("state.", 0) == 0))
+               ? p.parameters.erase(it)
+               : std::next(it);
+    REQUIRE(p.parameters.size() < made.parameters.size());
+    const std::string ck = tmp / "partial.h5";
+    save_hitpoints(saved, ck, p);
+    RenderOptions o = opt;
+    o.checkpoint = ck;
+    CHECK_THROWS_AS(render_progressive(s, o, true, prov), InputError);
+    CHECK(load_hitpoints(ck).passes == 2);  // not continued
+  }
+  // The checkpoint as written resumes.
+  CHECK(render_progressive(s, opt, true, prov).passes == 3);
+}
+
+// Checkpoints every checkpoint_every passes and after the last one, written before the pass's
+// on_pass callback: the file holds the last multiple of checkpoint_every (or the final pass).
+TEST_CASE("render driver: checkpoints every K passes and at the end", "[render][resume]") {
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
+  TempDir tmp("checkpoint-every");
+  for (int every : {1, 2, 3}) {
+    INFO("checkpoint every " << every);
+    RenderOptions opt = small_run(5);
+    opt.checkpoint = tmp / ("ck" + std::to_string(every) + ".h5");
+    opt.checkpoint_every = every;
+    Provenance prov;
+    std::vector<int> seen;  // the checkpoint's passes after each pass (0: none yet)
+    render_progressive(s, opt, false, prov, [&](int done, double) {
+      CHECK(done == int(seen.size()) + 1);
+      seen.push_back(std::filesystem::exists(opt.checkpoint) ? load_hitpoints(opt.checkpoint).passes : 0);
+    });
+    REQUIRE(seen.size() == 5);
+    for (int done = 1; done <= 5; ++done) {
+      const int expect = done == 5 ? 5 : done / every * every;
+      CHECK(seen[size_t(done - 1)] == expect);
+    }
+  }
 }
 
 TEST_CASE("render driver: time spent in snapshot callbacks is not rendering time",
@@ -180,6 +338,7 @@ TEST_CASE("render tool: snapshots and run record", "[render][snapshots][tools]")
                     tmp);
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
+  CHECK(r.err.empty());  // the progress line is for terminals only (progress.h): stderr is a file
   for (const char* f : {"r-1p.exr", "r-2p.exr", "r-4p.exr", "r.exr", "r.png", "r.json"})
     CHECK(std::filesystem::exists(tmp / f));
   CHECK_FALSE(std::filesystem::exists(tmp / "r-3p.exr"));

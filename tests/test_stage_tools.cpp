@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "photonflow/h5io.h"
+#include "photonflow/illuminate.h"
 #include "photonflow/image.h"
 #include "photonflow/stage_files.h"
 #include "support.h"
@@ -111,6 +112,14 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
     check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
                                              (tmp / "ph3.h5") + " -o " + out, tmp),
                   out, "--first-pass 0");
+    // The same for a photon grid of those passes (illuminate --grid): its photons are not the
+    // next pass's either (the check once went untested: no test built a grid of other passes).
+    REQUIRE(run_tool("build-grid", "--scene " + box + " --photons " + (tmp / "ph3.h5") +
+                                       " --hitpoints " + hp + " -o " + (tmp / "grid3.h5"), tmp)
+                .exit_code == 0);
+    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --grid " +
+                                             (tmp / "grid3.h5") + " -o " + out, tmp),
+                  out, "starts at pass 3");
   }
   SECTION("a fresh hitpoint file cannot be synthesized") {
     check_refused(run_tool("synthesize", "--hitpoints " + hp + " -o " + (tmp / "img.exr"), tmp),
@@ -225,25 +234,86 @@ TEST_CASE("the staged route gives the render driver's image", "[tools][staged]")
   bake(tmp, "cornell-spheres.dae", "scene.h5");
   std::string scene = tmp / "scene.h5";
   for (std::string gather : {"grid", "flann"}) {
-    // Passes 0-1 in one photons file, pass 2 in another: illuminate continues the state.
-    REQUIRE(run_tool("trace-hitpoints", "--scene " + scene + " -o " + (tmp / "hp.h5") + " --spp 2", tmp).exit_code == 0);
-    REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + (tmp / "ph01.h5") + " --photons 5000 --passes 2", tmp).exit_code == 0);
-    REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + (tmp / "ph2.h5") + " --photons 5000 --first-pass 2", tmp).exit_code == 0);
+    // Passes 0-1 in one photons file, pass 2 in another: illuminate continues the state. A seed
+    // other than the default: render's one --seed reaches the eye pass and the photon passes.
+    REQUIRE(run_tool("trace-hitpoints", "--scene " + scene + " -o " + (tmp / "hp.h5") + " --spp 2 --seed 7", tmp).exit_code == 0);
+    {  // stderr is a file here: no progress line (progress.h), it is for terminals only
+      const test::ToolRun tp = run_tool("trace-photons", "--scene " + scene + " -o " + (tmp / "ph01.h5") + " --photons 5000 --passes 2 --seed 7", tmp);
+      REQUIRE(tp.exit_code == 0);
+      CHECK(tp.err.empty());
+    }
+    REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + (tmp / "ph2.h5") + " --photons 5000 --first-pass 2 --seed 7", tmp).exit_code == 0);
     if (gather == "grid") {
       REQUIRE(run_tool("build-grid", "--scene " + scene + " --photons " + (tmp / "ph01.h5") + " --hitpoints " + (tmp / "hp.h5") + " -o " + (tmp / "grid01.h5"), tmp).exit_code == 0);
       REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --grid " + (tmp / "grid01.h5") + " -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
     } else {
       REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --photons " + (tmp / "ph01.h5") + " --method flann -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
     }
-    REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "s2.h5") + " --photons " + (tmp / "ph2.h5") + " --method " + gather + " -o " + (tmp / "s3.h5"), tmp).exit_code == 0);
+    {
+      const test::ToolRun il = run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "s2.h5") + " --photons " + (tmp / "ph2.h5") + " --method " + gather + " -o " + (tmp / "s3.h5"), tmp);
+      REQUIRE(il.exit_code == 0);
+      CHECK(il.err.empty());
+    }
     REQUIRE(run_tool("synthesize", "--hitpoints " + (tmp / "s3.h5") + " -o " + (tmp / "staged.exr"), tmp).exit_code == 0);
-    REQUIRE(run_tool("render", "--scene " + scene + " -o " + (tmp / "driver.exr") + " --spp 2 --photons 5000 --passes 3 --method " + gather, tmp).exit_code == 0);
+    REQUIRE(run_tool("render", "--scene " + scene + " -o " + (tmp / "driver.exr") + " --spp 2 --photons 5000 --passes 3 --seed 7 --method " + gather, tmp).exit_code == 0);
     Image staged = read_exr(tmp / "staged.exr"), driver = read_exr(tmp / "driver.exr");
     INFO("gather " << gather);
     CHECK(same_pixels(staged, driver));
     double sum = 0;
     for (float v : driver.rgb) sum += v;
     CHECK(sum > 0);
+  }
+}
+
+// The classic route of the illuminate stage is classic_estimate (illuminate.h) with the tool's
+// -k, --caustic-radius and --eps: the tool adds option handling only. Each option is checked to
+// change the estimate here, so an option the tool dropped (it once could, silently) shows.
+TEST_CASE("illuminate --estimator classic is classic_estimate with the tool's options",
+          "[tools][classic]") {
+  TempDir tmp("classic-tool");
+  bake(tmp, "cornell-spheres.dae", "scene.h5");
+  const std::string scene = tmp / "scene.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5";
+  REQUIRE(run_tool("trace-hitpoints", "--scene " + scene + " -o " + hp, tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + ph + " --photons 20000 --passes 2", tmp).exit_code == 0);
+  const Scene sc = load_scene(scene);
+  const PhotonSet photons = load_photons(ph);
+  uint64_t emitted = 0;
+  for (uint64_t e : photons.pass_emitted) emitted += e;
+  REQUIRE(emitted == 40000u);
+  auto library = [&](const ClassicOptions& o) {
+    HitpointSet h = load_hitpoints(hp);
+    classic_estimate(sc, h, photons.photons, emitted, o);
+    return h;
+  };
+  const HitpointSet fresh = load_hitpoints(hp);
+  ClassicOptions base;
+  base.k = 20;
+  ClassicOptions wide = base;
+  wide.caustic_radius = 0.375f;  // exact in decimal: the tool reads the same float
+  REQUIRE(wide.caustic_radius != fresh.radius0);
+  ClassicOptions fewer = base;
+  fewer.k = 7;
+  ClassicOptions approx = base;
+  approx.eps = 20.f;
+  const HitpointSet ref = library(base);
+  struct Case {
+    std::string args;
+    ClassicOptions opt;
+  };
+  for (const Case& c : {Case{"-k 20", base},
+                        Case{"-k 20 --caustic-radius 0.375", wide},
+                        Case{"-k 7", fewer}, Case{"-k 20 --eps 20", approx}}) {
+    INFO("illuminate " << c.args);
+    const std::string out = tmp / "out.h5";
+    std::filesystem::remove(out);
+    REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + hp + " --photons " + ph +
+                                       " --estimator classic " + c.args + " -o " + out, tmp)
+                .exit_code == 0);
+    const HitpointSet tool = load_hitpoints(out), lib = library(c.opt);
+    CHECK(tool.estimator == "classic");
+    CHECK(test::same_hitpoints(tool.hitpoints, lib.hitpoints));
+    if (c.args != "-k 20")  // the option is observable at all
+      CHECK_FALSE(test::same_hitpoints(lib.hitpoints, ref.hitpoints));
   }
 }
 
