@@ -19,6 +19,7 @@
 #include "photonflow/image.h"
 #include "photonflow/procedural.h"
 #include "photonflow/scene.h"
+#include "photonflow/vec.h"
 
 namespace pf::test {
 
@@ -123,6 +124,35 @@ inline void flip(pf_triangle& t) {
     t.n1[k] = -t.n1[k];
     t.n2[k] = -t.n2[k];
   }
+}
+
+// Flat shading: every vertex normal becomes the geometric normal (smooth normals of a coarse
+// tessellation lose a little energy through directions below the surface; flat ones are exact).
+inline void make_flat(std::vector<pf_triangle>& tris) {
+  for (auto& t : tris) {
+    const Vec3 n = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+    n.store(t.n0);
+    n.store(t.n1);
+    n.store(t.n2);
+  }
+}
+
+// Quad a, b, c, d (counter-clockwise seen from its front) as two flat-shaded triangles of mesh and
+// material `id`.
+inline std::vector<pf_triangle> quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                                     int id) {
+  auto tri = [id](const Vec3& p, const Vec3& q, const Vec3& r) {
+    pf_triangle t{};
+    p.store(t.v0);
+    q.store(t.v1);
+    r.store(t.v2);
+    t.mesh = id;
+    t.material = id;
+    return t;
+  };
+  std::vector<pf_triangle> out = {tri(a, b, c), tri(a, c, d)};
+  make_flat(out);
+  return out;
 }
 
 // White furnace: the inside of a unit sphere whose walls all emit `le` and reflect diffusely with

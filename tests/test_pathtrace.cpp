@@ -28,6 +28,8 @@
 #include "support.h"
 
 using namespace pf;
+using test::make_flat;
+using test::quad;
 using test::TempDir;
 
 namespace {
@@ -41,34 +43,6 @@ pf_material material(int type, float albedo, float emission, float ior = 1.f) {
     m.emission[c] = emission;
   }
   return m;
-}
-
-// Flat shading: every vertex normal becomes the geometric normal (smooth normals of a coarse
-// tessellation lose a little energy through directions below the surface; flat ones are exact).
-void make_flat(std::vector<pf_triangle>& tris) {
-  for (auto& t : tris) {
-    Vec3 n = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
-    n.store(t.n0);
-    n.store(t.n1);
-    n.store(t.n2);
-  }
-}
-
-// Quad a, b, c, d (counter-clockwise seen from its front) as two flat triangles of mesh and
-// material `id`.
-std::vector<pf_triangle> quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, int id) {
-  auto tri = [id](const Vec3& p, const Vec3& q, const Vec3& r) {
-    pf_triangle t{};
-    p.store(t.v0);
-    q.store(t.v1);
-    r.store(t.v2);
-    t.mesh = id;
-    t.material = id;
-    return t;
-  };
-  std::vector<pf_triangle> out = {tri(a, b, c), tri(a, c, d)};
-  make_flat(out);
-  return out;
 }
 
 float tri_area(const pf_triangle& t) {

@@ -27,6 +27,7 @@
 #include "support.h"
 
 using namespace pf;
+using test::quad;
 
 namespace {
 
@@ -39,25 +40,6 @@ pf_material material(int type, const Vec3& color, float emission = 0.f, float io
     m.emission[c] = emission;
   }
   return m;
-}
-
-// Quad a, b, c, d (counter-clockwise seen from its front) as two flat-shaded triangles of mesh and
-// material `id`.
-std::vector<pf_triangle> quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, int id) {
-  auto tri = [id](const Vec3& p, const Vec3& q, const Vec3& r) {
-    pf_triangle t{};
-    p.store(t.v0);
-    q.store(t.v1);
-    r.store(t.v2);
-    const Vec3 n = normalize(cross(q - p, r - p));
-    n.store(t.n0);
-    n.store(t.n1);
-    n.store(t.n2);
-    t.mesh = id;
-    t.material = id;
-    return t;
-  };
-  return {tri(a, b, c), tri(a, c, d)};
 }
 
 // Square of half side `s` centred on `c` in the plane spanned by unit vectors e1, e2; its front
