@@ -333,6 +333,18 @@ TEST_CASE("a killed render resumes to the uninterrupted image", "[tools][resume]
   REQUIRE(run_tool("render", common + " -o " + (tmp / "resumed.exr") + " --checkpoint " + ck +
                                  " --checkpoint-every 1 --resume", tmp).exit_code == 0);
   CHECK(same_pixels(read_exr(tmp / "full.exr"), read_exr(tmp / "resumed.exr")));
+  // The kill above often lands after the last pass, so resume mid-run deterministically too: the
+  // checkpoint of a finished 5-pass run is the state after pass 5 of the 12-pass run (passes are
+  // not a state option), which --resume must continue at pass 6, not 1.
+  const std::string ck5 = tmp / "ck5.h5";
+  REQUIRE(run_tool("render", "--scene " + scene + " --photons 20000 --passes 5 -o " +
+                                 (tmp / "five.exr") + " --checkpoint " + ck5, tmp).exit_code == 0);
+  REQUIRE(load_hitpoints(ck5).passes == 5);
+  REQUIRE(run_tool("render", common + " -o " + (tmp / "resumed5.exr") + " --checkpoint " + ck5 +
+                                 " --checkpoint-every 4 --resume", tmp).exit_code == 0);
+  CHECK(load_hitpoints(ck5).passes == 12);
+  CHECK(same_pixels(read_exr(tmp / "full.exr"), read_exr(tmp / "resumed5.exr")));
+  CHECK_FALSE(same_pixels(read_exr(tmp / "five.exr"), read_exr(tmp / "resumed5.exr")));
   // The checkpoint records the wall-clock seconds of the run so far (it once said 0).
   {
     const Provenance p = read_provenance(h5::Reader(ck, kHitpointsFormat, 1));
