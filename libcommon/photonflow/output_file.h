@@ -4,6 +4,7 @@
 //
 // Used by every writer (h5io.h, image.h, text_file.h, procedural.h) and by every tool's main.
 #pragma once
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,10 @@ std::string temp_path(const std::string& path);
 // `path` exists and is not a regular file — a rename would replace a device node such as /dev/null
 // or fail on a directory — or when the rename fails.
 void commit_temp(const std::string& tmp, const std::string& path);
+
+// Writes n bytes to `path` atomically: into temp_path(path), flushed, then commit_temp. InputError
+// naming `path` when the file cannot be created or written (the temporary file removed).
+void write_file_atomic(const std::string& path, const char* data, size_t n);
 
 // Checks a run's outputs before any work (empty paths are skipped). InputError naming the path
 // when an output

@@ -6,7 +6,6 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
-#include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -14,7 +13,6 @@
 #include <cstdint>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <stdexcept>
 
 #include "photonflow/error.h"
@@ -91,23 +89,6 @@ std::vector<uint8_t> zlib_stored(const std::vector<uint8_t>& raw) {
   } while (pos < raw.size());
   put_u32_be(z, adler32(raw.data(), raw.size()));
   return z;
-}
-
-void write_bytes(const std::string& path, const std::vector<uint8_t>& bytes) {
-  std::string tmp = temp_path(path);
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f)
-      throw input_error(path, "cannot create the file", "check the directory and its permissions");
-    f.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-    if (!f.flush()) {
-      f.close();
-      std::remove(tmp.c_str());
-      throw input_error(path, "cannot write the file", "disk full?");
-    }
-  }
-  commit_temp(tmp, path);
 }
 
 bool is_rgb_channel(const std::string& name) { return name == "R" || name == "G" || name == "B"; }
@@ -234,7 +215,8 @@ std::vector<uint8_t> encode_png(int w, int h, const std::vector<uint8_t>& rgb8) 
 }
 
 void write_png(const Image& img, const std::string& path, float exposure_stops) {
-  write_bytes(path, encode_png(img.width, img.height, to_srgb8(img, exposure_stops)));
+  const std::vector<uint8_t> png = encode_png(img.width, img.height, to_srgb8(img, exposure_stops));
+  write_file_atomic(path, reinterpret_cast<const char*>(png.data()), png.size());
 }
 
 // ---- PNG decoding (masks) --------------------------------------------------------------------

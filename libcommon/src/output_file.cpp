@@ -53,6 +53,22 @@ void commit_temp(const std::string& tmp, const std::string& path) {
   }
 }
 
+void write_file_atomic(const std::string& path, const char* data, size_t n) {
+  const std::string tmp = temp_path(path);
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f)
+      throw input_error(path, "cannot create the file", "check the directory and its permissions");
+    f.write(data, static_cast<std::streamsize>(n));
+    if (!f.flush()) {
+      f.close();
+      std::remove(tmp.c_str());
+      throw input_error(path, "cannot write the file", "disk full?");
+    }
+  }
+  commit_temp(tmp, path);
+}
+
 void check_outputs(const std::vector<std::string>& inputs,
                    const std::vector<std::string>& outputs) {
   for (size_t i = 0; i < outputs.size(); ++i) {

@@ -1,11 +1,9 @@
 // Text outputs: see text_file.h.
 #include "photonflow/text_file.h"
 
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "photonflow/version.h"
@@ -75,18 +73,7 @@ std::string numbered_name(const std::string& pattern, const std::string& key, in
 }
 
 void write_text_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = temp_path(path);
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw input_error(path, "cannot create the file", "check the directory");
-    f << text;
-    if (!f.flush()) {
-      f.close();
-      std::remove(tmp.c_str());
-      throw input_error(path, "cannot write the file", "disk full?");
-    }
-  }
-  commit_temp(tmp, path);
+  write_file_atomic(path, text.data(), text.size());
 }
 
 }  // namespace pf
