@@ -14,8 +14,6 @@ namespace pf {
 
 namespace {
 
-int thread_count(int t) { return worker_threads(t); }
-
 // f_r of the hitpoint's surface: Lambertian albedo / π. Every entry point checks the hitpoints'
 // material (and mesh) ids against the scene first (check_against_scene), so the index is valid.
 Vec3 brdf(const Scene& s, const pf_hitpoint& hp) {
@@ -93,7 +91,7 @@ void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGr
   // (the bins PhotonGrid::for_each_in_radius visits), keeps the photons that pass the gather rule
   // (pf_ppm_in_radius and photon_accepted) without branching, orders them by original photon
   // index (grid.order) and sums them in that order, exactly as the FLANN gather does.
-#pragma omp parallel num_threads(thread_count(opt.threads))
+#pragma omp parallel num_threads(worker_threads(opt.threads))
   {
     // Per-thread work space, kept from pass to pass.
     thread_local std::vector<int32_t> cand;   // sorted-array indices of the accepted photons
@@ -180,7 +178,7 @@ void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& 
   const float alpha = opt.alpha;
   const int64_t count = int64_t(h.hitpoints.size());
   PhotonMap map(photons);
-#pragma omp parallel num_threads(thread_count(opt.threads))
+#pragma omp parallel num_threads(worker_threads(opt.threads))
   {
     thread_local std::vector<int32_t> idx;  // per-thread work space, kept from pass to pass
 #pragma omp for schedule(dynamic, 256)
@@ -213,7 +211,7 @@ void classic_estimate(const Scene& scene, HitpointSet& h, const std::vector<pf_p
   PhotonMap gmap(global), cmap(caustic);
   const float rc = opt.caustic_radius > 0.f ? opt.caustic_radius : h.radius0;
   const int k = std::min<int>(opt.k, int(global.size()));
-#pragma omp parallel for schedule(dynamic, 256) num_threads(thread_count(opt.threads))
+#pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
   for (size_t i = 0; i < h.hitpoints.size(); ++i) {
     pf_hitpoint& hp = h.hitpoints[i];
     Vec3 fr = brdf(scene, hp);

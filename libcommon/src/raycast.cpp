@@ -380,8 +380,6 @@ bool cast(const Scene& scene, const Ray& ray, bool any_hit, Traversal trav, pf_r
   return false;
 }
 
-int thread_count(int threads) { return worker_threads(threads); }
-
 }  // namespace
 
 const char* traversal_name(Traversal t) {
@@ -413,7 +411,7 @@ void intersect_closest_batch(const Scene& scene, const std::vector<Ray>& rays,
                              std::vector<Hit>& hits, Traversal trav, int threads) {
   hits.resize(rays.size());
   const int64_t n = int64_t(rays.size());
-#pragma omp parallel for schedule(dynamic, 256) num_threads(thread_count(threads))
+#pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(threads))
   for (int64_t i = 0; i < n; ++i) intersect_closest(scene, rays[size_t(i)], hits[size_t(i)], trav);
 }
 
@@ -421,7 +419,7 @@ void intersect_any_batch(const Scene& scene, const std::vector<Ray>& rays,
                          std::vector<uint8_t>& occluded, Traversal trav, int threads) {
   occluded.resize(rays.size());
   const int64_t n = int64_t(rays.size());
-#pragma omp parallel for schedule(dynamic, 256) num_threads(thread_count(threads))
+#pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(threads))
   for (int64_t i = 0; i < n; ++i)
     occluded[size_t(i)] = intersect_any(scene, rays[size_t(i)], trav) ? 1 : 0;
 }
