@@ -58,6 +58,9 @@ std::string mesh_grid_problem(const pf_mesh_grid& g);
 
 // Refuses (InputError naming --max-bins) a max_bins above kMaxBinsPerAxis; `what` names the grid.
 void check_max_bins(int max_bins, const std::string& what);
+// The parameters of a photon grid build (CPU and device): std::invalid_argument for
+// default_radius <= 0 or not finite, or max_bins < 1; check_max_bins above kMaxBinsPerAxis.
+void check_photon_grid_params(const PhotonGridParams& params);
 // Refuses (InputError) a grid of `entries` bin-start entries above kMaxGridEntries: "<what> would
 // have <entries> bins, more than 2^28 (<hint>)".
 void check_grid_entries(int64_t entries, const std::string& what, const std::string& hint);

@@ -103,10 +103,7 @@ struct DeviceGrid {
 // Its lasting buffers are the device's scratch buffers `ns`.headers, .cell_start, .order, .photons.
 DeviceGrid device_grid(ClContext& dev, const ClBuffer& photons, size_t n, int mesh_count,
                        const PhotonGridParams& params, const std::string& ns = "grid") {
-  if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
-    throw std::invalid_argument("photon grid: default_radius must be positive and finite");
-  if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
-  check_max_bins(params.max_bins, "the photon grid");
+  check_photon_grid_params(params);  // as the CPU build
   DeviceGrid g;
   const size_t meshes = size_t(mesh_count);
   // 1. Per-mesh bounds and counts (local reduction, then one atomic per mesh and work-group).

@@ -139,6 +139,13 @@ void check_max_bins(int max_bins, const std::string& what) {
                               ": at most 16777216 (2^24) bins per axis");
 }
 
+void check_photon_grid_params(const PhotonGridParams& params) {
+  if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
+    throw std::invalid_argument("photon grid: default_radius must be positive and finite");
+  if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
+  check_max_bins(params.max_bins, "the photon grid");
+}
+
 void check_grid_entries(int64_t entries, const std::string& what, const std::string& hint) {
   if (entries > kMaxGridEntries)
     throw input_error("", what + " would have " + std::to_string(entries) +
@@ -185,10 +192,7 @@ void build_photon_grid_into(PhotonGrid& grid, const std::vector<pf_photon>& phot
 
 void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t span_count,
                             int mesh_count, const PhotonGridParams& params, int threads) {
-  if (!(params.default_radius > 0.f) || !std::isfinite(params.default_radius))
-    throw std::invalid_argument("photon grid: default_radius must be positive and finite");
-  if (params.max_bins < 1) throw std::invalid_argument("photon grid: max_bins must be >= 1");
-  check_max_bins(params.max_bins, "the photon grid");
+  check_photon_grid_params(params);
   size_t n = 0;
   for (size_t s = 0; s < span_count; ++s) n += spans[s].size;
   check_photon_count(n, mesh_count);
