@@ -16,8 +16,11 @@
 
 #include "photonflow/clusters.h"
 #include "photonflow/h5io.h"
+#include "photonflow/grid_shared.h"
 #include "photonflow/image.h"
+#include "photonflow/ppm.h"
 #include "photonflow/procedural.h"
+#include "photonflow/rng.h"
 #include "photonflow/scene.h"
 #include "photonflow/vec.h"
 
@@ -153,6 +156,33 @@ inline std::vector<pf_triangle> quad(const Vec3& a, const Vec3& b, const Vec3& c
   std::vector<pf_triangle> out = {tri(a, b, c), tri(a, c, d)};
   make_flat(out);
   return out;
+}
+
+// A hitpoint at x = q of radius r and a photon at x = p, a few ulps beyond q + r (itself rounded),
+// that the float distance rule pf_ppm_in_radius(pf_ppm_dist2(q, p), r) still accepts (y and z
+// equal). With bins p wide from 0, q + r lies in bin 0 and the photon exactly on the lower edge of
+// bin 1: a gather box of bins from q − r to q + r misses it unless it is widened. Found by a
+// deterministic search (about one draw in 50 qualifies; the products use all mantissa bits).
+struct EdgePhoton {
+  float q = 0, r = 0, p = 0;
+};
+inline EdgePhoton edge_photon() {
+  EdgePhoton e;
+  bool found = false;
+  for (uint32_t k = 0; k < 100000 && !found; ++k) {
+    e.q = 0.1f + 0.3f * pf_rng_float(3, 0, k, 0);
+    e.r = 0.2f + 0.2f * pf_rng_float(3, 0, k, 1);
+    e.p = e.q + e.r;
+    for (int ulps = 1; ulps <= 3 && !found; ++ulps) {
+      e.p = std::nextafter(e.p, INFINITY);
+      found = pf_ppm_in_radius(pf_ppm_dist2(e.q, 0, 0, e.p, 0, 0), e.r);
+    }
+  }
+  REQUIRE(found);
+  INFO("q " << e.q << " R " << e.r << " p " << e.p);
+  REQUIRE(pf_grid_coord(e.q + e.r, 0.f, e.p, 2) == 0);  // the unwidened box ends in bin 0 ...
+  REQUIRE(pf_grid_coord(e.p, 0.f, e.p, 2) == 1);        // ... and the photon lies in bin 1
+  return e;
 }
 
 // White furnace: the inside of a unit sphere whose walls all emit `le` and reflect diffusely with

@@ -424,25 +424,13 @@ TEST_CASE("gather methods: a photon on a bin edge accepted by the float distance
   // The rule pf_ppm_in_radius(pf_ppm_dist2(x, p), R) is evaluated in float, so a photon a few ulps
   // beyond x + R (itself rounded) can pass it; when it lies exactly on the lower edge of the next
   // grid bin, a box of bins from x − R to x + R misses it. The kernels widen their boxes
-  // (PF_SLACK) as the CPU grid does: every method must gather what the CPU grid gathers. Found
-  // by a deterministic search along x; the bins are d = R0 = p wide, so p is the edge of bin 1.
+  // (PF_SLACK) as the CPU grid does: every method must gather what the CPU grid gathers. Such a
+  // case along x (test::edge_photon); the bins are d = R0 = p wide, so p is the edge of bin 1.
   auto dev = test_device();
   if (!dev) return;
-  float q = 0, r = 0, p = 0;
-  bool found = false;
-  for (uint32_t k = 0; k < 100000 && !found; ++k) {
-    q = 0.1f + 0.3f * pf_rng_float(3, 0, k, 0);
-    r = 0.2f + 0.2f * pf_rng_float(3, 0, k, 1);
-    p = q + r;
-    for (int ulps = 1; ulps <= 3 && !found; ++ulps) {
-      p = std::nextafter(p, INFINITY);
-      found = pf_ppm_in_radius(pf_ppm_dist2(q, 0.5f, 0.5f, p, 0.5f, 0.5f), r);
-    }
-  }
-  REQUIRE(found);
+  const test::EdgePhoton e = test::edge_photon();
+  const float q = e.q, r = e.r, p = e.p;
   INFO("x " << q << " R " << r << " photon " << p);
-  REQUIRE(pf_grid_coord(q + r, 0.f, p, 2) == 0);
-  REQUIRE(pf_grid_coord(p, 0.f, p, 2) == 1);
   const Scene scene = room_scene(PF_MAT_DIFFUSE, 4, 4);  // (materials and meshes only)
   HitpointSet h;
   h.scene_id = scene.scene_id;

@@ -11,6 +11,7 @@
 
 #include "photonflow/photon_grid.h"
 #include "photonflow/rng.h"
+#include "support.h"
 
 using namespace pf;
 
@@ -239,23 +240,11 @@ TEST_CASE("photon grid: a photon on a bin edge that the distance rule accepts by
   // pf_ppm_in_radius(pf_ppm_dist2(q, p), R) is evaluated in float: a photon a few ulps beyond
   // q + R (itself rounded) can pass it. When that photon sits exactly on the lower edge of the
   // next bin, the bins of the box [q − R, q + R] miss it; for_each_in_radius widens the box
-  // (photon_grid.h) so that it equals the brute-force rule even then. Search (deterministically)
-  // for such q, R, p along x, then put p on a bin edge: d = p, bins [0, p) and [p, 2p).
-  float q = 0, r = 0, p = 0;
-  bool found = false;
-  for (uint32_t k = 0; k < 100000 && !found; ++k) {  // (about one in 50 qualifies)
-    q = 0.1f + 0.3f * pf_rng_float(3, 0, k, 0);         // (products: all mantissa bits used)
-    r = 0.2f + 0.2f * pf_rng_float(3, 0, k, 1);
-    p = q + r;
-    for (int ulps = 1; ulps <= 3 && !found; ++ulps) {
-      p = std::nextafter(p, INFINITY);
-      found = pf_ppm_in_radius(pf_ppm_dist2(q, 0, 0, p, 0, 0), r);
-    }
-  }
-  REQUIRE(found);
+  // (photon_grid.h) so that it equals the brute-force rule even then. Such q, R, p along x
+  // (test::edge_photon), with p on a bin edge: d = p, bins [0, p) and [p, 2p).
+  const test::EdgePhoton e = test::edge_photon();
+  const float q = e.q, r = e.r, p = e.p;
   INFO("q " << q << " R " << r << " p " << p);
-  REQUIRE(grid_coord(q + r, 0.f, p, 2) == 0);  // the unwidened box ends in bin 0 ...
-  REQUIRE(grid_coord(p, 0.f, p, 2) == 1);      // ... and the photon lies in bin 1
   // Mesh 0: photons at 0, p (the one in question) and 1.5p: extent 1.5p, d = R0 = p, two bins.
   std::vector<pf_photon> in = {photon_at(0, 0, 0, 0), photon_at(p, 0, 0, 0),
                                photon_at(1.5f * p, 0, 0, 0)};
