@@ -14,6 +14,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include <algorithm>
 
@@ -254,81 +256,36 @@ TEST_CASE("pathtrace: lamp in a sphere: L = rho Le (A_e/A) / (1 - rho) on the wa
   }
 }
 
-TEST_CASE("pathtrace: point light over a plane: L = rho I h / (pi d^3)", "[pathtrace][analytic]") {
-  // A diffuse floor y = 0 (albedo ρ) under an isotropic point light of intensity I at height h;
-  // nothing else in the scene, so the light is direct only: E = I cos θ / d² = I h / d³ and
-  // L = ρ/π · E. The camera looks straight down. A pixel's value is the mean of L over its
-  // footprint (box filter), computed here on a 16×16 grid of sub-pixel positions; the only noise
-  // left is that of the jittered positions, measured by the variance layer.
-  const float rho = 0.8f, I = 5.f, h = 1.f;
-  Scene s;
-  s.triangles = make_box(Vec3(-4, -1, -4), Vec3(4, 0, 4), false, {0, 0});  // top face is y = 0
-  s.mesh_names = {"floor"};
-  s.materials = {material(PF_MAT_DIFFUSE, rho, 0.f)};
-  s.material_names = {"floor"};
-  pf_light l{};
-  l.type = PF_LIGHT_POINT;
-  l.triangle = -1;
-  l.position[1] = h;
-  for (int c = 0; c < 3; ++c) l.radiance[c] = I;
-  s.lights = {l};
-  s.camera = pf_camera{{0.f, 3.f, 0.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 40.f, 16, 16};
-  finish_scene(s);
-  PathTraceOptions opt;
-  opt.spp = 64;
-  Image img = pathtrace(s, opt);
-  const std::vector<float>& var = img.layers.at("variance");
-  CameraFrame cam(s.camera);
-  auto analytic = [&](float px, float py) {
-    Vec3 d = cam.direction(px, py);
-    Vec3 p = cam.eye() + d * (cam.eye().y / -d.y);  // where the ray meets the floor
-    const double dist = length(Vec3(0, h, 0) - p);
-    return rho * I * h / (kPi * dist * dist * dist);
-  };
-  size_t bad = 0;
-  double worst = 0;
-  for (int y = 0; y < 16; ++y)
-    for (int x = 0; x < 16; ++x) {
-      double expected = 0;
-      for (int j = 0; j < 16; ++j)
-        for (int i = 0; i < 16; ++i) expected += analytic(x + (i + 0.5f) / 16, y + (j + 0.5f) / 16);
-      expected /= 256.0;
-      const double got = img.get(x, y).x, se = std::sqrt(double(var[size_t(y * 16 + x)]));
-      worst = std::max(worst, std::fabs(got / expected - 1.0));
-      bad += std::fabs(got - expected) > 5.0 * se + 1e-3 * expected;
-    }
-  INFO("worst relative deviation " << worst);
-  CHECK(bad == 0);
-  CHECK(worst < 0.05);
-}
+namespace {
 
-TEST_CASE("pathtrace: two point lights over a plane: L = rho/pi sum I_k h_k / d_k^3",
-          "[pathtrace][analytic]") {
-  // As above with two isotropic point lights of unequal intensity at different places: next-event
-  // estimation picks one per sample with probability p_k = I_k / (I_1 + I_2) (power 4π I_k) and
-  // must divide by it, L = ρ/π Σ_k I_k h_k / d_k³. With a single light p = 1 hides a missing 1/p_k
-  // (it passed the test above); here it would give Σ_k p_k·(ρ/π) I_k h_k / d_k³ (−50% or more).
-  // The pixel means are compared as above: exact box-filter averages on a 16 × 16 sub-pixel grid,
-  // each pixel within 5 of its standard errors (variance layer: jitter and light choice).
-  const float rho = 0.8f;
-  const Vec3 pos[2] = {Vec3(0.3f, 1.f, 0.f), Vec3(-0.5f, 1.5f, 0.4f)};
-  const float intensity[2] = {5.f, 2.f};
+// A diffuse floor y = 0 (albedo ρ) under isotropic point lights (position, intensity) and nothing
+// else, so the light is direct only: L = ρ/π Σ_k I_k cos θ_k / d_k² = ρ/π Σ_k I_k h_k / d_k³. The
+// camera looks straight down at 16×16 pixels, path traced with 64 samples each. Each pixel's value
+// is compared with the mean of L over its footprint (box filter), computed on a 16×16 grid of
+// sub-pixel positions; the only noise left is that of the jittered positions and the light
+// choice, measured by the variance layer.
+struct FloorComparison {
+  size_t lights = 0;     // in the baked scene
+  size_t bad = 0;        // pixels off by more than 5 standard errors (+ 0.1%)
+  double worst = 0;      // largest |got / expected − 1|
+  double mean = 0, mean_expected = 0;
+};
+FloorComparison point_lights_over_floor(float rho, const std::vector<std::pair<Vec3, float>>& lights) {
   Scene s;
   s.triangles = make_box(Vec3(-4, -1, -4), Vec3(4, 0, 4), false, {0, 0});  // top face is y = 0
   s.mesh_names = {"floor"};
   s.materials = {material(PF_MAT_DIFFUSE, rho, 0.f)};
   s.material_names = {"floor"};
-  for (int k = 0; k < 2; ++k) {
+  for (const auto& [pos, intensity] : lights) {
     pf_light l{};
     l.type = PF_LIGHT_POINT;
     l.triangle = -1;
-    pos[k].store(l.position);
-    for (int c = 0; c < 3; ++c) l.radiance[c] = intensity[k];
+    pos.store(l.position);
+    for (int c = 0; c < 3; ++c) l.radiance[c] = intensity;
     s.lights.push_back(l);
   }
   s.camera = pf_camera{{0.f, 3.f, 0.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 40.f, 16, 16};
   finish_scene(s);
-  REQUIRE(s.lights.size() == 2);
   PathTraceOptions opt;
   opt.spp = 64;
   Image img = pathtrace(s, opt);
@@ -338,14 +295,14 @@ TEST_CASE("pathtrace: two point lights over a plane: L = rho/pi sum I_k h_k / d_
     Vec3 d = cam.direction(px, py);
     Vec3 p = cam.eye() + d * (cam.eye().y / -d.y);  // where the ray meets the floor
     double l = 0;
-    for (int k = 0; k < 2; ++k) {
-      const double dist = length(pos[k] - p);
-      l += rho * intensity[k] * pos[k].y / (kPi * dist * dist * dist);
+    for (const auto& [pos, intensity] : lights) {
+      const double dist = length(pos - p);
+      l += rho * intensity * pos.y / (kPi * dist * dist * dist);
     }
     return l;
   };
-  size_t bad = 0;
-  double sum = 0, sum_expected = 0;
+  FloorComparison r;
+  r.lights = s.lights.size();
   for (int y = 0; y < 16; ++y)
     for (int x = 0; x < 16; ++x) {
       double expected = 0;
@@ -353,13 +310,37 @@ TEST_CASE("pathtrace: two point lights over a plane: L = rho/pi sum I_k h_k / d_
         for (int i = 0; i < 16; ++i) expected += analytic(x + (i + 0.5f) / 16, y + (j + 0.5f) / 16);
       expected /= 256.0;
       const double got = img.get(x, y).x, se = std::sqrt(double(var[size_t(y * 16 + x)]));
-      sum += got;
-      sum_expected += expected;
-      bad += std::fabs(got - expected) > 5.0 * se + 1e-3 * expected;
+      r.worst = std::max(r.worst, std::fabs(got / expected - 1.0));
+      r.mean += got / 256;
+      r.mean_expected += expected / 256;
+      r.bad += std::fabs(got - expected) > 5.0 * se + 1e-3 * expected;
     }
-  INFO("image mean " << sum / 256 << ", expected " << sum_expected / 256);
-  CHECK(bad == 0);
-  CHECK(sum / sum_expected == Approx(1.0).epsilon(0.02));
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("pathtrace: point light over a plane: L = rho I h / (pi d^3)", "[pathtrace][analytic]") {
+  // One light of intensity I = 5 at height h = 1 over a floor of albedo 0.8: E = I cos θ / d² =
+  // I h / d³ and L = ρ/π · E (point_lights_over_floor).
+  const FloorComparison r = point_lights_over_floor(0.8f, {{Vec3(0, 1, 0), 5.f}});
+  INFO("worst relative deviation " << r.worst);
+  CHECK(r.bad == 0);
+  CHECK(r.worst < 0.05);
+}
+
+TEST_CASE("pathtrace: two point lights over a plane: L = rho/pi sum I_k h_k / d_k^3",
+          "[pathtrace][analytic]") {
+  // As above with two isotropic point lights of unequal intensity at different places: next-event
+  // estimation picks one per sample with probability p_k = I_k / (I_1 + I_2) (power 4π I_k) and
+  // must divide by it, L = ρ/π Σ_k I_k h_k / d_k³. With a single light p = 1 hides a missing 1/p_k
+  // (it passed the test above); here it would give Σ_k p_k·(ρ/π) I_k h_k / d_k³ (−50% or more).
+  const FloorComparison r =
+      point_lights_over_floor(0.8f, {{Vec3(0.3f, 1.f, 0.f), 5.f}, {Vec3(-0.5f, 1.5f, 0.4f), 2.f}});
+  REQUIRE(r.lights == 2);
+  INFO("image mean " << r.mean << ", expected " << r.mean_expected);
+  CHECK(r.bad == 0);
+  CHECK(r.mean / r.mean_expected == Approx(1.0).epsilon(0.02));
 }
 
 TEST_CASE("pathtrace: glass plate under a lamp ceiling: light only through specular paths",
