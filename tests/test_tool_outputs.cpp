@@ -5,6 +5,7 @@
 //     refused before any work, with one line, exit 2, the input untouched and no output at all —
 //     also no first output of a run whose later output would have failed;
 //   - the PNG preview goes beside the image even when a directory name has a dot;
+//   - a missing required option is named (only the missing ones);
 //   - stray arguments and --threads / OMP_NUM_THREADS beyond kMaxThreads are refused (libgomp
 //     crashed on 100 000 threads);
 //   - render checks its options as trace-hitpoints and trace-photons do, and --resume continues
@@ -22,6 +23,7 @@
 #include "photonflow/output_file.h"
 #include "photonflow/render_driver.h"
 #include "photonflow/threads.h"
+#include "photonflow/tool_main.h"
 #include "support.h"
 
 using namespace pf;
@@ -181,6 +183,35 @@ TEST_CASE("outputs: stray arguments and thread counts beyond the limit are refus
   CHECK(worker_threads(kMaxThreads * 4) == kMaxThreads);
   CHECK(worker_threads(3) == 3);
   CHECK(worker_threads(0) >= 1);
+}
+
+TEST_CASE("outputs: a missing required option is named, the given ones are not",
+          "[tools][outputs]") {
+  TempDir tmp("required");
+  const Chain c = make_chain(tmp);
+  const std::string out = tmp / "o.h5";
+  check_refused(run_tool("trace-hitpoints", "--scene " + c.scene, tmp), tmp,
+                "--output is required (see trace-hitpoints --help)");
+  test::ToolRun r = run_tool("illuminate", "--scene " + c.scene + " --photons " + c.ph, tmp);
+  check_refused(r, tmp, "--hitpoints and --output are required");
+  CHECK(r.err.find("--scene") == std::string::npos);
+  check_refused(run_tool("illuminate", "--scene " + c.scene + " --hitpoints " + c.hp + " -o " + out,
+                         tmp),
+                tmp, "--photons or --grid is required", {out});
+  check_refused(run_tool("cluster", "", tmp), tmp,
+                "--scene, --hitpoints and --output are required");
+  check_refused(run_tool("synthesize", "-o " + out, tmp), tmp, "--hitpoints is required", {out});
+
+  // The library function alone.
+  cxxopts::Options o("tool", "");
+  o.add_options()("alpha", "", cxxopts::value<int>())("beta", "", cxxopts::value<int>());
+  std::vector<std::string> words = {"tool", "--beta", "1"};
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  const cxxopts::ParseResult parsed = o.parse(int(argv.size()), argv.data());
+  CHECK_NOTHROW(require_options(o, parsed, {"beta"}));
+  CHECK_THROWS_WITH(require_options(o, parsed, {"alpha", "beta"}),
+                    "--alpha is required (see tool --help)");
 }
 
 TEST_CASE("render: options out of range are refused as the stages refuse them",

@@ -49,6 +49,21 @@ inline cxxopts::ParseResult parse_options(cxxopts::Options& options, int argc, c
   return r;
 }
 
+// Refuses a command line that lacks required options, naming the missing ones only:
+// "--output is required", "--hitpoints and --output are required" (hint: see <program> --help).
+inline void require_options(const cxxopts::Options& options, const cxxopts::ParseResult& r,
+                            std::initializer_list<const char*> required) {
+  std::vector<std::string> missing;
+  for (const char* name : required)
+    if (!r.count(name)) missing.push_back(std::string("--") + name);
+  if (missing.empty()) return;
+  std::string list = missing.front();
+  for (size_t i = 1; i < missing.size(); ++i)
+    list += (i + 1 == missing.size() ? " and " : ", ") + missing[i];
+  throw input_error("", list + (missing.size() == 1 ? " is required" : " are required"),
+                    "see " + options.program() + " --help");
+}
+
 // A path option's value: given, else its default, else "" (for check_outputs' lists).
 inline std::string path_option(const cxxopts::ParseResult& r, const std::string& name) {
   if (r.count(name)) return r[name].as<std::string>();

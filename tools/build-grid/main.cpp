@@ -31,8 +31,7 @@ int main(int argc, char** argv) {
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
-    if (!a.count("scene") || !a.count("photons") || !a.count("output"))
-      throw pf::input_error("", "--scene, --photons and --output are required");
+    pf::require_options(o, a, {"scene", "photons", "output"});
     pf::check_output_options(a, {"scene", "photons", "hitpoints"}, {"output"});
     pf::PhotonGridParams gp;
     gp.max_bins = a["max-bins"].as<int>();

@@ -75,8 +75,7 @@ int main(int argc, char** argv) {
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
-    if (!a.count("scene") || !a.count("hitpoints") || !a.count("output"))
-      throw pf::input_error("", "--scene, --hitpoints and --output are required");
+    pf::require_options(o, a, {"scene", "hitpoints", "output"});
     const std::string method = a["method"].as<std::string>();
     const int wg = a["wg-size"].as<int>(), iterations = a["iterations"].as<int>();
     const int max_bins = a["max-bins"].as<int>(), threads = a["threads"].as<int>();

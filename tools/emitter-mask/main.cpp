@@ -27,8 +27,7 @@ int main(int argc, char** argv) {
     // clang-format on
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
-    if (!a.count("scene") || !a.count("output"))
-      throw pf::input_error("", "--scene and --output are required");
+    pf::require_options(o, a, {"scene", "output"});
     pf::check_output_options(a, {"scene"}, {"output"});
     pf::EmitterMaskOptions opt;
     opt.spp = a["spp"].as<int>();

@@ -48,9 +48,9 @@ int main(int argc, char** argv) {
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
-    if (!a.count("scene") || !a.count("hitpoints") || !a.count("output") ||
-        (!a.count("photons") && !a.count("grid")))
-      throw pf::input_error("", "--scene, --hitpoints, --photons (or --grid) and --output are required");
+    pf::require_options(o, a, {"scene", "hitpoints", "output"});
+    if (!a.count("photons") && !a.count("grid"))
+      throw pf::input_error("", "--photons or --grid is required", "see illuminate --help");
     pf::check_output_options(a, {"scene", "hitpoints", "photons", "grid", "clusters"}, {"output"});
     std::string estimator = a["estimator"].as<std::string>();
     pf::require_choice("estimator", estimator, {"ppm", "classic"});

@@ -70,8 +70,7 @@ int main(int argc, char** argv) {
                                "--snapshot-every and --time-limit.\n";
       return 0;
     }
-    if (!a.count("scene") || !a.count("output"))
-      throw pf::input_error("", "--scene and --output are required");
+    pf::require_options(o, a, {"scene", "output"});
 
     pf::PathTraceOptions opt;
     opt.spp = a["spp"].as<int>();

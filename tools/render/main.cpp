@@ -59,8 +59,7 @@ int main(int argc, char** argv) {
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
-    if (!a.count("scene") || !a.count("output"))
-      throw pf::input_error("", "--scene and --output are required");
+    pf::require_options(o, a, {"scene", "output"});
 
     pf::RenderOptions opt;
     opt.passes = a["passes"].as<int>();

@@ -24,8 +24,7 @@ int main(int argc, char** argv) {
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
-    if (!a.count("hitpoints") || !a.count("output"))
-      throw pf::input_error("", "--hitpoints and --output are required");
+    pf::require_options(o, a, {"hitpoints", "output"});
     std::string out = a["output"].as<std::string>();
     std::string png = a.count("png") ? a["png"].as<std::string>() : pf::preview_path(out);
     pf::check_outputs({pf::path_option(a, "hitpoints")}, {out, png});
