@@ -1,11 +1,14 @@
 // The render stages as executables (issue 3): bad input refused with one line and no output, the
-// staged route equal to the render driver, kill-and-resume equal to an uninterrupted run, and the
-// Make DAG's caching.
+// staged route equal to the render driver, kill-and-resume equal to an uninterrupted run,
+// checkpoints written mid-run every --checkpoint-every passes, and the Make DAG's caching.
 #include <catch2/catch.hpp>
+#include <signal.h>
 
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "photonflow/h5io.h"
 #include "photonflow/illuminate.h"
@@ -355,6 +358,49 @@ TEST_CASE("a killed render resumes to the uninterrupted image", "[tools][resume]
   auto r = run_tool("render", "--scene " + scene + " --photons 20000 --passes 5 -o " +
                                   (tmp / "y.exr") + " --checkpoint " + ck + " --resume", tmp);
   CHECK(r.exit_code == 2);
+}
+
+TEST_CASE("render writes its checkpoint every --checkpoint-every passes, mid-run", "[tools][resume]") {
+  // The driver writes a pass's checkpoint before its snapshot (render_driver.cpp), so when the
+  // snapshot of pass 8 appears, a run with --checkpoint-every 7 has a checkpoint of pass 7 or of a
+  // later multiple of 7. A tool that dropped the option (default 10) would have none yet, or one of
+  // pass 10 or 20. The run is long and is killed once checked.
+  TempDir tmp("checkpoint-every");
+  bake(tmp, "cornell-box.dae", "scene.h5");
+  const std::string ck = tmp / "ck.h5", pidfile = tmp / "pid";
+  const std::string cmd = test::bin_dir() + "/render --scene " + (tmp / "scene.h5") +
+                          " --photons 20000 --passes 100000 -o " + (tmp / "x.exr") +
+                          " --checkpoint " + ck + " --checkpoint-every 7 --snapshot-at 8" +
+                          " --snapshot " + (tmp / "snap-{pass}.exr") +
+                          " >/dev/null 2>&1 & echo $! > " + pidfile;
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  struct Killer {
+    std::string pidfile;
+    ~Killer() {
+      std::ifstream f(pidfile);
+      long pid = 0;
+      if (f >> pid && pid > 0) kill(pid_t(pid), SIGKILL);
+    }
+  } killer{pidfile};
+  auto snapshot = [&] {
+    for (auto& e : std::filesystem::directory_iterator(tmp.dir)) {
+      const std::string n = e.path().filename().string();
+      if (n.rfind("snap-", 0) == 0 && n.size() > 4 && n.substr(n.size() - 4) == ".exr") return true;
+    }
+    return false;
+  };
+  bool seen = false;
+  for (int i = 0; i < 12000 && !seen; ++i) {  // 120 s at most
+    seen = snapshot();
+    if (!seen) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  REQUIRE(seen);
+  REQUIRE(std::filesystem::exists(ck));
+  const int passes = load_hitpoints(ck).passes;
+  INFO("checkpoint after pass " << passes);
+  CHECK(passes >= 7);
+  CHECK(passes % 7 == 0);
+  CHECK(passes < 100000);  // mid-run: not the final checkpoint
 }
 
 TEST_CASE("the Make DAG reruns exactly the stages whose parameters changed", "[tools][dag]") {
