@@ -34,6 +34,8 @@
 # REF_SPP ≥ 4 × PT_SPP, and check the table "The references' own error" of the report: its E must
 # stay well below the errors compared (docs/RESULTS.md).
 # Changing a parameter reruns only the runs it affects (parameter stamps, pipelines/stamp.mk).
+# The runs do not depend on the tools' binaries (a rebuild after an unrelated edit would rerun the
+# whole 8.6 minutes): after a change to the renderer, measure again with make -B.
 BUILD  ?= build
 BIN    ?= $(BUILD)/bin
 OUT    ?= out
