@@ -16,6 +16,7 @@
 
 #include "photonflow/clusters.h"
 #include "photonflow/h5io.h"
+#include "photonflow/hash.h"
 #include "photonflow/grid_shared.h"
 #include "photonflow/image.h"
 #include "photonflow/ppm.h"
@@ -87,6 +88,20 @@ inline ToolRun run_tool(const std::string& tool, const std::string& args, const 
   return r;
 }
 
+// Sets the checksum64 attribute of dataset `d` (h5io.cpp) to its current bytes, as a tool that
+// edits a file consistently would: the edits below test the loaders' checks behind the checksum.
+inline void refresh_checksum(hid_t d) {
+  if (H5Aexists(d, "checksum64") <= 0) return;
+  h5::Handle ft(H5Dget_type(d));
+  h5::Handle space(H5Dget_space(d));
+  std::vector<unsigned char> raw(size_t(H5Sget_simple_extent_npoints(space.get())) *
+                                 H5Tget_size(ft.get()));
+  REQUIRE(H5Dread(d, ft.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()) >= 0);
+  const int64_t sum = int64_t(checksum64(raw.data(), raw.size()));
+  h5::Handle a(H5Aopen(d, "checksum64", H5P_DEFAULT));
+  REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &sum) >= 0);
+}
+
 // Fuzz-style edits of a written file (Catch's REQUIRE: include catch.hpp first).
 // Rewrites dataset `dset` of `file` in place: reads it as T (memory type `type`, fields matched by
 // name), lets `edit` change it, writes it back.
@@ -102,6 +117,7 @@ void edit_dataset(const std::string& file, const std::string& dset, hid_t type,
   REQUIRE(H5Dread(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0);
   change(v);
   REQUIRE(H5Dwrite(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0);
+  refresh_checksum(d.get());
 }
 
 // Sets the int64 attribute `name` of object `obj` of `file`.

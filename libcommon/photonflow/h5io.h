@@ -162,6 +162,9 @@ class Reader : public FileBase {
 
  private:
   void read_raw(const std::string& path, hid_t type, void* out) const;
+  // Refuses dataset `path` (open as `dataset`) when its checksum64 attribute, where it has one,
+  // differs from the checksum of the n elements read as `type` into `data`.
+  void verify(const std::string& path, hid_t dataset, hid_t type, const void* data, size_t n) const;
   Handle open_dataset(const std::string& path) const;
   int version_ = 0;
 };

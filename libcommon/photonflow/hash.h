@@ -1,4 +1,5 @@
-// hash.h — SHA-256 (FIPS 180-4) for content hashes of inputs and for scene identity.
+// hash.h — SHA-256 (FIPS 180-4) for content hashes of inputs and for scene identity, and a fast
+// 64-bit checksum that detects damage of the datasets in photonflow's HDF5 files.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -22,5 +23,11 @@ class Sha256 {
 
 // Hash of a file's bytes. Throws InputError if the file cannot be read.
 std::string sha256_file(const std::string& path);
+
+// Checksum of n bytes for damage detection, not identity (no cryptographic strength): four lanes
+// of 64-bit words, each lane a rotate-multiply chain (so the order of words counts), folded with
+// the length and finished by the splitmix64 mixer. Several GB/s; every written dataset carries it
+// (h5io.cpp, attribute checksum64) and every read verifies it.
+uint64_t checksum64(const void* data, size_t n);
 
 }  // namespace pf

@@ -3,9 +3,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 
+#include "photonflow/hash.h"
 #include "photonflow/output_file.h"
 
 namespace pf::h5 {
@@ -62,7 +64,13 @@ Writer::Writer(const std::string& final_path, const std::string& format, int ver
     : final_path_(final_path) {
   quiet_hdf5();
   path_ = temp_path(final_path);
-  file_ = Handle(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  // The HDF5 1.8 file format, not the earliest: its superblock and object headers carry checksums,
+  // which HDF5 verifies on open, so a damaged header or attribute is refused there. With the
+  // earliest format, a damaged attribute message crashed HDF5 1.10 inside H5Aiterate2 (fuzzing,
+  // docs/FORMATS.md). Readable by HDF5 1.8 and later (h5py, h5dump).
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS));
+  H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V18, H5F_LIBVER_V18);
+  file_ = Handle(H5Fcreate(path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()));
   if (!file_.valid())
     throw input_error(final_path, "cannot create output file",
                       "check that the directory exists and is writable");
@@ -131,7 +139,8 @@ void Writer::write_raw(const std::string& path, hid_t type, const void* data,
   for (auto d : dims) total *= d;
   Handle space(H5Screate_simple(int(dims.size()), dims.data(), nullptr));
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE));
-  // Chunk + deflate large datasets; small ones stay contiguous (cheaper to read).
+  // Large 1-D datasets are chunked (64 Ki elements a chunk) so readers such as h5py can read part
+  // of them; small ones stay contiguous.
   if (total * H5Tget_size(type) > (1u << 20) && dims.size() == 1) {
     hsize_t chunk = std::min<hsize_t>(dims[0], 1u << 16);
     H5Pset_chunk(dcpl.get(), 1, &chunk);
@@ -141,19 +150,28 @@ void Writer::write_raw(const std::string& path, hid_t type, const void* data,
   if (!d.valid()) throw input_error(final_path_, "cannot create dataset " + path);
   if (total > 0 && H5Dwrite(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
     throw input_error(final_path_, "cannot write dataset " + path, "is the disk full?");
+  // The checksum of the bytes as written (file type = this memory type), which every read
+  // verifies (Reader::verify): data damaged in the file, or a damaged chunk index that makes HDF5
+  // return fill values instead of the data, is refused instead of read. The attribute itself sits
+  // in the dataset's object header, which the 1.8 format checksums.
+  if (H5Tdetect_class(type, H5T_VLEN) <= 0 && H5Tis_variable_str(type) <= 0)
+    attr(path, "checksum64", int64_t(checksum64(data, size_t(total) * H5Tget_size(type))));
 }
 
 void Writer::write(const std::string& path, const Compound& type, const void* data, size_t n) {
   write_raw(path, type.id(), data, {n});
 }
 
+// Fixed-length strings (the longest plus its NUL), stored inside the dataset: variable-length
+// strings live in HDF5's global heap, whose reader (H5HG_read, HDF5 1.10) copies past its buffer
+// when a damaged file gives a wrong length; a fuzzed scene.h5 crashed trace-hitpoints there.
 void Writer::write_strings(const std::string& path, const std::vector<std::string>& v) {
-  Handle t(H5Tcopy(H5T_C_S1));
-  H5Tset_size(t.get(), H5T_VARIABLE);
-  H5Tset_cset(t.get(), H5T_CSET_UTF8);
-  std::vector<const char*> ptrs;
-  for (auto& s : v) ptrs.push_back(s.c_str());
-  write_raw(path, t.get(), ptrs.data(), {v.size()});
+  size_t width = 1;
+  for (const auto& s : v) width = std::max(width, s.size() + 1);
+  std::vector<char> packed(v.size() * width, '\0');
+  for (size_t i = 0; i < v.size(); ++i) std::memcpy(&packed[i * width], v[i].data(), v[i].size());
+  Handle t = string_type(width);
+  write_raw(path, t.get(), packed.data(), {v.size()});
 }
 
 void Writer::describe(const std::string& path, const std::string& unit,
@@ -215,10 +233,21 @@ Handle open_attr(const FileBase& f, const std::string& obj, const std::string& n
                       "the file is damaged or from another tool");
   return a;
 }
+
+// A single-valued attribute: H5Aread writes every element of the attribute's dataspace, and the
+// readers below give it room for one.
+Handle open_scalar_attr(const FileBase& f, const std::string& obj, const std::string& name) {
+  Handle a = open_attr(f, obj, name);
+  Handle s(H5Aget_space(a.get()));
+  if (H5Sget_simple_extent_npoints(s.get()) != 1)
+    throw input_error(f.path(), "attribute " + obj + "@" + name + " is not a single value",
+                      "the file is damaged or from another tool");
+  return a;
+}
 }  // namespace
 
 std::string Reader::attr_string(const std::string& obj, const std::string& name) const {
-  Handle a = open_attr(*this, obj, name);
+  Handle a = open_scalar_attr(*this, obj, name);
   Handle t(H5Aget_type(a.get()));
   if (H5Tget_class(t.get()) != H5T_STRING)
     throw input_error(path_, "attribute " + obj + "@" + name + " is not a string");
@@ -242,7 +271,7 @@ std::string Reader::attr_string(const std::string& obj, const std::string& name)
 }
 
 int64_t Reader::attr_int(const std::string& obj, const std::string& name) const {
-  Handle a = open_attr(*this, obj, name);
+  Handle a = open_scalar_attr(*this, obj, name);
   int64_t v = 0;
   if (H5Aread(a.get(), H5T_NATIVE_INT64, &v) < 0)
     throw input_error(path_, "attribute " + obj + "@" + name + " is not an integer");
@@ -250,7 +279,7 @@ int64_t Reader::attr_int(const std::string& obj, const std::string& name) const 
 }
 
 double Reader::attr_double(const std::string& obj, const std::string& name) const {
-  Handle a = open_attr(*this, obj, name);
+  Handle a = open_scalar_attr(*this, obj, name);
   double v = 0;
   if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0)
     throw input_error(path_, "attribute " + obj + "@" + name + " is not a number");
@@ -309,8 +338,26 @@ std::vector<size_t> Reader::shape(const std::string& path) const {
   Handle d = open_dataset(path);
   Handle s(H5Dget_space(d.get()));
   int nd = H5Sget_simple_extent_ndims(s.get());
-  std::vector<hsize_t> dims(nd > 0 ? nd : 0);
-  if (nd > 0) H5Sget_simple_extent_dims(s.get(), dims.data(), nullptr);
+  if (nd < 0) throw input_error(path_, "dataset " + path + " has no readable shape (damaged)");
+  std::vector<hsize_t> dims(size_t(nd), 0);
+  if (nd > 0 && H5Sget_simple_extent_dims(s.get(), dims.data(), nullptr) < 0)
+    throw input_error(path_, "dataset " + path + " has no readable shape (damaged)");
+  // The shape sizes the readers' buffers: it must fit the bytes the file stores for the dataset,
+  // or a damaged shape (a flipped bit in a dimension) would ask for terabytes. Without filters the
+  // storage holds every element (chunked: whole chunks, so at least); a filter such as deflate
+  // (which h5py users may add) compresses at most about 1032:1 (RFC 1951's longest match).
+  Handle ft(H5Dget_type(d.get()));
+  const size_t elem = H5Tget_size(ft.get());
+  long double bytes = elem;
+  for (hsize_t n : dims) bytes *= n;
+  if (bytes > 0) {
+    Handle dcpl(H5Dget_create_plist(d.get()));
+    const int filters = dcpl.valid() ? H5Pget_nfilters(dcpl.get()) : 0;
+    const long double stored = (long double)H5Dget_storage_size(d.get());
+    if (elem == 0 || bytes > stored * (filters > 0 ? 1100.0L : 1.0L))
+      throw input_error(path_, "dataset " + path + " claims more elements than the file stores",
+                        "the file is damaged or truncated: remake it");
+  }
   return std::vector<size_t>(dims.begin(), dims.end());
 }
 
@@ -320,6 +367,25 @@ size_t Reader::count(const std::string& path) const {
   return n;
 }
 
+void Reader::verify(const std::string& path, hid_t dataset, hid_t type, const void* data,
+                    size_t n) const {
+  if (H5Aexists(dataset, "checksum64") <= 0) return;  // files of builds before the checksum
+  const int64_t want = attr_int(path, "checksum64");
+  Handle ft(H5Dget_type(dataset));
+  uint64_t have = 0;
+  if (H5Tequal(ft.get(), type) > 0) {
+    have = checksum64(data, n * H5Tget_size(type));
+  } else {  // read as another type (a subset of fields, a conversion): the file's bytes again
+    std::vector<unsigned char> raw(n * H5Tget_size(ft.get()));
+    if (n > 0 && H5Dread(dataset, ft.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()) < 0)
+      throw input_error(path_, "cannot read dataset " + path + " (truncated or damaged)");
+    have = checksum64(raw.data(), raw.size());
+  }
+  if (have != uint64_t(want))
+    throw input_error(path_, "dataset " + path + " is damaged (its checksum does not match)",
+                      "remake the file with the stage that wrote it");
+}
+
 void Reader::read(const std::string& path, const Compound& type, void* out, size_t n) const {
   Handle d = open_dataset(path);
   if (count(path) != n) throw input_error(path_, "dataset " + path + " has an unexpected size");
@@ -327,18 +393,39 @@ void Reader::read(const std::string& path, const Compound& type, void* out, size
   Handle ft(H5Dget_type(d.get()));
   if (H5Tget_class(ft.get()) != H5T_COMPOUND)
     throw input_error(path_, "dataset " + path + " is not a compound of named fields");
+  // HDF5 converts field by field at the offsets the file's type declares: each of its fields must
+  // lie inside the record, or the conversion reads past its buffer (a damaged type crashed it).
+  const size_t record = H5Tget_size(ft.get());
+  const int fm = H5Tget_nmembers(ft.get());
+  if (record == 0 || fm <= 0)
+    throw input_error(path_, "dataset " + path + " has a damaged compound type");
+  for (int i = 0; i < fm; ++i) {
+    Handle mt(H5Tget_member_type(ft.get(), unsigned(i)));
+    const size_t size = mt.valid() ? H5Tget_size(mt.get()) : 0;
+    if (size == 0 || H5Tget_member_offset(ft.get(), unsigned(i)) + size > record)
+      throw input_error(path_, "dataset " + path + " has a damaged compound type",
+                        "remake the file");
+  }
+  // Every field the caller asks for must exist in the file's compound, of the same class (HDF5
+  // converts sizes, e.g. a float64 written by h5py into float32, but not integers into arrays).
   int nm = H5Tget_nmembers(type.id());
   for (int i = 0; i < nm; ++i) {
     char* name = H5Tget_member_name(type.id(), unsigned(i));
-    bool found = H5Tget_member_index(ft.get(), name) >= 0;
+    const int at = H5Tget_member_index(ft.get(), name);
     std::string field(name);
     H5free_memory(name);
-    if (!found)
+    if (at < 0)
       throw input_error(path_, "dataset " + path + " lacks field '" + field + "'",
+                        "remake the file with this build");
+    Handle want(H5Tget_member_type(type.id(), unsigned(i)));
+    Handle have(H5Tget_member_type(ft.get(), unsigned(at)));
+    if (H5Tget_class(want.get()) != H5Tget_class(have.get()))
+      throw input_error(path_, "dataset " + path + " field '" + field + "' has another type",
                         "remake the file with this build");
   }
   if (n > 0 && H5Dread(d.get(), type.id(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out) < 0)
     throw input_error(path_, "cannot read dataset " + path + " (truncated or damaged)");
+  verify(path, d.get(), type.id(), out, n);
 }
 
 void Reader::read_raw(const std::string& path, hid_t type, void* out) const {
@@ -347,26 +434,47 @@ void Reader::read_raw(const std::string& path, hid_t type, void* out) const {
   H5T_class_t c = H5Tget_class(ft.get());
   if (c != H5T_INTEGER && c != H5T_FLOAT)
     throw input_error(path_, "dataset " + path + " is not numeric");
-  if (count(path) > 0 && H5Dread(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out) < 0)
+  const size_t n = count(path);
+  if (n > 0 && H5Dread(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out) < 0)
     throw input_error(path_, "cannot read dataset " + path + " (truncated or damaged)");
+  verify(path, d.get(), type, out, n);
 }
 
 std::vector<std::string> Reader::read_strings(const std::string& path) const {
   Handle d = open_dataset(path);
-  size_t n = count(path);
-  Handle t(H5Tcopy(H5T_C_S1));
-  H5Tset_size(t.get(), H5T_VARIABLE);
+  const size_t n = count(path);  // checked against the bytes stored (shape)
   Handle ft(H5Dget_type(d.get()));
-  if (H5Tget_class(ft.get()) != H5T_STRING || H5Tis_variable_str(ft.get()) <= 0)
+  if (H5Tget_class(ft.get()) != H5T_STRING)
     throw input_error(path_, "dataset " + path + " is not a list of strings");
-  H5Tset_cset(t.get(), H5Tget_cset(ft.get()));
-  std::vector<char*> ptrs(n, nullptr);
-  if (n > 0 && H5Dread(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0)
-    throw input_error(path_, "cannot read strings " + path);
   std::vector<std::string> out;
-  for (char* p : ptrs) {
-    out.emplace_back(p ? p : "");
-    if (p) H5free_memory(p);
+  if (H5Tis_variable_str(ft.get()) > 0) {
+    // Variable-length strings: written by builds before fixed-length names (and by h5py's
+    // default); read for compatibility.
+    Handle t(H5Tcopy(H5T_C_S1));
+    H5Tset_size(t.get(), H5T_VARIABLE);
+    H5Tset_cset(t.get(), H5Tget_cset(ft.get()));
+    std::vector<char*> ptrs(n, nullptr);
+    if (n > 0 && H5Dread(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0)
+      throw input_error(path_, "cannot read strings " + path);
+    for (char* p : ptrs) {
+      out.emplace_back(p ? p : "");
+      if (p) H5free_memory(p);
+    }
+    return out;
+  }
+  const size_t width = H5Tget_size(ft.get());
+  if (width == 0) throw input_error(path_, "dataset " + path + " has a damaged string type");
+  Handle t(H5Tcopy(H5T_C_S1));
+  H5Tset_size(t.get(), width);
+  H5Tset_strpad(t.get(), H5T_STR_NULLPAD);
+  H5Tset_cset(t.get(), H5Tget_cset(ft.get()));
+  std::vector<char> packed(n * width, '\0');
+  if (n > 0 && H5Dread(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, packed.data()) < 0)
+    throw input_error(path_, "cannot read strings " + path);
+  verify(path, d.get(), t.get(), packed.data(), n);
+  for (size_t i = 0; i < n; ++i) {
+    const char* p = &packed[i * width];
+    out.emplace_back(p, strnlen(p, width));
   }
   return out;
 }

@@ -83,4 +83,37 @@ std::string sha256_file(const std::string& path) {
   return h.hex();
 }
 
+namespace {
+constexpr uint64_t kP1 = 0x9E3779B185EBCA87ull, kP2 = 0xC2B2AE3D27D4EB4Full,
+                   kP3 = 0x165667B19E3779F9ull;
+inline uint64_t rotl64(uint64_t x, int r) { return (x << r) | (x >> (64 - r)); }
+inline uint64_t lane(uint64_t h, uint64_t w) { return rotl64(h ^ (w * kP2), 31) * kP1; }
+inline uint64_t load64(const unsigned char* p) {
+  uint64_t w;
+  std::memcpy(&w, p, 8);
+  return w;
+}
+}  // namespace
+
+uint64_t checksum64(const void* data, size_t n) {
+  const auto* b = static_cast<const unsigned char*>(data);
+  uint64_t h[4] = {kP1, kP2, kP3, kP1 ^ kP2};
+  size_t i = 0;
+  for (; i + 32 <= n; i += 32)
+    for (int l = 0; l < 4; ++l) h[l] = lane(h[l], load64(b + i + 8 * l));
+  for (; i + 8 <= n; i += 8) h[0] = lane(h[0], load64(b + i));
+  if (i < n) {  // the last bytes, zero-padded, tagged with their count
+    unsigned char tail[8] = {};
+    std::memcpy(tail, b + i, n - i);
+    h[1] = lane(h[1], load64(tail) ^ (uint64_t(n - i) << 56));
+  }
+  uint64_t r = uint64_t(n) * kP3;
+  for (int l = 0; l < 4; ++l) r = (r ^ lane(0, h[l])) * kP1 + kP3;
+  r ^= r >> 30;  // splitmix64 finisher
+  r *= 0xBF58476D1CE4E5B9ull;
+  r ^= r >> 27;
+  r *= 0x94D049BB133111EBull;
+  return r ^ (r >> 31);
+}
+
 }  // namespace pf
