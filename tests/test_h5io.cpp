@@ -46,6 +46,15 @@ void write_minimal(const std::string& path, const std::string& format, int versi
   w.attr("/", "scene_id", scene_id);
   w.commit();
 }
+// The InputError's line that fn() throws, or "<no error>".
+std::string input_error_message(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
 }  // namespace
 
 TEST_CASE("SHA-256 matches the FIPS 180-4 test vectors", "[hash]") {
@@ -209,14 +218,7 @@ TEST_CASE("committing replaces an older file atomically", "[h5io]") {
 
 TEST_CASE("readers refuse wrong, foreign, damaged and missing files with one line", "[h5io]") {
   TempDir tmp;
-  auto message = [](auto&& fn) {
-    try {
-      fn();
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("<no error>");
-  };
+  const auto message = input_error_message;
   std::string good = tmp / "good.h5";
   write_minimal(good, "photonflow.hitpoints", 1, "s1");
 
@@ -302,14 +304,7 @@ TEST_CASE("damaged shapes, compound types and attribute extents are refused, nev
   // Each of these crashed a stage or made it allocate terabytes when a fuzzer flipped bytes of a
   // real file (a segfault inside HDF5's conversion, a std::bad_alloc): now each is one InputError.
   TempDir tmp;
-  auto message = [](auto&& fn) {
-    try {
-      fn();
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("<no error>");
-  };
+  const auto message = input_error_message;
   const std::string path = tmp / "d.h5";
   struct Rec {
     float a;
@@ -440,12 +435,7 @@ TEST_CASE("written files carry checksums: a damaged value or header is refused, 
     return p;
   };
   auto refused = [](const std::function<void()>& fn) {
-    try {
-      fn();
-    } catch (const InputError&) {
-      return true;
-    }
-    return false;
+    return input_error_message(fn) != "<no error>";
   };
   float one = 1234.5f;
   const size_t value_at = bytes.find(std::string(reinterpret_cast<char*>(&one), 4));
