@@ -11,7 +11,7 @@
 namespace pf {
 
 constexpr const char* kSceneFormat = "photonflow.scene";
-constexpr int kSceneFormatVersion = 1;
+constexpr int kSceneFormatVersion = 2;  // 2: names as fixed-length strings (1: variable-length, still read)
 
 struct Scene {
   std::vector<pf_triangle> triangles;
