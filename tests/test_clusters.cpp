@@ -51,18 +51,26 @@ size_t padded_sum(const ClusterSet& c) {
   return s;
 }
 
+// The largest |x − centre| + r over a cluster's members (in double): the radius its members'
+// gather spheres need.
+double member_extent(const ClusterSet& c, const HitpointSet& h, const pf_cluster& cl) {
+  double m = 0;
+  for (int t = cl.first; t < cl.first + cl.count; ++t) {
+    const pf_hitpoint& p = h.hitpoints[size_t(c.order[size_t(t)])];
+    double d2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      double d = double(p.position[a]) - double(cl.centre[a]);
+      d2 += d * d;
+    }
+    m = std::max(m, std::sqrt(d2) + double(p.radius));
+  }
+  return m;
+}
+
 // Every member's gather sphere lies inside the cluster's sphere (checked in double).
 bool radii_contain(const ClusterSet& c, const HitpointSet& h) {
   for (auto& cl : c.clusters)
-    for (int t = cl.first; t < cl.first + cl.count; ++t) {
-      const pf_hitpoint& p = h.hitpoints[size_t(c.order[size_t(t)])];
-      double d2 = 0;
-      for (int a = 0; a < 3; ++a) {
-        double d = double(p.position[a]) - double(cl.centre[a]);
-        d2 += d * d;
-      }
-      if (std::sqrt(d2) + double(p.radius) > double(cl.radius)) return false;
-    }
+    if (member_extent(c, h, cl) > double(cl.radius)) return false;
   return true;
 }
 
@@ -70,16 +78,7 @@ bool radii_contain(const ClusterSet& c, const HitpointSet& h) {
 // |x − centre| + r (in double), rounded up to float — within one float step of that maximum.
 bool radii_tight(const ClusterSet& c, const HitpointSet& h) {
   for (auto& cl : c.clusters) {
-    double m = 0;
-    for (int t = cl.first; t < cl.first + cl.count; ++t) {
-      const pf_hitpoint& p = h.hitpoints[size_t(c.order[size_t(t)])];
-      double d2 = 0;
-      for (int a = 0; a < 3; ++a) {
-        double d = double(p.position[a]) - double(cl.centre[a]);
-        d2 += d * d;
-      }
-      m = std::max(m, std::sqrt(d2) + double(p.radius));
-    }
+    const double m = member_extent(c, h, cl);
     if (!(double(cl.radius) >= m && double(std::nextafter(cl.radius, 0.f)) < m)) return false;
   }
   return true;

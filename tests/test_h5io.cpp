@@ -46,6 +46,16 @@ void write_minimal(const std::string& path, const std::string& format, int versi
   w.attr("/", "scene_id", scene_id);
   w.commit();
 }
+// `p` written to a file at `path` and read back.
+Provenance provenance_round_trip(const Provenance& p, const std::string& path) {
+  {
+    h5::Writer w(path, "photonflow.test", 1);
+    write_provenance(w, p);
+    w.commit();
+  }
+  return read_provenance(h5::Reader(path, "photonflow.test", 1));
+}
+
 // The InputError's line that fn() throws, or "<no error>".
 std::string input_error_message(const std::function<void()>& fn) {
   try {
@@ -520,14 +530,7 @@ TEST_CASE("provenance round-trips with input hashes", "[h5io][provenance]") {
   p.add_input("source", input);
   p.wall_time_s = 1.25;
   p.command_line = "test-tool --photons 100000";
-  std::string path = tmp / "p.h5";
-  {
-    h5::Writer w(path, "photonflow.test", 1);
-    write_provenance(w, p);
-    w.commit();
-  }
-  h5::Reader r(path, "photonflow.test", 1);
-  Provenance q = read_provenance(r);
+  const Provenance q = provenance_round_trip(p, tmp / "p.h5");
   CHECK(q.tool == "test-tool");
   CHECK(q.seed == p.seed);
   CHECK(q.parameters == p.parameters);
@@ -604,14 +607,7 @@ TEST_CASE("provenance keeps each input's path, hash, format and scene_id apart",
   p.tool = "t";
   p.add_input("scene", a, "photonflow.scene", "id-of-a");
   p.add_input("hitpoints", b, "photonflow.hitpoints", "id-of-b");
-  std::string path = tmp / "p.h5";
-  {
-    h5::Writer w(path, "photonflow.test", 1);
-    write_provenance(w, p);
-    w.commit();
-  }
-  h5::Reader r(path, "photonflow.test", 1);
-  Provenance q = read_provenance(r);
+  const Provenance q = provenance_round_trip(p, tmp / "p.h5");
   REQUIRE(q.inputs.size() == 2);
   for (const auto& in : q.inputs) {
     INFO("role " << in.role);

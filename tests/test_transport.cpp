@@ -81,20 +81,28 @@ Scene point_lights_in_box(float rho, float i1, float i2) {
   return s;
 }
 
+// A scene of one diffuse mesh "floor" (albedo rho) made of `tris`, lit by `lights`, seen by `cam`.
+Scene diffuse_floor(std::vector<pf_triangle> tris, float rho, std::vector<pf_light> lights,
+                    const pf_camera& cam) {
+  Scene s;
+  s.triangles = std::move(tris);
+  s.mesh_names = {"floor"};
+  s.materials = {material(PF_MAT_DIFFUSE, Vec3(rho, rho, rho))};
+  s.material_names = {"floor"};
+  s.lights = std::move(lights);
+  s.camera = cam;
+  finish_scene(s);
+  return s;
+}
+
 // A diffuse floor y = 0 (albedo rho, 8 × 8 wide), its front up or down, under a point light of
 // intensity I at height h; the camera looks straight down from above. Nothing else: the light the
 // camera sees is direct only, L = ρ/π · I h / d³, whichever side of the floor is its front.
 Scene floor_under_point_light(bool front_up, float rho, float intensity, float h, int size) {
-  Scene s;
-  s.triangles = front_up ? square(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 4.f, 0)
-                         : square(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), 4.f, 0);
-  s.mesh_names = {"floor"};
-  s.materials = {material(PF_MAT_DIFFUSE, Vec3(rho, rho, rho))};
-  s.material_names = {"floor"};
-  s.lights = {point_light(Vec3(0, h, 0), intensity)};
-  s.camera = pf_camera{{0.f, 3.f, 0.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 40.f, size, size};
-  finish_scene(s);
-  return s;
+  return diffuse_floor(front_up ? square(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 4.f, 0)
+                                : square(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), 4.f, 0),
+                       rho, {point_light(Vec3(0, h, 0), intensity)},
+                       pf_camera{{0.f, 3.f, 0.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 40.f, size, size});
 }
 
 // Where the ray through pixel position (px, py) meets the floor y = 0.
@@ -321,14 +329,9 @@ TEST_CASE("direct light: two point lights, L = rho/pi * sum I_k cos_k / d_k^2",
   // have a relative standard error of 0.47%; tolerance 2.5%. Caught: the 1/p_k weight left out
   // (−59%); the point light's 1/d² written 1/d.
   const float rho = 0.6f;
-  Scene s;
-  s.triangles = square(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 4.f, 0);
-  s.mesh_names = {"floor"};
-  s.materials = {material(PF_MAT_DIFFUSE, Vec3(rho, rho, rho))};
-  s.material_names = {"floor"};
-  s.lights = {point_light(Vec3(0, 1, 0), 2.f), point_light(Vec3(1, 2, 0.5f), 5.f)};
-  s.camera = pf_camera{{0, 3, 0}, {0, 0, 0}, {0, 0, 1}, 40.f, 4, 4};
-  finish_scene(s);
+  const Scene s = diffuse_floor(square(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 4.f, 0), rho,
+                                {point_light(Vec3(0, 1, 0), 2.f), point_light(Vec3(1, 2, 0.5f), 5.f)},
+                                pf_camera{{0, 3, 0}, {0, 0, 0}, {0, 0, 1}, 40.f, 4, 4});
   const Vec3 p(0, 0, 0), n(0, 1, 0);
   const double expected =
       rho / kPi * (point_irradiance(p, n, Vec3(0, 1, 0), 2.f) +
@@ -459,13 +462,8 @@ TEST_CASE("classic estimate: caustic photons are rescaled to the global radius (
   // hitpoint about 4%; 49 hitpoints 0.1 apart (discs barely overlap): about 0.6% on the mean;
   // tolerance 3%. Caught: the caustic sum not rescaled (L = ρ/π (E_g + 4 E_c) here).
   const float rho = 0.5f;
-  Scene s;
-  s.triangles = square(Vec3(0.5f, 0, 0.5f), Vec3(0, 0, 1), Vec3(1, 0, 0), 0.5f, 0);
-  s.mesh_names = {"floor"};
-  s.materials = {material(PF_MAT_DIFFUSE, Vec3(rho, rho, rho))};
-  s.material_names = {"floor"};
-  s.camera = pf_camera{{0.5f, 2, 0.5f}, {0.5f, 0, 0.5f}, {0, 0, 1}, 40.f, 7, 7};
-  finish_scene(s);
+  const Scene s = diffuse_floor(square(Vec3(0.5f, 0, 0.5f), Vec3(0, 0, 1), Vec3(1, 0, 0), 0.5f, 0),
+                                rho, {}, pf_camera{{0.5f, 2, 0.5f}, {0.5f, 0, 0.5f}, {0, 0, 1}, 40.f, 7, 7});
   const int n_g = 50000, n_c = 20000;
   const uint64_t n_e = 100000;
   const float phi_g = 3.f, phi_c = 6.f;
