@@ -92,11 +92,8 @@ inline ToolRun run_tool(const std::string& tool, const std::string& args, const 
 // edits a file consistently would: the edits below test the loaders' checks behind the checksum.
 inline void refresh_checksum(hid_t d) {
   if (H5Aexists(d, "checksum64") <= 0) return;
-  h5::Handle ft(H5Dget_type(d));
-  h5::Handle space(H5Dget_space(d));
-  std::vector<unsigned char> raw(size_t(H5Sget_simple_extent_npoints(space.get())) *
-                                 H5Tget_size(ft.get()));
-  REQUIRE(H5Dread(d, ft.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()) >= 0);
+  std::vector<unsigned char> raw;
+  REQUIRE(h5::read_stored_bytes(d, raw));
   const int64_t sum = int64_t(checksum64(raw.data(), raw.size()));
   h5::Handle a(H5Aopen(d, "checksum64", H5P_DEFAULT));
   REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &sum) >= 0);

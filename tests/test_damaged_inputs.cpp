@@ -45,11 +45,9 @@ std::string dataset_bytes(const std::string& file, const std::string& path) {
   REQUIRE(f.valid());
   h5::Handle d(H5Dopen2(f.get(), path.c_str(), H5P_DEFAULT));
   REQUIRE(d.valid());
-  h5::Handle t(H5Dget_type(d.get()));
-  h5::Handle s(H5Dget_space(d.get()));
-  std::string out(size_t(H5Sget_simple_extent_npoints(s.get())) * H5Tget_size(t.get()), '\0');
-  REQUIRE(H5Dread(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) >= 0);
-  return out;
+  std::vector<unsigned char> raw;
+  REQUIRE(h5::read_stored_bytes(d.get(), raw));
+  return std::string(raw.begin(), raw.end());
 }
 
 // The output a stage's run is judged by: a dataset of an .h5 output, the pixels of an image.

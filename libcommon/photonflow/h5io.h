@@ -172,4 +172,8 @@ class Reader : public FileBase {
 // Silences HDF5's own error printing (we report errors ourselves). Idempotent.
 void quiet_hdf5();
 
+// Every element of an open dataset in its own file type, unconverted (the bytes checksum64 covers,
+// h5io.cpp); false when HDF5 cannot read them.
+bool read_stored_bytes(hid_t dataset, std::vector<unsigned char>& out);
+
 }  // namespace pf::h5

@@ -367,6 +367,15 @@ size_t Reader::count(const std::string& path) const {
   return n;
 }
 
+bool read_stored_bytes(hid_t dataset, std::vector<unsigned char>& out) {
+  Handle ft(H5Dget_type(dataset));
+  Handle space(H5Dget_space(dataset));
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (!ft.valid() || n < 0) return false;
+  out.assign(size_t(n) * H5Tget_size(ft.get()), 0);
+  return n == 0 || H5Dread(dataset, ft.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) >= 0;
+}
+
 void Reader::verify(const std::string& path, hid_t dataset, hid_t type, const void* data,
                     size_t n) const {
   if (H5Aexists(dataset, "checksum64") <= 0) return;  // files of builds before the checksum
@@ -376,8 +385,8 @@ void Reader::verify(const std::string& path, hid_t dataset, hid_t type, const vo
   if (H5Tequal(ft.get(), type) > 0) {
     have = checksum64(data, n * H5Tget_size(type));
   } else {  // read as another type (a subset of fields, a conversion): the file's bytes again
-    std::vector<unsigned char> raw(n * H5Tget_size(ft.get()));
-    if (n > 0 && H5Dread(dataset, ft.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()) < 0)
+    std::vector<unsigned char> raw;
+    if (!read_stored_bytes(dataset, raw))
       throw input_error(path_, "cannot read dataset " + path + " (truncated or damaged)");
     have = checksum64(raw.data(), raw.size());
   }
