@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
       std::cout << opts.help() << "\nAll meshes are centred at the origin, outward-facing.\n";
       return 0;
     }
-    if (!args.count("out")) throw pf::input_error("", "--out is required", "see --help");
+    pf::require_options(opts, args, {"out"});
     const std::string shape = args["shape"].as<std::string>();
     const size_t n = args["triangles"].as<size_t>();
     const float r = args["radius"].as<float>();
