@@ -81,25 +81,32 @@ Scene point_lights_in_box(float rho, float i1, float i2) {
   return s;
 }
 
-// A scene of one diffuse mesh "floor" (albedo rho) made of `tris`, lit by `lights`, seen by `cam`.
-Scene diffuse_floor(std::vector<pf_triangle> tris, float rho, std::vector<pf_light> lights,
-                    const pf_camera& cam) {
+// A scene of one diffuse mesh `name` (albedo rho) made of `tris`, lit by `lights`, seen by `cam`.
+Scene diffuse_mesh(const std::string& name, std::vector<pf_triangle> tris, float rho,
+                   std::vector<pf_light> lights, const pf_camera& cam) {
   Scene s;
   s.triangles = std::move(tris);
-  s.mesh_names = {"floor"};
+  s.mesh_names = {name};
   s.materials = {material(PF_MAT_DIFFUSE, Vec3(rho, rho, rho))};
-  s.material_names = {"floor"};
+  s.material_names = {name};
   s.lights = std::move(lights);
   s.camera = cam;
   finish_scene(s);
   return s;
 }
 
+// A diffuse plane z = −1 (6 × 6 wide, albedo 1/2) facing a W × H camera at the origin that looks
+// straight at it: image positions map affinely onto the plane (camera.h).
+Scene plane_facing_camera(int W, int H) {
+  return diffuse_mesh("plane", square(Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 1, 0), 3.f, 0), 0.5f,
+                      {}, pf_camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 50.f, W, H});
+}
+
 // A diffuse floor y = 0 (albedo rho, 8 × 8 wide), its front up or down, under a point light of
 // intensity I at height h; the camera looks straight down from above. Nothing else: the light the
 // camera sees is direct only, L = ρ/π · I h / d³, whichever side of the floor is its front.
 Scene floor_under_point_light(bool front_up, float rho, float intensity, float h, int size) {
-  return diffuse_floor(front_up ? square(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 4.f, 0)
+  return diffuse_mesh("floor", front_up ? square(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 4.f, 0)
                                 : square(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), 4.f, 0),
                        rho, {point_light(Vec3(0, h, 0), intensity)},
                        pf_camera{{0.f, 3.f, 0.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 40.f, size, size});
@@ -239,14 +246,8 @@ TEST_CASE("eye pass: spp samples of a pixel are stratified and independently jit
   // each of its 16 cells, at independent uniform offsets within the cells. Caught: both jitter
   // coordinates taken from the same stratum index (s % 4); every sample of a pixel given the same
   // random numbers (the stream index without the sample number).
-  Scene s;
-  s.triangles = square(Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 1, 0), 3.f, 0);
-  s.mesh_names = {"plane"};
-  s.materials = {material(PF_MAT_DIFFUSE, Vec3(0.5f, 0.5f, 0.5f))};
-  s.material_names = {"plane"};
   const int W = 4, H = 3, spp = 16;
-  s.camera = pf_camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 50.f, W, H};
-  finish_scene(s);
+  const Scene s = plane_facing_camera(W, H);
   CameraFrame cam(s.camera);
   EyePassOptions eo;
   eo.spp = spp;
@@ -286,14 +287,8 @@ TEST_CASE("eye pass: the samples of a pixel cover it uniformly for any spp (box 
   // 0.433/sqrt(576·spp); tolerance 5 of them. A strata × strata grid (strata = ⌈√spp⌉) filled
   // in order misses the last cells when spp is not a square: spp = 2 put both samples in the
   // pixel's upper half (mean v = 1/4), spp = 8 left its lower-right ninth empty.
-  Scene s;
-  s.triangles = square(Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, 1, 0), 3.f, 0);
-  s.mesh_names = {"plane"};
-  s.materials = {material(PF_MAT_DIFFUSE, Vec3(0.5f, 0.5f, 0.5f))};
-  s.material_names = {"plane"};
   const int W = 24, H = 24;
-  s.camera = pf_camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 50.f, W, H};
-  finish_scene(s);
+  const Scene s = plane_facing_camera(W, H);
   CameraFrame cam(s.camera);
   for (int spp : {2, 3, 4, 5, 6, 8, 9, 12}) {
     EyePassOptions eo;
@@ -329,7 +324,7 @@ TEST_CASE("direct light: two point lights, L = rho/pi * sum I_k cos_k / d_k^2",
   // have a relative standard error of 0.47%; tolerance 2.5%. Caught: the 1/p_k weight left out
   // (−59%); the point light's 1/d² written 1/d.
   const float rho = 0.6f;
-  const Scene s = diffuse_floor(square(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 4.f, 0), rho,
+  const Scene s = diffuse_mesh("floor", square(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 4.f, 0), rho,
                                 {point_light(Vec3(0, 1, 0), 2.f), point_light(Vec3(1, 2, 0.5f), 5.f)},
                                 pf_camera{{0, 3, 0}, {0, 0, 0}, {0, 0, 1}, 40.f, 4, 4});
   const Vec3 p(0, 0, 0), n(0, 1, 0);
@@ -462,7 +457,7 @@ TEST_CASE("classic estimate: caustic photons are rescaled to the global radius (
   // hitpoint about 4%; 49 hitpoints 0.1 apart (discs barely overlap): about 0.6% on the mean;
   // tolerance 3%. Caught: the caustic sum not rescaled (L = ρ/π (E_g + 4 E_c) here).
   const float rho = 0.5f;
-  const Scene s = diffuse_floor(square(Vec3(0.5f, 0, 0.5f), Vec3(0, 0, 1), Vec3(1, 0, 0), 0.5f, 0),
+  const Scene s = diffuse_mesh("floor", square(Vec3(0.5f, 0, 0.5f), Vec3(0, 0, 1), Vec3(1, 0, 0), 0.5f, 0),
                                 rho, {}, pf_camera{{0.5f, 2, 0.5f}, {0.5f, 0, 0.5f}, {0, 0, 1}, 40.f, 7, 7});
   const int n_g = 50000, n_c = 20000;
   const uint64_t n_e = 100000;
