@@ -125,7 +125,8 @@ void fuzz(const Chain& c, const std::string& file, const std::string& tool, cons
                               ("pf-damaged-" + fs::path(file).stem().string() + "-run" +
                                std::to_string(run) + ".h5")).string();
     INFO(file << ": run " << run << ", bits flipped at bytes" << where << " (kept as " << keep
-              << ", beside the intact file as .intact, if this fails)\n" << tool << " exit " << r.exit_code << ": " << r.err);
+              << ", beside the intact file as .intact, if this fails)\n"
+              << tool << " exit " << r.exit_code << ": " << r.err);
     const bool clean_exit = r.exit_code == 0 || r.exit_code == 2;
     const bool same = r.exit_code != 0 || (fs::exists(out) && output_data(out, dataset) == expected);
     if (!clean_exit || !same) {
