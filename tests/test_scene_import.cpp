@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "photonflow/error.h"
+#include "photonflow/memory_cap.h"
 #include "photonflow/scene_import.h"
 #include "support.h"
 
@@ -554,4 +555,42 @@ TEST_CASE("Cornell box: dimensions, wall colours, light under the ceiling facing
   // The camera stands outside the open front (z = 1) and looks in along −z.
   CHECK(s.camera.eye[2] > 1.f);
   check_vec(normalize(Vec3(s.camera.look_at) - Vec3(s.camera.eye)), Vec3(0, 0, -1));
+}
+
+TEST_CASE("a loader that runs away on a damaged file is stopped by the import's address-space cap",
+          "[scene_import]") {
+  if (!AddressSpaceCap::supported()) {
+    WARN("SKIPPED: address-space caps are off in sanitizer builds (the file would take 21 GB)");
+    return;
+  }
+  // assimp 5.2.5's COLLADA reader loops on the letter in "1x" of an index list, growing a vector
+  // until the allocator fails (21 GB and 46 s without the cap).
+  const std::string rel = "tests/data/letter-in-index.dae";
+  auto refusal = [&](uint64_t memory_mb) {
+    BakeOptions o;
+    o.import_memory_mb = memory_mb;
+    try {
+      bake(rel, o);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    FAIL("no error");
+    return std::string();
+  };
+  const std::string automatic = refusal(0);
+  INFO(automatic);
+  CHECK(automatic.find(rel) != std::string::npos);
+  CHECK(automatic.find("assimp needed more than the import's") != std::string::npos);
+  CHECK(automatic.find("256 MiB + 64 x the") != std::string::npos);
+  CHECK(automatic.find('\n') == std::string::npos);
+  const std::string fixed = refusal(64);
+  INFO(fixed);
+  CHECK(fixed.find("the import's 64 MiB of address space") != std::string::npos);
+  CHECK(fixed.find("(--import-memory-mb 64)") != std::string::npos);
+
+  // The whole file bakes under a small fixed budget, the same triangles as without one.
+  BakeOptions small;
+  small.import_memory_mb = 16;
+  CHECK(bake("data/cornell-box.dae", small).triangles.size() ==
+        bake("data/cornell-box.dae").triangles.size());
 }

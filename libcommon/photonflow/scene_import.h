@@ -41,6 +41,9 @@ struct BakeOptions {
   int width = 0;                    // pixels; 0 = 512, or derived from the other and the aspect
   int height = 0;                   // pixels; 0 = 512, or derived from the other and the aspect
   KdBuildParams kd;
+  // Address-space budget of each assimp import in MiB (memory_cap.h); 0 = automatic: 256 MiB + 64 ×
+  // the bytes of the files it opens. An import that needs more is refused (InputError).
+  uint64_t import_memory_mb = 0;
 };
 
 // What the bake found and did, for the tool's summary and warnings.

@@ -104,6 +104,10 @@ int run(int argc, char** argv) {
      cxxopts::value<int>()->default_value(pf::default_text(kKd.max_depth)))
     ("kd-max-leaf", "kd-tree: never split nodes with this many triangles or fewer",
      cxxopts::value<int>()->default_value(pf::default_text(kKd.max_leaf_size)))
+    ("import-memory-mb", "address space each file import may take, MiB (0 = automatic: 256 MiB + "
+                         "64 x the bytes of the files read); a loader that runs away on a "
+                         "damaged file is stopped there",
+     cxxopts::value<uint64_t>()->default_value("0"))
     ("threads", "threads for the kd-tree build (0 = all cores; the result does not depend "
                 "on it)", cxxopts::value<int>()->default_value("0"))
     ("h,help", "print this help");
@@ -135,6 +139,10 @@ int run(int argc, char** argv) {
   o.kd.max_depth = args["kd-max-depth"].as<int>();
   o.kd.max_leaf_size = args["kd-max-leaf"].as<int>();
   o.kd.threads = args["threads"].as<int>();
+  o.import_memory_mb = args["import-memory-mb"].as<uint64_t>();
+  if (o.import_memory_mb > (uint64_t(1) << 24))
+    throw pf::input_error("", "--import-memory-mb must be at most 16777216 (16 TiB)",
+                          "give 0 for the automatic budget");
   pf::require_positive("kd-ct", o.kd.cost_traversal);
   pf::require_positive("kd-ci", o.kd.cost_intersect);
   if (!(o.kd.empty_bonus >= 0.f && o.kd.empty_bonus < 1.f))
