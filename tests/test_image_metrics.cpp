@@ -509,6 +509,10 @@ TEST_CASE("image_metrics: PNG masks: stored and compressed, all filters, grey, R
     CHECK_NOTHROW(decode_png(png_from_raw(3, 3, row + row + row), "ok.png"));
     CHECK_THROWS_WITH(decode_png(png_from_raw(3, 4, row + row + row), "short.png"),
                       Catch::Contains("damaged PNG image data"));
+    // A header far larger than deflate could expand the data to is refused before its rows are
+    // allocated (here 4 GB).
+    CHECK_THROWS_WITH(decode_png(png_from_raw(65536, 65536, row + row + row), "huge.png"),
+                      Catch::Contains("need more data than its"));
     const std::string bad_filter = std::string(1, '\x05') + "abc";
     CHECK_THROWS_WITH(decode_png(png_from_raw(3, 3, row + bad_filter + row), "filter.png"),
                       Catch::Contains("unknown PNG filter type"));

@@ -294,7 +294,15 @@ Image decode_png(const std::string& bytes, const std::string& name) {
   // Inflate (RFC 1950/1951 through zlib) into H filtered scanlines.
   const size_t row = (size_t(W) * size_t(channels) * size_t(depth) + 7) / 8;
   const size_t bpp = std::max<size_t>(1, size_t(channels) * size_t(depth) / 8);
-  std::vector<unsigned char> raw(size_t(H) * (row + 1));
+  // Deflate expands at most about 1032:1 (RFC 1951: a 258-byte match per 2 bits at best), so a
+  // header that asks for more scanline bytes than that is damaged; refused before the buffer for
+  // them is allocated (65536 × 65536 RGBA16 would be 34 GB).
+  const size_t raw_bytes = size_t(H) * (row + 1);
+  if (raw_bytes / 1100 > idat.size())
+    throw input_error(name, "is a damaged PNG file: its header's " + std::to_string(W) + "x" +
+                                std::to_string(H) + " pixels need more data than its " +
+                                std::to_string(idat.size()) + " compressed bytes can hold");
+  std::vector<unsigned char> raw(raw_bytes);
   z_stream zs{};
   if (inflateInit(&zs) != Z_OK) throw input_error(name, "cannot start zlib");
   zs.next_in = idat.data();
