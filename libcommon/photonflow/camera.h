@@ -10,6 +10,11 @@
 
 namespace pf {
 
+// Largest image side in pixels: scene-bake's --width and --height, scene.h5's camera and the
+// stage files' width/height attributes are checked against it (every image buffer is sized by
+// them).
+constexpr int kMaxImageSide = 65536;
+
 class CameraFrame {
  public:
   explicit CameraFrame(const pf_camera& c) : width_(c.width), height_(c.height) {

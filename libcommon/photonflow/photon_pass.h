@@ -45,6 +45,11 @@ void check_options(const PhotonPassOptions& opt);
 // --first-pass and --passes otherwise (also for first < 0 or count < 0). Every trace_photons
 // checks its own pass index.
 void check_pass_range(int64_t first, int64_t count);
+// Whether passes first … first + count − 1 (none when count ≤ 0) end at 2^31 − 1 at most; the
+// files' readers (stage_files.cpp) check their first_pass and pass count with it.
+inline bool pass_indices_fit(int64_t first, int64_t count) {
+  return count <= 0 || first + count - 1 <= int64_t(INT32_MAX);
+}
 
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt);
 

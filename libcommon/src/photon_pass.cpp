@@ -108,7 +108,7 @@ void check_options(const PhotonPassOptions& opt) {
 void check_pass_range(int64_t first, int64_t count) {
   if (first < 0 || count < 0)
     throw input_error("", "--first-pass and --passes must be >= 0");
-  if (count > 0 && first + count - 1 > int64_t(INT32_MAX))
+  if (!pass_indices_fit(first, count))
     throw input_error("", "passes " + std::to_string(first) + " … " +
                               std::to_string(first + count - 1) +
                               " run past 2147483647 (2^31 - 1), the largest pass index",

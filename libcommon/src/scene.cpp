@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 
+#include "photonflow/camera.h"
 #include "photonflow/h5io.h"
 #include "photonflow/hash.h"
 
@@ -287,11 +288,12 @@ Scene load_scene(const std::string& path) {
     if (l.type == PF_LIGHT_AREA && (l.triangle < 0 || size_t(l.triangle) >= s.triangles.size()))
       throw input_error(path, "an area light's triangle id is out of range", hint);
   }
-  // The image size (scene-bake: 1 … 65536 pixels per side) sizes every image buffer.
-  if (s.camera.width < 1 || s.camera.width > 65536 || s.camera.height < 1 ||
-      s.camera.height > 65536)
+  // The image size sizes every image buffer.
+  if (s.camera.width < 1 || s.camera.width > kMaxImageSide || s.camera.height < 1 ||
+      s.camera.height > kMaxImageSide)
     throw input_error(path, "camera image size " + std::to_string(s.camera.width) + "x" +
-                                std::to_string(s.camera.height) + " is outside 1 … 65536 pixels",
+                                std::to_string(s.camera.height) + " is outside 1 … " +
+                                std::to_string(kMaxImageSide) + " pixels",
                       hint);
   std::string problem = validate_kdtree(s.kd, s.triangles.size());
   if (!problem.empty()) throw input_error(path, "invalid kd-tree: " + problem, hint);

@@ -65,6 +65,7 @@
 #include <set>
 #include <sstream>
 
+#include "photonflow/camera.h"
 #include "photonflow/error.h"
 #include "photonflow/memory_cap.h"
 #include "photonflow/provenance.h"
@@ -482,10 +483,10 @@ pf_camera resolve_camera(const BakeOptions& o, const std::optional<FileCamera>& 
                          const Bounds& bounds, const std::string& file) {
   const float file_aspect = fc && fc->aspect > 0.f ? fc->aspect : 0.f;
   const float base_aspect = file_aspect > 0.f ? file_aspect : 1.f;
-  if (o.width < 0 || o.height < 0 || o.width > 65536 || o.height > 65536)
+  if (o.width < 0 || o.height < 0 || o.width > kMaxImageSide || o.height > kMaxImageSide)
     throw input_error(file, "image size " + std::to_string(o.width) + "x" +
                                 std::to_string(o.height) + " is out of range",
-                      "give --width and --height in pixels, 1..65536");
+                      "give --width and --height in pixels, 1.." + std::to_string(kMaxImageSide));
   pf_camera cam{};
   cam.width = o.width;
   cam.height = o.height;

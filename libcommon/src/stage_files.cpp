@@ -5,7 +5,9 @@
 #include <cstddef>
 #include <limits>
 
+#include "photonflow/camera.h"
 #include "photonflow/h5io.h"
+#include "photonflow/photon_pass.h"
 #include "photonflow/scene.h"
 
 namespace pf {
@@ -48,7 +50,7 @@ constexpr int64_t kIntMax = std::numeric_limits<int32_t>::max();
 int check_first_pass(const h5::Reader& r, const std::string& path, size_t passes,
                      const std::string& hint) {
   const int64_t first = attr_in(r, path, "/", "first_pass", 0, kIntMax, hint);
-  if (passes > 0 && first + int64_t(passes) - 1 > kIntMax)
+  if (!pass_indices_fit(first, int64_t(passes)))
     throw input_error(path, "its passes " + std::to_string(first) + " … " +
                                 std::to_string(first + int64_t(passes) - 1) + " run past 2^31-1",
                       hint);
@@ -196,9 +198,9 @@ HitpointSet load_hitpoints(const std::string& path) {
   const std::string hint = "the file is damaged; remake it with trace-hitpoints";
   HitpointSet h;
   h.scene_id = r.scene_id();
-  // The camera's image size (scene-bake: 1 … 65536 pixels per side).
-  h.width = int(attr_in(r, path, "/", "width", 1, 65536, hint));
-  h.height = int(attr_in(r, path, "/", "height", 1, 65536, hint));
+  // The camera's image size.
+  h.width = int(attr_in(r, path, "/", "width", 1, kMaxImageSide, hint));
+  h.height = int(attr_in(r, path, "/", "height", 1, kMaxImageSide, hint));
   h.direct_mode = parse_direct(r.attr_string("/", "direct_mode"), path);
   h.radius0 = float(r.attr_double("/", "radius0"));
   h.estimator = r.attr_string("/", "estimator");
