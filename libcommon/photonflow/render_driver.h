@@ -42,8 +42,10 @@ class ProgressiveRenderer {
  public:
   // Starts a run: the eye pass, no photons yet.
   ProgressiveRenderer(const Scene& scene, const RenderOptions& opt);
-  // Continues a run from a saved hitpoint state (a checkpoint).
-  ProgressiveRenderer(const Scene& scene, const RenderOptions& opt, HitpointSet state);
+  // Continues a run from a saved hitpoint state (a checkpoint), checked against the scene's
+  // tables (check_against_scene); `path`, the file it came from, names it in the InputError.
+  ProgressiveRenderer(const Scene& scene, const RenderOptions& opt, HitpointSet state,
+                      const std::string& path = "");
 
   // One photon pass (trace photons of pass `passes_done()`) and its PPM gather.
   void run_iteration();

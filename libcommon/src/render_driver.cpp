@@ -29,9 +29,9 @@ ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions
 }
 
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt,
-                                         HitpointSet state)
+                                         HitpointSet state, const std::string& path)
     : scene_(scene), opt_(opt), state_(std::move(state)) {
-  check_against_scene("", state_, scene_);
+  check_against_scene(path, state_, scene_);
 }
 
 void ProgressiveRenderer::run_iteration() {
@@ -138,17 +138,18 @@ HitpointSet render_progressive(
   Stopwatch wall;
   bool from_checkpoint = resume && !opt.checkpoint.empty() && access(opt.checkpoint.c_str(), F_OK) == 0;
   std::unique_ptr<ProgressiveRenderer> r;
-  HitpointSet loaded;
   if (from_checkpoint) {
-    loaded = load_hitpoints(opt.checkpoint);
+    HitpointSet loaded = load_hitpoints(opt.checkpoint);
     require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
-    check_against_scene(opt.checkpoint, loaded, scene);
-    if (loaded.estimator == "classic")
+    // Checks the state's indices against the scene's tables; no work yet (that is run_iteration).
+    r = std::make_unique<ProgressiveRenderer>(scene, opt, std::move(loaded), opt.checkpoint);
+    const HitpointSet& state = r->state();
+    if (state.estimator == "classic")
       throw input_error(opt.checkpoint, "holds a classic photon-mapping estimate, not a PPM state",
                         "delete it or pass another --checkpoint");
-    if (loaded.passes > opt.passes)
+    if (state.passes > opt.passes)
       throw input_error(opt.checkpoint,
-                        "already has " + std::to_string(loaded.passes) + " passes, more than --passes",
+                        "already has " + std::to_string(state.passes) + " passes, more than --passes",
                         "raise --passes or start without --resume");
     require_same_state(opt.checkpoint, opt);
   }
@@ -160,10 +161,7 @@ HitpointSet render_progressive(
   Stopwatch clock;
   double aside = 0;
   const double build0 = opt.device ? opt.device->build_seconds() : 0.0;
-  if (from_checkpoint)
-    r = std::make_unique<ProgressiveRenderer>(scene, opt, std::move(loaded));
-  else
-    r = std::make_unique<ProgressiveRenderer>(scene, opt);
+  if (!from_checkpoint) r = std::make_unique<ProgressiveRenderer>(scene, opt);  // the eye pass
   RenderStatus st;
   st.target = opt.passes;
   st.resumed = from_checkpoint;
