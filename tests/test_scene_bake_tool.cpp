@@ -84,9 +84,15 @@ TEST_CASE("scene-bake: bad inputs give one line, exit code 2 and no file", "[sce
   for (const char* rel :
        {"tests/data/nan.obj", "tests/data/degenerate.obj", "tests/data/bad-index.obj",
         "tests/data/bad-index.dae", "tests/data/no-light.obj", "tests/data/lines.obj",
-        "tests/data/garbage.dae", "tests/data/unknown.xyz", "tests/data/missing.obj"}) {
+        "tests/data/garbage.dae", "tests/data/unknown.xyz", "tests/data/missing.obj",
+        // assimp runs away (memory), crashes, aborts or loops on these (test_scene_import)
+        "tests/data/letter-in-index.dae", "tests/data/damaged-segv.ply",
+        "tests/data/damaged-assert.ply", "tests/data/damaged-loop.ply"}) {
     INFO(rel);
-    Run r = run_tool("'" + src(rel) + "' -o '" + out + "'", dir);
+    const std::string input = std::string(rel).find(".ply") != std::string::npos
+                                  ? src("data/cornell-box.dae") + "' --insert '" + src(rel)
+                                  : src(rel);
+    Run r = run_tool("'" + input + "' -o '" + out + "' --import-seconds 1", dir);
     INFO(r.err);
     CHECK(r.code == 2);
     CHECK(lines(r.err) == 1);
@@ -106,7 +112,8 @@ TEST_CASE("scene-bake: bad options give one line and exit code 2", "[scene_bake_
         in + out + " --insert-box 0,0,0,1,1,1",
         in + out + " --insert '" + src("tests/data/tetra.ply") + "' --insert-material nope",
         in + out + " --kd-max-leaf many", in + out + " --kd-max-leaf 0",
-        in + out + " --kd-ct -1", in + out + " --kd-max-depth 999", in + out + " --threads -2"}) {
+        in + out + " --kd-ct -1", in + out + " --kd-max-depth 999", in + out + " --threads -2",
+        in + out + " --import-seconds -1", in + out + " --import-memory-mb 99999999"}) {
     INFO(args);
     Run r = run_tool(args, dir);
     INFO(r.err);
@@ -212,7 +219,8 @@ TEST_CASE("scene-bake: --help explains every option", "[scene_bake_tool]") {
   for (const char* opt :
        {"--output", "--eye", "--look-at", "--up", "--fov", "--width", "--height", "--insert",
         "--insert-box", "--insert-material", "--kd-ct", "--kd-ci", "--kd-empty-bonus",
-        "--kd-max-depth", "--kd-max-leaf", "--threads", "--help", "INPUT", "degrees", "pixels",
+        "--kd-max-depth", "--kd-max-leaf", "--import-memory-mb", "--import-seconds", "--threads",
+        "--help", "INPUT", "degrees", "pixels",
         "default"}) {
     INFO(opt);
     CHECK(r.out.find(opt) != std::string::npos);

@@ -10,7 +10,8 @@
 //
 // The cap is RLIMIT_AS (setrlimit), lowered to the current address-space size (/proc/self/statm)
 // plus the budget for the cap's lifetime and restored after it. It is process-wide, so it belongs
-// around single-threaded work: another thread's allocations count against it too. A soft limit
+// around single-threaded work: another thread's allocations count against it too. scene-bake's
+// imports run in a child process of their own (isolate.h), where nothing else runs. A soft limit
 // the user set lower is kept. Inactive (active() false, no limit set) in AddressSanitizer builds,
 // whose operator new aborts instead of throwing when the allocator fails, and where setrlimit or
 // /proc fail.

@@ -44,6 +44,9 @@ struct BakeOptions {
   // Address-space budget of each assimp import in MiB (memory_cap.h); 0 = automatic: 256 MiB + 64 ×
   // the bytes of the files it opens. An import that needs more is refused (InputError).
   uint64_t import_memory_mb = 0;
+  // Time limit of the import in seconds (bake_scene's child process); 0 = automatic: 60 s + 10 s
+  // per MB of the input files. An import still running then is killed and refused (InputError).
+  double import_seconds = 0;
 };
 
 // What the bake found and did, for the tool's summary and warnings.
@@ -64,9 +67,12 @@ constexpr float kDefaultFovYDeg = 40.f;
 
 // Reads options.input (and the inserts), flattens the node graph into world-space triangles,
 // maps materials, collects point lights, sets the camera, then derives hh, bounds, area lights and
-// their CDF, kd-tree and scene_id (finish_scene). Throws InputError (one line: file, problem, what to do) for unreadable or
-// unsupported files, no triangles, no light, non-finite coordinates, out-of-range indices and bad
-// options. Zero-area triangles are dropped and counted in `report`.
+// their CDF, kd-tree and scene_id (finish_scene). Throws InputError (one line: file, problem, what
+// to do) for unreadable or unsupported files, no triangles, no light, non-finite coordinates,
+// out-of-range indices and bad options. Zero-area triangles are dropped and counted in `report`.
+// The files are read by assimp in a child process (isolate.h), which crashes, aborts or loops on
+// some damaged files: that too is an InputError naming the file, as is an import past its memory
+// budget (import_memory_mb) or time limit (import_seconds).
 Scene bake_scene(const BakeOptions& options, BakeReport& report);
 
 }  // namespace pf

@@ -108,6 +108,9 @@ int run(int argc, char** argv) {
                          "64 x the bytes of the files read); a loader that runs away on a "
                          "damaged file is stopped there",
      cxxopts::value<uint64_t>()->default_value("0"))
+    ("import-seconds", "time limit of the file import, s (0 = automatic: 60 s + 10 s per MB "
+                       "of the input files); a loader that loops on a damaged file is stopped "
+                       "there", cxxopts::value<double>()->default_value("0"))
     ("threads", "threads for the kd-tree build (0 = all cores; the result does not depend "
                 "on it)", cxxopts::value<int>()->default_value("0"))
     ("h,help", "print this help");
@@ -140,6 +143,9 @@ int run(int argc, char** argv) {
   o.kd.max_leaf_size = args["kd-max-leaf"].as<int>();
   o.kd.threads = args["threads"].as<int>();
   o.import_memory_mb = args["import-memory-mb"].as<uint64_t>();
+  o.import_seconds = args["import-seconds"].as<double>();
+  if (!(o.import_seconds >= 0 && o.import_seconds < 1e9))
+    throw pf::input_error("", "--import-seconds must be >= 0", "give 0 for the automatic limit");
   if (o.import_memory_mb > (uint64_t(1) << 24))
     throw pf::input_error("", "--import-memory-mb must be at most 16777216 (16 TiB)",
                           "give 0 for the automatic budget");
