@@ -1,15 +1,18 @@
 // Work in a child process (see isolate.h).
 #include "photonflow/isolate.h"
 
+#include <poll.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -64,6 +67,16 @@ void write_fully(int fd, const char* p, size_t n) {
   }
 }
 
+// A file descriptor that becomes readable when process `pid` ends; -1 where the kernel has none.
+int open_pidfd(pid_t pid) {
+#ifdef SYS_pidfd_open
+  return int(syscall(SYS_pidfd_open, pid, 0));
+#else
+  (void)pid;
+  return -1;
+#endif
+}
+
 [[noreturn]] void child(const std::function<void(const IsolatedSend&)>& work, int out, int con,
                         pid_t parent) {
   // Dies with the parent: a parent killed while waiting (a time limit of its own, ^C) must not
@@ -102,21 +115,43 @@ IsolatedRun run_isolated(const std::function<void(const IsolatedSend&)>& work,
   if (pid == 0) child(work, out.fd, con.fd, parent);
 
   IsolatedRun run;
-  int status = 0;
-  auto wait_step = std::chrono::microseconds(200);
-  for (;;) {
-    const pid_t w = waitpid(pid, &status, WNOHANG);
-    if (w == pid) break;
-    if (w < 0 && errno != EINTR)
-      throw std::runtime_error(std::string("waitpid failed: ") + std::strerror(errno));
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (time_limit_s > 0 && elapsed > time_limit_s && !run.timed_out) {
+  const auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  const auto kill_at_limit = [&] {
+    if (time_limit_s > 0 && !run.timed_out && elapsed() >= time_limit_s) {
       kill(pid, SIGKILL);
       run.timed_out = true;
     }
-    std::this_thread::sleep_for(wait_step);
-    wait_step = std::min(wait_step * 2, std::chrono::microseconds(20000));
+  };
+  // Wait for the child's end: on a pidfd (Linux 5.3+), which wakes the moment it ends, else by
+  // polling waitpid every 2 ms at most.
+  const int pidfd = open_pidfd(pid);
+  if (pidfd >= 0) {
+    for (;;) {
+      int timeout_ms = -1;
+      if (time_limit_s > 0 && !run.timed_out)
+        timeout_ms = int(std::clamp(std::ceil((time_limit_s - elapsed()) * 1e3), 0.0, 1e9));
+      pollfd p{pidfd, POLLIN, 0};
+      const int r = poll(&p, 1, timeout_ms);
+      if (r > 0) break;
+      if (r == 0) kill_at_limit();
+      if (r < 0 && errno != EINTR) break;  // waitpid below still waits
+    }
+    close(pidfd);
+  }
+  int status = 0;
+  auto wait_step = std::chrono::microseconds(100);
+  for (;;) {
+    const pid_t w = waitpid(pid, &status, pidfd >= 0 ? 0 : WNOHANG);
+    if (w == pid) break;
+    if (w < 0 && errno != EINTR)
+      throw std::runtime_error(std::string("waitpid failed: ") + std::strerror(errno));
+    if (w == 0) {
+      kill_at_limit();
+      std::this_thread::sleep_for(wait_step);
+      wait_step = std::min(wait_step * 2, std::chrono::microseconds(2000));
+    }
   }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (WIFEXITED(status)) {
