@@ -13,6 +13,11 @@
 // assimp opens (BudgetIOSystem counts them, glTF buffers and OBJ material libraries included), or
 // BakeOptions::import_memory_mb; a parser that runs away on a damaged file is refused promptly.
 //
+// Isolation. Everything that touches assimp (import_scene: reading, flattening, lights, camera)
+// runs in a child process (isolate.h, import_isolated), because assimp 5.2.5 crashes, aborts or
+// loops on some damaged files; the child sends the flattened scene back as bytes (encode/decode)
+// and bake_scene derives the rest (finish_scene: kd-tree, lights' CDF, scene id) in this process.
+//
 // Flattening. Each mesh instance is transformed by its node's accumulated matrix; normals by the
 // inverse transpose of its 3×3 part. A transform with a negative determinant (a mirror) reverses
 // the winding, so v1/v2 are swapped to keep the geometric normal on the front (CCW) side.
@@ -59,14 +64,14 @@
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 #include <functional>
-#include <type_traits>
-#include <cmath>
 #include <memory>
 #include <new>
 #include <set>
 #include <sstream>
+#include <type_traits>
 
 #include "photonflow/camera.h"
 #include "photonflow/error.h"
