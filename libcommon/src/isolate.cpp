@@ -61,7 +61,7 @@ void write_fully(int fd, const char* p, size_t n) {
   while (n > 0) {
     const ssize_t w = write(fd, p, n);
     if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) _exit(71);  // the memory file is full (no memory left): end as killed would
+    if (w <= 0) _exit(71);  // the memory file cannot grow (no memory left): the parent reports it
     p += w;
     n -= size_t(w);
   }
@@ -127,6 +127,7 @@ IsolatedRun run_isolated(const std::function<void(const IsolatedSend&)>& work,
   // Wait for the child's end: on a pidfd (Linux 5.3+), which wakes the moment it ends, else by
   // polling waitpid every 2 ms at most.
   const int pidfd = open_pidfd(pid);
+  bool ended = false;  // the pidfd said so: waitpid returns at once
   if (pidfd >= 0) {
     for (;;) {
       int timeout_ms = -1;
@@ -134,16 +135,17 @@ IsolatedRun run_isolated(const std::function<void(const IsolatedSend&)>& work,
         timeout_ms = int(std::clamp(std::ceil((time_limit_s - elapsed()) * 1e3), 0.0, 1e9));
       pollfd p{pidfd, POLLIN, 0};
       const int r = poll(&p, 1, timeout_ms);
-      if (r > 0) break;
+      ended = r > 0;
+      if (ended) break;
       if (r == 0) kill_at_limit();
-      if (r < 0 && errno != EINTR) break;  // waitpid below still waits
+      if (r < 0 && errno != EINTR) break;  // the waitpid loop below takes over, time limit too
     }
     close(pidfd);
   }
   int status = 0;
   auto wait_step = std::chrono::microseconds(100);
   for (;;) {
-    const pid_t w = waitpid(pid, &status, pidfd >= 0 ? 0 : WNOHANG);
+    const pid_t w = waitpid(pid, &status, ended ? 0 : WNOHANG);
     if (w == pid) break;
     if (w < 0 && errno != EINTR)
       throw std::runtime_error(std::string("waitpid failed: ") + std::strerror(errno));
