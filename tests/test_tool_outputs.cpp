@@ -9,7 +9,9 @@
 //   - stray arguments and --threads / OMP_NUM_THREADS beyond kMaxThreads are refused (libgomp
 //     crashed on 100 000 threads);
 //   - render checks its options as trace-hitpoints and trace-photons do, and --resume continues
-//     only a checkpoint made with the same state options (state_parameters).
+//     only a checkpoint made with the same state options (state_parameters);
+//   - a run that runs out of memory says so in one line and exits 1, also when the allocation
+//     failed in an OpenMP worker thread (before: std::terminate, SIGABRT).
 // Plus the library pieces themselves: preview_path, check_outputs, commit_temp.
 #include <catch2/catch.hpp>
 #include <sys/stat.h>
@@ -20,6 +22,7 @@
 #include "photonflow/error.h"
 #include "photonflow/hash.h"
 #include "photonflow/image.h"
+#include "photonflow/memory_cap.h"
 #include "photonflow/output_file.h"
 #include "photonflow/render_driver.h"
 #include "photonflow/threads.h"
@@ -270,4 +273,37 @@ TEST_CASE("render: --resume continues only a checkpoint made with the same state
                    tmp)
               .exit_code == 0);
   CHECK(read_exr(tmp / "c.exr").rgb == read_exr(tmp / "d.exr").rgb);
+}
+
+TEST_CASE("outputs: out of memory is one line and exit code 1, also from a worker thread",
+          "[tools][outputs]") {
+  if (!AddressSpaceCap::supported()) {
+    WARN("SKIPPED: address-space caps are off in sanitizer builds");
+    return;
+  }
+  TempDir tmp("oom");
+  const Chain c = make_chain(tmp);
+  const std::string big = tmp / "big.h5", out = tmp / "o.h5";
+  REQUIRE(run_tool("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o " + big +
+                                     " --width 65536 --height 65536", tmp)
+              .exit_code == 0);
+  // The tools inherit the cap: this process's address space plus 1 GiB.
+  AddressSpaceCap cap(uint64_t(1) << 30);
+  REQUIRE(cap.active());
+  for (const auto& [tool, args] : std::vector<std::pair<std::string, std::string>>{
+           // 4e9 photons: a chunk buffer's growth fails in an OpenMP worker thread
+           {"trace-photons", "--scene " + c.scene + " -o " + out + " --photons 4000000000"},
+           {"render", "--scene " + c.scene + " -o " + (tmp / "o.exr") +
+                          " --photons 3000000000 --passes 1"},
+           // 65536 x 65536 hitpoints
+           {"trace-hitpoints", "--scene " + big + " -o " + out}}) {
+    const test::ToolRun r = run_tool(tool, args, tmp);
+    INFO(tool << " " << args << "\nexit " << r.exit_code << ", stderr: " << r.err);
+    CHECK(r.exit_code == 1);
+    CHECK(r.err == tool + ": " + out_of_memory_text() + "\n");
+    CHECK_FALSE(fs::exists(out));
+    CHECK_FALSE(fs::exists(tmp / "o.exr"));
+    for (auto& e : fs::directory_iterator(tmp.dir))
+      CHECK(e.path().string().find(".tmp.") == std::string::npos);
+  }
 }

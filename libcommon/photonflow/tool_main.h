@@ -4,10 +4,18 @@
 // output_file.h), reads inputs, calls one library function and writes outputs, all inside
 // run_tool(), which turns failures into one line on stderr and an exit code:
 //   pf::InputError / cxxopts option errors → "<tool>: <message>", exit 2 (bad input)
+//   std::bad_alloc                         → "<tool>: out of memory: <what to lower>", exit 1
 //   any other std::exception              → "<tool>: internal error: <message>", exit 1
+// An exception thrown in an OpenMP worker thread cannot reach run_tool: the OpenMP runtime ends
+// the program through std::terminate (before, "terminate called after throwing an instance of
+// 'std::bad_alloc'" and SIGABRT: `trace-photons --photons 4000000000`). run_tool installs a
+// terminate handler that prints the same one line and exits with 1 instead.
 #pragma once
+#include <cstdio>
+#include <cstdlib>
 #include <cxxopts.hpp>
 #include <exception>
+#include <new>
 #include <functional>
 #include <initializer_list>
 #include <iostream>
@@ -20,7 +28,41 @@
 
 namespace pf {
 
+// What a tool says when an allocation fails.
+inline const char* out_of_memory_text() {
+  return "out of memory: the run needs more than this machine has (lower --photons, --spp or "
+         "the image size baked into the scene)";
+}
+
+// The tool's name for the terminate handler (set by run_tool).
+inline const char*& terminating_tool() {
+  static const char* name = "photonflow";
+  return name;
+}
+
+// std::terminate's handler in the tools: one line for the exception nobody caught (one thrown in
+// an OpenMP worker thread), then exit code 1; no abort, no core file.
+[[noreturn]] inline void terminate_with_one_line() {
+  std::string line = "internal error: std::terminate without an exception";
+  if (const std::exception_ptr e = std::current_exception()) {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::bad_alloc&) {
+      line = out_of_memory_text();
+    } catch (const std::exception& x) {
+      line = std::string("internal error in a worker thread: ") + x.what();
+    } catch (...) {
+      line = "internal error in a worker thread: an exception of unknown type";
+    }
+  }
+  std::fprintf(stderr, "%s: %s\n", terminating_tool(), line.c_str());
+  std::fflush(stderr);
+  std::_Exit(1);
+}
+
 inline int run_tool(const char* tool, const std::function<int()>& body) {
+  terminating_tool() = tool;
+  std::set_terminate(terminate_with_one_line);
   try {
     check_thread_environment();
     return body();
@@ -30,6 +72,9 @@ inline int run_tool(const char* tool, const std::function<int()>& body) {
   } catch (const cxxopts::exceptions::exception& e) {
     std::cerr << tool << ": " << e.what() << " (see " << tool << " --help)\n";
     return kExitBadInput;
+  } catch (const std::bad_alloc&) {
+    std::cerr << tool << ": " << out_of_memory_text() << "\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << tool << ": internal error: " << e.what() << "\n";
     return 1;
