@@ -81,7 +81,8 @@ TEST_CASE("run_isolated: a child dies with the process that waits for it", "[iso
   test::TempDir tmp("isolate");
   const std::string pid_file = tmp / "inner.pid";
   // The outer child waits for an inner one that never ends; the outer is killed at its time
-  // limit, and the inner must go with it.
+  // limit (2 s: the inner writes its pid in milliseconds, also on a loaded machine), and the
+  // inner must go with it.
   const IsolatedRun outer = run_isolated(
       [&](const IsolatedSend&) {
         run_isolated([&](const IsolatedSend&) {
@@ -90,7 +91,7 @@ TEST_CASE("run_isolated: a child dies with the process that waits for it", "[iso
           }
         });
       },
-      0.5);
+      2.0);
   CHECK(outer.signal == SIGKILL);
   pid_t inner = 0;
   REQUIRE((std::ifstream(pid_file) >> inner));
