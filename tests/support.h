@@ -27,6 +27,14 @@
 
 namespace pf::test {
 
+// Every byte of a file ("" when it cannot be read).
+inline std::string file_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
 // A fresh temporary folder, removed at the end of the scope.
 struct TempDir {
   std::filesystem::path dir;
@@ -75,14 +83,8 @@ inline ToolRun run_tool(const std::string& tool, const std::string& args, const 
   int status = std::system(cmd.c_str());
   ToolRun r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  auto slurp = [](const std::string& p) {
-    std::ifstream f(p);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-  };
-  r.out = slurp(out);
-  r.err = slurp(err);
+  r.out = file_bytes(out);
+  r.err = file_bytes(err);
   std::filesystem::remove(out);
   std::filesystem::remove(err);
   return r;

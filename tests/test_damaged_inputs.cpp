@@ -34,11 +34,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
 int fuzz_runs() {
   const char* e = std::getenv("PF_FUZZ_RUNS");
   return e && std::atoi(e) > 0 ? std::atoi(e) : 40;
@@ -59,7 +54,7 @@ std::string dataset_bytes(const std::string& file, const std::string& path) {
 // text of a JSON record (which must be whole: one object).
 std::string output_data(const std::string& out, const std::string& dataset) {
   if (fs::path(out).extension() == ".json") {
-    const std::string text = slurp(out);
+    const std::string text = test::file_bytes(out);
     REQUIRE(text.size() > 2);
     CHECK(text.front() == '{');
     CHECK(text[text.find_last_not_of(" \n")] == '}');
@@ -117,7 +112,7 @@ void fuzz(const Chain& c, const std::string& file, const std::string& tool, cons
       for (size_t at; (at = a.find(key)) != std::string::npos;) a.replace(at, key.size(), value);
     return a;
   };
-  const std::string intact = slurp(file);
+  const std::string intact = test::file_bytes(file);
   REQUIRE(intact.size() > 0);
   // The stage on a copy of the intact file: the output a harmless flip must give.
   fs::copy_file(file, in, fs::copy_options::overwrite_existing);

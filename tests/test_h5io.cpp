@@ -18,6 +18,7 @@
 #include "photonflow/hash.h"
 #include "photonflow/provenance.h"
 #include "photonflow/scene.h"
+#include "support.h"
 
 namespace fs = std::filesystem;
 using namespace pf;
@@ -394,11 +395,7 @@ TEST_CASE("damaged shapes, compound types and attribute extents are refused, nev
     H5Fclose(f);
     REQUIRE(h5::Reader(old, "photonflow.test", 1).read<Rec>("/rec", t).at(1).zzzzzzz == 4);
 
-    std::string bytes;
-    {
-      std::ifstream in(old, std::ios::binary);
-      bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    }
+    std::string bytes = test::file_bytes(old);
     const std::string name("zzzzzzz\0", 8);
     const size_t at = bytes.find(name);
     REQUIRE(at != std::string::npos);
@@ -432,11 +429,7 @@ TEST_CASE("written files carry checksums: a damaged value or header is refused, 
     CHECK(r.read<float>("/values") == values);
     CHECK(r.attr_string("/values", "label") == "MARKER-LABEL");
   }
-  std::string bytes;
-  {
-    std::ifstream in(path, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
+  const std::string bytes = test::file_bytes(path);
   auto damaged = [&](size_t at) {
     std::string copy = bytes;
     copy[at] = char(copy[at] ^ 0x10);

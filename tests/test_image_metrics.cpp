@@ -134,13 +134,6 @@ std::string make_png(int w, int h, int depth, int ctype, const std::vector<std::
   return png;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 // The number after "key": in a JSON text (NaN when absent).
 double json_number(const std::string& js, const std::string& key) {
   const size_t at = js.find("\"" + key + "\": ");
@@ -612,7 +605,7 @@ TEST_CASE("image_metrics: imgcompare tool: metrics printed and written, bad inpu
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.find("RMSE") != std::string::npos);
   CHECK(r.out.find("SSIM") != std::string::npos);
-  const std::string js = slurp(tmp / "m.json");
+  const std::string js = test::file_bytes(tmp / "m.json");
   CHECK(js.find("\"pixels\": 399") != std::string::npos);
   CHECK(json_number(js, "rmse") == Approx(0.125).epsilon(1e-6));
   CHECK(json_number(js, "mae") == Approx(0.125).epsilon(1e-6));

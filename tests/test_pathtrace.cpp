@@ -562,11 +562,9 @@ TEST_CASE("pathtrace: tool: snapshots, record, preview", "[pathtrace][tools]") {
   Image lib = pathtrace(load_scene(tmp / "scene.h5"), opt);
   Image out = read_exr(tmp / "pt.exr");
   CHECK(out.rgb == lib.rgb);
-  std::ifstream f(tmp / "run.json");
-  std::stringstream js;
-  js << f.rdbuf();
-  CHECK(js.str().find("\"samples\": 4") != std::string::npos);
-  CHECK(js.str().find(s.scene_id) != std::string::npos);
+  const std::string js = test::file_bytes(tmp / "run.json");
+  CHECK(js.find("\"samples\": 4") != std::string::npos);
+  CHECK(js.find(s.scene_id) != std::string::npos);
   CHECK(r.out.find("snapshot") != std::string::npos);
 }
 

@@ -36,13 +36,6 @@ RenderOptions small_run(int passes) {
   return o;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 size_t occurrences(const std::string& text, const std::string& needle) {
   size_t n = 0;
   for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
@@ -343,7 +336,7 @@ TEST_CASE("render tool: snapshots and run record", "[render][snapshots][tools]")
     CHECK(std::filesystem::exists(tmp / f));
   CHECK_FALSE(std::filesystem::exists(tmp / "r-3p.exr"));
   CHECK(read_exr(tmp / "r-4p.exr").rgb == read_exr(tmp / "r.exr").rgb);
-  const std::string j = slurp(tmp / "r.json");
+  const std::string j = test::file_bytes(tmp / "r.json");
   CHECK(occurrences(j, "{\"path\": ") == 4);  // three snapshots and the final image
   CHECK_THAT(j, Catch::Contains("r-1p.exr\", \"passes\": 1,"));
   CHECK_THAT(j, Catch::Contains("\"snapshot-at\": \"1\""));
