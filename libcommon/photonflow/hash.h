@@ -30,4 +30,12 @@ std::string sha256_file(const std::string& path);
 // (h5io.cpp, attribute checksum64) and every read verifies it.
 uint64_t checksum64(const void* data, size_t n);
 
+// SplitMix64's output function (Steele, Lea & Flood 2014), a bijective 64-bit mixer: checksum64's
+// finish and the step of procedural.cpp's generator.
+inline uint64_t splitmix64_mix(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
 }  // namespace pf

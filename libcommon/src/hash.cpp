@@ -109,11 +109,7 @@ uint64_t checksum64(const void* data, size_t n) {
   }
   uint64_t r = uint64_t(n) * kP3;
   for (int l = 0; l < 4; ++l) r = (r ^ lane(0, h[l])) * kP1 + kP3;
-  r ^= r >> 30;  // splitmix64 finisher
-  r *= 0xBF58476D1CE4E5B9ull;
-  r ^= r >> 27;
-  r *= 0x94D049BB133111EBull;
-  return r ^ (r >> 31);
+  return splitmix64_mix(r);
 }
 
 }  // namespace pf

@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "photonflow/error.h"
+#include "photonflow/hash.h"
 #include "photonflow/output_file.h"
 
 namespace pf {
@@ -22,12 +23,7 @@ constexpr float kPi = 3.14159265358979323846f;
 class Rng {
  public:
   explicit Rng(uint64_t seed) : s_(seed) {}
-  uint64_t next() {
-    uint64_t z = (s_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
+  uint64_t next() { return splitmix64_mix(s_ += 0x9E3779B97F4A7C15ull); }
   float uniform() { return float(next() >> 40) * (1.f / 16777216.f); }  // [0, 1)
   float uniform(float a, float b) { return a + (b - a) * uniform(); }
   Vec3 unit_vector() {  // uniform on the sphere (Archimedes)
