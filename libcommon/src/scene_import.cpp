@@ -808,8 +808,9 @@ std::string last_line(const std::string& console) {
   return s.size() > 200 ? s.substr(0, 200) + "..." : s;
 }
 
-// Time limit of the child: a floor plus a rate per byte of the files named (measured: the 3.7 MB
-// ogre.obj imports in 0.6 s here), or BakeOptions::import_seconds.
+// Time limit of the child: a floor plus a rate per byte of the files named (measured: the Cornell
+// box with the 3.7 MB ogre.obj inserted imports in 0.14 s here, docs/BENCHMARKS.md), or
+// BakeOptions::import_seconds.
 double import_time_limit(const BakeOptions& o) {
   if (o.import_seconds > 0) return o.import_seconds;
   uint64_t bytes = 0;

@@ -1,7 +1,6 @@
 // Text outputs: see text_file.h.
 #include "photonflow/text_file.h"
 
-
 #include <cmath>
 #include <cstdio>
 #include <sstream>
