@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <signal.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -57,9 +58,25 @@ TEST_CASE("run_isolated: a crash, an abort and an exception are reported, not su
 
   const IsolatedRun threw =
       run_isolated([](const IsolatedSend&) { throw std::runtime_error("boom"); });
-  CHECK(threw.exit_code == 70);
+  CHECK(threw.exit_code == kIsolatedThrew);
   CHECK(threw.signal == 0);
   CHECK(threw.console.find("boom") != std::string::npos);
+}
+
+TEST_CASE("run_isolated: a send that cannot write ends the child with kIsolatedSendFailed",
+          "[isolate]") {
+  const IsolatedRun run = run_isolated([](const IsolatedSend& send) {
+    // A file-size limit applies to the memory file too (as `ulimit -f` would).
+    const rlimit cap{4096, RLIM_INFINITY};
+    setrlimit(RLIMIT_FSIZE, &cap);
+    std::signal(SIGXFSZ, SIG_IGN);
+    send(std::string(100000, 'z'));
+    send("never");
+  });
+  CHECK(run.exit_code == kIsolatedSendFailed);
+  CHECK(run.signal == 0);
+  CHECK(run.output.size() <= 4096);
+  CHECK(run.output.find("never") == std::string::npos);
 }
 
 TEST_CASE("run_isolated: a child past its time limit is killed", "[isolate]") {

@@ -5,15 +5,21 @@
 //     refused before any work, with one line, exit 2, the input untouched and no output at all —
 //     also no first output of a run whose later output would have failed;
 //   - the PNG preview goes beside the image even when a directory name has a dot;
-//   - a missing required option is named (only the missing ones);
+//   - a missing required option is named (only the missing ones), and one given an empty value
+//     is refused before any work;
 //   - stray arguments and --threads / OMP_NUM_THREADS beyond kMaxThreads are refused (libgomp
 //     crashed on 100 000 threads);
 //   - render checks its options as trace-hitpoints and trace-photons do, and --resume continues
 //     only a checkpoint made with the same state options (state_parameters);
 //   - a run that runs out of memory says so in one line and exits 1, also when the allocation
-//     failed in an OpenMP worker thread (before: std::terminate, SIGABRT).
+//     failed in an OpenMP worker thread (before: std::terminate, SIGABRT);
+//   - a full disk (a file-size limit here) is one line and exit 2 with no output and no temporary
+//     file, from HDF5, OpenEXR, OBJ and the import's child alike (before: HDF5 crashed at exit);
+//   - synthesize --png none writes no preview.
 // Plus the library pieces themselves: preview_path, check_outputs, commit_temp.
 #include <catch2/catch.hpp>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <filesystem>
@@ -204,6 +210,14 @@ TEST_CASE("outputs: a missing required option is named, the given ones are not",
   check_refused(run_tool("cluster", "", tmp), tmp,
                 "--scene, --hitpoints and --output are required");
   check_refused(run_tool("synthesize", "-o " + out, tmp), tmp, "--hitpoints is required", {out});
+  // An empty value ("-o \"$OUT\"" with OUT unset) is refused before any work, not at the end.
+  check_refused(run_tool("trace-hitpoints", "--scene " + c.scene + " -o ''", tmp), tmp,
+                "trace-hitpoints: --output is empty (give it a file name)");
+  check_refused(run_tool("trace-photons", "--scene '' -o " + out, tmp), tmp,
+                "--scene is empty", {out});
+  check_refused(run_tool("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o ''",
+                         tmp),
+                tmp, "scene-bake: --output is empty");
 
   // The library function alone.
   cxxopts::Options o("tool", "");
@@ -215,6 +229,15 @@ TEST_CASE("outputs: a missing required option is named, the given ones are not",
   CHECK_NOTHROW(require_options(o, parsed, {"beta"}));
   CHECK_THROWS_WITH(require_options(o, parsed, {"alpha", "beta"}),
                     "--alpha is required (see tool --help)");
+  cxxopts::Options p("tool", "");
+  p.add_options()("out", "", cxxopts::value<std::string>())("in", "", cxxopts::value<std::string>());
+  std::vector<std::string> empty_words = {"tool", "--in", "a.h5", "--out", ""};
+  std::vector<char*> empty_argv;
+  for (auto& w : empty_words) empty_argv.push_back(w.data());
+  const cxxopts::ParseResult with_empty = p.parse(int(empty_argv.size()), empty_argv.data());
+  CHECK_NOTHROW(require_options(p, with_empty, {"in"}));
+  CHECK_THROWS_WITH(require_options(p, with_empty, {"in", "out"}),
+                    "--out is empty (give it a file name)");
 }
 
 TEST_CASE("render: options out of range are refused as the stages refuse them",
@@ -306,4 +329,106 @@ TEST_CASE("outputs: out of memory is one line and exit code 1, also from a worke
     for (auto& e : fs::directory_iterator(tmp.dir))
       CHECK(e.path().string().find(".tmp.") == std::string::npos);
   }
+}
+
+namespace {
+
+// A file-size limit (RLIMIT_FSIZE, as `ulimit -f`) for this process and the tools it starts, with
+// SIGXFSZ ignored, so a write past it fails with EFBIG as a write to a full disk fails with
+// ENOSPC. Restores both on destruction.
+struct FileSizeCap {
+  rlimit old{};
+  struct sigaction old_action {};
+  explicit FileSizeCap(rlim_t bytes) {
+    getrlimit(RLIMIT_FSIZE, &old);
+    const rlimit cap{bytes, old.rlim_max};
+    REQUIRE(setrlimit(RLIMIT_FSIZE, &cap) == 0);
+    struct sigaction ignore {};
+    ignore.sa_handler = SIG_IGN;
+    sigaction(SIGXFSZ, &ignore, &old_action);
+  }
+  ~FileSizeCap() {
+    setrlimit(RLIMIT_FSIZE, &old);
+    sigaction(SIGXFSZ, &old_action, nullptr);
+  }
+  FileSizeCap(const FileSizeCap&) = delete;
+  FileSizeCap& operator=(const FileSizeCap&) = delete;
+};
+
+}  // namespace
+
+// Before: HDF5 writers printed their line, then crashed at exit (SIGSEGV in HDF5's exit handler,
+// which closed again the file whose close had failed; h5io.cpp); scene-bake blamed assimp for
+// a child that could not pass the scene back.
+TEST_CASE("outputs: a full disk is one line and exit code 2, and leaves no output",
+          "[tools][outputs]") {
+  TempDir tmp("disk-full");
+  const Chain c = make_chain(tmp);
+  const std::string h5 = tmp / "o.h5", exr = tmp / "o.exr", png = tmp / "o.png";
+  const std::string box = std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae";
+  struct Case {
+    std::string tool, args, needle;
+    std::vector<std::string> outputs;
+  };
+  const std::vector<Case> cases = {
+      // the import's child cannot write the scene into its memory file
+      {"scene-bake", box + " -o " + h5, "file-size limit", {h5}},
+      {"trace-hitpoints", "--scene " + c.scene + " -o " + h5, "is the disk full?", {h5}},
+      {"trace-photons", "--scene " + c.scene + " -o " + h5 + " --photons 20000",
+       "is the disk full?", {h5}},
+      {"illuminate",
+       "--scene " + c.scene + " --hitpoints " + c.hp + " --photons " + c.ph + " -o " + h5,
+       "is the disk full?", {h5}},
+      {"synthesize", "--hitpoints " + c.st + " -o " + exr, "is the disk full?", {exr, png}},
+      {"render", "--scene " + c.scene + " -o " + exr + " --photons 2000 --passes 2",
+       "is the disk full?", {exr, png}},
+      {"render",
+       "--scene " + c.scene + " -o " + exr + " --photons 2000 --passes 2 --checkpoint " + h5 +
+           " --checkpoint-every 1",
+       "is the disk full?", {exr, png, h5}},
+      {"gen-mesh", "--out " + (tmp / "o.obj"), "is the disk full?", {tmp / "o.obj"}},
+  };
+  for (const Case& k : cases) {
+    test::ToolRun r;
+    {
+      FileSizeCap cap(1024);  // the tools' stdout and stderr files stay below it
+      r = run_tool(k.tool, k.args, tmp);
+    }
+    INFO(k.tool << " " << k.args << "\nexit " << r.exit_code << ", stderr: " << r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(r.err.rfind(k.tool + ": ", 0) == 0);
+    CHECK(r.err.find(k.needle) != std::string::npos);
+    for (const std::string& o : k.outputs) {
+      INFO("must not exist: " << o);
+      CHECK_FALSE(fs::exists(o));
+    }
+    for (auto& e : fs::directory_iterator(tmp.dir))
+      CHECK(e.path().string().find(".tmp.") == std::string::npos);
+  }
+  // The same commands without the limit write their outputs (the cap above caused the failures).
+  for (const Case& k : cases) {
+    const test::ToolRun r = run_tool(k.tool, k.args, tmp);
+    INFO(k.tool << " " << k.args << "\nstderr: " << r.err);
+    CHECK(r.exit_code == 0);
+    for (const std::string& o : k.outputs) {
+      CHECK(fs::exists(o));
+      fs::remove(o);
+    }
+  }
+}
+
+TEST_CASE("outputs: synthesize --png none writes no preview", "[tools][outputs]") {
+  TempDir tmp("png-none");
+  const Chain c = make_chain(tmp);
+  const test::ToolRun r =
+      run_tool("synthesize", "--hitpoints " + c.st + " -o " + (tmp / "a.exr") + " --png none", tmp);
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(fs::exists(tmp / "a.exr"));
+  CHECK_FALSE(fs::exists(tmp / "a.png"));
+  CHECK_FALSE(fs::exists(tmp / "none"));
+  CHECK(run_tool("synthesize", "--hitpoints " + c.st + " -o " + (tmp / "b.exr"), tmp).exit_code ==
+        0);
+  CHECK(fs::exists(tmp / "b.png"));  // the default: beside the output
 }

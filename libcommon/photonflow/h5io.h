@@ -29,6 +29,10 @@ class Handle {
   ~Handle();
   hid_t get() const { return id_; }
   bool valid() const { return id_ >= 0; }
+  // Releases the id now; false when that failed (for a file: its last writes did not reach the
+  // disk). The id is given up either way: HDF5 1.10 crashes when a file whose close failed is
+  // closed again (h5io.cpp, "A full disk").
+  bool close();
 
  private:
   hid_t id_ = -1;

@@ -23,10 +23,16 @@
 
 namespace pf {
 
+// The child's exit codes besides 0: `work` threw, or `send` could not write its bytes: the
+// memory file could not grow (no memory left, or a file-size limit: `ulimit -f` applies to memory
+// files too).
+constexpr int kIsolatedThrew = 70;      // EX_SOFTWARE
+constexpr int kIsolatedSendFailed = 71; // EX_OSERR
+
 struct IsolatedRun {
   std::string output;        // the bytes the child passed to `send`, in order
   std::string console;       // its stdout and stderr, at most the last 64 KiB
-  int exit_code = -1;        // 0 after the work returned, 70 after it threw; -1: a signal
+  int exit_code = -1;        // 0 after the work returned, else kIsolated*; -1: a signal
   int signal = 0;            // the signal that ended the child, else 0
   bool timed_out = false;    // killed (SIGKILL) at the time limit
   double seconds = 0;        // wall time of the child
@@ -35,8 +41,9 @@ struct IsolatedRun {
 using IsolatedSend = std::function<void(const std::string&)>;
 
 // Runs work(send) in a forked child and waits for it, at most `time_limit_s` seconds (0 = no
-// limit), then kills it. An exception escaping `work` ends the child with exit code 70, its what()
-// on the console. Throws std::runtime_error if no child can be made (fork or memfd_create fail).
+// limit), then kills it. An exception escaping `work` ends the child with kIsolatedThrew, its
+// what() on the console; a `send` that cannot write ends it with kIsolatedSendFailed. Throws
+// std::runtime_error if no child can be made (fork or memfd_create fail).
 IsolatedRun run_isolated(const std::function<void(const IsolatedSend& send)>& work,
                          double time_limit_s = 0);
 

@@ -96,12 +96,21 @@ inline cxxopts::ParseResult parse_options(cxxopts::Options& options, int argc, c
 
 // Refuses a command line that lacks required options, naming the missing ones only:
 // "--output is required", "--hitpoints and --output are required" (hint: see <program> --help).
+// A required option given an empty value ("-o \"$OUT\"" with OUT unset) is refused too, before
+// any work: "--output is empty (give it a file name)"; an empty output path would otherwise fail
+// only at the end, after the whole run, and without a name to report.
 inline void require_options(const cxxopts::Options& options, const cxxopts::ParseResult& r,
                             std::initializer_list<const char*> required) {
   std::vector<std::string> missing;
   for (const char* name : required)
     if (!r.count(name)) missing.push_back(std::string("--") + name);
-  if (missing.empty()) return;
+  if (missing.empty()) {
+    for (const char* name : required)
+      for (const auto& kv : r.arguments())
+        if (kv.key() == name && kv.value().empty())
+          throw input_error("", std::string("--") + name + " is empty", "give it a file name");
+    return;
+  }
   std::string list = missing.front();
   for (size_t i = 1; i < missing.size(); ++i)
     list += (i + 1 == missing.size() ? " and " : ", ") + missing[i];

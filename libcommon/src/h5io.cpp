@@ -12,6 +12,16 @@
 
 namespace pf::h5 {
 
+// A full disk. When a write fails (ENOSPC, or EFBIG under `ulimit -f`), the file's close fails
+// too, and HDF5 1.10 keeps the file in its table of open ids: its exit handler (H5_term_library)
+// then closes it again and crashes in H5F__close_cb (SIGSEGV, after the tool had printed its one
+// line). So HDF5 gets no exit handler; it must be told before its first call, hence at static
+// initialisation. Nothing is lost: every file and object is closed by its Handle, and a Writer
+// that was not committed deletes its file. A failed close gives its id up (Handle::close).
+namespace {
+[[maybe_unused]] const bool kNoHdf5ExitHandler = H5dont_atexit() >= 0;
+}  // namespace
+
 void quiet_hdf5() {
   static bool done = false;
   if (!done) {
@@ -31,6 +41,12 @@ Handle& Handle::operator=(Handle&& o) noexcept {
 
 Handle::~Handle() {
   if (id_ >= 0) H5Idec_ref(id_);
+}
+
+bool Handle::close() {
+  const bool ok = id_ < 0 || H5Idec_ref(id_) >= 0;
+  id_ = -1;
+  return ok;
 }
 
 Compound::Compound(size_t size) : type_(H5Tcreate(H5T_COMPOUND, size)), size_(size) {}
@@ -80,7 +96,7 @@ Writer::Writer(const std::string& final_path, const std::string& format, int ver
 
 Writer::~Writer() {
   if (!committed_) {
-    file_ = Handle();
+    file_.close();  // may fail after a failed write: the file goes all the same
     std::remove(path_.c_str());
   }
 }
@@ -183,7 +199,9 @@ void Writer::describe(const std::string& path, const std::string& unit,
 void Writer::commit() {
   if (H5Fflush(file_.get(), H5F_SCOPE_GLOBAL) < 0)
     throw input_error(final_path_, "cannot flush output", "is the disk full?");
-  file_ = Handle();
+  // The close writes too (the superblock's end of file, the file truncated to it): a file whose
+  // close failed is not whole, and the destructor removes it.
+  if (!file_.close()) throw input_error(final_path_, "cannot close output", "is the disk full?");
   committed_ = true;  // commit_temp removes the temporary file if it fails
   commit_temp(path_, final_path_);
 }

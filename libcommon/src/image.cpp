@@ -139,7 +139,7 @@ void write_exr(const Image& img, const std::string& path) {
     out.writePixels(img.height);
   } catch (const std::exception& e) {
     std::remove(tmp.c_str());
-    throw input_error(path, std::string("cannot write EXR: ") + e.what());
+    throw input_error(path, std::string("cannot write EXR: ") + e.what(), "is the disk full?");
   }
   commit_temp(tmp, path);
 }

@@ -24,7 +24,6 @@ namespace pf {
 namespace {
 
 constexpr size_t kConsoleTail = 64 * 1024;
-constexpr int kExitThrew = 70;  // EX_SOFTWARE
 
 // A memory file the child writes and the parent reads; closed on destruction.
 struct MemFile {
@@ -61,7 +60,7 @@ void write_fully(int fd, const char* p, size_t n) {
   while (n > 0) {
     const ssize_t w = write(fd, p, n);
     if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) _exit(71);  // the memory file cannot grow (no memory left): the parent reports it
+    if (w <= 0) _exit(kIsolatedSendFailed);  // the memory file cannot grow: the parent reports it
     p += w;
     n -= size_t(w);
   }
@@ -95,9 +94,9 @@ int open_pidfd(pid_t pid) {
   } catch (const std::exception& e) {
     const std::string line = std::string("exception: ") + e.what() + "\n";
     write_fully(STDERR_FILENO, line.data(), line.size());
-    code = kExitThrew;
+    code = kIsolatedThrew;
   } catch (...) {
-    code = kExitThrew;
+    code = kIsolatedThrew;
   }
   _exit(code);
 }

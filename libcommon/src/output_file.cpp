@@ -63,7 +63,7 @@ void write_file_atomic(const std::string& path, const char* data, size_t n) {
     if (!f.flush()) {
       f.close();
       std::remove(tmp.c_str());
-      throw input_error(path, "cannot write the file", "disk full?");
+      throw input_error(path, "cannot write the file", "is the disk full?");
     }
   }
   commit_temp(tmp, path);

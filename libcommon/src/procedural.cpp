@@ -260,7 +260,7 @@ void write_obj(const std::string& path, const std::vector<pf_triangle>& tris) {
     out.flush();
     if (!out) {
       std::remove(tmp.c_str());
-      throw input_error(path, "cannot write the output file", "disk full?");
+      throw input_error(path, "cannot write the output file", "is the disk full?");
     }
   }
   commit_temp(tmp, path);

@@ -855,6 +855,10 @@ Scene import_isolated(const BakeOptions& options, BakeReport& report) {
                                    fmt_float(float(limit)) + " s (an assimp loader loops on some "
                                    "damaged files)",
                       hint + "; if it is whole and large, raise --import-seconds");
+  if (run.exit_code == kIsolatedSendFailed)
+    throw input_error(reading, "the importing child process could not pass the scene back: its "
+                               "memory file could not grow",
+                      "no memory left, or a file-size limit (ulimit -f) too small");
   const std::string said = last_line(run.console);
   throw input_error(reading, "assimp crashed reading it (" +
                                  (run.signal ? signal_text(run.signal)

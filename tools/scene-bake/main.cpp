@@ -125,6 +125,7 @@ int run(int argc, char** argv) {
     throw pf::input_error("", "no INPUT scene file given", "see scene-bake --help");
   if (!args.count("output"))
     throw pf::input_error("", "no output file given", "add -o scene.h5");
+  pf::require_options(opts, args, {"input", "output"});  // both given: refuses empty values
 
   pf::BakeOptions o;
   o.input = args["input"].as<std::string>();

@@ -15,8 +15,8 @@ int main(int argc, char** argv) {
     o.add_options()
       ("hitpoints", "hitpoint state (from illuminate)", cxxopts::value<std::string>())
       ("o,output", "output OpenEXR image (linear RGB, W/(sr m^2))", cxxopts::value<std::string>())
-      ("png", "also write an sRGB PNG preview here (default: output with .png)",
-       cxxopts::value<std::string>())
+      ("png", "sRGB PNG preview; default: the output with .png; 'none': no preview",
+       cxxopts::value<std::string>()->default_value(""))
       ("exposure", "PNG exposure in stops (the EXR is never scaled)",
        cxxopts::value<float>()->default_value("0"))
       ("h,help", "print this help");
@@ -26,8 +26,9 @@ int main(int argc, char** argv) {
     if (pf::list_devices_requested(a)) return 0;
     pf::require_options(o, a, {"hitpoints", "output"});
     std::string out = a["output"].as<std::string>();
-    std::string png = a.count("png") ? a["png"].as<std::string>() : pf::preview_path(out);
-    pf::check_outputs({pf::path_option(a, "hitpoints")}, {out, png});
+    std::string png = a["png"].as<std::string>();
+    if (png.empty()) png = pf::preview_path(out);
+    pf::check_outputs({pf::path_option(a, "hitpoints")}, {out, png == "none" ? "" : png});
     pf::HitpointSet h = pf::load_hitpoints(a["hitpoints"].as<std::string>());
     if (h.estimator == "none")
       throw pf::input_error(a["hitpoints"].as<std::string>(), "has no photons gathered yet",
@@ -35,8 +36,9 @@ int main(int argc, char** argv) {
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "synthesize");
     pf::Image img = dev ? pf::synthesize(h, *dev) : pf::synthesize(h);
     pf::write_exr(img, out);
-    pf::write_png(img, png, a["exposure"].as<float>());
-    std::cout << "synthesize: " << out << " and " << png << " (" << h.width << "x" << h.height
+    if (png != "none") pf::write_png(img, png, a["exposure"].as<float>());
+    std::cout << "synthesize: " << out << (png != "none" ? " and " + png : "") << " ("
+              << h.width << "x" << h.height
               << ", " << h.passes << " pass(es), " << h.photons_emitted << " photons)\n";
     return 0;
   });
