@@ -240,6 +240,7 @@ TEST_CASE("render driver: checkpoints every K passes and at the end", "[render][
     render_progressive(s, opt, false, prov, [&](int done, double) {
       CHECK(done == int(seen.size()) + 1);
       seen.push_back(std::filesystem::exists(opt.checkpoint) ? load_hitpoints(opt.checkpoint).passes : 0);
+      return true;
     });
     REQUIRE(seen.size() == 5);
     for (int done = 1; done <= 5; ++done) {
@@ -247,6 +248,45 @@ TEST_CASE("render driver: checkpoints every K passes and at the end", "[render][
       CHECK(seen[size_t(done - 1)] == expect);
     }
   }
+}
+
+// A pass callback that returns false (render's Ctrl-C, interrupt.h) ends the run after that
+// pass: the checkpoint is saved then, also between regular checkpoints, and --resume from it
+// gives the uninterrupted run's state.
+TEST_CASE("render driver: a stop after a pass saves the checkpoint; resuming gives the whole run",
+          "[render][resume]") {
+  const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
+  TempDir tmp("stop");
+  Provenance prov;
+  RenderOptions opt = small_run(5);
+  const HitpointSet whole = render_progressive(s, opt, false, prov);
+  opt.checkpoint = tmp / "ck.h5";
+  opt.checkpoint_every = 4;  // no regular checkpoint before the stop
+  RenderStatus st;
+  int calls = 0;
+  const HitpointSet part = render_progressive(
+      s, opt, false, prov, [&](int done, double) { return ++calls, done < 2; }, {}, &st);
+  CHECK(calls == 2);
+  CHECK(st.stopped);
+  CHECK(st.passes == 2);
+  CHECK(part.passes == 2);
+  REQUIRE(std::filesystem::exists(opt.checkpoint));
+  CHECK(load_hitpoints(opt.checkpoint).passes == 2);
+  RenderStatus rest;
+  const HitpointSet resumed = render_progressive(s, opt, true, prov, {}, {}, &rest);
+  CHECK_FALSE(rest.stopped);
+  CHECK(rest.resumed);
+  CHECK(resumed.passes == 5);
+  CHECK(test::same_hitpoints(resumed.hitpoints, whole.hitpoints));
+  // A stop at the last pass is no stop; a stop without a checkpoint keeps nothing on disk.
+  RenderStatus at_end;
+  render_progressive(s, small_run(2), false, prov, [](int, double) { return false; }, {}, &at_end);
+  CHECK_FALSE(at_end.stopped);
+  RenderOptions bare = small_run(3);
+  RenderStatus no_ck;
+  CHECK(render_progressive(s, bare, false, prov, [](int, double) { return false; }, {}, &no_ck)
+            .passes == 1);
+  CHECK(no_ck.stopped);
 }
 
 TEST_CASE("render driver: time spent in snapshot callbacks is not rendering time",

@@ -223,11 +223,14 @@ class GaProgressLine {
  public:
   explicit GaProgressLine(std::string unit);
   void update(const GaProgress& p);
+  void end_line();  // as Progress::end_line (progress.h)
 
  private:
   std::string unit_;
   bool tty_;
   double last_ = -1;
+  bool open_ = false;
+  bool saw_interrupt_ = false;
 };
 
 }  // namespace pf

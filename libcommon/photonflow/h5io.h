@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "photonflow/error.h"
+#include "photonflow/output_file.h"
 
 namespace pf::h5 {
 
@@ -125,6 +126,7 @@ class Writer : public FileBase {
   void write_raw(const std::string& path, hid_t type, const void* data,
                  const std::vector<size_t>& shape);
   std::string final_path_;
+  TempOutput temp_;  // the file path_ names (its temporary name), removed unless committed
   bool committed_ = false;
 };
 

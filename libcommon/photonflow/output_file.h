@@ -18,6 +18,31 @@ std::string temp_path(const std::string& path);
 // or fail on a directory — or when the rename fails.
 void commit_temp(const std::string& tmp, const std::string& path);
 
+// A temporary output file being written: temp_path(final_path), tracked while it exists so that an
+// interrupt (interrupt.h) removes it, and removed on destruction unless commit() renamed it into
+// place. Every writer (h5io.h, image.h, text_file.h, procedural.h) writes through one.
+class TempOutput {
+ public:
+  explicit TempOutput(const std::string& final_path);
+  ~TempOutput();  // removes the file unless committed
+  TempOutput(const TempOutput&) = delete;
+  TempOutput& operator=(const TempOutput&) = delete;
+  const std::string& path() const { return tmp_; }
+  const std::string& final_path() const { return final_; }
+  // Renames the file into place (commit_temp); on failure the file is removed and InputError
+  // thrown.
+  void commit();
+
+ private:
+  std::string final_, tmp_;
+  int slot_ = -1;  // its entry in the table the interrupt handler reads; -1: not tracked
+  bool done_ = false;
+};
+
+// Removes every TempOutput's file that exists now. Async-signal-safe (unlink only): the
+// interrupt handler calls it.
+void remove_tracked_temps() noexcept;
+
 // Writes n bytes to `path` atomically: into temp_path(path), flushed, then commit_temp. InputError
 // naming `path` when the file cannot be created or written (the temporary file removed).
 void write_file_atomic(const std::string& path, const char* data, size_t n);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <string>
 
+#include "photonflow/interrupt.h"
 #include "photonflow/provenance.h"
 
 namespace pf {
@@ -18,6 +19,8 @@ class Progress {
   // Reports that `done` steps are finished and `amount` units were processed in all.
   void update(long done, double amount) {
     if (!tty_) return;
+    if (interrupted() && !saw_interrupt_) open_ = false, saw_interrupt_ = true;  // its notice
+                                                                                // ended the line
     double t = clock_.seconds();
     if (done < total_ && t - last_ < 0.25) return;
     last_ = t;
@@ -25,8 +28,16 @@ class Progress {
     double eta = done > 0 ? t * double(total_ - done) / double(done) : 0.0;
     std::fprintf(stderr, "\r%s %ld/%ld  %.3g %s/s  ETA %.0f s   ", what_.c_str(), done, total_,
                  rate, unit_.c_str(), eta);
-    if (done >= total_) std::fprintf(stderr, "\n");
+    open_ = done < total_;
+    if (!open_) std::fprintf(stderr, "\n");
     std::fflush(stderr);
+  }
+  // Ends a line left open by a run that stops early (an interrupt), so the next message starts
+  // on a line of its own.
+  void end_line() {
+    if (!open_) return;
+    std::fprintf(stderr, "\n");
+    open_ = false;
   }
 
  private:
@@ -35,6 +46,8 @@ class Progress {
   bool tty_;
   Stopwatch clock_;
   double last_ = -1.0;
+  bool open_ = false;  // a line is shown without its newline
+  bool saw_interrupt_ = false;
 };
 
 }  // namespace pf

@@ -93,6 +93,7 @@ struct RenderStatus {
   double build_seconds = 0;       // OpenCL program builds so far (not in `seconds`)
   double mean_radius = 0;         // mean gather radius R of the hitpoints (eq. 3.16), world units
   bool resumed = false;           // the run continued a checkpoint
+  bool stopped = false;           // on_pass asked to stop before opt.passes (an interrupt)
 };
 
 // InputError naming the option when one is out of range: the eye and photon pass options
@@ -112,13 +113,15 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final
 // state. Each checkpoint carries `prov` with wall_time_s = prov.wall_time_s (the caller's seconds
-// before the call, 0 if it does not say) + the wall-clock seconds of this call so far. `on_pass(done, photons)` is called after every pass (progress display);
-// `on_snapshot(state, status)` after every pass whose count is a multiple of opt.snapshot_every
-// (> 0) or is listed in opt.snapshot_at, including the last when it is one. `status`, when
-// given, receives the final status.
+// before the call, 0 if it does not say) + the wall-clock seconds of this call so far.
+// `on_snapshot(state, status)` is called after every pass whose count is a multiple of
+// opt.snapshot_every (> 0) or is listed in opt.snapshot_at, including the last when it is one;
+// `on_pass(done, photons)` after every pass (progress display): when it returns false the run
+// stops there (render on Ctrl-C, interrupt.h), saving opt.checkpoint first when one is named, and
+// the status says `stopped`. `status`, when given, receives the final status.
 HitpointSet render_progressive(
     const Scene& scene, const RenderOptions& opt, bool resume, const Provenance& prov,
-    const std::function<void(int, double)>& on_pass = {},
+    const std::function<bool(int, double)>& on_pass = {},
     const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot = {},
     RenderStatus* status = nullptr);
 

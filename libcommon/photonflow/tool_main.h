@@ -10,6 +10,8 @@
 // the program through std::terminate (before, "terminate called after throwing an instance of
 // 'std::bad_alloc'" and SIGABRT: `trace-photons --photons 4000000000`). run_tool installs a
 // terminate handler that prints the same one line and exits with 1 instead.
+// Ctrl-C, SIGTERM and SIGHUP remove the temporary outputs being written, then end the tool by
+// that signal (interrupt.h); render and cluster's GA stop cleanly on the first one.
 #pragma once
 #include <cstdio>
 #include <cstdlib>
@@ -23,6 +25,7 @@
 #include <vector>
 
 #include "photonflow/error.h"
+#include "photonflow/interrupt.h"
 #include "photonflow/output_file.h"
 #include "photonflow/threads.h"
 
@@ -55,6 +58,7 @@ inline const char*& terminating_tool() {
       line = "internal error in a worker thread: an exception of unknown type";
     }
   }
+  remove_tracked_temps();  // a file being written when the thread failed
   std::fprintf(stderr, "%s: %s\n", terminating_tool(), line.c_str());
   std::fflush(stderr);
   std::_Exit(1);
@@ -63,6 +67,7 @@ inline const char*& terminating_tool() {
 inline int run_tool(const char* tool, const std::function<int()>& body) {
   terminating_tool() = tool;
   std::set_terminate(terminate_with_one_line);
+  install_interrupt_handlers();  // Ctrl-C and SIGTERM remove the outputs being written
   try {
     check_thread_environment();
     return body();

@@ -22,6 +22,7 @@
 #include "photonflow/cl_gather.h"
 #include "photonflow/h5io.h"
 #include "photonflow/hash.h"
+#include "photonflow/interrupt.h"
 #include "photonflow/provenance.h"
 #include "photonflow/threads.h"
 
@@ -1310,6 +1311,7 @@ GaProgressLine::GaProgressLine(std::string unit) : unit_(std::move(unit)), tty_(
 
 void GaProgressLine::update(const GaProgress& p) {
   if (!tty_) return;
+  if (interrupted() && !saw_interrupt_) open_ = false, saw_interrupt_ = true;  // as Progress
   const bool done = p.generation >= p.total;
   if (!done && p.seconds - last_ < 0.25) return;
   last_ = p.seconds;
@@ -1317,8 +1319,15 @@ void GaProgressLine::update(const GaProgress& p) {
   const double eta = ran > 0 ? p.seconds * double(p.total - p.generation) / double(ran) : 0.0;
   std::fprintf(stderr, "\rgeneration %d/%d  best %.6g %s  ETA %.0f s   ", p.generation, p.total,
                p.best, unit_.c_str(), eta);
+  open_ = !done;
   if (done) std::fprintf(stderr, "\n");
   std::fflush(stderr);
+}
+
+void GaProgressLine::end_line() {
+  if (!open_) return;
+  std::fprintf(stderr, "\n");
+  open_ = false;
 }
 
 }  // namespace pf

@@ -77,9 +77,9 @@ bool FileBase::exists(const std::string& obj) const {
 // ---- Writer ----------------------------------------------------------------------------------
 
 Writer::Writer(const std::string& final_path, const std::string& format, int version)
-    : final_path_(final_path) {
+    : final_path_(final_path), temp_(final_path) {
   quiet_hdf5();
-  path_ = temp_path(final_path);
+  path_ = temp_.path();
   // The HDF5 1.8 file format, not the earliest: its superblock and object headers carry checksums,
   // which HDF5 verifies on open, so a damaged header or attribute is refused there. With the
   // earliest format, a damaged attribute message crashed HDF5 1.10 inside H5Aiterate2 (fuzzing,
@@ -95,10 +95,8 @@ Writer::Writer(const std::string& final_path, const std::string& format, int ver
 }
 
 Writer::~Writer() {
-  if (!committed_) {
-    file_.close();  // may fail after a failed write: the file goes all the same
-    std::remove(path_.c_str());
-  }
+  // May fail after a failed write; temp_ removes the file all the same.
+  if (!committed_) file_.close();
 }
 
 void Writer::group(const std::string& path) {
@@ -202,8 +200,8 @@ void Writer::commit() {
   // The close writes too (the superblock's end of file, the file truncated to it): a file whose
   // close failed is not whole, and the destructor removes it.
   if (!file_.close()) throw input_error(final_path_, "cannot close output", "is the disk full?");
-  committed_ = true;  // commit_temp removes the temporary file if it fails
-  commit_temp(path_, final_path_);
+  committed_ = true;
+  temp_.commit();  // removes the temporary file if it fails
 }
 
 // ---- Reader ----------------------------------------------------------------------------------

@@ -132,16 +132,15 @@ void write_exr(const Image& img, const std::string& path) {
                                reinterpret_cast<char*>(const_cast<float*>(data.data())), px,
                                px * img.width));
   }
-  std::string tmp = temp_path(path);
+  TempOutput tmp(path);
   try {
-    Imf::OutputFile out(tmp.c_str(), header);
+    Imf::OutputFile out(tmp.path().c_str(), header);
     out.setFrameBuffer(fb);
     out.writePixels(img.height);
   } catch (const std::exception& e) {
-    std::remove(tmp.c_str());
     throw input_error(path, std::string("cannot write EXR: ") + e.what(), "is the disk full?");
   }
-  commit_temp(tmp, path);
+  tmp.commit();
 }
 
 Image read_exr(const std::string& path) {

@@ -82,8 +82,13 @@ int open_pidfd(pid_t pid) {
   // leave a looping child behind.
   prctl(PR_SET_PDEATHSIG, SIGKILL);
   if (getppid() != parent) _exit(72);  // the parent is already gone
+  // The parent's handlers are not the child's: a crash ends it, and an interrupt (the terminal's
+  // ^C reaches the whole process group) ends it without touching the parent's outputs (an
+  // interrupt the parent ignores, e.g. SIGHUP under nohup, stays ignored).
   for (int s : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS})
     std::signal(s, SIG_DFL);
+  for (int s : {SIGINT, SIGTERM, SIGHUP})
+    if (std::signal(s, SIG_DFL) == SIG_IGN) std::signal(s, SIG_IGN);
   const rlimit no_core{0, 0};
   setrlimit(RLIMIT_CORE, &no_core);
   dup2(con, STDOUT_FILENO);

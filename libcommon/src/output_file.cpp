@@ -3,7 +3,9 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <system_error>
@@ -35,7 +37,52 @@ bool same_file(const std::string& a, const std::string& b) {
   return pa == pb;
 }
 
+// The table of temporary outputs the interrupt handler removes: a slot is free (0), being filled
+// (1) or holds a path (2); the handler reads only slots in state 2, whose path is complete.
+// A path too long for a slot, or a 17th file open at once, is not tracked (it is still removed by
+// its TempOutput; only an interrupt would leave it).
+struct TempSlot {
+  std::atomic<int> state{0};
+  char path[4096];
+};
+TempSlot g_temps[16];
+
+int track(const std::string& path) {
+  if (path.size() >= sizeof(TempSlot::path)) return -1;
+  for (int i = 0; i < int(std::size(g_temps)); ++i) {
+    int expected = 0;
+    if (!g_temps[i].state.compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(g_temps[i].path, path.c_str(), path.size() + 1);
+    g_temps[i].state.store(2);
+    return i;
+  }
+  return -1;
+}
+
+void untrack(int slot) {
+  if (slot >= 0) g_temps[slot].state.store(0);
+}
+
 }  // namespace
+
+void remove_tracked_temps() noexcept {
+  for (TempSlot& t : g_temps)
+    if (t.state.load() == 2) unlink(t.path);
+}
+
+TempOutput::TempOutput(const std::string& final_path)
+    : final_(final_path), tmp_(temp_path(final_path)), slot_(track(tmp_)) {}
+
+TempOutput::~TempOutput() {
+  if (!done_) std::remove(tmp_.c_str());
+  untrack(slot_);
+}
+
+void TempOutput::commit() {
+  // Tracked until destruction: an interrupt after the rename unlinks a name that is gone.
+  done_ = true;  // commit_temp removes the file when it fails
+  commit_temp(tmp_, final_);
+}
 
 std::string temp_path(const std::string& path) {
   return path + ".tmp." + std::to_string(static_cast<long>(getpid()));
@@ -54,19 +101,15 @@ void commit_temp(const std::string& tmp, const std::string& path) {
 }
 
 void write_file_atomic(const std::string& path, const char* data, size_t n) {
-  const std::string tmp = temp_path(path);
+  TempOutput tmp(path);
   {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    std::ofstream f(tmp.path(), std::ios::binary | std::ios::trunc);
     if (!f)
       throw input_error(path, "cannot create the file", "check the directory and its permissions");
     f.write(data, static_cast<std::streamsize>(n));
-    if (!f.flush()) {
-      f.close();
-      std::remove(tmp.c_str());
-      throw input_error(path, "cannot write the file", "is the disk full?");
-    }
+    if (!f.flush()) throw input_error(path, "cannot write the file", "is the disk full?");
   }
-  commit_temp(tmp, path);
+  tmp.commit();
 }
 
 void check_outputs(const std::vector<std::string>& inputs,

@@ -219,9 +219,9 @@ std::vector<pf_triangle> make_cornell_room(size_t sphere_triangles) {
 }
 
 void write_obj(const std::string& path, const std::vector<pf_triangle>& tris) {
-  const std::string tmp = temp_path(path);
+  TempOutput tmp(path);
   {
-    std::ofstream out(tmp);
+    std::ofstream out(tmp.path());
     if (!out) throw input_error(path, "cannot create the output file", "check the directory");
     // Identical vertices (and normals) are written once; keys are the exact float bits.
     auto key = [](const float* p) {
@@ -258,12 +258,9 @@ void write_obj(const std::string& path, const std::vector<pf_triangle>& tris) {
       out << line;
     }
     out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw input_error(path, "cannot write the output file", "is the disk full?");
-    }
+    if (!out) throw input_error(path, "cannot write the output file", "is the disk full?");
   }
-  commit_temp(tmp, path);
+  tmp.commit();
 }
 
 }  // namespace pf

@@ -129,7 +129,7 @@ void require_same_state(const std::string& checkpoint, const RenderOptions& opt)
 
 HitpointSet render_progressive(
     const Scene& scene, const RenderOptions& opt, bool resume, const Provenance& prov,
-    const std::function<void(int, double)>& on_pass,
+    const std::function<bool(int, double)>& on_pass,
     const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot,
     RenderStatus* status) {
   check_options(opt);
@@ -191,17 +191,28 @@ HitpointSet render_progressive(
     // snapshot) is already in build_seconds and is not taken off twice.
     Stopwatch outside;
     const double built_before = opt.device ? opt.device->build_seconds() : 0.0;
-    if (!opt.checkpoint.empty() && opt.checkpoint_every > 0 &&
-        (r->passes_done() % opt.checkpoint_every == 0 || r->passes_done() == opt.passes)) {
+    const bool last = r->passes_done() == opt.passes;
+    bool saved = false;
+    auto save_checkpoint = [&] {
       Provenance at = checkpoint_prov;
       at.wall_time_s += wall.seconds();
       r->save_state(opt.checkpoint, at);
-    }
+      saved = true;
+    };
+    if (!opt.checkpoint.empty() && opt.checkpoint_every > 0 &&
+        (r->passes_done() % opt.checkpoint_every == 0 || last))
+      save_checkpoint();
     const bool snapshot = on_snapshot && snapshot_due(opt, r->passes_done());
-    if (snapshot || r->passes_done() == opt.passes) st.mean_radius = mean_radius();
+    if (snapshot || last) st.mean_radius = mean_radius();
     if (snapshot) on_snapshot(r->state(), st);
     aside += outside.seconds() - ((opt.device ? opt.device->build_seconds() : 0.0) - built_before);
-    if (on_pass) on_pass(r->passes_done(), photons);
+    if (on_pass && !on_pass(r->passes_done(), photons) && !last) {
+      // Asked to stop: the passes so far are kept in the checkpoint, for --resume.
+      if (!opt.checkpoint.empty() && !saved) save_checkpoint();
+      st.mean_radius = mean_radius();
+      st.stopped = true;
+      break;
+    }
   }
   if (status) *status = st;
   return r->state();

@@ -3,7 +3,6 @@
 // per-mesh uniform grid (eq. 7.1), or evolutionary clustering (thesis ch. 8, ga_clusters.h: 1+λ
 // evolution from k-means, fitness eq. 8.1–8.3 or the gather's device time), each padded with filler
 // hitpoints to a multiple of the work-group size. Writes clusters.h5 (docs/FORMATS.md).
-#include <csignal>
 #include <iostream>
 
 #include "photonflow/cl_backend.h"
@@ -15,11 +14,6 @@
 #include "photonflow/scene.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/tool_main.h"
-
-namespace {
-volatile std::sig_atomic_t g_interrupted = 0;
-void on_sigint(int) { g_interrupted = 1; }
-}  // namespace
 
 int main(int argc, char** argv) {
   return pf::run_tool("cluster", [&] {
@@ -165,17 +159,19 @@ int main(int argc, char** argv) {
       in.scene = &scene;
       in.photons = &photons;
       in.device = dev.get();
-      std::signal(SIGINT, on_sigint);
+      const pf::StopOnInterrupt stop(
+          "cluster: stopping after this generation (interrupt again to stop at once)\n");
       pf::GaProgressLine line(pf::ga_fitness_unit(ga.fitness));
       result = pf::evolve_clusters(in, ga, [&](const pf::GaProgress& p) {
         line.update(p);
-        return g_interrupted == 0;
+        return !pf::interrupted();
       });
       if (result.interrupted) {
-        std::cerr << "\ncluster: interrupted after generation " << result.generations
+        line.end_line();
+        std::cerr << "cluster: interrupted after generation " << result.generations
                   << "; the evolution is saved in " << ga.checkpoint
                   << " (rerun the same command with --resume to continue)\n";
-        return 130;
+        return pf::kExitInterrupted;
       }
       c = std::move(result.clusters);
       build_s = result.seconds;

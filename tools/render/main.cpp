@@ -130,9 +130,15 @@ int main(int argc, char** argv) {
       return dev ? pf::synthesize(h, *dev) : pf::synthesize(h);
     };
     pf::RenderStatus status;
+    // Ctrl-C (or SIGTERM) ends the run after the pass in progress, with the checkpoint saved.
+    const pf::StopOnInterrupt stop(
+        "render: stopping after this pass (interrupt again to stop at once)\n");
     pf::HitpointSet h = pf::render_progressive(
         scene, opt, a.count("resume") > 0, prov,
-        [&](int done, double n) { progress.update(done, n); },
+        [&](int done, double n) {
+          progress.update(done, n);
+          return !pf::interrupted();
+        },
         [&](const pf::HitpointSet& state, const pf::RenderStatus& s) {
           const std::string file = pf::render_snapshot_name(pattern, s.passes, opt.passes);
           pf::write_exr(image_of(state), file);
@@ -141,6 +147,17 @@ int main(int argc, char** argv) {
                     << " s)\n";
         },
         &status);
+    if (status.stopped) {
+      progress.end_line();
+      std::cerr << "render: interrupted after " << status.passes << " of " << opt.passes
+                << " passes; "
+                << (opt.checkpoint.empty()
+                        ? "nothing saved (--checkpoint FILE keeps a run's state for --resume)"
+                        : "the state is saved in " + opt.checkpoint +
+                              " (rerun the same command with --resume to continue)")
+                << "\n";
+      return pf::kExitInterrupted;
+    }
     pf::Image img = image_of(h);
     pf::write_exr(img, out);
     written.push_back({out, status});
