@@ -492,6 +492,48 @@ TEST_CASE("names are fixed-length strings; variable-length ones (older files) st
   CHECK(r.read_strings("/old") == names);
 }
 
+// h5py writes every str it is given as a variable-length string: a file whose string attributes
+// a user rewrote with h5py (f.attrs['note'] = 'x', or the same value again) still reads, the
+// format check included.
+TEST_CASE("string attributes rewritten as variable-length strings (h5py's way) still read",
+          "[h5io]") {
+  TempDir tmp;
+  const std::string path = tmp / "v.h5";
+  {
+    h5::Writer w(path, "photonflow.test", 1);
+    w.attr("/", "estimator", "ppm");
+    w.write("/x", std::vector<float>{1.f, 2.f});
+    w.commit();
+  }
+  auto set_vlen = [&](const char* name, const std::string& value) {
+    hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    REQUIRE(f >= 0);
+    if (H5Aexists(f, name) > 0) H5Adelete(f, name);
+    hid_t vt = H5Tcopy(H5T_C_S1);
+    H5Tset_size(vt, H5T_VARIABLE);
+    H5Tset_cset(vt, H5T_CSET_UTF8);
+    hid_t space = H5Screate(H5S_SCALAR);
+    hid_t a = H5Acreate2(f, name, vt, space, H5P_DEFAULT, H5P_DEFAULT);
+    const char* p = value.c_str();
+    REQUIRE(H5Awrite(a, vt, &p) >= 0);
+    H5Aclose(a);
+    H5Sclose(space);
+    H5Tclose(vt);
+    H5Fclose(f);
+  };
+  set_vlen("format", "photonflow.test");
+  set_vlen("estimator", "ppm");
+  set_vlen("note", "looked at by hand");
+  {
+    h5::Reader r(path, "photonflow.test", 1);  // the format check reads the rewritten attribute
+    CHECK(r.attr_string("/", "estimator") == "ppm");
+    CHECK(r.attr_string("/", "note") == "looked at by hand");
+    CHECK(r.read<float>("/x") == std::vector<float>{1.f, 2.f});
+  }
+  set_vlen("format", "photonflow.other");
+  CHECK_THROWS_AS(h5::Reader(path, "photonflow.test", 1), InputError);
+}
+
 TEST_CASE("files from different scenes are refused", "[h5io]") {
   TempDir tmp;
   write_minimal(tmp / "a.h5", "photonflow.hitpoints", 1, "aaaa");
