@@ -5,10 +5,12 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
 
 #include "photonflow/cl_runtime.h"
 #include "photonflow/h5io.h"
 #include "photonflow/image.h"
+#include "photonflow/stage_files.h"
 #include "support.h"
 
 using namespace pf;
@@ -195,4 +197,46 @@ TEST_CASE("OpenCL tools: --method, --clusters and build-grid on the device", "[o
   REQUIRE(illuminate("--grid " + g_cpu, "from-cpu-grid.h5").exit_code == 0);
   REQUIRE(illuminate("--grid " + g_cl, "from-cl-grid.h5").exit_code == 0);
   CHECK(image("from-cl-grid.h5").rgb == image("from-cpu-grid.h5").rgb);
+}
+
+// A machine without any OpenCL driver (the ICD loader pointed at an empty vendors folder, so
+// this runs also where PoCL is installed): --device opencl is one line and exit 2 before any
+// work; --device auto (the default where a tool has one) falls back to the CPU backend, says so,
+// and gives the CPU backend's result; --list-devices says what to install.
+TEST_CASE("OpenCL tools: without an OpenCL driver, opencl is refused and auto runs on the CPU",
+          "[opencl][tools]") {
+  TempDir tmp("no-icd");
+  const std::string vendors = tmp / "vendors";
+  std::filesystem::create_directories(vendors);
+  const std::string none = "OCL_ICD_VENDORS=" + vendors;
+  Scene scene = room_scene(PF_MAT_GLASS, 12, 9);
+  const std::string sc = tmp / "scene.h5", hp = tmp / "hp.h5", cpu = tmp / "cpu.h5";
+  Provenance prov;
+  prov.tool = "test";
+  save_scene(scene, sc, prov);
+
+  ToolRun list = run_tool("render", "--list-devices", tmp, none);
+  CHECK(list.exit_code == 0);
+  CHECK(list.out.find("no OpenCL platform or device found (install an OpenCL driver") !=
+        std::string::npos);
+
+  ToolRun refused = run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp + " --device opencl",
+                             tmp, none);
+  INFO(refused.err);
+  CHECK(refused.exit_code == 2);
+  CHECK(lines(refused.err) == 1);
+  CHECK(refused.err.find("--device opencl: no OpenCL platform or device found") !=
+        std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(hp));
+
+  ToolRun fallback =
+      run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp + " --device auto", tmp, none);
+  INFO(fallback.out << fallback.err);
+  REQUIRE(fallback.exit_code == 0);
+  CHECK((fallback.out + fallback.err).find("cpu backend (auto: no OpenCL") != std::string::npos);
+  REQUIRE(run_tool("trace-hitpoints", "--scene " + sc + " -o " + cpu + " --device cpu", tmp)
+              .exit_code == 0);
+  CHECK(same_hitpoints(load_hitpoints(hp).hitpoints, load_hitpoints(cpu).hitpoints));
+  CHECK(h5::Reader(hp, kHitpointsFormat, 1).attr_string("/provenance/parameters", "backend") ==
+        "cpu");
 }
