@@ -76,6 +76,25 @@ int exit_code(pid_t pid) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+struct Interrupted {
+  bool started = false;  // `ready` appeared before the signal
+  int exit_code = -1;
+  std::string err;
+};
+
+// Starts `tool args`, waits until the file `ready` exists (the tool is past its start), sends
+// SIGINT and waits for the tool.
+Interrupted interrupt_once(const std::string& tool, const std::string& args,
+                           const std::string& ready, const TempDir& tmp) {
+  const pid_t pid = start_tool(tool, args, tmp);
+  Interrupted r;
+  r.started = wait_for(ready);
+  kill(pid, SIGINT);
+  r.exit_code = exit_code(pid);
+  r.err = test::file_bytes(tmp / ".err");
+  return r;
+}
+
 void no_temporary_files(const TempDir& tmp) {
   for (auto& e : fs::directory_iterator(tmp.dir))
     CHECK(e.path().string().find(".tmp.") == std::string::npos);
@@ -167,19 +186,15 @@ TEST_CASE("interrupts: render and cluster's GA stop after the step in progress, 
   SECTION("render") {
     const std::string ck = tmp / "ck.h5", out = tmp / "r.exr", snap = tmp / "s-{pass}.exr";
     // 100 000 passes: far more than the run gets to before the signal.
-    const pid_t pid =
-        start_tool("render",
-                   "--scene " + scene + " -o " + out + " --photons 200 --passes 100000" +
-                       " --checkpoint " + ck + " --checkpoint-every 100000 --snapshot-at 1" +
-                       " --snapshot " + snap,
-                   tmp);
-    const bool started = wait_for(tmp / "s-000001.exr");
-    kill(pid, SIGINT);
-    const int code = exit_code(pid);
-    REQUIRE(started);
-    const std::string err = test::file_bytes(tmp / ".err");
+    const Interrupted r = interrupt_once(
+        "render",
+        "--scene " + scene + " -o " + out + " --photons 200 --passes 100000" + " --checkpoint " +
+            ck + " --checkpoint-every 100000 --snapshot-at 1" + " --snapshot " + snap,
+        tmp / "s-000001.exr", tmp);
+    REQUIRE(r.started);
+    const std::string& err = r.err;
     INFO("stderr: " << err);
-    CHECK(code == kExitInterrupted);
+    CHECK(r.exit_code == kExitInterrupted);
     CHECK(err.find("render: interrupted after ") != std::string::npos);
     CHECK(err.find("of 100000 passes; the state is saved in " + ck) != std::string::npos);
     REQUIRE(fs::exists(ck));
@@ -201,19 +216,17 @@ TEST_CASE("interrupts: render and cluster's GA stop after the step in progress, 
                      "--scene " + scene + " --hitpoints " + hp + " --photons " + ph + " -o " + dist,
                      tmp)
                 .exit_code == 0);
-    const pid_t pid = start_tool("cluster",
-                                 "--scene " + scene + " --hitpoints " + hp + " --distribution " +
-                                     dist + " --method ga --wg-size 16 --ga-iterations 10000000" +
-                                     " --checkpoint " + ck + " --checkpoint-every 1 -o " + out,
-                                 tmp);
-    const bool started = wait_for(ck);
-    kill(pid, SIGINT);
-    const int code = exit_code(pid);
-    REQUIRE(started);
-    const std::string err = test::file_bytes(tmp / ".err");
-    INFO("stderr: " << err);
-    CHECK(code == kExitInterrupted);
-    CHECK(err.find("cluster: interrupted after generation ") != std::string::npos);
+    const Interrupted r = interrupt_once("cluster",
+                                         "--scene " + scene + " --hitpoints " + hp +
+                                             " --distribution " + dist +
+                                             " --method ga --wg-size 16 --ga-iterations 10000000" +
+                                             " --checkpoint " + ck + " --checkpoint-every 1 -o " +
+                                             out,
+                                         ck, tmp);
+    REQUIRE(r.started);
+    INFO("stderr: " << r.err);
+    CHECK(r.exit_code == kExitInterrupted);
+    CHECK(r.err.find("cluster: interrupted after generation ") != std::string::npos);
     CHECK(fs::exists(ck));
     CHECK_FALSE(fs::exists(out));
     no_temporary_files(tmp);

@@ -220,21 +220,20 @@ TEST_CASE("outputs: a missing required option is named, the given ones are not",
                 tmp, "scene-bake: --output is empty");
 
   // The library function alone.
+  auto parse = [](cxxopts::Options& options, std::vector<std::string> words) {
+    std::vector<char*> argv;
+    for (auto& w : words) argv.push_back(w.data());
+    return options.parse(int(argv.size()), argv.data());
+  };
   cxxopts::Options o("tool", "");
   o.add_options()("alpha", "", cxxopts::value<int>())("beta", "", cxxopts::value<int>());
-  std::vector<std::string> words = {"tool", "--beta", "1"};
-  std::vector<char*> argv;
-  for (auto& w : words) argv.push_back(w.data());
-  const cxxopts::ParseResult parsed = o.parse(int(argv.size()), argv.data());
+  const cxxopts::ParseResult parsed = parse(o, {"tool", "--beta", "1"});
   CHECK_NOTHROW(require_options(o, parsed, {"beta"}));
   CHECK_THROWS_WITH(require_options(o, parsed, {"alpha", "beta"}),
                     "--alpha is required (see tool --help)");
   cxxopts::Options p("tool", "");
   p.add_options()("out", "", cxxopts::value<std::string>())("in", "", cxxopts::value<std::string>());
-  std::vector<std::string> empty_words = {"tool", "--in", "a.h5", "--out", ""};
-  std::vector<char*> empty_argv;
-  for (auto& w : empty_words) empty_argv.push_back(w.data());
-  const cxxopts::ParseResult with_empty = p.parse(int(empty_argv.size()), empty_argv.data());
+  const cxxopts::ParseResult with_empty = parse(p, {"tool", "--in", "a.h5", "--out", ""});
   CHECK_NOTHROW(require_options(p, with_empty, {"in"}));
   CHECK_THROWS_WITH(require_options(p, with_empty, {"in", "out"}),
                     "--out is empty (give it a file name)");
