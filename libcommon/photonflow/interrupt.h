@@ -1,7 +1,7 @@
 // interrupt.h — Ctrl-C (SIGINT), SIGTERM and SIGHUP in the tools.
 //
 // Every tool installs these handlers (run_tool, tool_main.h). A signal removes the temporary
-// output files being written (track_temp, output_file.h) and then ends the process by the same
+// output files being written (TempOutput, output_file.h) and then ends the process by the same
 // signal, as it would have ended without the handler (exit status 128 + n in a shell). So an
 // interrupted stage leaves no "<out>.tmp.<pid>" behind, and never a file that looks whole.
 //
