@@ -54,6 +54,16 @@ struct TempDir {
   }
 };
 
+// The temporary outputs ("<name>.tmp.<pid>", output_file.h) left anywhere under `dir`: a stage
+// that failed or was interrupted must leave none.
+inline std::vector<std::string> temporary_files(const std::filesystem::path& dir) {
+  std::vector<std::string> left;
+  for (auto& e : std::filesystem::recursive_directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp.") != std::string::npos)
+      left.push_back(e.path().string());
+  return left;
+}
+
 // The photonflow source folder: $PF_SOURCE_DIR when set (a copy of the tree somewhere else, as on
 // the GPU machine that bench/gpu.sh carries the test binaries to), else the tree this test was
 // built from.

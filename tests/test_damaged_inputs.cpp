@@ -161,8 +161,7 @@ void fuzz(const Chain& c, const std::string& file, const std::string& tool, cons
       CHECK(same);  // the output exists (and, for same_output, holds the intact file's result)
       fs::remove(out);
     }
-    for (auto& e : fs::directory_iterator(c.tmp.dir))
-      CHECK(e.path().string().find(".tmp.") == std::string::npos);
+    CHECK(test::temporary_files(c.tmp.dir).empty());
   }
   // Flips do reach what the stage reads (small files are about half HDF5 header slack).
   INFO(refused << " refused, " << accepted << " accepted");

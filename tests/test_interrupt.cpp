@@ -95,10 +95,7 @@ Interrupted interrupt_once(const std::string& tool, const std::string& args,
   return r;
 }
 
-void no_temporary_files(const TempDir& tmp) {
-  for (auto& e : fs::directory_iterator(tmp.dir))
-    CHECK(e.path().string().find(".tmp.") == std::string::npos);
-}
+void no_temporary_files(const TempDir& tmp) { CHECK(test::temporary_files(tmp.dir).empty()); }
 
 }  // namespace
 

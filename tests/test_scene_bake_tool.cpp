@@ -15,6 +15,7 @@
 #include "photonflow/provenance.h"
 #include "photonflow/scene.h"
 #include "photonflow/scene_import.h"
+#include "support.h"
 
 namespace fs = std::filesystem;
 
@@ -151,8 +152,7 @@ TEST_CASE("scene-bake: a good input writes scene.h5 with provenance", "[scene_ba
   CHECK(r.out.find("triangles  36 (4 inserted") != std::string::npos);
   CHECK(r.out.find("scene_id") != std::string::npos);
   REQUIRE(fs::exists(out));
-  for (auto& e : fs::directory_iterator(dir))
-    CHECK(e.path().filename().string().find(".tmp.") == std::string::npos);
+  CHECK(pf::test::temporary_files(dir).empty());
 
   const pf::Scene s = pf::load_scene(out.string());
   CHECK(s.triangles.size() == 36);

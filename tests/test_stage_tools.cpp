@@ -38,8 +38,7 @@ void check_refused(const test::ToolRun& r, const std::string& output, const std:
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   CHECK(r.err.find(needle) != std::string::npos);
   CHECK_FALSE(std::filesystem::exists(output));
-  for (auto& e : std::filesystem::directory_iterator(std::filesystem::path(output).parent_path()))
-    CHECK(e.path().string().find(".tmp.") == std::string::npos);
+  CHECK(test::temporary_files(std::filesystem::path(output).parent_path()).empty());
 }
 
 bool same_pixels(const Image& a, const Image& b) {

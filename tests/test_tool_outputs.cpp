@@ -54,8 +54,7 @@ void check_refused(const test::ToolRun& r, const TempDir& tmp, const std::string
     INFO("must not exist: " << p);
     CHECK_FALSE(fs::exists(p));
   }
-  for (auto& e : fs::recursive_directory_iterator(tmp.dir))
-    CHECK(e.path().string().find(".tmp.") == std::string::npos);
+  CHECK(test::temporary_files(tmp.dir).empty());
 }
 
 // A small chain: scene, hitpoints, photons, gathered state.
@@ -112,8 +111,7 @@ TEST_CASE("outputs: check_outputs and commit_temp refuse what a rename would des
   CHECK(fs::is_fifo(tmp / "fifo"));
   CHECK_FALSE(fs::exists(t));
   // The probe leaves nothing behind.
-  for (auto& e : fs::directory_iterator(tmp.dir))
-    CHECK(e.path().string().find(".tmp.") == std::string::npos);
+  CHECK(test::temporary_files(tmp.dir).empty());
 }
 
 TEST_CASE("outputs: stages never overwrite an input and fail before their first output",
@@ -325,8 +323,7 @@ TEST_CASE("outputs: out of memory is one line and exit code 1, also from a worke
     CHECK(r.err == tool + ": " + out_of_memory_text() + "\n");
     CHECK_FALSE(fs::exists(out));
     CHECK_FALSE(fs::exists(tmp / "o.exr"));
-    for (auto& e : fs::directory_iterator(tmp.dir))
-      CHECK(e.path().string().find(".tmp.") == std::string::npos);
+    CHECK(test::temporary_files(tmp.dir).empty());
   }
 }
 
@@ -402,8 +399,7 @@ TEST_CASE("outputs: a full disk is one line and exit code 2, and leaves no outpu
       INFO("must not exist: " << o);
       CHECK_FALSE(fs::exists(o));
     }
-    for (auto& e : fs::directory_iterator(tmp.dir))
-      CHECK(e.path().string().find(".tmp.") == std::string::npos);
+    CHECK(test::temporary_files(tmp.dir).empty());
   }
   // The same commands without the limit write their outputs (the cap above caused the failures).
   for (const Case& k : cases) {
