@@ -14,6 +14,7 @@
 #include <tuple>
 #include <vector>
 
+#include "photonflow/hash.h"
 #include "photonflow/procedural.h"
 #include "support.h"
 
@@ -168,6 +169,73 @@ TEST_CASE("procedural: triangle soup inside its box, no slivers, deterministic",
     const float area2 = length(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
     CHECK(area2 > 1e-4f * 0.3f * 0.3f);
     CHECK(t.material == 5);
+  }
+}
+
+// The generator's stream replayed here in the order procedural.h documents. A draw made inside
+// a call's argument list or an operator's operands would follow the compiler's evaluation
+// order (unspecified in C++): GCC and Clang then made different meshes from one seed.
+struct ReplayRng {
+  uint64_t s;
+  float uniform() { return float(splitmix64_mix(s += 0x9E3779B97F4A7C15ull) >> 40) * (1.f / 16777216.f); }
+  float uniform(float a, float b) { return a + (b - a) * uniform(); }
+  Vec3 unit_vector() {
+    const float z = uniform(-1.f, 1.f);
+    const float phi = uniform(0.f, 2.f * 3.14159265358979323846f);
+    const float r = std::sqrt(std::fmax(0.f, 1.f - z * z));
+    return {r * std::cos(phi), r * std::sin(phi), z};
+  }
+};
+
+TEST_CASE("procedural: a seed gives the documented draws, whatever the compiler", "[procedural]") {
+  SECTION("triangle soup: centre z, y, x, then each vertex's reach and direction") {
+    Bounds box;
+    box.extend(Vec3(-1, 0, 2));
+    box.extend(Vec3(1, 0.5f, 3));
+    const float size = 0.3f;
+    const auto tris = make_triangle_soup(box, 40, size, 11);
+    ReplayRng rng{11};
+    size_t done = 0;
+    while (done < tris.size()) {
+      const float cz = rng.uniform(box.lo.z, box.hi.z);
+      const float cy = rng.uniform(box.lo.y, box.hi.y);
+      const float cx = rng.uniform(box.lo.x, box.hi.x);
+      Vec3 v[3];
+      for (Vec3& x : v) {
+        const float reach = size * rng.uniform();
+        x = vmin(vmax(Vec3(cx, cy, cz) + rng.unit_vector() * reach, box.lo), box.hi);
+      }
+      if (!(length(cross(v[1] - v[0], v[2] - v[0])) > 1e-4f * size * size)) continue;
+      const pf_triangle& t = tris[done++];
+      INFO("triangle " << done - 1);
+      CHECK(std::memcmp(t.v0, &v[0].x, sizeof t.v0) == 0);
+      CHECK(std::memcmp(t.v1, &v[1].x, sizeof t.v1) == 0);
+      CHECK(std::memcmp(t.v2, &v[2].x, sizeof t.v2) == 0);
+    }
+  }
+  SECTION("height field: per wave its frequency, direction and phase") {
+    const int cells = 8;
+    const float base = 0.25f, height = 0.5f;
+    const auto tris = make_heightfield(0.f, 1.f, 0.f, 1.f, base, height, cells, 5);
+    ReplayRng rng{5};
+    struct Wave {
+      Vec3 k;
+      float phase;
+    } waves[8];
+    for (Wave& w : waves) {
+      const float f = rng.uniform(2.f, 5.f);
+      w.k = rng.unit_vector() * f;
+      w.phase = rng.uniform(0.f, 2.f * 3.14159265358979323846f);
+    }
+    for (int i = 0; i < cells; ++i)
+      for (int j = 0; j < cells; ++j) {
+        const Vec3 q(float(i) / float(cells), 0.f, float(j) / float(cells));
+        float sum = 0.f;
+        for (const Wave& w : waves) sum += std::sin(dot(w.k, q) + w.phase);
+        // Cell (i, j)'s first triangle starts at vertex (i, j).
+        INFO("vertex " << i << ", " << j);
+        CHECK(tris[size_t(2 * (i * cells + j))].v0[1] == base + height * (sum / 8.f));
+      }
   }
 }
 

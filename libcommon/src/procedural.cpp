@@ -43,7 +43,10 @@ class WaveNoise {
   explicit WaveNoise(uint64_t seed) {
     Rng rng(seed);
     for (Wave& w : waves_) {
-      w.k = rng.unit_vector() * rng.uniform(2.f, 5.f);
+      // One draw per statement: the order of a call's arguments or of an operator's operands
+      // is unspecified and differs between compilers (GCC and Clang gave different meshes).
+      const float f = rng.uniform(2.f, 5.f);
+      w.k = rng.unit_vector() * f;
       w.phase = rng.uniform(0.f, 2.f * kPi);
     }
   }
@@ -176,10 +179,16 @@ std::vector<pf_triangle> make_triangle_soup(const Bounds& box, size_t count, flo
   tris.reserve(count);
   auto clamp_to_box = [&](Vec3 p) { return vmin(vmax(p, box.lo), box.hi); };
   while (tris.size() < count) {
-    const Vec3 c(rng.uniform(box.lo.x, box.hi.x), rng.uniform(box.lo.y, box.hi.y),
-                 rng.uniform(box.lo.z, box.hi.z));
+    // One draw per statement, as in WaveNoise (z, y, x: the order these meshes were made in).
+    const float cz = rng.uniform(box.lo.z, box.hi.z);
+    const float cy = rng.uniform(box.lo.y, box.hi.y);
+    const float cx = rng.uniform(box.lo.x, box.hi.x);
+    const Vec3 c(cx, cy, cz);
     Vec3 v[3];
-    for (Vec3& x : v) x = clamp_to_box(c + rng.unit_vector() * (size * rng.uniform()));
+    for (Vec3& x : v) {
+      const float reach = size * rng.uniform();
+      x = clamp_to_box(c + rng.unit_vector() * reach);
+    }
     const float area2 = length(cross(v[1] - v[0], v[2] - v[0]));
     if (!(area2 > 1e-4f * size * size)) continue;  // redraw slivers and degenerates
     tris.push_back(make_flat(v[0], v[1], v[2], ids));
