@@ -135,7 +135,10 @@ std::vector<pf::Ray> random_rays(const BenchScene& b, size_t n, uint32_t seed) {
   std::vector<pf::Ray> rays(n);
   for (pf::Ray& r : rays) {
     const Vec3 e = box.extent();
-    r.o = box.lo + Vec3(uni() * e.x, uni() * e.y, uni() * e.z);
+    // One draw per statement (z, y, x, the order GCC gave these rays): argument order is
+    // unspecified, and Clang made other rays from the same seed.
+    const float oz = uni() * e.z, oy = uni() * e.y, ox = uni() * e.x;
+    r.o = box.lo + Vec3(ox, oy, oz);
     const float z = 2.f * uni() - 1.f, phi = 6.2831853f * uni();
     const float q = std::sqrt(std::max(0.f, 1.f - z * z));
     r.d = Vec3(q * std::cos(phi), q * std::sin(phi), z);

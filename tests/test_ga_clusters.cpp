@@ -398,7 +398,7 @@ TEST_CASE("the remove mutation takes the smaller of two clusters (ch. 8.1)", "[g
   ClusterSet start = empty_cluster_set(h, in.wg_size, "test");
   int32_t first = 0;
   for (int g = 0; g < groups; ++g) {
-    std::vector<int32_t> m(size_t(size_at[size_t(g)]));
+    std::vector<int32_t> m(static_cast<size_t>(size_at[size_t(g)]));
     for (int32_t& i : m) i = first++;
     append_cluster(start, 0, m.data(), m.size(), h);
   }

@@ -45,7 +45,9 @@ TEST_CASE("ppm: a split state (pf_ppm_state) updates to the hitpoint's bits", "[
   for (uint32_t i = 0; i < 2000; ++i) {
     pf_rng r = pf_rng_start(11, 0, i);
     const float radius = 0.01f + pf_rng_next(&r), n = i % 5 == 0 ? 0.f : 100.f * pf_rng_next(&r);
-    pf_hitpoint hp = make_hitpoint(radius, n, pf_rng_next(&r), pf_rng_next(&r), pf_rng_next(&r));
+    // One draw per statement (last argument first, as GCC evaluated the former argument list).
+    const float f2 = pf_rng_next(&r), f1 = pf_rng_next(&r), f0 = pf_rng_next(&r);
+    pf_hitpoint hp = make_hitpoint(radius, n, f0, f1, f2);
     pf_ppm_state st = {hp.radius, hp.n_photons, {hp.flux[0], hp.flux[1], hp.flux[2]}};
     const float tau_m[3] = {pf_rng_next(&r), 2.f * pf_rng_next(&r), 3.f * pf_rng_next(&r)};
     const int m = int(i % 7);
