@@ -42,6 +42,11 @@ enum class Traversal { Ropes, Stack, Brute };
 const char* traversal_name(Traversal t);
 
 // Closest hit with t in (tmin, tmax]. Returns hit.hit().
+// The three traversals agree on every ray but one degenerate kind: a ray whose origin lies in a
+// kd split plane that holds a triangle, and that leaves the plane on the side the build did not
+// store the triangle on. Brute force can hit that triangle at t ≈ 0 (by rounding, a touch at the
+// origin); the kd traversals start in the other child and do not see it. No ray the renderer
+// casts starts that close to a surface (offset_origin moves it ray_epsilon away first).
 bool intersect_closest(const Scene& scene, const Ray& ray, Hit& hit,
                        Traversal trav = Traversal::Stack);
 // True if any triangle is hit with t in (tmin, tmax] (shadow rays; the same interval as
