@@ -3,23 +3,24 @@
 #   make render   install missing Debian packages, build (Release), render the default scene
 #   make test     install missing Debian packages, build (Release), run the test suite (ctest)
 #   make test-sanitize  the test suite under AddressSanitizer + UBSan (build-sanitize/; slow build)
+#   make test-tsan      the test suite under ThreadSanitizer, Clang + libomp + Archer (build-tsan/)
 #   make bench    build and run the benchmarks (long; results go to docs/BENCHMARKS.md by hand)
 #   make ch6      the thesis's ch. 6 experiments: tables and charts into docs/results/
 #   make accuracy speed against accuracy: error vs time and passes, charts into docs/results/
 #
 # Variables: SCENE (a name in data/, default cornell-box), OUT (default out), BUILD (default build),
-# JOBS (default: all cores), SAN_BUILD (default build-sanitize).
+# JOBS (default: all cores), SAN_BUILD (default build-sanitize), TSAN_BUILD (default build-tsan).
 BUILD ?= build
 JOBS  ?= $(shell nproc)
 SCENE ?= cornell-box
 OUT   ?= out
 BIN   := $(abspath $(BUILD))/bin
 
-.PHONY: all deps configure build render test test-sanitize bench ch6 accuracy clean help
+.PHONY: all deps configure build render test test-sanitize test-tsan bench ch6 accuracy clean help
 all: build
 
 help:
-	@sed -n '2,11p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,12p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@tools/setup/install-deps.sh
@@ -56,6 +57,27 @@ test-sanitize: deps
 	if [ -n "$$(ls -A $(SAN_LOGS))" ]; then \
 	  echo "test-sanitize: sanitizer reports in $(SAN_LOGS):" >&2; head -n 20 $(SAN_LOGS)/* >&2; exit 1; \
 	fi; [ $$rc -eq 0 ] && echo "test-sanitize: tests passed, no sanitizer reports"; exit $$rc
+
+# ThreadSanitizer needs Clang: libomp with the Archer tool (OMP_TOOL_LIBRARIES) tells it how
+# OpenMP's barriers and reductions synchronise. Code it cannot see (PoCL's threads, HDF5) is
+# ignored. Reports go to $(TSAN_BUILD)/sanitizer-logs/; any report fails the target.
+TSAN_BUILD ?= build-tsan
+TSAN_LOGS  := $(abspath $(TSAN_BUILD))/sanitizer-logs
+ARCHER     := /usr/lib/llvm-15/lib/libarcher.so
+test-tsan: deps
+	@tools/setup/install-deps.sh debian-packages-tsan.txt
+	@mkdir -p $(TSAN_BUILD)
+	@CC=clang-15 CXX=clang++-15 cmake -S . -B $(TSAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DPHOTONFLOW_SANITIZE_THREAD=ON -DPHOTONFLOW_BENCH=OFF > $(TSAN_BUILD)/configure.log 2>&1 \
+	  || { cat $(TSAN_BUILD)/configure.log; exit 1; }
+	@cmake --build $(TSAN_BUILD) -j$(JOBS)
+	@rm -rf $(TSAN_LOGS) && mkdir -p $(TSAN_LOGS)
+	@cd $(TSAN_BUILD) && OMP_TOOL_LIBRARIES=$(ARCHER) \
+	  TSAN_OPTIONS=ignore_noninstrumented_modules=1:log_path=$(TSAN_LOGS)/tsan \
+	  ctest --output-on-failure -j$(JOBS); rc=$$?; \
+	if [ -n "$$(ls -A $(TSAN_LOGS))" ]; then \
+	  echo "test-tsan: sanitizer reports in $(TSAN_LOGS):" >&2; head -n 20 $(TSAN_LOGS)/* >&2; exit 1; \
+	fi; [ $$rc -eq 0 ] && echo "test-tsan: tests passed, no sanitizer reports"; exit $$rc
 
 bench: build
 	@$(MAKE) --no-print-directory -f pipelines/bench.mk BIN=$(BIN) OUT=$(OUT)

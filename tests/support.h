@@ -27,6 +27,21 @@
 
 namespace pf::test {
 
+// True in a ThreadSanitizer build (`make test-tsan`).
+constexpr bool thread_sanitizer_build() {
+#if defined(__SANITIZE_THREAD__)
+  return true;
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+  return true;
+#else
+  return false;
+#endif
+#else
+  return false;
+#endif
+}
+
 // Every byte of a file ("" when it cannot be read).
 inline std::string file_bytes(const std::string& path) {
   std::ifstream f(path, std::ios::binary);

@@ -7,11 +7,12 @@
 #include <cstdio>
 #include <limits>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define PF_ASAN_BUILD 1
+// Sanitizers reserve terabytes of shadow address space, which any cap would refuse.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define PF_SANITIZER_BUILD 1
 #elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define PF_ASAN_BUILD 1
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define PF_SANITIZER_BUILD 1
 #endif
 #endif
 
@@ -28,7 +29,7 @@ uint64_t address_space_bytes() {
 }
 
 bool AddressSpaceCap::supported() {
-#ifdef PF_ASAN_BUILD
+#ifdef PF_SANITIZER_BUILD
   return false;
 #else
   return true;

@@ -1,10 +1,16 @@
 #!/usr/bin/env bash
-# Installs the Debian packages listed in debian-packages.txt that are missing.
+# Installs the Debian packages listed in debian-packages.txt (or in the lists named as arguments,
+# files beside this script) that are missing.
 # As root: apt-get update + install (non-interactive). Otherwise: prints the exact command and
 # exits 1, so `make` stops before a build that cannot work.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-mapfile -t wanted < <(grep -v '^\s*#' "$here/debian-packages.txt" | grep -v '^\s*$')
+lists=("$@")
+[[ ${#lists[@]} -eq 0 ]] && lists=(debian-packages.txt)
+wanted=()
+for list in "${lists[@]}"; do
+  mapfile -t -O "${#wanted[@]}" wanted < <(grep -v '^\s*#' "$here/$list" | grep -v '^\s*$')
+done
 missing=()
 for p in "${wanted[@]}"; do
   status="$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)"
