@@ -5,7 +5,12 @@
 // Meshes built on a vertex grid (sphere, blob, height field, box) share their vertices bit for bit
 // between neighbouring triangles, so they are watertight. Shading normals n0..n2 are the geometric
 // normal except where noted. Random generators take a seed and give the same triangles on every
-// platform (own PRNG, no std:: distributions).
+// platform and with every compiler (own PRNG, no std:: distributions, and one draw per statement
+// in a fixed order; C++ leaves the order of draws inside one argument list unspecified):
+// - noise (blob, height field): per wave its frequency, its direction (z in [−1, 1], then the
+//   azimuth) and its phase;
+// - triangle soup: per triangle the centre's z, y and x, then per vertex its distance from the
+//   centre and its direction (as above); a triangle that is redrawn has used up its draws.
 #pragma once
 #include <cstdint>
 #include <string>
