@@ -68,6 +68,7 @@
 
 #include "photonflow/clusters.h"
 #include "photonflow/photon_distribution.h"
+#include "photonflow/progress.h"
 #include "photonflow/rng.h"
 #include "photonflow/stage_files.h"
 
@@ -223,14 +224,12 @@ class GaProgressLine {
  public:
   explicit GaProgressLine(std::string unit);
   void update(const GaProgress& p);
-  void end_line();  // as Progress::end_line (progress.h)
+  void end_line() { line_.end_line(); }  // a line left open by an interrupted run
 
  private:
   std::string unit_;
-  bool tty_;
+  TerminalLine line_;
   double last_ = -1;
-  bool open_ = false;
-  bool saw_interrupt_ = false;
 };
 
 }  // namespace pf

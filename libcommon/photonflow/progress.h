@@ -3,6 +3,7 @@
 #pragma once
 #include <unistd.h>
 
+#include <cstdarg>
 #include <cstdio>
 #include <string>
 
@@ -11,43 +12,65 @@
 
 namespace pf {
 
+// One line redrawn in place on a terminal (stderr, only when it is a TTY), for the progress of long
+// work; it knows whether the line is still open, so a message can start on a line of its own.
+class TerminalLine {
+ public:
+  TerminalLine() : tty_(isatty(2) != 0) {}
+  bool tty() const { return tty_; }
+  // Redraws the line (printf format); `final` ends it with a newline.
+  __attribute__((format(printf, 3, 4))) void draw(bool final, const char* format, ...) {
+    std::va_list args;
+    va_start(args, format);
+    std::fputc('\r', stderr);
+    std::vfprintf(stderr, format, args);
+    va_end(args);
+    if (final) std::fputc('\n', stderr);
+    std::fflush(stderr);
+    open_ = !final;
+    interrupted_when_drawn_ = interrupted();
+  }
+  // Ends a line left open by a run that stops early, so the next message starts on a line of its
+  // own; not when an interrupt's notice (interrupt.h), written since the last draw, ended it.
+  void end_line() {
+    if (open_ && !(interrupted() && !interrupted_when_drawn_)) {
+      std::fputc('\n', stderr);
+      std::fflush(stderr);
+    }
+    open_ = false;
+  }
+
+ private:
+  bool tty_;
+  bool open_ = false;  // drawn without its newline
+  bool interrupted_when_drawn_ = false;
+};
+
 class Progress {
  public:
   // `total` steps of `what` (e.g. "pass"); `unit` names the rate's unit (e.g. "photons").
   Progress(std::string what, long total, std::string unit)
-      : what_(std::move(what)), unit_(std::move(unit)), total_(total), tty_(isatty(2) != 0) {}
+      : what_(std::move(what)), unit_(std::move(unit)), total_(total) {}
   // Reports that `done` steps are finished and `amount` units were processed in all.
   void update(long done, double amount) {
-    if (!tty_) return;
-    if (interrupted() && !saw_interrupt_) open_ = false, saw_interrupt_ = true;  // its notice
-                                                                                // ended the line
+    if (!line_.tty()) return;
     double t = clock_.seconds();
     if (done < total_ && t - last_ < 0.25) return;
     last_ = t;
     double rate = t > 0 ? amount / t : 0.0;
     double eta = done > 0 ? t * double(total_ - done) / double(done) : 0.0;
-    std::fprintf(stderr, "\r%s %ld/%ld  %.3g %s/s  ETA %.0f s   ", what_.c_str(), done, total_,
-                 rate, unit_.c_str(), eta);
-    open_ = done < total_;
-    if (!open_) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
+    line_.draw(done >= total_, "%s %ld/%ld  %.3g %s/s  ETA %.0f s   ", what_.c_str(), done, total_,
+               rate, unit_.c_str(), eta);
   }
-  // Ends a line left open by a run that stops early (an interrupt), so the next message starts
-  // on a line of its own.
-  void end_line() {
-    if (!open_) return;
-    std::fprintf(stderr, "\n");
-    open_ = false;
-  }
+  // Ends a line left open by a run that stops early (an interrupt).
+  void end_line() { line_.end_line(); }
 
  private:
   std::string what_, unit_;
   long total_;
-  bool tty_;
+  TerminalLine line_;
   Stopwatch clock_;
   double last_ = -1.0;
-  bool open_ = false;  // a line is shown without its newline
-  bool saw_interrupt_ = false;
 };
 
 }  // namespace pf

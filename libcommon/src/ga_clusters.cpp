@@ -1307,27 +1307,17 @@ void write_ga_record(h5::Writer& w, const GaResult& r, const GaOptions& opt) {
              "its mutants)");
 }
 
-GaProgressLine::GaProgressLine(std::string unit) : unit_(std::move(unit)), tty_(isatty(2) != 0) {}
+GaProgressLine::GaProgressLine(std::string unit) : unit_(std::move(unit)) {}
 
 void GaProgressLine::update(const GaProgress& p) {
-  if (!tty_) return;
-  if (interrupted() && !saw_interrupt_) open_ = false, saw_interrupt_ = true;  // as Progress
+  if (!line_.tty()) return;
   const bool done = p.generation >= p.total;
   if (!done && p.seconds - last_ < 0.25) return;
   last_ = p.seconds;
   const int ran = p.generation - p.resumed_from;
   const double eta = ran > 0 ? p.seconds * double(p.total - p.generation) / double(ran) : 0.0;
-  std::fprintf(stderr, "\rgeneration %d/%d  best %.6g %s  ETA %.0f s   ", p.generation, p.total,
-               p.best, unit_.c_str(), eta);
-  open_ = !done;
-  if (done) std::fprintf(stderr, "\n");
-  std::fflush(stderr);
-}
-
-void GaProgressLine::end_line() {
-  if (!open_) return;
-  std::fprintf(stderr, "\n");
-  open_ = false;
+  line_.draw(done, "generation %d/%d  best %.6g %s  ETA %.0f s   ", p.generation, p.total, p.best,
+             unit_.c_str(), eta);
 }
 
 }  // namespace pf
