@@ -5,6 +5,7 @@
 // the wall-clock budget, and CPU against OpenCL.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -371,5 +372,85 @@ TEST_CASE("OpenCL: SPPM and PPPM images equal the CPU backend's", "[sppm][opencl
     const double rmse = test::relative_rmse(gpu, cpu);
     INFO(estimator_name(e) << ": relative RMSE opencl vs cpu " << rmse);
     CHECK(rmse <= 1e-3);
+  }
+}
+
+namespace {
+
+// Runs a tool that must succeed.
+void ok(const std::string& tool, const std::string& args, const test::TempDir& tmp) {
+  const test::ToolRun r = test::run_tool(tool, args, tmp);
+  INFO(tool << " " << args << "\n" << r.err);
+  REQUIRE(r.exit_code == 0);
+}
+
+// Runs a tool that must refuse: exit 2, one line on stderr, and no file at `output`.
+void refused(const std::string& tool, const std::string& args, const test::TempDir& tmp,
+             const std::string& output, const std::string& needle) {
+  const test::ToolRun r = test::run_tool(tool, args, tmp);
+  INFO(tool << " " << args << "\n" << r.err);
+  CHECK(r.exit_code == 2);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.find(needle) != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(output));
+}
+
+}  // namespace
+
+TEST_CASE("staged route: trace-hitpoints --pass, trace-photons, illuminate --estimator sppm|pppm "
+          "give render's image; parts of both routes merge", "[sppm][tools]") {
+  test::TempDir tmp("pf-sppm-staged");
+  const std::string scene = tmp / "scene.h5";
+  ok("scene-bake", test::source_dir() + "/data/cornell-spheres.dae -o " + scene +
+                       " --width 24 --height 20", tmp);
+  const std::string common = " --scene " + scene + " ";
+  for (const std::string e : {"sppm", "pppm"}) {
+    std::string state;
+    for (int p = 0; p < 3; ++p) {
+      const std::string eye = tmp / ("eye" + std::to_string(p) + ".h5");
+      const std::string ph = tmp / ("ph" + std::to_string(p) + ".h5");
+      const std::string next = tmp / (e + std::to_string(p) + ".h5");
+      ok("trace-hitpoints", common + "--estimator " + e + " --pass " + std::to_string(p) +
+                                " --direct shadow-rays -o " + eye, tmp);
+      ok("trace-photons", common + "--first-pass " + std::to_string(p) +
+                              " --passes 1 --photons 3000 -o " + ph, tmp);
+      ok("illuminate", common + "--estimator " + e + " --hitpoints " + eye + " --photons " + ph +
+                           (state.empty() ? "" : " --state " + state) + " -o " + next, tmp);
+      state = next;
+    }
+    const std::string staged = tmp / (e + "-staged.exr"), rendered = tmp / (e + "-render.exr");
+    ok("synthesize", (e == "sppm" ? "--hitpoints " : "--sums ") + state + " -o " + staged, tmp);
+    ok("render", common + "--estimator " + e +
+                     " --passes 3 --photons 3000 --direct shadow-rays -o " + rendered, tmp);
+    const Image a = read_exr(staged), b = read_exr(rendered);
+    CHECK(a.rgb == b.rgb);  // the same stage functions: the same bits
+    if (e == "pppm") {
+      // The staged range [0, 3) and render's [3, 5) are one run's [0, 5).
+      const std::string part = tmp / "part35.h5", merged = tmp / "merged.exr";
+      ok("render", common + "--estimator pppm --first-pass 3 --passes 2 --photons 3000 "
+                            "--direct shadow-rays --sums " + part, tmp);
+      ok("merge", state + " " + part + " --range 0:5 -o " + merged, tmp);
+      ok("render", common + "--estimator pppm --passes 5 --photons 3000 --direct shadow-rays -o " +
+                       rendered, tmp);
+      const Image m = read_exr(merged), w = read_exr(rendered);
+      CHECK(test::relative_rmse(m, w) < 1e-6);
+      // Refusals: a gap, an overlap, another seed, a range not covered; illuminate with the
+      // wrong eye pass; a negative budget. One line, exit 2, no output.
+      const std::string out = tmp / "bad.exr";
+      ok("render", common + "--estimator pppm --first-pass 4 --passes 1 --photons 3000 "
+                            "--direct shadow-rays --sums " + tmp / "part4.h5", tmp);
+      ok("render", common + "--estimator pppm --first-pass 3 --passes 1 --photons 3000 "
+                            "--direct shadow-rays --seed 2 --sums " + tmp / "seed2.h5", tmp);
+      refused("merge", state + " " + tmp / "part4.h5" + " -o " + out, tmp, out, "are in no part");
+      refused("merge", state + " " + part + " " + tmp / "part4.h5" + " -o " + out, tmp, out,
+              "overlap");
+      refused("merge", state + " " + tmp / "seed2.h5" + " -o " + out, tmp, out, "seed");
+      refused("merge", state + " --range 0:5 -o " + out, tmp, out, "render the missing passes");
+      refused("illuminate", common + "--estimator pppm --hitpoints " + tmp / "eye1.h5" +
+                                " --photons " + tmp / "ph2.h5" + " --state " + state + " -o " + out,
+              tmp, out, "eye pass 1");
+      refused("render", common + "--estimator sppm --time -1 -o " + out, tmp, out, "--time");
+      refused("render", common + "--estimator sppm --spp 4 -o " + out, tmp, out, "--spp");
+    }
   }
 }

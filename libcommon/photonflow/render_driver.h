@@ -154,6 +154,14 @@ void check_options(const RenderOptions& opt);
 // under other options would be neither run's image. (Passes, snapshots, threads, device, method
 // and work-group size may change: every gather method gathers the same photons.)
 std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
+// The same record for the staged route (illuminate --estimator pppm), from the options recorded in
+// the provenance of its eye pass (trace-hitpoints: spp, max-depth, direct, shadow-samples, radius,
+// seed, pixel-sampler) and photon pass (trace-photons: photons, max-bounces, seed) and its alpha:
+// equal to render's for the same options, so parts of either route merge. InputError naming the
+// file whose provenance lacks one.
+std::map<std::string, std::string> staged_state_parameters(
+    Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
+    const std::string& photons_path, float alpha);
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final

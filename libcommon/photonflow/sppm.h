@@ -69,4 +69,16 @@ double pppm_radius(double r1, double alpha, int pass);
 void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
 
+// The staged route of both (illuminate --estimator sppm | pppm): `eye` is a trace-hitpoints file
+// of eye pass p (estimator "none", eye_pass p) and `photons` holds photon pass p alone; the grid is
+// built here (opt.max_bins) and the pass applied as render applies it, so both routes give the
+// same state. InputError naming eye_path or photons_path when the passes do not line up
+// (p = state.passes, or sums.end_pass()) or the direct modes differ.
+void sppm_stage(const Scene& scene, HitpointSet& state, const HitpointSet& eye,
+                const std::string& eye_path, const PhotonSet& photons,
+                const std::string& photons_path, const PpmOptions& opt);
+void pppm_stage(const Scene& scene, PassSums& sums, const HitpointSet& eye,
+                const std::string& eye_path, const PhotonSet& photons,
+                const std::string& photons_path, const PpmOptions& opt);
+
 }  // namespace pf

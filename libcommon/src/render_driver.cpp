@@ -198,6 +198,41 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
   return p;
 }
 
+std::map<std::string, std::string> staged_state_parameters(
+    Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
+    const std::string& photons_path, float alpha) {
+  auto text = [](const Provenance& p, const std::string& path, const char* name) {
+    const auto it = p.parameters.find(name);
+    if (it == p.parameters.end())
+      throw input_error(path, std::string("records no --") + name + " of the tool that wrote it",
+                        "remake it with this version");
+    return it->second;
+  };
+  auto number = [&](const Provenance& p, const std::string& path, const char* name) {
+    const std::string t = text(p, path, name);
+    try {
+      return std::stod(t);
+    } catch (const std::exception&) {
+      throw input_error(path, std::string("records --") + name + " '" + t + "', not a number");
+    }
+  };
+  RenderOptions o;
+  o.estimator = e;
+  o.eye.spp = int(number(eye, eye_path, "spp"));
+  o.eye.max_depth = int(number(eye, eye_path, "max-depth"));
+  o.eye.direct = text(eye, eye_path, "direct") == "shadow-rays" ? DirectMode::ShadowRays
+                                                                 : DirectMode::Photons;
+  o.eye.shadow_samples = int(number(eye, eye_path, "shadow-samples"));
+  o.eye.radius = float(number(eye, eye_path, "radius"));
+  o.eye.seed = uint32_t(number(eye, eye_path, "seed"));
+  o.eye.sampler = parse_pixel_sampler(text(eye, eye_path, "pixel-sampler"));
+  o.photons.photons = uint32_t(number(photons, photons_path, "photons"));
+  o.photons.max_bounces = int(number(photons, photons_path, "max-bounces"));
+  o.photons.seed = uint32_t(number(photons, photons_path, "seed"));
+  o.ppm.alpha = alpha;
+  return state_parameters(o);
+}
+
 namespace {
 
 // Refuses a checkpoint whose recorded state options differ from this run's (state_parameters).

@@ -157,4 +157,64 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
   sums.photons_emitted += emitted;
 }
 
+namespace {
+
+// Eye pass p of a trace-hitpoints file, checked against photon pass p of `photons`.
+EyePassResult staged_eye_pass(const HitpointSet& eye, const std::string& eye_path, int pass,
+                              DirectMode mode, const PhotonSet& photons,
+                              const std::string& photons_path) {
+  if (eye.estimator != "none")
+    throw input_error(eye_path, "is a hitpoint state, not an eye pass",
+                      "give trace-hitpoints --estimator sppm|pppm --pass " + std::to_string(pass));
+  if (eye.eye_pass != pass)
+    throw input_error(eye_path, "is eye pass " + std::to_string(eye.eye_pass) + ", the state needs pass " +
+                                    std::to_string(pass),
+                      "trace it with --pass " + std::to_string(pass));
+  if (eye.direct_mode != mode)
+    throw input_error(eye_path, std::string("was traced with --direct ") +
+                                    direct_mode_name(eye.direct_mode) + ", the state has " +
+                                    direct_mode_name(mode));
+  if (photons.first_pass != pass || photons.pass_count() != 1)
+    throw input_error(photons_path, "holds passes " + std::to_string(photons.first_pass) + " … " +
+                                        std::to_string(photons.first_pass + photons.pass_count() - 1) +
+                                        ", this step needs pass " + std::to_string(pass) + " alone",
+                      "trace it with --first-pass " + std::to_string(pass) + " --passes 1");
+  EyePassResult r;
+  r.hitpoints = eye.hitpoints;
+  r.emitted = eye.emitted;
+  r.direct = eye.direct;
+  r.radius = eye.radius0;
+  r.width = eye.width;
+  r.height = eye.height;
+  return r;
+}
+
+PhotonGrid staged_grid(const Scene& scene, const PhotonSet& photons, float radius0,
+                       const PpmOptions& opt) {
+  PhotonGridParams gp;
+  gp.max_bins = opt.max_bins;
+  gp.default_radius = radius0;
+  return build_photon_grid(photons.photons, int(scene.mesh_names.size()), gp);
+}
+
+}  // namespace
+
+void sppm_stage(const Scene& scene, HitpointSet& state, const HitpointSet& eye,
+                const std::string& eye_path, const PhotonSet& photons,
+                const std::string& photons_path, const PpmOptions& opt) {
+  const EyePassResult r =
+      staged_eye_pass(eye, eye_path, state.passes, state.direct_mode, photons, photons_path);
+  sppm_pass(scene, state, r, staged_grid(scene, photons, state.radius0, opt),
+            photons.pass_emitted[0], opt);
+}
+
+void pppm_stage(const Scene& scene, PassSums& sums, const HitpointSet& eye,
+                const std::string& eye_path, const PhotonSet& photons,
+                const std::string& photons_path, const PpmOptions& opt) {
+  const EyePassResult r =
+      staged_eye_pass(eye, eye_path, sums.end_pass(), sums.direct_mode, photons, photons_path);
+  pppm_pass(scene, sums, r, staged_grid(scene, photons, sums.radius1, opt),
+            photons.pass_emitted[0], opt);
+}
+
 }  // namespace pf
