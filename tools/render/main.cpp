@@ -153,6 +153,15 @@ int main(int argc, char** argv) {
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "render");
     opt.device = dev.get();
     opt.ppm.method = pf::method_option(a, dev.get());
+    // The gather methods of gather_method.h work on fixed hitpoints (clusters, device-resident
+    // state); sppm and pppm gather each pass's new visible points through the CPU grid.
+    if (opt.estimator != pf::Estimator::Ppm && a.count("method") &&
+        opt.ppm.method != pf::GatherMethod::Grid)
+      throw pf::input_error("", "--estimator " + a["estimator"].as<std::string>() +
+                                    " gathers through each pass's CPU grid; --method " +
+                                    pf::gather_method_name(opt.ppm.method) +
+                                    " belongs to ppm's fixed hitpoints",
+                            "drop --method (--device opencl still traces the passes there)");
     prov.parameters["method"] = pf::gather_method_name(opt.ppm.method);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
