@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "photonflow/cl_runtime.h"
+#include "photonflow/eye_pass.h"
 #include "photonflow/gather_method.h"
 #include "photonflow/photon_grid.h"
 #include "photonflow/shared_types.h"
@@ -107,6 +108,15 @@ class DevicePpmState {
   // them: trace_photons_device made them from the checked scene. Other methods download them and
   // take the copying route.
   GatherTimes pass(const DevicePhotons& photons, const PpmOptions& opt);
+  // One SPPM pass (sppm.h) over an SPPM state (one hitpoint per pixel): `eye` holds eye pass p's
+  // visible points, whose sites and throughputs β go up; the pixels' R, N, τ stay on the device,
+  // where the hashed-grid gather multiplies each τ_M by β and updates them; the emitted and direct
+  // layers are averaged on the host. The same state as sppm_pass(scene, h, eye, grid of the
+  // photons, emitted, opt), bit for bit where the device rounds division and sqrt correctly.
+  GatherTimes sppm_pass(const EyePassResult& eye, const std::vector<pf_photon>& photons,
+                        uint64_t emitted, const PpmOptions& opt);
+  GatherTimes sppm_pass(const EyePassResult& eye, const DevicePhotons& photons,
+                        const PpmOptions& opt);
   // h.hitpoints ← the device's state (nothing when already current).
   void sync();
   // Copies h.hitpoints to the device now (a hash-grid pass does it when needed); benchmarks
@@ -121,6 +131,9 @@ class DevicePpmState {
   // A hash-grid pass over photons on the host (host) or on the device (device), np of them.
   GatherTimes hash_grid(const pf_photon* host, const ClBuffer* device, size_t np, uint64_t emitted,
                         const PpmOptions& opt);
+  GatherTimes sppm_hash_grid(const EyePassResult& eye, const pf_photon* host,
+                             const ClBuffer* device, size_t np, uint64_t emitted,
+                             const PpmOptions& opt);
 
   const Scene& scene_;
   HitpointSet& h_;
@@ -129,6 +142,7 @@ class DevicePpmState {
   // hash-grid pass). A pass changes only the states: sync copies those back.
   ClBuffer sites_, states_;
   ClBuffer mats_;                // the scene's materials, written with the hitpoints
+  ClBuffer weights_;             // SPPM: the pass's eye-path throughputs β, 3 per pixel
   bool host_current_ = true;     // h_.hitpoints holds the latest state
   bool device_current_ = false;  // hps_ holds it
   float rmax_ = 0.f;             // largest finite positive radius of the device's state

@@ -58,6 +58,18 @@ HitpointSet make_sppm_state(const Scene& scene, float radius0, DirectMode mode);
 void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
 
+// The two halves of sppm_pass around the gather, for the device's SPPM pass (cl_gather.h,
+// DevicePpmState::sppm_pass), which gathers on the device in between:
+//   sppm_sites: one site per pixel of `state` — the pixel's visible point in `eye`, or a site
+//     with mesh −1 where the eye path found none — and its throughput β (3 floats, 0 without one);
+//     InputError as sppm_pass when the eye pass does not fit the state;
+//   sppm_finish_pass: every pixel with a visible point takes its position, normal, direction, mesh
+//     and material; the emitted and direct layers take the pass's into their running mean; the
+//     pass is counted with its `emitted` photons.
+void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,
+                std::vector<float>& beta);
+void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted);
+
 // r_i of pass p (0-based; i = p + 1) for initial radius r1: r_i² = r1² · Π_{j=1..i−1} (j + α)/(j + 1)
 // (KZ11 eq. 19 unrolled), evaluated in double in that order so that every machine gets the same
 // radius for the same pass.

@@ -72,6 +72,20 @@ ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions
 }
 
 void ProgressiveRenderer::run_iteration() {
+  if (opt_.estimator == Estimator::Sppm && opt_.device) {
+    // OpenCL: eye pass and photons traced on the device, the photons never leave it, and the
+    // pixels' R, N, τ stay there between passes (DevicePpmState::sppm_pass).
+    EyePassOptions eo = opt_.eye;
+    eo.pass = uint32_t(state_.passes);
+    const EyePassResult eye = trace_hitpoints(scene_, eo, *opt_.device);
+    if (!device_state_) device_state_ = std::make_unique<DevicePpmState>(scene_, state_, *opt_.device);
+    const ClWaitScope no_wait(*opt_.device, false);
+    const DevicePhotons pass =
+        trace_photons_device(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
+    photons_stored_ += pass.count;
+    device_state_->sppm_pass(eye, pass, opt_.ppm);
+    return;
+  }
   if (opt_.estimator == Estimator::Sppm) {  // a new eye pass, then the pass's photons per pixel
     EyePassResult eye;
     size_t stored = 0;

@@ -102,6 +102,29 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
     const int m = gather_site(scene, grid, v, s.radius, skip_direct, tau_m);
     for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
     pf_ppm_update(&s, m, tau_m, alpha);                  // thesis eq. 3.14, 3.16, 3.18
+  }
+  sppm_finish_pass(state, eye, emitted);
+}
+
+void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,
+                std::vector<float>& beta) {
+  const std::vector<size_t> px = visible_pixels(eye, state.width, state.height, true);
+  const size_t n = size_t(state.width) * size_t(state.height);
+  if (state.hitpoints.size() != n)
+    throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
+  pf_hitpoint none{};
+  none.mesh = none.material = -1;
+  sites.assign(n, none);
+  beta.assign(n * 3, 0.f);
+  for (size_t i = 0; i < px.size(); ++i) {
+    sites[px[i]] = eye.hitpoints[i];
+    for (int c = 0; c < 3; ++c) beta[px[i] * 3 + size_t(c)] = eye.hitpoints[i].weight[c];
+  }
+}
+
+void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted) {
+  for (const pf_hitpoint& v : eye.hitpoints) {  // visible_pixels checked the pixels
+    pf_hitpoint& s = state.hitpoints[size_t(v.pixel_y) * size_t(state.width) + size_t(v.pixel_x)];
     for (int c = 0; c < 3; ++c) {
       s.position[c] = v.position[c];
       s.normal[c] = v.normal[c];
