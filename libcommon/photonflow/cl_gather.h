@@ -151,6 +151,14 @@ class DevicePpmState {
   std::vector<int32_t> order_;
 };
 
+// The gather of one probabilistic-PPM pass (sppm.h) on the device: eye pass p's visible points
+// gather the device's photons of pass p within the pass's global radius (pppm_pass_radius) through
+// the hashed grid; returns β·τ_M per visible point (3 floats), which pppm_accumulate adds to the
+// sums, as pppm_pass's host gather does (the same values where the device rounds like the host).
+std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& eye, float radius,
+                                      DirectMode direct, const DevicePhotons& photons,
+                                      const PpmOptions& opt, ClContext& dev);
+
 // The grid-cluster gather alone (gather_grid_clusters, the kernel of grid-kmeans and
 // grid-gridclusters), for timing many clusterings of one eye pass against one photon pass: the
 // device-time fitness of the GA (thesis ch. 8.2, Table 8.4). The hitpoints, the photons and their

@@ -80,6 +80,13 @@ double pppm_radius(double r1, double alpha, int pass);
 // emitted.
 void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
+// The radius r_i of the pass pppm_pass applies next, as the float the gather uses.
+float pppm_pass_radius(const PassSums& sums);
+// pppm_pass after its gather: tau_beta holds β·τ_M (float products, 3 per visible point of `eye`,
+// τ_M gathered within pppm_pass_radius(sums)); adds L_p of every pixel to the sums and counts the
+// pass. The device's gather (cl_gather.h, pppm_gather_device) ends here too.
+void pppm_accumulate(PassSums& sums, const EyePassResult& eye, const std::vector<float>& tau_beta,
+                     uint64_t emitted);
 
 // The staged route of both (illuminate --estimator sppm | pppm): `eye` is a trace-hitpoints file
 // of eye pass p (estimator "none", eye_pass p) and `photons` holds photon pass p alone; the grid is

@@ -783,6 +783,45 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
   return times;
 }
 
+std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& eye, float radius,
+                                      DirectMode direct, const DevicePhotons& photons,
+                                      const PpmOptions& opt, ClContext& dev) {
+  const size_t nh = eye.hitpoints.size(), np = photons.count;
+  std::vector<float> tau_beta(nh * 3, 0.f);
+  // One hashed-grid pass with α = 1 over fresh states (R = r_i, N = 0, τ = 0): eq. 3.14–3.18 then
+  // leave R, set N = M and τ = β·τ_M exactly (ratio (0 + M)/(0 + M) = 1), which are read back.
+  PpmOptions o = opt;
+  o.method = GatherMethod::HashGrid;
+  o.alpha = 1.f;
+  check_pass(o, nh, np);
+  if (nh == 0 || np == 0) return tau_beta;
+  require_one_buffer(dev, nh, sizeof(pf_gather_site), "visible points", o.method);
+  std::vector<pf_hitpoint> fresh(eye.hitpoints);
+  std::vector<float> beta(nh * 3);
+  for (size_t i = 0; i < nh; ++i) {
+    fresh[i].radius = radius;
+    fresh[i].n_photons = 0.f;
+    for (int c = 0; c < 3; ++c) {
+      fresh[i].flux[c] = 0.f;
+      beta[i * 3 + size_t(c)] = eye.hitpoints[i].weight[c];
+    }
+  }
+  const SplitHitpoints hps{&dev.scratch("pppm.sites", nh * sizeof(pf_gather_site)),
+                           &dev.scratch("pppm.states", nh * sizeof(pf_ppm_state))};
+  write_split(dev, hps, fresh.data(), nullptr, nh);
+  const ClBuffer& weights = dev.scratch("pppm.weights", nh * 3 * sizeof(float));
+  dev.write(weights, nh * 3 * sizeof(float), beta.data());
+  const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
+  dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
+  GatherTimes times;
+  hash_grid_pass(scene, hps, mats, nh, direct, radius, PassPhotons{nullptr, photons.photons, np},
+                 o, dev, times, &weights);
+  read_split_states(dev, hps, fresh.data(), nullptr, nh);
+  for (size_t i = 0; i < nh; ++i)
+    for (int c = 0; c < 3; ++c) tau_beta[i * 3 + size_t(c)] = fresh[i].flux[c];
+  return tau_beta;
+}
+
 void DevicePpmState::upload() {
   if (device_current_) return;
   sync();  // never overwrite a newer device state with an older host copy

@@ -35,17 +35,10 @@ uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
                     EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored) {
   EyePassOptions eo = opt.eye;
   eo.pass = pass;
-  eye = eye_pass(scene, eo, opt.device);
+  eye = trace_hitpoints(scene, eo);
   PhotonGridParams gp;
   gp.max_bins = opt.ppm.max_bins;
   gp.default_radius = radius0;  // the smallest bin size, as ppm_grid_params
-  if (opt.device) {  // device photon tracing; the gather runs on the host (docs/FORMATS.md)
-    PhotonPassResult p = trace_photons(scene, pass, opt.photons, *opt.device);
-    stored = p.photons.size();
-    const PhotonSpan span{p.photons.data(), p.photons.size()};
-    build_photon_grid_into(grid, &span, 1, int(scene.mesh_names.size()), gp, opt.ppm.threads);
-    return p.emitted;
-  }
   const uint64_t emitted = trace_photons_into(scene, pass, opt.photons, chunks);
   stored = chunks.size();
   const std::vector<PhotonSpan> spans = chunks.spans();
@@ -152,6 +145,20 @@ PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt, PassSum
 }
 
 void PppmRenderer::run_iteration() {
+  if (opt_.device) {  // eye pass, photons and gather on the device; the sums on the host
+    EyePassOptions eo = opt_.eye;
+    eo.pass = uint32_t(sums_.end_pass());
+    eye_ = trace_hitpoints(scene_, eo, *opt_.device);
+    const ClWaitScope no_wait(*opt_.device, false);
+    const DevicePhotons pass =
+        trace_photons_device(scene_, uint32_t(sums_.end_pass()), opt_.photons, *opt_.device);
+    photons_stored_ += pass.count;
+    pppm_accumulate(sums_, eye_,
+                    pppm_gather_device(scene_, eye_, pppm_pass_radius(sums_), sums_.direct_mode,
+                                       pass, opt_.ppm, *opt_.device),
+                    pass.emitted);
+    return;
+  }
   size_t stored = 0;
   const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(sums_.end_pass()), sums_.radius1,
                                       eye_, photon_chunks_, grid_, stored);
