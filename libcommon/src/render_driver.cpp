@@ -2,12 +2,12 @@
 #include "photonflow/render_driver.h"
 
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdint>
-#include <sstream>
 
 #include "photonflow/cl_backend.h"
 #include "photonflow/options.h"
@@ -470,22 +470,24 @@ std::string render_snapshot_name(const std::string& pattern, int passes, int tot
 }
 
 std::string render_record_json(const Provenance& prov, const std::vector<RenderImageRecord>& images) {
-  std::ostringstream o;
-  o << "{\n" << provenance_json_fields(prov) << ",\n  \"images\": [";
-  const char* sep = "";
+  Json doc = provenance_json(prov);
+  Json list = Json::array();
   for (const auto& im : images) {
     const RenderStatus& s = im.status;
-    o << sep << "\n    {\"path\": " << json_string(im.path) << ", \"passes\": " << s.passes
-      << ", \"target\": " << s.target << ", \"photons_emitted\": " << s.photons_emitted
-      << ", \"photons_stored\": " << s.photons_stored
-      << ", \"seconds\": " << json_number(s.seconds)
-      << ", \"build_seconds\": " << json_number(s.build_seconds)
-      << ", \"mean_radius\": " << json_number(s.mean_radius)
-      << ", \"resumed\": " << (s.resumed ? "true" : "false") << "}";
-    sep = ",";
+    Json entry = Json::object();
+    entry["path"] = im.path;
+    entry["passes"] = s.passes;
+    entry["target"] = s.target;
+    entry["photons_emitted"] = s.photons_emitted;
+    entry["photons_stored"] = s.photons_stored;
+    entry["seconds"] = json_value(s.seconds);
+    entry["build_seconds"] = json_value(s.build_seconds);
+    entry["mean_radius"] = json_value(s.mean_radius);
+    entry["resumed"] = s.resumed;
+    list.push_back(std::move(entry));
   }
-  o << "\n  ]\n}\n";
-  return o.str();
+  doc["images"] = std::move(list);
+  return json_record_text(doc);
 }
 
 void write_render_record(const std::string& path, const Provenance& prov,
