@@ -36,6 +36,19 @@ stop_all() {
 }
 
 if [[ $cmd == stop ]]; then
+  # Jobs first: their processes (slurmstepd and its children) would outlive slurmd.
+  if [[ -f $dir/env.sh && -s $dir/slurmctld.pid ]] && kill -0 "$(cat "$dir/slurmctld.pid")" 2>/dev/null; then
+    export SLURM_CONF=$dir/slurm.conf
+    jobs=$(timeout 10 squeue -h -o %A 2>/dev/null | sort -u || true)
+    if [[ -n $jobs ]]; then
+      # shellcheck disable=SC2086
+      timeout 10 scancel $jobs 2>/dev/null || true
+      for ((i = 0; i < 100; i++)); do
+        [[ -z $(timeout 10 squeue -h -t RUNNING,COMPLETING -o %A 2>/dev/null) ]] && break
+        sleep 0.1
+      done
+    fi
+  fi
   stop_all
   exit 0
 fi
