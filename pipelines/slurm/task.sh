@@ -23,6 +23,8 @@ if [[ -f $part ]]; then
   echo "task.sh: task $k: $part is there already (passes $first..$((first + PPT - 1))); nothing to do"
   exit 0
 fi
+# A task killed outright (SIGKILL, a node lost) may have left its temporary file (FORMATS.md).
+rm -f "$part".tmp.*
 # On a Slurm node: as many threads as the task has cores; elsewhere (local.mk) THREADS, 0 = all.
 threads=${SLURM_CPUS_PER_TASK:-${THREADS:-0}}
 echo "task.sh: task $k on $(hostname): passes $first..$((first + PPT - 1)) -> $part"
