@@ -50,7 +50,7 @@ setsid bash -c 'while kill -0 "$1" 2>/dev/null; do sleep 1; done
 source "$cluster/env.sh"
 
 # The scene and the settings of every run: 4 tasks of 2 passes, 8 passes in all.
-TASKS=4 PPT=2 SEED=3 PHOTONS=${PF_SLURM_PHOTONS:-20000}
+TASKS=4 PPT=2 SEED=3 PHOTONS=${PF_SLURM_PHOTONS:-1000000}
 "$BIN/scene-bake" "$src/data/cornell-box.dae" -o "$tmp/scene.h5" --width 64 --height 64 > /dev/null
 run_opts=(--scene "$tmp/scene.h5" --bin "$BIN" --tasks "$TASKS" --passes-per-task "$PPT"
           --seed "$SEED" --photons "$PHOTONS" --mem 512M --time 10:00)
@@ -73,15 +73,6 @@ same_as_reference() {
     || fail "$1 differs from the single render of the same passes: relMSE $e (expected < 1e-9)"
   echo "$T: $1 equals the single render (relMSE $e)"
 }
-
-# The check can fail: a render of other passes (another seed; two passes fewer) is far from it.
-render --passes $((TASKS * PPT)) --seed $((SEED + 1)) -o "$tmp/other-seed.exr"
-render --passes $(((TASKS - 1) * PPT)) --seed $SEED -o "$tmp/fewer-passes.exr"
-for img in other-seed fewer-passes; do
-  e=$(relmse "$tmp/$img.exr" "$tmp/reference.exr")
-  python3 -c "import sys; sys.exit(0 if $e > 1e-6 else 1)" \
-    || fail "$img.exr is as close to the reference as the merge must be (relMSE $e): the comparison cannot fail"
-done
 
 # Waits until none of the run's jobs is pending or running (bounded), then shows their states.
 wait_jobs() {
@@ -109,6 +100,28 @@ for ((k = 0; k < TASKS; ++k)); do
 done
 [[ -f $run1/image.exr && -f $run1/image.png && -f $run1/run.json ]] || fail "run 1 wrote no image.exr, image.png and run.json"
 same_as_reference "$run1/image.exr"
+# The comparison can fail: the parts of tasks 0..2 alone (6 of the 8 passes) are far from it.
+parts1=("$run1"/parts/passes-*.h5)
+[[ ${#parts1[@]} -eq $TASKS ]] || fail "run 1 left ${#parts1[@]} parts, not $TASKS"
+"$BIN/merge" "${parts1[@]:0:TASKS-1}" -o "$tmp/fewer-passes.exr" > /dev/null
+e=$(relmse "$tmp/fewer-passes.exr" "$tmp/reference.exr")
+python3 -c "import sys; sys.exit(0 if $e > 1e-6 else 1)" \
+  || fail "the image of $(((TASKS - 1) * PPT)) passes is as close to the reference as the merge must be (relMSE $e): the comparison cannot fail"
+# Parts that must not merge: task 1's range rendered with another seed, and a part given twice.
+render --seed $((SEED + 1)) --first-pass "$PPT" --passes "$PPT" --sums "$tmp/other-seed.h5"
+for set in other-seed duplicate; do
+  if [[ $set == other-seed ]]; then
+    parts=("${parts1[0]}" "$tmp/other-seed.h5" "${parts1[@]:2}"); culprit=other-seed.h5
+  else
+    parts=("${parts1[@]}" "${parts1[1]}"); culprit=$(basename "${parts1[1]}")
+  fi
+  if out=$("$BIN/merge" "${parts[@]}" --range "0:$((TASKS * PPT))" -o "$tmp/$set.exr" 2>&1); then
+    fail "merge accepted a $set part"
+  fi
+  grep -q "$culprit" <<< "$out" || fail "merge's refusal of a $set part does not name it: $out"
+  [[ ! -e $tmp/$set.exr ]] || fail "merge refused a $set part but wrote $tmp/$set.exr"
+  echo "$T: merge refuses a $set part: $out"
+done
 
 # 2. One task cancelled while it renders, then resubmitted alone.
 run2=$tmp/run2
