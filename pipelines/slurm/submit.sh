@@ -83,7 +83,7 @@ BIN=$(cd "$BIN" && pwd)
 cp "$scene" "$RUN/scene.h5.tmp" && mv "$RUN/scene.h5.tmp" "$RUN/scene.h5" \
   || pf_die "$RUN: cannot copy the scene into the run folder"
 NAME=$(basename "$RUN")
-MERGE_CPUS=1
+MERGE_CPUS=$CPUS_PER_TASK   # the merge job: a tree level's merges run side by side
 {
   echo "# photonflow Slurm run, written by pipelines/slurm/submit.sh on $(date -u +%FT%TZ)"
   PIPE=$PF_SLURM_DIR
