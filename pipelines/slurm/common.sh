@@ -37,20 +37,39 @@ pf_missing() {
 # pf_log KIND JOBID [TASKS]: appends a line to RUN/jobs.log.
 pf_log() { printf '%s %s %s %s\n' "$(date -u +%FT%TZ)" "$1" "$2" "${3:-}" >> "$RUN/jobs.log"; }
 
-# pf_active_tasks: array tasks of this run's task jobs still pending or running, one per line.
+# pf_check_queue: stops the script unless squeue answers (the controller is reachable); after it,
+# pf_queued's failures are the ids Slurm has forgotten.
+pf_check_queue() {
+  local out
+  out=$(squeue -h -o %i 2>&1) || pf_die "squeue failed, so the queue is unknown: $out"
+}
+
+# pf_queued ID FORMAT: squeue's FORMAT field of job ID's tasks still in the queue (none once the
+# job has left it, also when Slurm has forgotten the id). Any other failure of squeue stops the
+# script: a controller that does not answer must not make running tasks look missing.
+pf_queued() {
+  local out
+  if ! out=$(squeue -h -r -j "$1" -o "$2" 2>&1); then
+    [[ $out == *"Invalid job id"* ]] && return 0
+    pf_die "squeue -j $1 failed: $out"
+  fi
+  [[ -n $out ]] && echo "$out"
+  return 0
+}
+
+# pf_active_tasks: array tasks of this run's task jobs still queued or running, one per line.
 pf_active_tasks() {
-  local ids
-  ids=$(awk '$2 == "tasks" { printf "%s%s", sep, $3; sep = "," }' "$RUN/jobs.log" 2>/dev/null)
-  [[ -n $ids ]] || return 0
-  squeue -h -r -t PENDING,RUNNING,CONFIGURING,COMPLETING,REQUEUED,RESIZING,SUSPENDED \
-    -j "$ids" -o %K 2>/dev/null | grep -E '^[0-9]+$' || true
+  local id
+  for id in $(awk '$2 == "tasks" { print $3 }' "$RUN/jobs.log" 2>/dev/null); do
+    pf_queued "$id" %K | grep -E '^[0-9]+$' || true
+  done
 }
 
 # pf_active_jobs KIND: this run's jobs of KIND (tasks | merge) still in the queue, one per line.
 pf_active_jobs() {
   local id
   for id in $(awk -v k="$1" '$2 == k { print $3 }' "$RUN/jobs.log" 2>/dev/null); do
-    [[ -n $(squeue -h -j "$id" -o %i 2>/dev/null) ]] && echo "$id"
+    [[ -n $(pf_queued "$id" %i) ]] && echo "$id"
   done
   return 0
 }

@@ -18,6 +18,7 @@ status_only=0
 pf_load "$1"
 command -v squeue >/dev/null || pf_die "squeue not found: not a Slurm node (on one machine: make -j -f pipelines/slurm/local.mk RUN=$RUN)"
 
+pf_check_queue
 active=$(pf_active_tasks | sort -un)
 todo=()
 done_n=0

@@ -75,7 +75,10 @@ done
 if [[ -e $RUN/run.env ]]; then
   pf_die "$RUN: holds a run already (resubmit its missing tasks with pipelines/slurm/resubmit.sh $RUN, or choose another --out)"
 fi
-((prepare_only)) || command -v sbatch >/dev/null || pf_die "sbatch not found: not a Slurm node (or use --prepare-only and pipelines/slurm/local.mk)"
+if ((!prepare_only)); then
+  command -v sbatch >/dev/null || pf_die "sbatch not found: not a Slurm node (or use --prepare-only and pipelines/slurm/local.mk)"
+  pf_check_queue
+fi
 
 mkdir -p "$RUN/parts" "$RUN/logs" || pf_die "$RUN: cannot create the run folder"
 RUN=$(cd "$RUN" && pwd)

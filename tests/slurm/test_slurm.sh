@@ -116,11 +116,11 @@ for set in other-seed duplicate; do
     parts=("${parts1[@]}" "${parts1[1]}"); culprit=$(basename "${parts1[1]}")
   fi
   if out=$("$BIN/merge" "${parts[@]}" --range "0:$((TASKS * PPT))" -o "$tmp/$set.exr" 2>&1); then
-    fail "merge accepted a $set part"
+    fail "merge accepted the $set part"
   fi
-  grep -q "$culprit" <<< "$out" || fail "merge's refusal of a $set part does not name it: $out"
-  [[ ! -e $tmp/$set.exr ]] || fail "merge refused a $set part but wrote $tmp/$set.exr"
-  echo "$T: merge refuses a $set part: $out"
+  grep -q "$culprit" <<< "$out" || fail "merge's refusal of the $set part does not name it: $out"
+  [[ ! -e $tmp/$set.exr ]] || fail "merge refused the $set part but wrote $tmp/$set.exr"
+  echo "$T: merge refuses the $set part: $out"
 done
 
 # 2. One task cancelled while it renders, then resubmitted alone.
