@@ -34,11 +34,12 @@ for ((k = 0; k < TASKS; ++k)); do
   files+=("$(pf_part "$k")"); firsts+=($((k * PPT))); ends+=($(((k + 1) * PPT)))
 done
 rm -rf "$RUN/merge"
+trap 'rm -rf "$RUN/merge"' EXIT   # the tree's intermediate files, whatever happens
 level=0
 while ((${#files[@]} > FANIN)); do
   level=$((level + 1))
   mkdir -p "$RUN/merge"
-  next=() nfirsts=() nends=() running=0
+  next=() nfirsts=() nends=() running=0 failed=0
   for ((g = 0; g * FANIN < ${#files[@]}; ++g)); do
     a=$((g * FANIN)) n=$FANIN
     ((a + n > ${#files[@]})) && n=$((${#files[@]} - a))
@@ -49,13 +50,13 @@ while ((${#files[@]} > FANIN)); do
     out=$(printf '%s/merge/level%d-passes-%08d-%08d.h5' "$RUN" "$level" "$first" $((end - 1)))
     "$BIN/merge" "${files[@]:a:n}" --range "$first:$end" --sums "$out" > /dev/null &
     running=$((running + 1))
-    if ((running >= MERGE_CPUS)); then wait -n || pf_die "a merge of level $level failed (above)"; running=$((running - 1)); fi
+    if ((running >= MERGE_CPUS)); then wait -n || failed=1; running=$((running - 1)); fi
     next+=("$out"); nfirsts+=("$first"); nends+=("$end")
   done
-  while ((running > 0)); do wait -n || pf_die "a merge of level $level failed (above)"; running=$((running - 1)); done
+  while ((running > 0)); do wait -n || failed=1; running=$((running - 1)); done
+  ((failed == 0)) || pf_die "a merge of tree level $level failed (above); remove the part it names and resubmit it"
   files=("${next[@]}") firsts=("${nfirsts[@]}") ends=("${nends[@]}")
   echo "merge.sh: level $level: ${#files[@]} merged partial results"
 done
 "$BIN/merge" "${files[@]}" --range "0:$((TASKS * PPT))" -o "$RUN/image.exr" --stats "$RUN/run.json"
-rm -rf "$RUN/merge"
 echo "merge.sh: $RUN/image.exr: $TASKS parts, $((TASKS * PPT)) passes, $level tree levels, $(awk -v a="$start" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.2f", b - a }') s"
