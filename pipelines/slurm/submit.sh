@@ -16,7 +16,7 @@
 #   --seed S             random seed (default 1)
 #   --alpha A            PPM's alpha (default 0.7)
 #   --radius R           initial radius, 0 = automatic (default 0)
-#   --cpus-per-task C    cores per task; render uses that many threads (default 1)
+#   --cpus-per-task C    cores per task (render uses that many threads) and for the merge (default 1)
 #   --partition NAME     Slurm partition (default: the cluster's default)
 #   --time LIMIT         Slurm time limit per task and for the merge, e.g. 30:00 (default: none)
 #   --mem MEM            memory per task and for the merge, e.g. 2G (default: the cluster's default)
