@@ -88,8 +88,9 @@ class ProgressiveRenderer {
   std::unique_ptr<DevicePpmState> device_state_;
 };
 
-// Traces the eye pass of pass `pass` (EyePassOptions::pass) and photon pass `pass`, and sorts
-// the photons into `grid`: the per-pass work of sppm and pppm, on opt.device when it is set.
+// Traces the eye pass of pass `pass` (EyePassOptions::pass) and photon pass `pass` on the CPU,
+// and sorts the photons into `grid`: the per-pass work of sppm and pppm before their CPU gather
+// (on a device they trace and gather there: DevicePpmState::sppm_pass, pppm_gather_device).
 // Returns the photons emitted; `stored` gets the photons stored.
 uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
                     EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored);
@@ -154,6 +155,14 @@ void check_options(const RenderOptions& opt);
 // under other options would be neither run's image. (Passes, snapshots, threads, device, method
 // and work-group size may change: every gather method gathers the same photons.)
 std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
+// The same record for the staged route (illuminate --estimator pppm), from the options recorded in
+// the provenance of its eye pass (trace-hitpoints: spp, max-depth, direct, shadow-samples, radius,
+// seed, pixel-sampler) and photon pass (trace-photons: photons, max-bounces, seed) and its alpha:
+// equal to render's for the same options, so parts of either route merge. InputError naming the
+// file whose provenance lacks one.
+std::map<std::string, std::string> staged_state_parameters(
+    Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
+    const std::string& photons_path, float alpha);
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final

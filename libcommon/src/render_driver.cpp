@@ -35,17 +35,10 @@ uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
                     EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored) {
   EyePassOptions eo = opt.eye;
   eo.pass = pass;
-  eye = eye_pass(scene, eo, opt.device);
+  eye = trace_hitpoints(scene, eo);
   PhotonGridParams gp;
   gp.max_bins = opt.ppm.max_bins;
   gp.default_radius = radius0;  // the smallest bin size, as ppm_grid_params
-  if (opt.device) {  // device photon tracing; the gather runs on the host (docs/FORMATS.md)
-    PhotonPassResult p = trace_photons(scene, pass, opt.photons, *opt.device);
-    stored = p.photons.size();
-    const PhotonSpan span{p.photons.data(), p.photons.size()};
-    build_photon_grid_into(grid, &span, 1, int(scene.mesh_names.size()), gp, opt.ppm.threads);
-    return p.emitted;
-  }
   const uint64_t emitted = trace_photons_into(scene, pass, opt.photons, chunks);
   stored = chunks.size();
   const std::vector<PhotonSpan> spans = chunks.spans();
@@ -72,6 +65,20 @@ ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions
 }
 
 void ProgressiveRenderer::run_iteration() {
+  if (opt_.estimator == Estimator::Sppm && opt_.device) {
+    // OpenCL: eye pass and photons traced on the device, the photons never leave it, and the
+    // pixels' R, N, τ stay there between passes (DevicePpmState::sppm_pass).
+    EyePassOptions eo = opt_.eye;
+    eo.pass = uint32_t(state_.passes);
+    const EyePassResult eye = trace_hitpoints(scene_, eo, *opt_.device);
+    if (!device_state_) device_state_ = std::make_unique<DevicePpmState>(scene_, state_, *opt_.device);
+    const ClWaitScope no_wait(*opt_.device, false);
+    const DevicePhotons pass =
+        trace_photons_device(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
+    photons_stored_ += pass.count;
+    device_state_->sppm_pass(eye, pass, opt_.ppm);
+    return;
+  }
   if (opt_.estimator == Estimator::Sppm) {  // a new eye pass, then the pass's photons per pixel
     EyePassResult eye;
     size_t stored = 0;
@@ -138,6 +145,20 @@ PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt, PassSum
 }
 
 void PppmRenderer::run_iteration() {
+  if (opt_.device) {  // eye pass, photons and gather on the device; the sums on the host
+    EyePassOptions eo = opt_.eye;
+    eo.pass = uint32_t(sums_.end_pass());
+    eye_ = trace_hitpoints(scene_, eo, *opt_.device);
+    const ClWaitScope no_wait(*opt_.device, false);
+    const DevicePhotons pass =
+        trace_photons_device(scene_, uint32_t(sums_.end_pass()), opt_.photons, *opt_.device);
+    photons_stored_ += pass.count;
+    pppm_accumulate(sums_, eye_,
+                    pppm_gather_device(scene_, eye_, pppm_pass_radius(sums_), sums_.direct_mode,
+                                       pass, opt_.ppm, *opt_.device),
+                    pass.emitted);
+    return;
+  }
   size_t stored = 0;
   const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(sums_.end_pass()), sums_.radius1,
                                       eye_, photon_chunks_, grid_, stored);
@@ -196,6 +217,41 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
     p["pixel-sampler"] = pixel_sampler_name(opt.eye.sampler);
   }
   return p;
+}
+
+std::map<std::string, std::string> staged_state_parameters(
+    Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
+    const std::string& photons_path, float alpha) {
+  auto text = [](const Provenance& p, const std::string& path, const char* name) {
+    const auto it = p.parameters.find(name);
+    if (it == p.parameters.end())
+      throw input_error(path, std::string("records no --") + name + " of the tool that wrote it",
+                        "remake it with this version");
+    return it->second;
+  };
+  auto number = [&](const Provenance& p, const std::string& path, const char* name) {
+    const std::string t = text(p, path, name);
+    try {
+      return std::stod(t);
+    } catch (const std::exception&) {
+      throw input_error(path, std::string("records --") + name + " '" + t + "', not a number");
+    }
+  };
+  RenderOptions o;
+  o.estimator = e;
+  o.eye.spp = int(number(eye, eye_path, "spp"));
+  o.eye.max_depth = int(number(eye, eye_path, "max-depth"));
+  o.eye.direct = text(eye, eye_path, "direct") == "shadow-rays" ? DirectMode::ShadowRays
+                                                                 : DirectMode::Photons;
+  o.eye.shadow_samples = int(number(eye, eye_path, "shadow-samples"));
+  o.eye.radius = float(number(eye, eye_path, "radius"));
+  o.eye.seed = uint32_t(number(eye, eye_path, "seed"));
+  o.eye.sampler = parse_pixel_sampler(text(eye, eye_path, "pixel-sampler"));
+  o.photons.photons = uint32_t(number(photons, photons_path, "photons"));
+  o.photons.max_bounces = int(number(photons, photons_path, "max-bounces"));
+  o.photons.seed = uint32_t(number(photons, photons_path, "seed"));
+  o.ppm.alpha = alpha;
+  return state_parameters(o);
 }
 
 namespace {

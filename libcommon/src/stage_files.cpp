@@ -161,8 +161,10 @@ void accept_input(Provenance& prov, const std::string& role, const std::string& 
 
 // ---- hitpoints.h5 ---------------------------------------------------------------------------
 
-HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id) {
+HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id,
+                              int eye_pass) {
   HitpointSet h;
+  h.eye_pass = eye_pass;
   h.hitpoints = std::move(eye.hitpoints);
   h.emitted = std::move(eye.emitted);
   h.direct = std::move(eye.direct);
@@ -193,6 +195,7 @@ void save_hitpoints(const HitpointSet& h, const std::string& path, const Provena
   w.attr("/", "estimator", h.estimator);
   w.attr("/", "photons_emitted", int64_t(h.photons_emitted));
   w.attr("/", "passes", int64_t(h.passes));
+  w.attr("/", "eye_pass", int64_t(h.eye_pass));
   write_provenance(w, prov);
   w.commit();
 }
@@ -215,6 +218,8 @@ HitpointSet load_hitpoints(const std::string& path) {
   h.photons_emitted = uint64_t(attr_in(r, path, "/", "photons_emitted", 0,
                                        std::numeric_limits<int64_t>::max(), hint));
   h.passes = int(attr_in(r, path, "/", "passes", 0, kIntMax, hint));
+  // Files written before the estimators with a new eye pass every pass hold eye pass 0.
+  if (r.has_attr("/", "eye_pass")) h.eye_pass = int(attr_in(r, path, "/", "eye_pass", 0, kIntMax, hint));
   h.hitpoints = r.read<pf_hitpoint>("/hitpoints", h5_type_hitpoint());
   h.emitted = r.read<float>("/image/emitted");
   h.direct = r.read<float>("/image/direct");
@@ -257,6 +262,10 @@ void save_photons(const PhotonSet& p, const std::string& path, const Provenance&
   w.describe("/pass_emitted", "photons", "photons emitted in each pass");
   write_provenance(w, prov);
   w.commit();
+}
+
+Provenance load_photons_provenance(const std::string& path) {
+  return read_provenance(h5::Reader(path, kPhotonsFormat, kPhotonsVersion));
 }
 
 PhotonSet load_photons(const std::string& path) {

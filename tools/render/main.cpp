@@ -153,6 +153,15 @@ int main(int argc, char** argv) {
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "render");
     opt.device = dev.get();
     opt.ppm.method = pf::method_option(a, dev.get());
+    // The gather methods of gather_method.h work on fixed hitpoints (clusters, device-resident
+    // state); sppm and pppm gather each pass's new visible points through the CPU grid.
+    if (opt.estimator != pf::Estimator::Ppm && a.count("method") &&
+        opt.ppm.method != pf::GatherMethod::Grid)
+      throw pf::input_error("", "--estimator " + a["estimator"].as<std::string>() +
+                                    " gathers through each pass's CPU grid; --method " +
+                                    pf::gather_method_name(opt.ppm.method) +
+                                    " belongs to ppm's fixed hitpoints",
+                            "drop --method (--device opencl still traces the passes there)");
     prov.parameters["method"] = pf::gather_method_name(opt.ppm.method);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
@@ -160,6 +169,7 @@ int main(int argc, char** argv) {
 
     prov.wall_time_s = clock.seconds();  // so far; checkpoints add the run's (render_driver.cpp)
     pf::Progress progress("pass", opt.passes, "photons");
+    if (opt.time_budget > 0) progress.set_budget(opt.time_budget, a.count("passes") == 0);
     std::vector<pf::RenderImageRecord> written;
     auto image_of = [&](const pf::HitpointSet& h) {
       return dev ? pf::synthesize(h, *dev) : pf::synthesize(h);
