@@ -37,6 +37,7 @@ render: build
 	@$(MAKE) --no-print-directory -f pipelines/render.mk BIN=$(BIN) SCENE=$(SCENE) OUT=$(OUT)
 
 test: build
+	@tools/setup/install-deps.sh debian-packages.txt debian-packages-test.txt
 	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
 
 # Every process the tests start (the tools too) writes its sanitizer reports into

@@ -23,7 +23,7 @@ fi
 src=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 [[ $(id -u) -eq 0 ]] || fail "needs root to start munged and slurmd (CI runs as root); PF_SKIP_SLURM=1 skips this test"
 for exe in munged slurmctld slurmd sbatch squeue scancel scontrol sinfo python3; do
-  command -v "$exe" >/dev/null || fail "'$exe' not found: install the Debian packages slurm-wlm and munge (tools/setup/debian-packages.txt), or skip with PF_SKIP_SLURM=1"
+  command -v "$exe" >/dev/null || fail "'$exe' not found: install the Debian packages slurm-wlm and munge (tools/setup/debian-packages-test.txt; make test installs them), or skip with PF_SKIP_SLURM=1"
 done
 BIN=${PF_BIN:?PF_BIN must name the folder of the tools (ctest sets it)}
 for exe in scene-bake render merge imgcompare; do
