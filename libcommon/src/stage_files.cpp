@@ -63,6 +63,13 @@ bool finite3(const float* p) {
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
 }
 
+// A pixel of an SPPM state that no eye path has reached yet (sppm.h: make_sppm_state): mesh and
+// material −1, nothing gathered. The only hitpoint whose ids may lie outside the scene's tables.
+bool unreached_sppm_pixel(const HitpointSet& h, const pf_hitpoint& hp) {
+  return h.estimator == "sppm" && hp.mesh == -1 && hp.material == -1 && hp.n_photons == 0.f &&
+         hp.flux[0] == 0.f && hp.flux[1] == 0.f && hp.flux[2] == 0.f;
+}
+
 // "<what> id <value> is outside the scene's <size> <table>", for the messages.
 std::string out_of(const char* what, int32_t value, size_t size, const char* table) {
   return std::string(what) + " id " + std::to_string(value) + " is outside the scene's " +
@@ -201,6 +208,7 @@ void check_against_scene(const std::string& path, const HitpointSet& h, const Sc
                            "trace-hitpoints";
   for (size_t i = 0; i < h.hitpoints.size(); ++i) {
     const pf_hitpoint& hp = h.hitpoints[i];
+    if (unreached_sppm_pixel(h, hp)) continue;
     if (hp.mesh < 0 || size_t(hp.mesh) >= meshes)
       throw input_error(path, "hitpoint " + std::to_string(i) + ": " +
                                   out_of("mesh", hp.mesh, meshes, "meshes"), hint);
@@ -332,7 +340,8 @@ HitpointSet load_hitpoints(const std::string& path) {
     if (hp.pixel_x < 0 || hp.pixel_x >= h.width || hp.pixel_y < 0 || hp.pixel_y >= h.height)
       throw input_error(path, "a hitpoint's pixel lies outside the image", hint);
     // mesh and material index the scene's tables: their upper bounds are check_against_scene's.
-    // An SPPM pixel whose eye path found no diffuse surface has mesh = material = -1 (below).
+    // A pixel of an SPPM state that no eye path has reached (sppm.h) has mesh = material = -1;
+    // check_hitpoint_values refuses one that gathered anything (unreached_sppm_pixel).
     const bool no_surface = h.estimator == "sppm" && hp.mesh == -1 && hp.material == -1;
     if ((hp.mesh < 0 || hp.material < 0) && !no_surface)
       throw input_error(path, "hitpoint " + std::to_string(i) + " has a negative " +
