@@ -18,6 +18,8 @@
 //               inside its cluster's sphere (what the clustered gathers rely on)
 //   checkpoint  accepted for the scene, synthesis, one more PPM pass, synthesis (render --resume,
 //               synthesize)
+//   sppm        an SPPM checkpoint (estimator "sppm", sppm.h): accepted, synthesis, one more SPPM
+//               pass (a new eye pass and a photon pass), synthesis (render --resume, synthesize)
 // Every run must end in exit 0 with every output value finite, or in a refusal: one line naming
 // the file (InputError, exit code 2). Every PF_FUZZ_TOOL_EVERY-th mutation (default 40) also runs
 // the real tool on the file (no clusters tool reads them without a device): exit 0 with finite
@@ -49,6 +51,7 @@
 #include "photonflow/illuminate.h"
 #include "photonflow/image.h"
 #include "photonflow/photon_pass.h"
+#include "photonflow/sppm.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/synthesize.h"
 #include "support.h"
@@ -134,10 +137,28 @@ Outcome isolated(const std::function<std::string()>& body, unsigned seconds) {
 
 // ---- the fixture ------------------------------------------------------------------------------
 
+// The next SPPM pass of `st` (sppm.h, as the render driver runs it): a new eye pass, then the
+// photons of that pass gathered per pixel.
+void sppm_next(const Scene& s, HitpointSet& st, const std::vector<pf_photon>& photons,
+               uint64_t emitted) {
+  PpmOptions ppm;
+  ppm.threads = 1;
+  EyePassOptions eo;
+  eo.threads = 1;
+  eo.direct = st.direct_mode;
+  eo.pass = uint32_t(st.passes);
+  const EyePassResult eye = trace_hitpoints(s, eo);
+  const PhotonGrid grid =
+      build_photon_grid(photons, int(s.mesh_names.size()), ppm_grid_params(st, ppm));
+  sppm_pass(s, st, eye, grid, emitted, ppm);
+}
+
+
 struct Fixture {
   TempDir tmp{"semfuzz"};
   std::string scene = tmp / "scene.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5",
-              grid = tmp / "grid.h5", clusters = tmp / "clusters.h5", ckpt = tmp / "ckpt.h5";
+              grid = tmp / "grid.h5", clusters = tmp / "clusters.h5", ckpt = tmp / "ckpt.h5",
+              sppm = tmp / "sppm.h5";
   Fixture() {
     const Outcome o = isolated(
         [this] {
@@ -167,8 +188,11 @@ struct Fixture {
                                                 ppm_grid_params(h, ppm)));
           save_grids(g, grid, prov());
           save_clusters(cluster_kmeans(h, 8, 3, 1), clusters, prov());
+          HitpointSet st = make_sppm_state(s, h.radius0, eo.direct);
           for (int k = 0; k < 2; ++k) ppm_pass(s, h, p.pass(k), p.pass_emitted[size_t(k)], ppm);
           save_hitpoints(h, ckpt, prov());
+          for (int k = 0; k < 2; ++k) sppm_next(s, st, p.pass(k), p.pass_emitted[size_t(k)]);
+          save_hitpoints(st, sppm, prov());
           return std::string();
         },
         120);
@@ -227,7 +251,7 @@ std::string check_state(const HitpointSet& h) {
 
 // ---- the stages -------------------------------------------------------------------------------
 
-enum class Kind { Scene, Hitpoints, Photons, Grid, Clusters, Checkpoint };
+enum class Kind { Scene, Hitpoints, Photons, Grid, Clusters, Checkpoint, Sppm };
 
 PpmOptions ppm_options() {
   PpmOptions o;
@@ -302,6 +326,15 @@ std::string run_stage(Kind kind, const std::string& file) {
     classic_estimate(s, c, ph.photons, emitted, co);
     bad = check_state(c);
     return bad.empty() ? "" : "classic: " + bad;
+  }
+  if (kind == Kind::Sppm) {  // render --resume of an SPPM checkpoint: one more pass
+    HitpointSet h = load_hitpoints(file);
+    accept_input(p, "hitpoints", file, h, s, fx.scene);
+    std::string bad = check_state(h);
+    if (!bad.empty()) return "loaded state: " + bad;
+    const PhotonSet ph = load_photons(fx.ph);
+    sppm_next(s, h, ph.pass(1), ph.pass_emitted[1]);
+    return check_state(h);
   }
   // Hitpoints and checkpoints: a PPM pass with the fixture's photons (one more pass of a
   // checkpoint: what render --resume does) and the image.
@@ -561,7 +594,8 @@ std::string mutate(const std::string& file, Rng& rng, bool scene) {
 // The stage's tool on `file`: exit 0 with finite outputs, or 2 with one line and no output.
 void run_tool_on(Kind kind, const std::string& file, const std::string& what) {
   const Fixture& fx = fixture();
-  const std::string out = fx.tmp / (kind == Kind::Checkpoint ? "tool-out.exr" : "tool-out.h5");
+  const bool image = kind == Kind::Checkpoint || kind == Kind::Sppm;
+  const std::string out = fx.tmp / (image ? "tool-out.exr" : "tool-out.h5");
   std::filesystem::remove(out);
   std::string tool, args;
   switch (kind) {
@@ -578,10 +612,11 @@ void run_tool_on(Kind kind, const std::string& file, const std::string& what) {
       tool = "illuminate";
       args = "--scene " + fx.scene + " --hitpoints " + fx.hp + " --grid " + file + " --method grid";
       break;
-    case Kind::Checkpoint: tool = "synthesize"; args = "--hitpoints " + file + " --png none"; break;
+    case Kind::Checkpoint:
+    case Kind::Sppm: tool = "synthesize"; args = "--hitpoints " + file + " --png none"; break;
     case Kind::Clusters: return;
   }
-  args += " -o " + out + (kind == Kind::Checkpoint ? "" : " --threads 1");
+  args += " -o " + out + (image ? "" : " --threads 1");
   const std::string so = fx.tmp / ".tool-stdout", se = fx.tmp / ".tool-stderr";
   const std::string cmd = "timeout -s KILL 60 " + test::bin_dir() + "/" + tool + " " + args + " >" +
                           so + " 2>" + se;
@@ -597,7 +632,7 @@ void run_tool_on(Kind kind, const std::string& file, const std::string& what) {
   } else if (code == 0) {
     REQUIRE(std::filesystem::exists(out));
     std::string bad;
-    if (kind == Kind::Checkpoint) {
+    if (image) {
       bad = non_finite(read_exr(out));
     } else {
       std::vector<pf_hitpoint> hps = test::read_dataset<pf_hitpoint>(out, "/hitpoints", h5_type_hitpoint().id());
@@ -675,4 +710,7 @@ TEST_CASE("semantic fuzz: clusters.h5", "[fuzz][semantic]") {
 }
 TEST_CASE("semantic fuzz: checkpoint (a PPM state)", "[fuzz][semantic]") {
   fuzz(Kind::Checkpoint, fixture().ckpt, "checkpoint", 6);
+}
+TEST_CASE("semantic fuzz: SPPM checkpoint (one hitpoint per pixel)", "[fuzz][semantic]") {
+  fuzz(Kind::Sppm, fixture().sppm, "sppm", 7);
 }
