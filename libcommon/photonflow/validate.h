@@ -14,6 +14,7 @@
 // the PPM update (eq. 3.16–3.18) divide 0 by 0.
 #pragma once
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -39,6 +40,26 @@ constexpr float kUnitTolerance = 1e-3f;
 // "nan", "inf", "-inf".
 std::string value_text(double v, int digits = 9);
 
+// The name of a checked value, made into text only when a check fails (the checks run on every
+// element of large arrays): a whole name ("camera.eye", "attribute radius0") or element `index`
+// of a dataset with an optional field ("geometry/triangles[17].v1"). It refers to the strings it
+// is given: use it within the call it is made for.
+class Name {
+ public:
+  Name(const std::string& whole) : dataset_(&whole) {}  // NOLINT: implicit on purpose
+  Name(const char* whole) : literal_(whole) {}           // NOLINT
+  Name(const std::string& dataset, size_t index, const char* field = nullptr)
+      : dataset_(&dataset), field_(field), index_(index), indexed_(true) {}
+  std::string str() const;
+
+ private:
+  const std::string* dataset_ = nullptr;
+  const char* literal_ = nullptr;
+  const char* field_ = nullptr;
+  size_t index_ = 0;
+  bool indexed_ = false;
+};
+
 // Checks with one file's name and the hint every message ends with.
 class Validator {
  public:
@@ -52,17 +73,27 @@ class Validator {
   static std::string element(const std::string& dataset, size_t i, const char* field = nullptr);
 
   // Every one of the n values at v is finite: "<what> is not finite (<value>)".
-  void finite(const std::string& what, const float* v, int n = 1) const;
+  void finite(const Name& what, const float* v, int n = 1) const {
+    for (int k = 0; k < n; ++k)
+      if (!std::isfinite(v[k])) fail_value(what, n > 1 ? k : -1, v[k], 0, 0, false);
+  }
   // Every value lies in [lo, hi] (NaN fails): "<what> is not finite (nan)" or
   // "<what> = <value> is outside [lo, hi]".
-  void in_range(const std::string& what, const float* v, int n, double lo, double hi) const;
-  void in_range(const std::string& what, double v, double lo, double hi) const;
+  void in_range(const Name& what, const float* v, int n, double lo, double hi) const {
+    for (int k = 0; k < n; ++k)
+      if (!(double(v[k]) >= lo && double(v[k]) <= hi)) fail_value(what, n > 1 ? k : -1, v[k], lo, hi, true);
+  }
+  void in_range(const Name& what, double v, double lo, double hi) const {
+    if (!(v >= lo && v <= hi)) fail_value(what, -1, v, lo, hi, true);
+  }
   // An integer in [lo, hi].
-  void int_in_range(const std::string& what, int64_t v, int64_t lo, int64_t hi) const;
+  void int_in_range(const Name& what, int64_t v, int64_t lo, int64_t hi) const;
   // A world position: finite, |each coordinate| <= kMaxCoordinate.
-  void position(const std::string& what, const float* v, int n = 3) const;
+  void position(const Name& what, const float* v, int n = 3) const {
+    in_range(what, v, n, -double(kMaxCoordinate), double(kMaxCoordinate));
+  }
   // A unit vector (|length − 1| <= kUnitTolerance), finite.
-  void unit(const std::string& what, const float* v) const;
+  void unit(const Name& what, const float* v) const;
 
   // Every element of a float array in [lo, hi]: "<dataset>[i] ...".
   void array_in_range(const std::string& dataset, const std::vector<float>& v, double lo,
@@ -81,6 +112,10 @@ class Validator {
   }
 
  private:
+  // Throws the message of a value that failed finite() or in_range() (component k >= 0 of an
+  // array field).
+  [[noreturn]] void fail_value(const Name& what, int k, double v, double lo, double hi,
+                               bool range) const;
   std::string file_, hint_;
 };
 

@@ -576,8 +576,8 @@ ClusterSet load_clusters(const std::string& path, const HitpointSet& h) {
   // non-finite centre would make them miss the photons every other method gathers. R is
   // refreshed from the hitpoints before use (update_cluster_radii) but must be a length.
   for (size_t k = 0; k < c.clusters.size(); ++k) {
-    v.position(Validator::element("clusters", k, "centre"), c.clusters[k].centre);
-    v.in_range(Validator::element("clusters", k, "radius"), &c.clusters[k].radius, 1, 0.0,
+    v.position(Name("clusters", k, "centre"), c.clusters[k].centre);
+    v.in_range(Name("clusters", k, "radius"), &c.clusters[k].radius, 1, 0.0,
                4.0 * kMaxCoordinate);
   }
   return c;

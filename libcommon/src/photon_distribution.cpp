@@ -199,7 +199,7 @@ PhotonDistribution load_photon_distribution(const std::string& path) {
       v.fail(Validator::element("mesh_grid", m, "photon_count") + " = " +
              std::to_string(g.photon_count) + " is not the sum of its bins' counts, " +
              std::to_string(sum));
-    if (bins_of(g) > 0) v.position(Validator::element("mesh_grid", m, "lo"), g.lo);
+    if (bins_of(g) > 0) v.position(Name("mesh_grid", m, "lo"), g.lo);
   }
   return d;
 }

@@ -228,14 +228,15 @@ void check_scene_values(const Scene& s, const Validator& v) {
   const std::string T = "geometry/triangles";
   for (size_t i = 0; i < s.triangles.size(); ++i) {
     const pf_triangle& t = s.triangles[i];
-    v.position(Validator::element(T, i, "v0"), t.v0);
-    v.position(Validator::element(T, i, "v1"), t.v1);
-    v.position(Validator::element(T, i, "v2"), t.v2);
-    v.unit(Validator::element(T, i, "n0"), t.n0);
-    v.unit(Validator::element(T, i, "n1"), t.n1);
-    v.unit(Validator::element(T, i, "n2"), t.n2);
+    v.position(Name(T, i, "v0"), t.v0);
+    v.position(Name(T, i, "v1"), t.v1);
+    v.position(Name(T, i, "v2"), t.v2);
+    v.unit(Name(T, i, "n0"), t.n0);
+    v.unit(Name(T, i, "n1"), t.n1);
+    v.unit(Name(T, i, "n2"), t.n2);
   }
   // Derived data: the planes recomputed from the triangles (linear; see docs/FORMATS.md).
+  const std::string H = "geometry/hh";
   for (size_t i = 0; i < s.triangles.size(); ++i) {
     const pf_triangle& t = s.triangles[i];
     const pf_hh_triangle& h = s.hh[i];
@@ -249,36 +250,35 @@ void check_scene_values(const Scene& s, const Validator& v) {
       const float* derived;
     } planes[3] = {{"n", h.n, d.n}, {"n1", h.n1, d.n1}, {"n2", h.n2, d.n2}};
     for (const auto& p : planes) {
-      const std::string at = Validator::element("geometry/hh", i, p.name);
-      v.finite(at, p.stored, 4);
+      v.finite(Name(H, i, p.name), p.stored, 4);
       if (!same_plane(p.stored, p.derived, c))
-        v.fail(at + " does not match the Havel–Herout plane of " + Validator::element(T, i) +
+        v.fail(Validator::element(H, i, p.name) + " does not match the Havel–Herout plane of " + Validator::element(T, i) +
                " (thesis eq. 4.3–4.7)");
     }
   }
   const std::string M = "materials/materials";
   for (size_t i = 0; i < s.materials.size(); ++i) {
     const pf_material& m = s.materials[i];
-    v.in_range(Validator::element(M, i, "ior"), &m.ior, 1, 1.0, 1000.0);
-    v.in_range(Validator::element(M, i, "color"), m.color, 3, 0.0, 1.0);
-    v.in_range(Validator::element(M, i, "emission"), m.emission, 3, 0.0, kMaxValue);
+    v.in_range(Name(M, i, "ior"), &m.ior, 1, 1.0, 1000.0);
+    v.in_range(Name(M, i, "color"), m.color, 3, 0.0, 1.0);
+    v.in_range(Name(M, i, "emission"), m.emission, 3, 0.0, kMaxValue);
   }
   // Lights: values, then the whole table and its CDF against the ones derived from the triangles,
   // materials and point lights (Scene::compute_light_cdf), which the scene id does not cover.
   const std::string L = "lights/lights";
   for (size_t i = 0; i < s.lights.size(); ++i) {
     const pf_light& l = s.lights[i];
-    v.position(Validator::element(L, i, "position"), l.position);
-    v.in_range(Validator::element(L, i, "radiance"), l.radiance, 3, 0.0, kMaxValue);
-    v.in_range(Validator::element(L, i, "area"), &l.area, 1, 0.0, kMaxValue);
-    v.in_range(Validator::element(L, i, "power"), &l.power, 1, 0.0, kMaxValue);
+    v.position(Name(L, i, "position"), l.position);
+    v.in_range(Name(L, i, "radiance"), l.radiance, 3, 0.0, kMaxValue);
+    v.in_range(Name(L, i, "area"), &l.area, 1, 0.0, kMaxValue);
+    v.in_range(Name(L, i, "power"), &l.power, 1, 0.0, kMaxValue);
     if (l.type == PF_LIGHT_POINT && l.triangle != -1)
       v.fail(Validator::element(L, i, "triangle") + " of a point light is " +
              std::to_string(l.triangle) + ", not -1");
   }
   const std::string C = "lights/cdf";
   for (size_t i = 0; i < s.light_cdf.size(); ++i)
-    v.in_range(Validator::element(C, i), &s.light_cdf[i], 1, 0.0, 1.0);
+    v.in_range(Name(C, i), &s.light_cdf[i], 1, 0.0, 1.0);
   v.non_decreasing(C, s.light_cdf);
   if (!s.light_cdf.empty() && s.light_cdf.back() != 1.f)
     v.fail(Validator::element(C, s.light_cdf.size() - 1) + " = " +
@@ -335,8 +335,8 @@ void check_scene_values(const Scene& s, const Validator& v) {
   // triangle of non-zero area is listed by some leaf (else rays pass through it).
   const std::string N = "kdtree/nodes";
   for (size_t i = 0; i < s.kd.nodes.size(); ++i) {
-    v.position(Validator::element(N, i, "lo"), s.kd.nodes[i].lo);
-    v.position(Validator::element(N, i, "hi"), s.kd.nodes[i].hi);
+    v.position(Name(N, i, "lo"), s.kd.nodes[i].lo);
+    v.position(Name(N, i, "hi"), s.kd.nodes[i].hi);
   }
   const pf_kd_node& root = s.kd.nodes[0];
   float slack = 0.f;
@@ -467,12 +467,12 @@ Scene load_scene(const std::string& path) {
   const Validator v(path, hint);
   for (size_t i = 0; i < s.triangles.size(); ++i) {
     const pf_triangle& t = s.triangles[i];
-    const std::string at = Validator::element("geometry/triangles", i);
+    const auto at = [i] { return Validator::element("geometry/triangles", i); };
     if (t.material < 0 || size_t(t.material) >= s.materials.size())
-      v.fail(at + ": a triangle's material id is out of range (" + std::to_string(t.material) +
+      v.fail(at() + ": a triangle's material id is out of range (" + std::to_string(t.material) +
              ", the scene has " + std::to_string(s.materials.size()) + " materials)");
     if (t.mesh < 0 || size_t(t.mesh) >= s.mesh_names.size())
-      v.fail(at + ": a triangle's mesh id is out of range (" + std::to_string(t.mesh) +
+      v.fail(at() + ": a triangle's mesh id is out of range (" + std::to_string(t.mesh) +
              ", the scene has " + std::to_string(s.mesh_names.size()) + " meshes)");
   }
   for (size_t i = 0; i < s.materials.size(); ++i)

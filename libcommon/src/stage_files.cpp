@@ -100,25 +100,25 @@ void check_state_counts(const HitpointSet& h, const Validator& v) {
 void check_hitpoint_values(const HitpointSet& h, size_t i, bool no_surface, const Validator& v) {
   const pf_hitpoint& hp = h.hitpoints[i];
   const std::string H = "hitpoints";
-  v.position(Validator::element(H, i, "position"), hp.position);
+  v.position(Name(H, i, "position"), hp.position);
   if (no_surface) {
-    v.finite(Validator::element(H, i, "normal"), hp.normal, 3);
-    v.finite(Validator::element(H, i, "dir"), hp.dir, 3);
+    v.finite(Name(H, i, "normal"), hp.normal, 3);
+    v.finite(Name(H, i, "dir"), hp.dir, 3);
   } else {
-    v.unit(Validator::element(H, i, "normal"), hp.normal);
-    v.unit(Validator::element(H, i, "dir"), hp.dir);
+    v.unit(Name(H, i, "normal"), hp.normal);
+    v.unit(Name(H, i, "dir"), hp.dir);
   }
-  v.in_range(Validator::element(H, i, "weight"), hp.weight, 3, 0.0, 1.0 + 1e-5);
-  v.in_range(Validator::element(H, i, "n_photons"), &hp.n_photons, 1, 0.0, kMaxValue);
-  v.in_range(Validator::element(H, i, "flux"), hp.flux, 3, 0.0, kMaxValue);
+  v.in_range(Name(H, i, "weight"), hp.weight, 3, 0.0, 1.0 + 1e-5);
+  v.in_range(Name(H, i, "n_photons"), &hp.n_photons, 1, 0.0, kMaxValue);
+  v.in_range(Name(H, i, "flux"), hp.flux, 3, 0.0, kMaxValue);
   if (no_surface) {
-    v.in_range(Validator::element(H, i, "radius"), &hp.radius, 1, 0.0, kMaxRadius);
+    v.in_range(Name(H, i, "radius"), &hp.radius, 1, 0.0, kMaxRadius);
     if (hp.n_photons != 0.f || hp.flux[0] != 0.f || hp.flux[1] != 0.f || hp.flux[2] != 0.f)
       v.fail(Validator::element(H, i) + " has no surface (mesh and material -1) but N or tau "
              "is not 0");
     return;
   }
-  v.in_range(Validator::element(H, i, "radius"), &hp.radius, 1, kMinRadius, kMaxRadius);
+  v.in_range(Name(H, i, "radius"), &hp.radius, 1, kMinRadius, kMaxRadius);
   if (h.estimator == "none" &&
       (hp.radius != h.radius0 || hp.n_photons != 0.f || hp.flux[0] != 0.f || hp.flux[1] != 0.f ||
        hp.flux[2] != 0.f))
@@ -155,9 +155,9 @@ void check_photon_values(const std::string& dataset, const std::vector<pf_photon
                          size_t begin, size_t end, const Validator& v) {
   for (size_t i = begin; i < end; ++i) {
     const pf_photon& p = photons[i];
-    v.position(Validator::element(dataset, i, "position"), p.position);
-    v.unit(Validator::element(dataset, i, "dir"), p.dir);
-    v.in_range(Validator::element(dataset, i, "flux"), p.flux, 3, 0.0, kMaxValue);
+    v.position(Name(dataset, i, "position"), p.position);
+    v.unit(Name(dataset, i, "dir"), p.dir);
+    v.in_range(Name(dataset, i, "flux"), p.flux, 3, 0.0, kMaxValue);
     if (p.flags & ~(PF_PHOTON_CAUSTIC | PF_PHOTON_DIRECT))
       v.fail(Validator::element(dataset, i, "flags") + " = " + std::to_string(p.flags) +
              " has bits other than 1 (caustic) and 2 (direct)");
@@ -519,7 +519,7 @@ GridSet load_grids(const std::string& path) {
     for (size_t m = 0; m < grid.mesh_grid.size(); ++m) {
       const pf_mesh_grid& mg = grid.mesh_grid[m];
       if (mg.photon_count == 0) continue;
-      v.position(Validator::element(p.substr(1) + "/mesh_grid", m, "lo"), mg.lo);
+      v.position(Name(p.substr(1) + "/mesh_grid", m, "lo"), mg.lo);
       if (!(mg.bin_size >= grid.params.default_radius))
         throw bad("mesh " + std::to_string(m) + ": bin size " + value_text(mg.bin_size) +
                   " is below default_radius " + value_text(grid.params.default_radius));
