@@ -206,6 +206,7 @@ TEST_CASE("damaged stage files are refused with one line", "[formats][stages]") 
     HitpointSet h;
     h.width = 2;
     h.height = 2;
+    h.radius0 = 0.1f;  // a valid R0 (0 is refused first)
     h.emitted.assign(12, 0.f);
     h.direct.assign(12, 0.f);
     h.hitpoints.resize(1);

@@ -65,7 +65,6 @@ class Validator {
  public:
   Validator(std::string file, std::string hint) : file_(std::move(file)), hint_(std::move(hint)) {}
 
-  const std::string& file() const { return file_; }
   // Throws input_error(file, problem, hint).
   [[noreturn]] void fail(const std::string& problem) const;
 
@@ -81,7 +80,8 @@ class Validator {
   // "<what> = <value> is outside [lo, hi]".
   void in_range(const Name& what, const float* v, int n, double lo, double hi) const {
     for (int k = 0; k < n; ++k)
-      if (!(double(v[k]) >= lo && double(v[k]) <= hi)) fail_value(what, n > 1 ? k : -1, v[k], lo, hi, true);
+      if (!(double(v[k]) >= lo && double(v[k]) <= hi))
+        fail_value(what, n > 1 ? k : -1, v[k], lo, hi, true);
   }
   void in_range(const Name& what, double v, double lo, double hi) const {
     if (!(v >= lo && v <= hi)) fail_value(what, -1, v, lo, hi, true);
@@ -95,9 +95,6 @@ class Validator {
   // A unit vector (|length − 1| <= kUnitTolerance), finite.
   void unit(const Name& what, const float* v) const;
 
-  // Every element of a float array in [lo, hi]: "<dataset>[i] ...".
-  void array_in_range(const std::string& dataset, const std::vector<float>& v, double lo,
-                      double hi) const;
   // An image layer of height × width × 3 values, each in [lo, hi]: names the pixel and channel,
   // "image/direct[y 3, x 5, channel 1]".
   void image_in_range(const std::string& dataset, const std::vector<float>& v, int width,

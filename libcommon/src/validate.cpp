@@ -52,12 +52,6 @@ void Validator::unit(const Name& what, const float* v) const {
     fail(what.str() + " is not a unit vector (length " + value_text(len) + ")");
 }
 
-void Validator::array_in_range(const std::string& dataset, const std::vector<float>& v, double lo,
-                               double hi) const {
-  for (size_t i = 0; i < v.size(); ++i)
-    if (!(double(v[i]) >= lo && double(v[i]) <= hi)) fail_value(Name(dataset, i), -1, v[i], lo, hi, true);
-}
-
 void Validator::image_in_range(const std::string& dataset, const std::vector<float>& v, int width,
                                double lo, double hi) const {
   const size_t row = size_t(width > 0 ? width : 1) * 3;
