@@ -83,7 +83,13 @@ TEST_CASE("scene.h5 whose content was changed after baking is refused", "[format
     // The id names the lights and the camera too (scene.h: the scene's content), not only the
     // geometry and materials.
     const std::string id = s.scene_id;
-    SECTION("a light's power") { s.lights[0].power *= 2.f; }
+    // (A light that no longer matches its material is refused before the id: load_scene derives
+    // the lights again, validate.h; here light and material change together.)
+    SECTION("a light's emission") {
+      const size_t m = size_t(s.triangles[size_t(s.lights[0].triangle)].material);
+      s.materials[m].emission[0] *= 2.f;
+      s.compute_light_cdf();
+    }
     SECTION("the camera") { s.camera.fov_y_deg += 1.f; }
     s.scene_id = id;
     save_scene(s, tmp / "s.h5", prov_for("test"));
@@ -200,6 +206,7 @@ TEST_CASE("damaged stage files are refused with one line", "[formats][stages]") 
     HitpointSet h;
     h.width = 2;
     h.height = 2;
+    h.radius0 = 0.1f;  // a valid R0 (0 is refused first)
     h.emitted.assign(12, 0.f);
     h.direct.assign(12, 0.f);
     h.hitpoints.resize(1);

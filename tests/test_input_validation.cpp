@@ -23,6 +23,7 @@
 #include "photonflow/photon_distribution.h"
 #include "photonflow/photon_pass.h"
 #include "photonflow/stage_files.h"
+#include "h5edit.h"
 #include "support.h"
 
 using namespace pf;
@@ -75,7 +76,7 @@ struct Files {
   TempDir tmp{"inputs"};
   Scene scene = test::room_scene(PF_MAT_DIFFUSE, 16, 12);
   HitpointSet h;
-  std::string scene_path, hp, ph, grid, clusters, dist;
+  std::string scene_path, hp, ph, grid, clusters, dist, ppm;
   Files() {
     scene_path = tmp / "scene.h5";
     save_scene(scene, scene_path, prov());
@@ -110,6 +111,11 @@ struct Files {
     for (int k = 0; k < 2; ++k) d.add_pass(p.pass(k), p.pass_emitted[size_t(k)], 4);
     dist = tmp / "dist.h5";
     save_photon_distribution(d, dist, prov());
+    // A PPM state after the two passes (what illuminate and render --checkpoint write).
+    HitpointSet state = h;
+    for (int k = 0; k < 2; ++k) ppm_pass(scene, state, p.pass(k), p.pass_emitted[size_t(k)], {});
+    ppm = tmp / "ppm.h5";
+    save_hitpoints(state, ppm, prov());
   }
 };
 
@@ -148,6 +154,7 @@ TEST_CASE("the valid files of the fixture load and are accepted", "[inputs]") {
   CHECK_NOTHROW(accept_grids(f.grid));
   CHECK_NOTHROW(load_clusters(f.clusters, f.h));
   CHECK_NOTHROW(load_photon_distribution(f.dist));
+  CHECK_NOTHROW(accept_hitpoints(f.ppm));
 }
 
 TEST_CASE("hitpoints.h5: indices out of range are refused", "[inputs][hitpoints]") {
@@ -420,4 +427,367 @@ TEST_CASE("clusters.h5 and photon_distribution.h5: ranges out of bounds are refu
   const std::string p = copy_of(f.tmp, f.dist);
   test::set_int_attr(p, "/", "passes", int64_t(1) << 32);
   refused([&] { load_photon_distribution(p); }, p, "passes");
+}
+
+// ---- values (validate.h): non-finite, out of range, inconsistent with the rest of the file ----
+// Each edit is one a user's script could make (h5edit.h); where the edited data is covered by the
+// scene id, the id is recomputed as docs/FORMATS.md describes, so only the value checks can refuse.
+
+namespace {
+
+// A copy of the fixture's `src` with dataset `dset` edited; for scene.h5, the id recomputed.
+template <class T>
+std::string edited(const std::string& src, const char* dset, hid_t type,
+                   const std::function<void(std::vector<T>&)>& change, bool refresh_id = false) {
+  const std::string p = copy_of(files().tmp, src);
+  test::edit_dataset<T>(p, dset, type, change);
+  if (refresh_id) test::refresh_scene_id(p);
+  return p;
+}
+
+std::string scene_edit_triangles(const std::function<void(std::vector<pf_triangle>&)>& c) {
+  return edited<pf_triangle>(files().scene_path, "/geometry/triangles", h5_type_triangle().id(), c,
+                             true);
+}
+
+}  // namespace
+
+TEST_CASE("scene.h5: non-finite and huge vertices are refused by every stage, naming the element",
+          "[inputs][scene][values]") {
+  // Audit (issue 26) finding 2: render exited 1 with "internal error: photon grid: default_radius
+  // must be positive and finite" and trace-hitpoints wrote non-finite radii.
+  Files& f = files();
+  const size_t k = f.scene.triangles.size() / 2;
+  const std::string at = "geometry/triangles[" + std::to_string(k) + "]";
+  const std::string nan_file = scene_edit_triangles([&](auto& v) { v[k].v1[0] = NAN; });
+  refused([&] { load_scene(nan_file); }, nan_file, at + ".v1[0] is not finite (nan)");
+  const std::string huge = scene_edit_triangles([&](auto& v) { v[k].v2[1] = 1e38f; });
+  refused([&] { load_scene(huge); }, huge, at + ".v2[1] = 9.99999968e+37 is outside [-1e+12, 1e+12]");
+  const std::string inf = scene_edit_triangles([&](auto& v) { v[k].v0[2] = -INFINITY; });
+  refused([&] { load_scene(inf); }, inf, at + ".v0[2] is not finite (-inf)");
+  const std::string normal = scene_edit_triangles([&](auto& v) { v[k].n1[0] = v[k].n1[1] = v[k].n1[2] = 0.f; });
+  refused([&] { load_scene(normal); }, normal, at + ".n1 is not a unit vector");
+  const std::string normal_nan = scene_edit_triangles([&](auto& v) { v[k].n2[2] = NAN; });
+  refused([&] { load_scene(normal_nan); }, normal_nan, at + ".n2[2] is not finite");
+  // The tools: one line naming the file, exit 2, no output.
+  for (const std::string& scene : {nan_file, huge}) {
+    for (const char* tool : {"trace-hitpoints", "render"}) {
+      INFO(tool << " " << scene);
+      const std::string out = f.tmp / (std::string(tool) + "-out") +
+                              (std::string(tool) == "render" ? ".exr" : ".h5");
+      const test::ToolRun r = test::run_tool(
+          tool, "--scene " + scene + " -o " + out + (std::string(tool) == "render" ? " --passes 1 --photons 1000" : ""),
+          f.tmp);
+      CHECK(r.exit_code == kExitBadInput);
+      CHECK(r.err.find(scene + ": " + at) != std::string::npos);
+      CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+      CHECK_FALSE(std::filesystem::exists(out));
+    }
+  }
+}
+
+TEST_CASE("scene.h5: materials, lights, the light CDF and the camera must hold usable values",
+          "[inputs][scene][values]") {
+  Files& f = files();
+  REQUIRE(f.scene.lights.size() >= 3);
+  const size_t emitter = size_t(f.scene.triangles[size_t(f.scene.lights[0].triangle)].material);
+  auto material = [&](const std::function<void(pf_material&)>& c, size_t which) {
+    return edited<pf_material>(f.scene_path, "/materials/materials", h5_type_material().id(),
+                               [&](auto& v) { c(v[which]); }, true);
+  };
+  const std::string m = "materials/materials[" + std::to_string(emitter) + "]";
+  std::string p = material([](pf_material& x) { x.color[1] = NAN; }, emitter);
+  refused([&] { load_scene(p); }, p, m + ".color[1] is not finite (nan)");
+  p = material([](pf_material& x) { x.emission[0] = NAN; }, emitter);
+  refused([&] { load_scene(p); }, p, m + ".emission[0] is not finite (nan)");
+  p = material([](pf_material& x) { x.emission[2] = -1.f; }, emitter);
+  refused([&] { load_scene(p); }, p, m + ".emission[2] = -1 is outside");
+  p = material([](pf_material& x) { x.ior = 0.f; }, 0);
+  refused([&] { load_scene(p); }, p, "materials/materials[0].ior = 0 is outside");
+
+  auto light = [&](const std::function<void(pf_light&)>& c) {
+    return edited<pf_light>(f.scene_path, "/lights/lights", h5_type_light().id(),
+                            [&](auto& v) { c(v[1]); }, true);
+  };
+  p = light([](pf_light& x) { x.radiance[0] = NAN; });
+  refused([&] { load_scene(p); }, p, "lights/lights[1].radiance[0] is not finite (nan)");
+  p = light([](pf_light& x) { x.power *= 2.f; });
+  refused([&] { load_scene(p); }, p, "lights/lights[1] (power");
+  p = light([](pf_light& x) { x.position[0] += 0.25f; });
+  refused([&] { load_scene(p); }, p, "differs from the light its triangle and material give");
+
+  // The CDF is not covered by the scene id: no id to recompute.
+  auto cdf = [&](const std::function<void(std::vector<float>&)>& c) {
+    return edited<float>(f.scene_path, "/lights/cdf", H5T_NATIVE_FLOAT, c);
+  };
+  p = cdf([](std::vector<float>& v) { v[0] = NAN; });
+  refused([&] { load_scene(p); }, p, "lights/cdf[0] is not finite (nan)");
+  p = cdf([](std::vector<float>& v) { std::swap(v[0], v[1]); });
+  refused([&] { load_scene(p); }, p, "lights/cdf[1] = ");
+  refused([&] { load_scene(p); }, p, "is below lights/cdf[0]");
+  p = cdf([](std::vector<float>& v) { v.back() = 0.999f; });
+  refused([&] { load_scene(p); }, p, "the last entry must be 1");
+  p = cdf([](std::vector<float>& v) { v[0] *= 0.5f; });  // still increasing, but not the powers
+  refused([&] { load_scene(p); }, p, "lights/cdf[0] = ");
+  refused([&] { load_scene(p); }, p, "differs from the lights' power fraction");
+
+  auto camera = [&](const std::function<void(pf_camera&)>& c) {
+    return edited<pf_camera>(f.scene_path, "/camera", h5_type_camera().id(),
+                             [&](auto& v) { c(v[0]); }, true);
+  };
+  for (float fov : {NAN, 0.f, 180.f, -30.f}) {
+    p = camera([&](pf_camera& c) { c.fov_y_deg = fov; });
+    refused([&] { load_scene(p); }, p, "camera.fov_y_deg");
+  }
+  p = camera([](pf_camera& c) { std::copy(c.eye, c.eye + 3, c.look_at); });
+  refused([&] { load_scene(p); }, p, "do not give a view direction");
+  p = camera([](pf_camera& c) {
+    for (int a = 0; a < 3; ++a) c.up[a] = c.look_at[a] - c.eye[a];
+  });
+  refused([&] { load_scene(p); }, p, "camera.up");
+  refused([&] { load_scene(p); }, p, "is parallel to the view direction");
+  p = camera([](pf_camera& c) { c.eye[1] = NAN; });
+  refused([&] { load_scene(p); }, p, "camera.eye[1] is not finite");
+}
+
+TEST_CASE("scene.h5: Havel-Herout planes and kd-tree leaves must match the triangles",
+          "[inputs][scene][values]") {
+  // Derived data the scene id does not cover: load_scene recomputes the planes and checks every
+  // leaf's triangles against its box (docs/FORMATS.md).
+  Files& f = files();
+  auto hh = [&](const std::function<void(std::vector<pf_hh_triangle>&)>& c) {
+    return edited<pf_hh_triangle>(f.scene_path, "/geometry/hh", h5_type_hh_triangle().id(), c);
+  };
+  std::string p = hh([](auto& v) { std::swap(v[3], v[40]); });
+  refused([&] { load_scene(p); }, p, "geometry/hh[3].n does not match the Havel–Herout plane");
+  p = hh([](auto& v) { v[7].n2[3] += 0.5f; });
+  refused([&] { load_scene(p); }, p, "geometry/hh[7].n2 does not match");
+  p = hh([](auto& v) { v[9].n1[0] = NAN; });
+  refused([&] { load_scene(p); }, p, "geometry/hh[9].n1[0] is not finite");
+
+  // A leaf entry replaced by a triangle far from the leaf's box.
+  const KdTree& kd = f.scene.kd;
+  const auto& tris = f.scene.triangles;
+  auto apart = [&](const pf_triangle& t, const pf_kd_node& n) {
+    for (int a = 0; a < 3; ++a) {
+      const float lo = std::min({t.v0[a], t.v1[a], t.v2[a]}), hi = std::max({t.v0[a], t.v1[a], t.v2[a]});
+      if (hi < n.lo[a] - 0.1f || lo > n.hi[a] + 0.1f) return true;
+    }
+    return false;
+  };
+  size_t entry = SIZE_MAX;
+  int32_t far = -1;
+  for (const pf_kd_node& n : kd.nodes) {
+    if (n.axis != PF_KD_LEAF || n.count == 0) continue;
+    for (size_t t = 0; t < tris.size() && far < 0; ++t)
+      if (apart(tris[t], n)) far = int32_t(t);
+    if (far >= 0) {
+      entry = size_t(n.first);
+      break;
+    }
+  }
+  REQUIRE(far >= 0);
+  p = edited<int32_t>(f.scene_path, "/kdtree/leaf_tris", H5T_NATIVE_INT32,
+                      [&](std::vector<int32_t>& v) { v[entry] = far; });
+  refused([&] { load_scene(p); }, p, "kdtree/leaf_tris[" + std::to_string(entry) + "] = " +
+                                         std::to_string(far) + ": the triangle lies outside the box");
+  // A triangle listed once, its entry replaced by another triangle of the same leaf: rays would
+  // pass through it.
+  std::vector<int> listed(tris.size(), 0);
+  for (int32_t t : kd.leaf_tris) ++listed[size_t(t)];
+  size_t from = SIZE_MAX, to = SIZE_MAX;
+  for (const pf_kd_node& n : kd.nodes) {
+    if (n.axis != PF_KD_LEAF || n.count < 2) continue;
+    for (int32_t j = n.first; j < n.first + n.count && from == SIZE_MAX; ++j)
+      if (listed[size_t(kd.leaf_tris[size_t(j)])] == 1) {
+        from = size_t(j);
+        to = size_t(j == n.first ? j + 1 : n.first);
+      }
+    if (from != SIZE_MAX) break;
+  }
+  REQUIRE(from != SIZE_MAX);
+  const int32_t lost = kd.leaf_tris[from];
+  p = edited<int32_t>(f.scene_path, "/kdtree/leaf_tris", H5T_NATIVE_INT32,
+                      [&](std::vector<int32_t>& v) { v[from] = v[to]; });
+  refused([&] { load_scene(p); }, p, "geometry/triangles[" + std::to_string(lost) + "] is in no kd-tree leaf");
+}
+
+TEST_CASE("hitpoints.h5: non-finite or negative PPM state, image layers and attributes are refused",
+          "[inputs][hitpoints][values]") {
+  // Audit finding 3: each of these gave NaN pixels with exit 0 (a negative N in a checkpoint
+  // resumed into 769 NaN pixels).
+  Files& f = files();
+  const size_t i = f.h.hitpoints.size() / 2;
+  const std::string at = "hitpoints[" + std::to_string(i) + "]";
+  auto hit = [&](const std::string& src, const std::function<void(pf_hitpoint&)>& c) {
+    return edited<pf_hitpoint>(src, "/hitpoints", h5_type_hitpoint().id(),
+                               [&](auto& v) { c(v[i]); });
+  };
+  std::string p = hit(f.hp, [](pf_hitpoint& x) { x.radius = NAN; });
+  refused([&] { load_hitpoints(p); }, p, at + ".radius is not finite (nan)");
+  p = hit(f.ppm, [](pf_hitpoint& x) { x.n_photons = NAN; });
+  refused([&] { load_hitpoints(p); }, p, at + ".n_photons is not finite (nan)");
+  p = hit(f.ppm, [](pf_hitpoint& x) { x.n_photons = -1.f; });  // the checkpoint of the audit
+  refused([&] { load_hitpoints(p); }, p, at + ".n_photons = -1 is outside");
+  p = hit(f.ppm, [](pf_hitpoint& x) { x.flux[1] = NAN; });
+  refused([&] { load_hitpoints(p); }, p, at + ".flux[1] is not finite (nan)");
+  p = hit(f.ppm, [](pf_hitpoint& x) { x.radius = 0.f; });
+  refused([&] { load_hitpoints(p); }, p, at + ".radius = 0 is outside");
+  p = hit(f.ppm, [](pf_hitpoint& x) { x.radius = 1e-30f; });  // R² is 0 in float
+  refused([&] { load_hitpoints(p); }, p, at + ".radius = ");
+  p = hit(f.ppm, [](pf_hitpoint& x) { x.weight[2] = INFINITY; });
+  refused([&] { load_hitpoints(p); }, p, at + ".weight[2] is not finite (inf)");
+  p = hit(f.ppm, [](pf_hitpoint& x) { x.normal[0] = NAN; });
+  refused([&] { load_hitpoints(p); }, p, at + ".normal[0] is not finite");
+  p = hit(f.hp, [](pf_hitpoint& x) { x.n_photons = 3.f; });  // a fresh state has N = 0
+  refused([&] { load_hitpoints(p); }, p, "of a fresh state");
+  for (const char* layer : {"/image/emitted", "/image/direct"}) {
+    p = edited<float>(f.ppm, layer, H5T_NATIVE_FLOAT, [](std::vector<float>& v) { v[5] = NAN; });
+    refused([&] { load_hitpoints(p); }, p,
+            std::string(layer + 1) + "[y 0, x 1, channel 2] is not finite (nan)");
+  }
+  for (double r0 : {double(NAN), 0.0, -0.5, 1e300}) {
+    p = copy_of(f.tmp, f.ppm);
+    test::set_double_attr(p, "/", "radius0", r0);
+    refused([&] { load_hitpoints(p); }, p, "attribute radius0");
+  }
+  for (const char* name : {"bogus", "PPM", ""}) {
+    p = copy_of(f.tmp, f.ppm);
+    test::set_string_attr(p, "/", "estimator", name);
+    refused([&] { load_hitpoints(p); }, p, "attribute estimator '" + std::string(name) + "'");
+  }
+  {  // a 2-pass state with 0 photons emitted; a fresh state with passes
+    p = copy_of(f.tmp, f.ppm);
+    test::set_int_attr(p, "/", "photons_emitted", 0);
+    refused([&] { load_hitpoints(p); }, p, "attributes passes = 2 and photons_emitted = 0");
+    p = copy_of(f.tmp, f.hp);
+    test::set_int_attr(p, "/", "passes", 2);
+    refused([&] { load_hitpoints(p); }, p, "of a fresh state");
+    p = copy_of(f.tmp, f.ppm);
+    test::set_string_attr(p, "/", "estimator", "classic");  // a classic estimate has one pass
+    refused([&] { load_hitpoints(p); }, p, "a classic estimate has exactly 1 pass");
+  }
+}
+
+TEST_CASE("hitpoints.h5: estimator sppm holds one hitpoint per pixel and allows pixels without "
+          "a surface", "[inputs][hitpoints][values]") {
+  Files& f = files();
+  HitpointSet s = f.h;
+  s.estimator = "sppm";
+  std::vector<pf_hitpoint> per_pixel(size_t(s.width) * size_t(s.height));
+  std::vector<bool> have(per_pixel.size(), false);
+  for (const pf_hitpoint& hp : s.hitpoints) {
+    const size_t o = size_t(hp.pixel_y) * size_t(s.width) + size_t(hp.pixel_x);
+    if (!have[o]) per_pixel[o] = hp;
+    have[o] = true;
+  }
+  for (size_t o = 0; o < per_pixel.size(); ++o)
+    if (!have[o] || o % 7 == 0) {  // a pixel whose eye path found no diffuse surface
+      pf_hitpoint& hp = per_pixel[o];
+      hp = pf_hitpoint{};
+      hp.pixel_x = int32_t(o % size_t(s.width));
+      hp.pixel_y = int32_t(o / size_t(s.width));
+      hp.mesh = hp.material = -1;
+      hp.radius = s.radius0;
+    }
+  s.hitpoints = per_pixel;
+  const std::string ok = f.tmp / "sppm.h5";
+  save_hitpoints(s, ok, prov());
+  CHECK_NOTHROW(load_hitpoints(ok));
+  auto bad = [&](const std::function<void(HitpointSet&)>& c, const std::string& needle) {
+    HitpointSet b = s;
+    c(b);
+    const std::string p = f.tmp / "sppm-bad.h5";
+    std::filesystem::remove(p);
+    save_hitpoints(b, p, prov());
+    refused([&] { load_hitpoints(p); }, p, needle);
+  };
+  bad([](HitpointSet& b) { b.hitpoints[0].n_photons = 1.f; }, "has no surface (mesh and material -1) but N or tau");
+  bad([](HitpointSet& b) { b.hitpoints[7].flux[2] = 0.5f; }, "has no surface");
+  bad([](HitpointSet& b) { b.hitpoints[0].material = 0; }, "negative mesh");
+  bad([](HitpointSet& b) { b.hitpoints.pop_back(); }, "one hitpoint per pixel");
+  bad([](HitpointSet& b) { b.hitpoints[1].pixel_x = 0; }, "has a second hitpoint");
+  bad([](HitpointSet& b) { b.estimator = "ppm"; b.passes = 1; b.photons_emitted = 10; },
+      "negative mesh");  // mesh -1 only in an SPPM state
+}
+
+TEST_CASE("photons.h5 and grid.h5: non-finite flux, wrapping counts and photons outside their "
+          "bins are refused", "[inputs][photons][grid][values]") {
+  Files& f = files();
+  std::string p = edited<pf_photon>(f.ph, "/photons", h5_type_photon().id(),
+                                    [](auto& v) { v[10].flux[0] = NAN; });
+  refused([&] { load_photons(p); }, p, "photons[10].flux[0] is not finite (nan)");
+  p = edited<pf_photon>(f.ph, "/photons", h5_type_photon().id(), [](auto& v) { v[11].dir[0] = 7.f; });
+  refused([&] { load_photons(p); }, p, "photons[11].dir is not a unit vector");
+  p = edited<pf_photon>(f.ph, "/photons", h5_type_photon().id(), [](auto& v) { v[12].flags = 12; });
+  refused([&] { load_photons(p); }, p, "photons[12].flags = 12");
+  for (const std::string& file : {f.ph, f.grid}) {
+    p = edited<uint64_t>(file, "/pass_emitted", H5T_NATIVE_UINT64,
+                         [](std::vector<uint64_t>& v) { v[0] = UINT64_MAX; });  // 2^64 − 1
+    const auto load = [&] { file == f.ph ? (void)load_photons(p) : (void)load_grids(p); };
+    refused(load, p, "pass_emitted[0] = 18446744073709551615 is outside [1, 2^62]");
+    p = edited<uint64_t>(file, "/pass_emitted", H5T_NATIVE_UINT64,
+                         [](std::vector<uint64_t>& v) { v[1] = 0; });  // stored photons, emitted none
+    refused(load, p, "pass_emitted[1] = 0 is outside");
+    p = edited<uint64_t>(file, "/pass_emitted", H5T_NATIVE_UINT64, [](std::vector<uint64_t>& v) {
+      v[0] = (uint64_t(1) << 62);
+      v[1] = (uint64_t(1) << 62);
+    });  // each in range, their sum past int64
+    refused(load, p, "exceed 2^63-1");
+  }
+  p = edited<pf_photon>(f.grid, "/pass1/photons", h5_type_photon().id(),
+                        [](auto& v) { v[3].flux[2] = INFINITY; });
+  refused([&] { load_grids(p); }, p, "pass1/photons[3].flux[2] is not finite (inf)");
+  {  // a grid of two passes whose pass_emitted lists one: the second pass was dropped silently
+    p = copy_of(f.tmp, f.grid);
+    std::vector<uint64_t> e = test::read_dataset<uint64_t>(p, "/pass_emitted", H5T_NATIVE_UINT64);
+    e.pop_back();
+    test::rewrite_dataset(p, "/pass_emitted", H5T_NATIVE_UINT64, e);
+    refused([&] { load_grids(p); }, p, "2 /pass<k> groups but pass_emitted has 1 entries");
+  }
+  {  // two photons of one mesh swapped between bins: each lies outside the bin that lists it
+    const GridSet g = load_grids(f.grid);
+    const PhotonGrid& grid = g.grids[1];
+    int32_t a = -1, b = -1;
+    for (const pf_mesh_grid& mg : grid.mesh_grid) {
+      if (mg.photon_count < 2) continue;
+      a = mg.first_photon;
+      const int bin_a = pf_grid_bin(&mg, grid.photons[size_t(a)].position[0],
+                                    grid.photons[size_t(a)].position[1], grid.photons[size_t(a)].position[2]);
+      for (int32_t j = a + 1; j < mg.first_photon + mg.photon_count && b < 0; ++j)
+        if (pf_grid_bin(&mg, grid.photons[size_t(j)].position[0], grid.photons[size_t(j)].position[1],
+                        grid.photons[size_t(j)].position[2]) != bin_a)
+          b = j;
+      if (b >= 0) break;
+    }
+    REQUIRE(b >= 0);
+    p = edited<pf_photon>(f.grid, "/pass1/photons", h5_type_photon().id(),
+                          [&](auto& v) { std::swap(v[size_t(a)], v[size_t(b)]); });
+    refused([&] { load_grids(p); }, p, "photon " + std::to_string(a) + " lies outside bin");
+  }
+}
+
+TEST_CASE("clusters.h5 and photon_distribution.h5: non-finite centres and counts that do not add "
+          "up are refused", "[inputs][clusters][values]") {
+  Files& f = files();
+  std::string p = edited<pf_cluster>(f.clusters, "/clusters", cluster_type().id(),
+                                     [](auto& v) { v[2].centre[0] = NAN; });
+  // Every method must gather the same photons: a NaN centre made the clustered gathers miss them.
+  refused([&] { load_clusters(p, f.h); }, p, "clusters[2].centre[0] is not finite (nan)");
+  p = edited<pf_cluster>(f.clusters, "/clusters", cluster_type().id(),
+                         [](auto& v) { v[1].radius = -1.f; });
+  refused([&] { load_clusters(p, f.h); }, p, "clusters[1].radius = -1 is outside");
+  p = copy_of(f.tmp, f.clusters);
+  test::set_int_attr(p, "/", "wg_size", (int64_t(1) << 32) + 8);  // int(...) was 8
+  refused([&] { load_clusters(p, f.h); }, p, "attribute wg_size");
+  p = copy_of(f.tmp, f.clusters);
+  test::set_string_attr(p, "/", "method", "bogus");
+  refused([&] { load_clusters(p, f.h); }, p, "attribute method 'bogus'");
+  p = edited<pf_mesh_grid>(f.dist, "/mesh_grid", h5_type_mesh_grid().id(),
+                           [](auto& v) { v[0].photon_count += 1; });
+  refused([&] { load_photon_distribution(p); }, p, "mesh_grid[0].photon_count");
+  refused([&] { load_photon_distribution(p); }, p, "is not the sum of its bins' counts");
+  p = copy_of(f.tmp, f.dist);
+  test::set_double_attr(p, "/", "default_radius", NAN);
+  refused([&] { load_photon_distribution(p); }, p, "attribute default_radius");
 }

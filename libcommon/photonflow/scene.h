@@ -48,6 +48,13 @@ struct Scene {
 // scene id. scene-bake calls it after importing; tests call it on scenes built in memory.
 void finish_scene(Scene& scene, const KdBuildParams& kd = {});
 
+// The lights and their CDF that compute_light_cdf makes from triangles, materials and the point
+// lights among `given` (kept in their order): area lights of emitter triangles first, in triangle
+// order, then the point lights; load_scene compares a file's lights and CDF with them.
+void derive_lights(const std::vector<pf_triangle>& triangles,
+                   const std::vector<pf_material>& materials, const std::vector<pf_light>& given,
+                   std::vector<pf_light>& lights, std::vector<float>& cdf);
+
 // Havel–Herout precomputation for one triangle (thesis eq. 4.3–4.7).
 pf_hh_triangle make_hh_triangle(const pf_triangle& t);
 

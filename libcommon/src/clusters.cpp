@@ -15,6 +15,7 @@
 #include "photonflow/morton.h"
 #include "photonflow/photon_grid.h"
 #include "photonflow/threads.h"
+#include "photonflow/validate.h"
 
 namespace pf {
 
@@ -543,10 +544,15 @@ void save_clusters(const ClusterSet& c, const std::string& path, const Provenanc
 
 ClusterSet load_clusters(const std::string& path, const HitpointSet& h) {
   h5::Reader r(path, kClustersFormat, kClustersVersion);
+  const Validator v(path, "the file is damaged; remake it with cluster");
   ClusterSet c;
   c.scene_id = r.scene_id();
-  c.wg_size = int(r.attr_int("/", "wg_size"));
+  const int64_t wg_size = r.attr_int("/", "wg_size");
+  v.int_in_range("attribute wg_size", wg_size, 1, kMaxWorkGroupSize);
+  c.wg_size = int(wg_size);
   c.method = r.attr_string("/", "method");
+  if (c.method != "kmeans" && c.method != "grid" && c.method != "ga")
+    v.fail("attribute method '" + c.method + "' is none of \"kmeans\", \"grid\" and \"ga\"");
   c.hitpoint_count = uint64_t(r.attr_int("/", "hitpoint_count"));
   c.hitpoints_sha256 = r.attr_string("/", "hitpoints_sha256");
   if (c.scene_id != h.scene_id)
@@ -566,6 +572,14 @@ ClusterSet load_clusters(const std::string& path, const HitpointSet& h) {
   std::string bad = check_clusters(c, h);
   if (!bad.empty())
     throw input_error(path, "is not a valid clustering: " + bad, "the file is damaged; remake it with cluster");
+  // Centres and radii: the clustered gathers read the bins of the sphere (centre, R), so a
+  // non-finite centre would make them miss the photons every other method gathers. R is
+  // refreshed from the hitpoints before use (update_cluster_radii) but must be a length.
+  for (size_t k = 0; k < c.clusters.size(); ++k) {
+    v.position(Name("clusters", k, "centre"), c.clusters[k].centre);
+    v.in_range(Name("clusters", k, "radius"), &c.clusters[k].radius, 1, 0.0,
+               4.0 * kMaxCoordinate);
+  }
   return c;
 }
 

@@ -9,6 +9,7 @@
 
 #include "photonflow/grid_shared.h"
 #include "photonflow/h5io.h"
+#include "photonflow/validate.h"
 
 namespace pf {
 
@@ -151,10 +152,19 @@ PhotonDistribution load_photon_distribution(const std::string& path) {
     throw input_error(path, "attribute passes = " + std::to_string(passes) + " is outside [1, 2^31-1]",
                       "remake it with photon-distribution");
   d.passes = int(passes);
-  d.first_pass = int(r.attr_int("/", "first_pass"));
-  d.emitted = uint64_t(r.attr_int("/", "photons_emitted"));
-  d.params.max_bins = int(r.attr_int("/", "max_bins"));
-  d.params.default_radius = float(r.attr_double("/", "default_radius"));
+  const Validator v(path, "remake it with photon-distribution");
+  const int64_t first_pass = r.attr_int("/", "first_pass");
+  v.int_in_range("attribute first_pass", first_pass, 0, INT32_MAX - (passes - 1));
+  d.first_pass = int(first_pass);
+  const int64_t emitted = r.attr_int("/", "photons_emitted");
+  v.int_in_range("attribute photons_emitted", emitted, passes, INT64_MAX);
+  d.emitted = uint64_t(emitted);
+  const int64_t max_bins = r.attr_int("/", "max_bins");
+  v.int_in_range("attribute max_bins", max_bins, 1, kMaxBinsPerAxis);
+  d.params.max_bins = int(max_bins);
+  const double radius = r.attr_double("/", "default_radius");
+  v.in_range("attribute default_radius", radius, kMinRadius, kMaxRadius);
+  d.params.default_radius = float(radius);
   d.mesh_grid = r.read<pf_mesh_grid>("/mesh_grid", h5_type_mesh_grid());
   d.counts = r.read<uint64_t>("/photon_count");
   // Consistency: every mesh's bins lie inside /photon_count, contiguous, sizes sane.
@@ -174,6 +184,23 @@ PhotonDistribution load_photon_distribution(const std::string& path) {
   if (next != d.counts.size() || d.passes < 1)
     throw input_error(path, "bin table does not match the grid headers (or no passes)",
                       "remake it with photon-distribution");
+  // Counts that add up: each mesh's photon_count is the sum of its bins' counts (the fitness sums
+  // them in uint64: a sum that wraps is refused too), and a mesh's grid lies in world space.
+  for (size_t m = 0; m < d.mesh_grid.size(); ++m) {
+    const pf_mesh_grid& g = d.mesh_grid[m];
+    uint64_t sum = 0;
+    for (size_t b = size_t(g.first_bin); b < size_t(g.first_bin) + bins_of(g); ++b) {
+      if (d.counts[b] > uint64_t(INT64_MAX) - sum)
+        v.fail(Validator::element("photon_count", b) + ": the counts of mesh " +
+               std::to_string(m) + " exceed 2^63-1");
+      sum += d.counts[b];
+    }
+    if (g.photon_count < 0 || sum != uint64_t(g.photon_count))
+      v.fail(Validator::element("mesh_grid", m, "photon_count") + " = " +
+             std::to_string(g.photon_count) + " is not the sum of its bins' counts, " +
+             std::to_string(sum));
+    if (bins_of(g) > 0) v.position(Name("mesh_grid", m, "lo"), g.lo);
+  }
   return d;
 }
 

@@ -8,6 +8,7 @@
 #include "photonflow/camera.h"
 #include "photonflow/h5io.h"
 #include "photonflow/hash.h"
+#include "photonflow/validate.h"
 
 namespace pf {
 
@@ -30,10 +31,12 @@ void Scene::compute_bounds() {
   }
 }
 
-void Scene::compute_light_cdf() {
+void derive_lights(const std::vector<pf_triangle>& triangles,
+                   const std::vector<pf_material>& materials, const std::vector<pf_light>& given,
+                   std::vector<pf_light>& lights, std::vector<float>& cdf) {
   // Keep point lights, rebuild area lights from emitter triangles.
   std::vector<pf_light> kept;
-  for (auto& l : lights)
+  for (auto& l : given)
     if (l.type == PF_LIGHT_POINT) kept.push_back(l);
   lights.clear();
   for (size_t i = 0; i < triangles.size(); ++i) {
@@ -56,15 +59,21 @@ void Scene::compute_light_cdf() {
     l.power = 4.f * kPi * luminance(l.radiance);  // isotropic point light: Φ = 4π·I
     lights.push_back(l);
   }
-  light_cdf.assign(lights.size(), 0.f);
+  cdf.assign(lights.size(), 0.f);
   double total = 0;
   for (auto& l : lights) total += l.power;
   double acc = 0;
   for (size_t i = 0; i < lights.size(); ++i) {
     acc += lights[i].power;
-    light_cdf[i] = total > 0 ? float(acc / total) : float(i + 1) / float(lights.size());
+    cdf[i] = total > 0 ? float(acc / total) : float(i + 1) / float(lights.size());
   }
-  if (!light_cdf.empty()) light_cdf.back() = 1.f;
+  if (!cdf.empty()) cdf.back() = 1.f;
+}
+
+void Scene::compute_light_cdf() {
+  std::vector<pf_light> given;
+  given.swap(lights);
+  derive_lights(triangles, materials, given, lights, light_cdf);
 }
 
 size_t Scene::pick_light(float u, float& p_light) const {
@@ -194,6 +203,187 @@ const h5::Compound& h5_type_photon() {
 
 // ---- scene.h5 -------------------------------------------------------------------------------
 
+namespace {
+
+// "x,y,z" of a stored vector, for the messages.
+std::string vec_text(const float* p) {
+  return value_text(p[0]) + "," + value_text(p[1]) + "," + value_text(p[2]);
+}
+
+// One Havel–Herout plane of the file against the one recomputed from the triangle (eq. 4.3–4.7):
+// N within 1e-5 of its largest component, d within 1e-5 of |N|·(largest |vertex coordinate|),
+// so a file baked by another compiler (other rounding of the same double expressions) passes and
+// planes of another triangle, or of a moved one, do not.
+bool same_plane(const float* stored, const float* derived, double coordinate) {
+  const double m = std::max({std::fabs(derived[0]), std::fabs(derived[1]), std::fabs(derived[2])});
+  for (int k = 0; k < 3; ++k)
+    if (!nearly_equal(stored[k], derived[k], 0.0, 1e-5 * m)) return false;
+  return nearly_equal(stored[3], derived[3], 1e-5, 1e-5 * m * coordinate);
+}
+
+// The values of a scene whose arrays and indices load_scene has checked (docs/FORMATS.md,
+// "Values"): triangles, planes, materials, lights and their CDF, camera, kd-tree boxes and leaves.
+// s.bounds holds the triangles' bounds.
+void check_scene_values(const Scene& s, const Validator& v) {
+  const std::string T = "geometry/triangles";
+  for (size_t i = 0; i < s.triangles.size(); ++i) {
+    const pf_triangle& t = s.triangles[i];
+    v.position(Name(T, i, "v0"), t.v0);
+    v.position(Name(T, i, "v1"), t.v1);
+    v.position(Name(T, i, "v2"), t.v2);
+    v.unit(Name(T, i, "n0"), t.n0);
+    v.unit(Name(T, i, "n1"), t.n1);
+    v.unit(Name(T, i, "n2"), t.n2);
+  }
+  // Derived data: the planes recomputed from the triangles (linear; see docs/FORMATS.md).
+  const std::string H = "geometry/hh";
+  for (size_t i = 0; i < s.triangles.size(); ++i) {
+    const pf_triangle& t = s.triangles[i];
+    const pf_hh_triangle& h = s.hh[i];
+    const pf_hh_triangle d = make_hh_triangle(t);
+    double c = 0;
+    for (const float* p : {t.v0, t.v1, t.v2})
+      for (int k = 0; k < 3; ++k) c = std::max(c, double(std::fabs(p[k])));
+    const struct {
+      const char* name;
+      const float* stored;
+      const float* derived;
+    } planes[3] = {{"n", h.n, d.n}, {"n1", h.n1, d.n1}, {"n2", h.n2, d.n2}};
+    for (const auto& p : planes) {
+      v.finite(Name(H, i, p.name), p.stored, 4);
+      if (!same_plane(p.stored, p.derived, c))
+        v.fail(Validator::element(H, i, p.name) + " does not match the Havel–Herout plane of " + Validator::element(T, i) +
+               " (thesis eq. 4.3–4.7)");
+    }
+  }
+  const std::string M = "materials/materials";
+  for (size_t i = 0; i < s.materials.size(); ++i) {
+    const pf_material& m = s.materials[i];
+    v.in_range(Name(M, i, "ior"), &m.ior, 1, 1.0, 1000.0);
+    v.in_range(Name(M, i, "color"), m.color, 3, 0.0, 1.0);
+    v.in_range(Name(M, i, "emission"), m.emission, 3, 0.0, kMaxValue);
+  }
+  // Lights: values, then the whole table and its CDF against the ones derived from the triangles,
+  // materials and point lights (Scene::compute_light_cdf), which the scene id does not cover.
+  const std::string L = "lights/lights";
+  for (size_t i = 0; i < s.lights.size(); ++i) {
+    const pf_light& l = s.lights[i];
+    v.position(Name(L, i, "position"), l.position);
+    v.in_range(Name(L, i, "radiance"), l.radiance, 3, 0.0, kMaxValue);
+    v.in_range(Name(L, i, "area"), &l.area, 1, 0.0, kMaxValue);
+    v.in_range(Name(L, i, "power"), &l.power, 1, 0.0, kMaxValue);
+    if (l.type == PF_LIGHT_POINT && l.triangle != -1)
+      v.fail(Validator::element(L, i, "triangle") + " of a point light is " +
+             std::to_string(l.triangle) + ", not -1");
+  }
+  const std::string C = "lights/cdf";
+  for (size_t i = 0; i < s.light_cdf.size(); ++i)
+    v.in_range(Name(C, i), &s.light_cdf[i], 1, 0.0, 1.0);
+  v.non_decreasing(C, s.light_cdf);
+  if (!s.light_cdf.empty() && s.light_cdf.back() != 1.f)
+    v.fail(Validator::element(C, s.light_cdf.size() - 1) + " = " +
+           value_text(s.light_cdf.back()) + ", the last entry must be 1");
+  std::vector<pf_light> lights;
+  std::vector<float> cdf;
+  derive_lights(s.triangles, s.materials, s.lights, lights, cdf);
+  if (lights.size() != s.lights.size())
+    v.fail(L + " holds " + std::to_string(s.lights.size()) + " lights, the emitter triangles and "
+           "point lights give " + std::to_string(lights.size()));
+  const bool none = s.bounds.empty();  // no triangles
+  const double reach =
+      1e-5 * (1.0 + (none ? 0.0 : std::max(length(s.bounds.lo), length(s.bounds.hi))));
+  double total = 0;
+  for (size_t i = 0; i < lights.size(); ++i) {
+    const pf_light& a = s.lights[i];
+    const pf_light& b = lights[i];
+    const std::string at = Validator::element(L, i);
+    if (a.type != b.type || a.triangle != b.triangle)
+      v.fail(at + " is not the light the triangles and materials give (type " +
+             std::to_string(b.type) + ", triangle " + std::to_string(b.triangle) + ")");
+    bool same = nearly_equal(a.area, b.area, 1e-5) && nearly_equal(a.power, b.power, 1e-5);
+    for (int k = 0; k < 3; ++k)
+      same = same && nearly_equal(a.position[k], b.position[k], 1e-5, reach) &&
+             nearly_equal(a.radiance[k], b.radiance[k], 1e-6);
+    if (!same)
+      v.fail(at + " (power " + value_text(a.power) + ") differs from the light its " +
+             (b.type == PF_LIGHT_AREA ? "triangle and material give" : "radiance gives") +
+             " (power " + value_text(b.power) + ")");
+    if (!nearly_equal(s.light_cdf[i], cdf[i], 0.0, 1e-5))
+      v.fail(Validator::element(C, i) + " = " + value_text(s.light_cdf[i]) +
+             " differs from the lights' power fraction " + value_text(cdf[i]));
+    total += double(b.power);
+  }
+  if (!(total <= double(kMaxValue)))
+    v.fail(L + ": the lights' total power " + value_text(total) + " exceeds " +
+           value_text(kMaxValue));
+  // Camera: the values scene-bake refuses (scene_import.cpp).
+  const pf_camera& cam = s.camera;
+  v.position("camera.eye", cam.eye);
+  v.position("camera.look_at", cam.look_at);
+  v.position("camera.up", cam.up);
+  if (!(cam.fov_y_deg > 0.f && cam.fov_y_deg < 180.f))
+    v.fail("camera.fov_y_deg = " + value_text(cam.fov_y_deg) + " is outside (0, 180) degrees");
+  const Vec3 eye(cam.eye), dir = Vec3(cam.look_at) - eye;
+  const float min_dist = 1e-5f * std::max({1.f, none ? 0.f : length(s.bounds.extent()), length(eye)});
+  if (!(length(dir) > min_dist))
+    v.fail("camera.eye " + vec_text(cam.eye) + " and camera.look_at " + vec_text(cam.look_at) +
+           " do not give a view direction");
+  if (!(length(cross(normalize(dir), normalize(Vec3(cam.up)))) > 1e-4f))
+    v.fail("camera.up " + vec_text(cam.up) + " is parallel to the view direction");
+  // kd-tree: validate_kdtree checked the structure; here the boxes against the triangles. Every
+  // triangle a leaf lists overlaps the leaf's box, the root box holds every triangle, and every
+  // triangle of non-zero area is listed by some leaf (else rays pass through it).
+  const std::string N = "kdtree/nodes";
+  for (size_t i = 0; i < s.kd.nodes.size(); ++i) {
+    v.position(Name(N, i, "lo"), s.kd.nodes[i].lo);
+    v.position(Name(N, i, "hi"), s.kd.nodes[i].hi);
+  }
+  const pf_kd_node& root = s.kd.nodes[0];
+  float slack = 0.f;
+  for (int k = 0; k < 3; ++k) slack = std::max(slack, root.hi[k] - root.lo[k]);
+  slack = 1e-4f * slack + 1e-30f;
+  auto overlaps = [&](const pf_triangle& t, const pf_kd_node& n) {
+    for (int k = 0; k < 3; ++k) {
+      const float lo = std::min({t.v0[k], t.v1[k], t.v2[k]});
+      const float hi = std::max({t.v0[k], t.v1[k], t.v2[k]});
+      if (hi < n.lo[k] - slack || lo > n.hi[k] + slack) return false;
+    }
+    return true;
+  };
+  auto inside = [&](const pf_triangle& t, const pf_kd_node& n) {
+    for (const float* p : {t.v0, t.v1, t.v2})
+      for (int k = 0; k < 3; ++k)
+        if (p[k] < n.lo[k] - slack || p[k] > n.hi[k] + slack) return false;
+    return true;
+  };
+  std::vector<uint8_t> listed(s.triangles.size(), 0);
+  for (size_t i = 0; i < s.kd.nodes.size(); ++i) {
+    const pf_kd_node& n = s.kd.nodes[i];
+    if (n.axis != PF_KD_LEAF) continue;
+    for (int32_t j = n.first; j < n.first + n.count; ++j) {
+      const int32_t t = s.kd.leaf_tris[size_t(j)];
+      if (!overlaps(s.triangles[size_t(t)], n))
+        v.fail(Validator::element("kdtree/leaf_tris", size_t(j)) + " = " + std::to_string(t) +
+               ": the triangle lies outside the box of leaf " + Validator::element(N, i) +
+               " (the kd-tree does not match the triangles)");
+      listed[size_t(t)] = 1;
+    }
+  }
+  for (size_t i = 0; i < s.triangles.size(); ++i) {
+    const pf_triangle& t = s.triangles[i];
+    if (!inside(t, root))
+      v.fail(Validator::element(T, i) + " lies outside the kd-tree's root box " +
+             "(the kd-tree does not match the triangles)");
+    const pf_hh_triangle& h = s.hh[i];
+    if (!listed[i] && (h.n[0] != 0.f || h.n[1] != 0.f || h.n[2] != 0.f))
+      v.fail(Validator::element(T, i) + " is in no kd-tree leaf " +
+             "(the kd-tree does not match the triangles)");
+  }
+}
+
+}  // namespace
+
+
 void save_scene(const Scene& s, const std::string& path, const Provenance& prov) {
   h5::Writer w(path, kSceneFormat, kSceneFormatVersion);
   w.attr("/", "scene_id", s.scene_id);
@@ -265,7 +455,8 @@ Scene load_scene(const std::string& path) {
   s.kd.depth = int(r.attr_int("/kdtree", "depth"));
   s.kd.build_seconds = r.attr_double("/kdtree", "build_seconds");
 
-  // Consistency: a file that passes these checks cannot make a later stage index out of range.
+  // Consistency: a file that passes these checks cannot make a later stage index out of range,
+  // nor compute a non-finite value (validate.h).
   const std::string hint = "the file is damaged; rebake it with scene-bake";
   if (s.hh.size() != s.triangles.size())
     throw input_error(path, "geometry/hh and geometry/triangles differ in length", hint);
@@ -273,20 +464,29 @@ Scene load_scene(const std::string& path) {
     throw input_error(path, "materials/names and materials/materials differ in length", hint);
   if (s.light_cdf.size() != s.lights.size())
     throw input_error(path, "lights/cdf and lights/lights differ in length", hint);
-  for (auto& t : s.triangles) {
+  const Validator v(path, hint);
+  for (size_t i = 0; i < s.triangles.size(); ++i) {
+    const pf_triangle& t = s.triangles[i];
+    const auto at = [i] { return Validator::element("geometry/triangles", i); };
     if (t.material < 0 || size_t(t.material) >= s.materials.size())
-      throw input_error(path, "a triangle's material id is out of range", hint);
+      v.fail(at() + ": a triangle's material id is out of range (" + std::to_string(t.material) +
+             ", the scene has " + std::to_string(s.materials.size()) + " materials)");
     if (t.mesh < 0 || size_t(t.mesh) >= s.mesh_names.size())
-      throw input_error(path, "a triangle's mesh id is out of range", hint);
+      v.fail(at() + ": a triangle's mesh id is out of range (" + std::to_string(t.mesh) +
+             ", the scene has " + std::to_string(s.mesh_names.size()) + " meshes)");
   }
-  for (auto& m : s.materials)
-    if (m.type < PF_MAT_DIFFUSE || m.type > PF_MAT_EMITTER)
-      throw input_error(path, "a material has unknown type " + std::to_string(m.type), hint);
-  for (auto& l : s.lights) {
+  for (size_t i = 0; i < s.materials.size(); ++i)
+    if (s.materials[i].type < PF_MAT_DIFFUSE || s.materials[i].type > PF_MAT_EMITTER)
+      v.fail(Validator::element("materials/materials", i) + ": a material has unknown type " +
+             std::to_string(s.materials[i].type));
+  for (size_t i = 0; i < s.lights.size(); ++i) {
+    const pf_light& l = s.lights[i];
+    const std::string at = Validator::element("lights/lights", i);
     if (l.type != PF_LIGHT_AREA && l.type != PF_LIGHT_POINT)
-      throw input_error(path, "a light has unknown type " + std::to_string(l.type), hint);
+      v.fail(at + ": a light has unknown type " + std::to_string(l.type));
     if (l.type == PF_LIGHT_AREA && (l.triangle < 0 || size_t(l.triangle) >= s.triangles.size()))
-      throw input_error(path, "an area light's triangle id is out of range", hint);
+      v.fail(at + ": an area light's triangle id is out of range (" + std::to_string(l.triangle) +
+             ")");
   }
   // The image size sizes every image buffer.
   if (s.camera.width < 1 || s.camera.width > kMaxImageSide || s.camera.height < 1 ||
@@ -297,11 +497,10 @@ Scene load_scene(const std::string& path) {
                       hint);
   std::string problem = validate_kdtree(s.kd, s.triangles.size());
   if (!problem.empty()) throw input_error(path, "invalid kd-tree: " + problem, hint);
-  if (!s.kd.nodes.empty()) {
-    s.kd.bounds.lo = Vec3(s.kd.nodes[0].lo);
-    s.kd.bounds.hi = Vec3(s.kd.nodes[0].hi);
-  }
   s.compute_bounds();
+  check_scene_values(s, v);
+  s.kd.bounds.lo = Vec3(s.kd.nodes[0].lo);
+  s.kd.bounds.hi = Vec3(s.kd.nodes[0].hi);
   // The id names the content: a file edited after baking (or damaged) no longer matches it.
   std::string stored = s.scene_id;
   s.compute_scene_id();

@@ -8,7 +8,9 @@
 #include "photonflow/camera.h"
 #include "photonflow/h5io.h"
 #include "photonflow/photon_pass.h"
+#include "photonflow/ppm.h"
 #include "photonflow/scene.h"
+#include "photonflow/validate.h"
 
 namespace pf {
 
@@ -72,6 +74,109 @@ bool unreached_sppm_pixel(const HitpointSet& h, const pf_hitpoint& hp) {
 std::string out_of(const char* what, int32_t value, size_t size, const char* table) {
   return std::string(what) + " id " + std::to_string(value) + " is outside the scene's " +
          std::to_string(size) + " " + table;
+}
+
+// The counts of a hitpoint state and its estimator agree (docs/FORMATS.md): a fresh state
+// ("none") has no passes and no photons; a classic estimate one pass; a PPM state at least one
+// pass; every pass emitted at least one photon (so N_emitted of eq. 3.19 is not 0 once a pass
+// was applied, and not more than 0 before).
+void check_state_counts(const HitpointSet& h, const Validator& v) {
+  const std::string counts = "attributes passes = " + std::to_string(h.passes) +
+                             " and photons_emitted = " + std::to_string(h.photons_emitted);
+  if (h.estimator == "none" && (h.passes != 0 || h.photons_emitted != 0))
+    v.fail(counts + " of a fresh state (estimator \"none\") are not 0");
+  if (h.estimator == "classic" && h.passes != 1)
+    v.fail(counts + ": a classic estimate has exactly 1 pass");
+  if (h.estimator == "ppm" && h.passes < 1)
+    v.fail(counts + ": a PPM state (estimator \"ppm\") has at least 1 pass");
+  if (h.photons_emitted < uint64_t(h.passes) || (h.passes == 0) != (h.photons_emitted == 0))
+    v.fail(counts + " disagree: every pass emits at least one photon");
+}
+
+// One hitpoint's values (validate.h): directions, weight in [0, 1] (the specular chain's
+// throughput times the pixel filter weight), R, N and τ of eq. 3.14–3.18, and its radiance of
+// eq. 3.19 finite. A fresh state has R = R0, N = 0, τ = 0; an SPPM pixel without a diffuse
+// surface (no_surface) has N = 0 and τ = 0 and no normal.
+void check_hitpoint_values(const HitpointSet& h, size_t i, bool no_surface, const Validator& v) {
+  const pf_hitpoint& hp = h.hitpoints[i];
+  const std::string H = "hitpoints";
+  v.position(Name(H, i, "position"), hp.position);
+  if (no_surface) {
+    v.finite(Name(H, i, "normal"), hp.normal, 3);
+    v.finite(Name(H, i, "dir"), hp.dir, 3);
+  } else {
+    v.unit(Name(H, i, "normal"), hp.normal);
+    v.unit(Name(H, i, "dir"), hp.dir);
+  }
+  v.in_range(Name(H, i, "weight"), hp.weight, 3, 0.0, 1.0 + 1e-5);
+  v.in_range(Name(H, i, "n_photons"), &hp.n_photons, 1, 0.0, kMaxValue);
+  v.in_range(Name(H, i, "flux"), hp.flux, 3, 0.0, kMaxValue);
+  if (no_surface) {
+    v.in_range(Name(H, i, "radius"), &hp.radius, 1, 0.0, kMaxRadius);
+    if (hp.n_photons != 0.f || hp.flux[0] != 0.f || hp.flux[1] != 0.f || hp.flux[2] != 0.f)
+      v.fail(Validator::element(H, i) + " has no surface (mesh and material -1) but N or tau "
+             "is not 0");
+    return;
+  }
+  v.in_range(Name(H, i, "radius"), &hp.radius, 1, kMinRadius, kMaxRadius);
+  if (h.estimator == "none" &&
+      (hp.radius != h.radius0 || hp.n_photons != 0.f || hp.flux[0] != 0.f || hp.flux[1] != 0.f ||
+       hp.flux[2] != 0.f))
+    v.fail(Validator::element(H, i) + " of a fresh state (estimator \"none\") has R " +
+           value_text(hp.radius) + ", N " + value_text(hp.n_photons) +
+           " or tau not R0, 0 and 0");
+  for (int c = 0; c < 3 && h.photons_emitted > 0; ++c) {
+    const float l = hp.weight[c] * pf_ppm_radiance(hp.flux[c], hp.radius, float(h.photons_emitted));
+    if (!(l <= kMaxValue))
+      v.fail(Validator::element(H, i) + ": its radiance (eq. 3.19, channel " + std::to_string(c) +
+             ") " + value_text(l) + " from tau " + value_text(hp.flux[c]) + " and R " +
+             value_text(hp.radius) + " is not finite or exceeds " + value_text(kMaxValue));
+  }
+}
+
+// An SPPM state holds exactly one hitpoint per pixel.
+void check_one_per_pixel(const HitpointSet& h, const Validator& v) {
+  const size_t pixels = size_t(h.width) * size_t(h.height);
+  if (h.hitpoints.size() != pixels)
+    v.fail("an SPPM state (estimator \"sppm\") holds one hitpoint per pixel: " +
+           std::to_string(h.hitpoints.size()) + " hitpoints for " + std::to_string(pixels) +
+           " pixels");
+  std::vector<uint8_t> seen(pixels, 0);
+  for (size_t i = 0; i < h.hitpoints.size(); ++i) {
+    const pf_hitpoint& hp = h.hitpoints[i];
+    if (seen[size_t(hp.pixel_y) * size_t(h.width) + size_t(hp.pixel_x)]++)
+      v.fail(Validator::element("hitpoints", i) + ": pixel (" + std::to_string(hp.pixel_x) + ", " +
+             std::to_string(hp.pixel_y) + ") has a second hitpoint in an SPPM state");
+  }
+}
+
+// The photons of a pass (photons.h5 or a grid pass): position, unit direction, flux and flags.
+void check_photon_values(const std::string& dataset, const std::vector<pf_photon>& photons,
+                         size_t begin, size_t end, const Validator& v) {
+  for (size_t i = begin; i < end; ++i) {
+    const pf_photon& p = photons[i];
+    v.position(Name(dataset, i, "position"), p.position);
+    v.unit(Name(dataset, i, "dir"), p.dir);
+    v.in_range(Name(dataset, i, "flux"), p.flux, 3, 0.0, kMaxValue);
+    if (p.flags & ~(PF_PHOTON_CAUSTIC | PF_PHOTON_DIRECT))
+      v.fail(Validator::element(dataset, i, "flags") + " = " + std::to_string(p.flags) +
+             " has bits other than 1 (caustic) and 2 (direct)");
+  }
+}
+
+// pass_emitted of a photons or grid file: every pass emitted 1 … 2^62 photons and their sum
+// stays below 2^63 (the hitpoints' photons_emitted is int64), so counts never wrap.
+void check_pass_emitted(const std::vector<uint64_t>& emitted, const Validator& v) {
+  constexpr uint64_t kMaxPass = uint64_t(1) << 62;
+  uint64_t total = 0;
+  for (size_t k = 0; k < emitted.size(); ++k) {
+    const std::string at = Validator::element("pass_emitted", k);
+    if (emitted[k] < 1 || emitted[k] > kMaxPass)
+      v.fail(at + " = " + std::to_string(emitted[k]) + " is outside [1, 2^62]");
+    total += emitted[k];
+    if (total > uint64_t(std::numeric_limits<int64_t>::max()))
+      v.fail(at + ": the photons emitted up to this pass exceed 2^63-1");
+  }
 }
 }  // namespace
 
@@ -207,36 +312,51 @@ Provenance load_hitpoints_provenance(const std::string& path) {
 HitpointSet load_hitpoints(const std::string& path) {
   h5::Reader r(path, kHitpointsFormat, kHitpointsVersion);
   const std::string hint = "the file is damaged; remake it with trace-hitpoints";
+  const Validator v(path, hint);
   HitpointSet h;
   h.scene_id = r.scene_id();
   // The camera's image size.
   h.width = int(attr_in(r, path, "/", "width", 1, kMaxImageSide, hint));
   h.height = int(attr_in(r, path, "/", "height", 1, kMaxImageSide, hint));
   h.direct_mode = parse_direct(r.attr_string("/", "direct_mode"), path);
-  h.radius0 = float(r.attr_double("/", "radius0"));
+  const double radius0 = r.attr_double("/", "radius0");
+  v.in_range("attribute radius0", radius0, kMinRadius, kMaxRadius);
+  h.radius0 = float(radius0);
   h.estimator = r.attr_string("/", "estimator");
+  if (h.estimator != "none" && h.estimator != "ppm" && h.estimator != "classic" &&
+      h.estimator != "sppm")
+    v.fail("attribute estimator '" + h.estimator +
+           "' is none of \"none\", \"ppm\", \"classic\" and \"sppm\"");
   h.photons_emitted = uint64_t(attr_in(r, path, "/", "photons_emitted", 0,
                                        std::numeric_limits<int64_t>::max(), hint));
   h.passes = int(attr_in(r, path, "/", "passes", 0, kIntMax, hint));
   // Files written before the estimators with a new eye pass every pass hold eye pass 0.
   if (r.has_attr("/", "eye_pass")) h.eye_pass = int(attr_in(r, path, "/", "eye_pass", 0, kIntMax, hint));
+  check_state_counts(h, v);
   h.hitpoints = r.read<pf_hitpoint>("/hitpoints", h5_type_hitpoint());
   h.emitted = r.read<float>("/image/emitted");
   h.direct = r.read<float>("/image/direct");
   check_image(path, h.emitted, h.width, h.height, "emitted");
   check_image(path, h.direct, h.width, h.height, "direct");
+  v.image_in_range("image/emitted", h.emitted, h.width, 0.0, kMaxValue);
+  v.image_in_range("image/direct", h.direct, h.width, 0.0, kMaxValue);
   for (size_t i = 0; i < h.hitpoints.size(); ++i) {
     const pf_hitpoint& hp = h.hitpoints[i];
     if (hp.pixel_x < 0 || hp.pixel_x >= h.width || hp.pixel_y < 0 || hp.pixel_y >= h.height)
       throw input_error(path, "a hitpoint's pixel lies outside the image", hint);
     // mesh and material index the scene's tables: their upper bounds are check_against_scene's.
-    if ((hp.mesh < 0 || hp.material < 0) && !unreached_sppm_pixel(h, hp))
+    // A pixel of an SPPM state that no eye path has reached (sppm.h) has mesh = material = -1;
+    // check_hitpoint_values refuses one that gathered anything (unreached_sppm_pixel).
+    const bool no_surface = h.estimator == "sppm" && hp.mesh == -1 && hp.material == -1;
+    if ((hp.mesh < 0 || hp.material < 0) && !no_surface)
       throw input_error(path, "hitpoint " + std::to_string(i) + " has a negative " +
                                   (hp.mesh < 0 ? "mesh" : "material") + " id", hint);
     if (!finite3(hp.position))
       throw input_error(path, "hitpoint " + std::to_string(i) + " has a non-finite position",
                         hint);
+    check_hitpoint_values(h, i, no_surface, v);
   }
+  if (h.estimator == "sppm") check_one_per_pixel(h, v);
   return h;
 }
 
@@ -273,7 +393,7 @@ PhotonSet load_photons(const std::string& path) {
   const std::string hint = "the file is damaged; remake it with trace-photons";
   PhotonSet p;
   p.scene_id = r.scene_id();
-  p.seed = uint32_t(r.attr_int("/", "seed"));
+  p.seed = uint32_t(attr_in(r, path, "/", "seed", 0, std::numeric_limits<uint32_t>::max(), hint));
   p.photons = r.read<pf_photon>("/photons", h5_type_photon());
   p.pass_begin = r.read<uint64_t>("/pass_begin");
   p.pass_emitted = r.read<uint64_t>("/pass_emitted");
@@ -294,6 +414,9 @@ PhotonSet load_photons(const std::string& path) {
         throw input_error(path, which + " has pass " + std::to_string(ph.pass) + " but is stored in pass " +
                                     std::to_string(int64_t(p.first_pass) + int64_t(k)), hint);
     }
+  const Validator v(path, hint);
+  check_pass_emitted(p.pass_emitted, v);
+  check_photon_values("photons", p.photons, 0, p.photons.size(), v);
   return p;
 }
 
@@ -331,6 +454,17 @@ GridSet load_grids(const std::string& path) {
   g.scene_id = r.scene_id();
   g.pass_emitted = r.read<uint64_t>("/pass_emitted");
   g.first_pass = check_first_pass(r, path, g.pass_emitted.size(), hint);
+  const Validator v(path, hint);
+  check_pass_emitted(g.pass_emitted, v);
+  // One /pass<k> group per pass_emitted entry: a group beyond them would be dropped silently.
+  size_t groups = 0;
+  for (const std::string& c : r.children("/"))
+    if (c.size() > 4 && c.compare(0, 4, "pass") == 0 &&
+        c.find_first_not_of("0123456789", 4) == std::string::npos)
+      ++groups;
+  if (groups != g.pass_emitted.size())
+    v.fail("the file has " + std::to_string(groups) + " /pass<k> groups but pass_emitted has " +
+           std::to_string(g.pass_emitted.size()) + " entries");
   for (size_t k = 0; k < g.pass_emitted.size(); ++k) {
     std::string p = "/pass" + std::to_string(g.first_pass + int(k));
     PhotonGrid grid;
@@ -339,12 +473,12 @@ GridSet load_grids(const std::string& path) {
     grid.photons = r.read<pf_photon>(p + "/photons", h5_type_photon());
     grid.order = r.read<int32_t>(p + "/order");
     grid.params.max_bins = int(attr_in(r, path, p, "max_bins", 1, kMaxBinsPerAxis, hint));
-    grid.params.default_radius = float(r.attr_double(p, "default_radius"));
+    const double radius = r.attr_double(p, "default_radius");
+    v.in_range("attribute " + p + "/default_radius", radius, kMinRadius, kMaxRadius);
+    grid.params.default_radius = float(radius);
     auto bad = [&](const std::string& what) {
       return input_error(path, p + ": " + what, hint);
     };
-    if (!(grid.params.default_radius > 0.f) || !std::isfinite(grid.params.default_radius))
-      throw bad("default_radius is not positive and finite");
     // The layout build_photon_grid makes (photon_grid.h), which the gathers index without
     // checks: per mesh, a well-formed header (eq. 7.1) whose bins + 1 entries follow the previous
     // mesh's in cell_start and whose photons follow the previous mesh's in photons.
@@ -384,6 +518,30 @@ GridSet load_grids(const std::string& path) {
     for (size_t i = 0; i < n; ++i)
       if (!finite3(grid.photons[i].position))
         throw bad("photon " + std::to_string(i) + " has a non-finite position");
+    check_photon_values(p.substr(1) + "/photons", grid.photons, 0, n, v);
+    for (size_t i = 0; i < n; ++i)
+      if (int64_t(grid.photons[i].pass) != int64_t(g.first_pass) + int64_t(k))
+        throw bad("photon " + std::to_string(i) + " has pass " +
+                  std::to_string(grid.photons[i].pass));
+    // Each photon lies in the bin whose cell_start range holds it (eq. 7.1 with the header's lo
+    // and bin size, grid_shared.h): the gathers look for a photon only in its own bin.
+    for (size_t m = 0; m < grid.mesh_grid.size(); ++m) {
+      const pf_mesh_grid& mg = grid.mesh_grid[m];
+      if (mg.photon_count == 0) continue;
+      v.position(Name(p.substr(1) + "/mesh_grid", m, "lo"), mg.lo);
+      if (!(mg.bin_size >= grid.params.default_radius))
+        throw bad("mesh " + std::to_string(m) + ": bin size " + value_text(mg.bin_size) +
+                  " is below default_radius " + value_text(grid.params.default_radius));
+      const int64_t bins = mesh_grid_bins(mg);
+      for (int64_t b = 0; b < bins; ++b)
+        for (int32_t i = grid.cell_start[size_t(mg.first_bin + b)];
+             i < grid.cell_start[size_t(mg.first_bin + b + 1)]; ++i) {
+          const pf_photon& ph = grid.photons[size_t(i)];
+          if (pf_grid_bin(&mg, ph.position[0], ph.position[1], ph.position[2]) != b)
+            throw bad("photon " + std::to_string(i) + " lies outside bin " + std::to_string(b) +
+                      " of mesh " + std::to_string(m) + ", whose cell_start range holds it");
+        }
+    }
     g.grids.push_back(std::move(grid));
   }
   return g;
