@@ -51,6 +51,8 @@ int main(int argc, char** argv) {
     pf::require_options(o, a, {"scene", "hitpoints", "output"});
     if (!a.count("photons") && !a.count("grid"))
       throw pf::input_error("", "--photons or --grid is required", "see illuminate --help");
+    pf::require_not_both(a, "photons", "grid", "the grid's photons are gathered, --photons would "
+                         "be ignored");
     pf::check_output_options(a, {"scene", "hitpoints", "photons", "grid", "clusters"}, {"output"});
     std::string estimator = a["estimator"].as<std::string>();
     pf::require_choice("estimator", estimator, {"ppm", "classic"});
