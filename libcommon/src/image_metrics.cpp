@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "photonflow/error.h"
+#include "photonflow/output_file.h"
 #include "photonflow/text_file.h"
 
 namespace pf {
@@ -204,6 +205,7 @@ ImageMetrics compare_images(const Image& test, const Image& ref, const Image* ma
 }
 
 Image read_mask(const std::string& path) {
+  require_regular_input(path);
   std::ifstream f(path, std::ios::binary);
   if (!f) throw input_error(path, "cannot open the mask file", "check the path");
   char head[8] = {};

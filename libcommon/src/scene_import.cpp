@@ -140,6 +140,9 @@ class BudgetIOSystem : public Assimp::DefaultIOSystem {
  public:
   BudgetIOSystem(AddressSpaceCap& cap, uint64_t per_byte) : cap_(cap), per_byte_(per_byte) {}
   Assimp::IOStream* Open(const char* file, const char* mode) override {
+    // A FIFO or a directory (an OBJ's mtllib naming one) is not opened: its read would block.
+    struct stat st {};
+    if (stat(file, &st) == 0 && !S_ISREG(st.st_mode)) return nullptr;
     Assimp::IOStream* stream = Assimp::DefaultIOSystem::Open(file, mode);
     if (stream && per_byte_ > 0 && opened_.insert(file).second) {
       bytes_ += stream->FileSize();
