@@ -5,14 +5,16 @@
  * surface, where it stores a hitpoint. Rays are traced by the stackless kd-tree traversal with
  * ropes (intersect_shared.h) — the spatial index the thesis's GPU tracer did not have.
  *
- * Random numbers: stream (seed, kEyeStream, pixel·spp + s) for jitter and glass choices, stream
- * (seed, kShadowStream + 0, same index) for shadow rays — the CPU's streams and dimension order.
+ * Random numbers: stream (seed, kEyeStream + pass, pixel·spp + s) for jitter (pixel_sampler.h)
+ * and glass choices, stream (seed, kShadowStream + pass, same index) for shadow rays — the CPU's
+ * streams and dimension order. PPM's one eye pass is pass 0; SPPM and PPPM trace one per pass.
  *
  * Output per (pixel, sample) slot: the hitpoint and a used flag; the host compacts the used slots
  * in slot order (= the CPU's order: pixel row-major, then sample).
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "trace_common.h"
+#include "photonflow/pixel_sampler.h"
 
 #define PF_EYE_STREAM 0xE7E0000u
 #define PF_SHADOW_STREAM 0x5AD0000u
@@ -86,7 +88,8 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
  * indexed from the batch's start. */
 __kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int width, int height,
                               int spp, int columns, int max_depth, int shadow_rays,
-                              int shadow_samples, float radius, uint seed, float eps,
+                              int shadow_samples, float radius, uint seed, uint pass,
+                              int sampler, float eps,
                               int pixel_offset, int pixel_count, __global pf_hitpoint* slots,
                               __global int* used, __global float* emitted_out,
                               __global float* direct_out) {
@@ -101,13 +104,9 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int wi
     const uint index = (uint)pix * (uint)spp + (uint)smp;
     const size_t slot = (size_t)local_pix * (size_t)spp + (size_t)smp;
     used[slot] = 0;
-    pf_rng rng = pf_rng_start(seed, PF_EYE_STREAM, index);
-    float jx = 0.5f, jy = 0.5f;
-    if (spp > 1) {
-      /* one sample per cell of a columns × (spp / columns) grid (eye_strata_columns) */
-      jx = ((float)(smp % columns) + pf_rng_next(&rng)) / (float)columns;
-      jy = ((float)(smp / columns) + pf_rng_next(&rng)) / (float)(spp / columns);
-    }
+    pf_rng rng = pf_rng_start(seed, PF_EYE_STREAM + pass, index);
+    float jx, jy;
+    pf_eye_jitter(sampler, seed, pass, (uint)pix, smp, spp, columns, &rng, &jx, &jy);
     /* CameraFrame::direction */
     const float px = (float)x + jx, py = (float)y + jy;
     const float sx = (2.0f * px / (float)width - 1.0f) * cam[12];
@@ -152,7 +151,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int wi
         if (shadow_rays) {
           float ng[3];
           for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
-          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, seed, 0u, index, eps, T, direct);
+          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, seed, pass, index, eps, T, direct);
         }
         break;
       }

@@ -1,5 +1,17 @@
 # render.mk — the default render's stage DAG; intermediates under $(OUT)/$(SCENE)/.
 #
+# ESTIMATOR=sppm (the default) or pppm: a new eye pass every pass (sppm.h), so light outlines,
+# edges and glass converge. Their state is per pixel and their passes are short, so the DAG is
+#
+#   scene-bake → render --estimator sppm|pppm (every pass: eye pass, photons, gather)
+#
+# with a checkpoint every CHECKPOINT_EVERY passes: interrupting `make render` and running it
+# again resumes. (The same passes stage by stage: trace-hitpoints --pass p, trace-photons
+# --first-pass p, illuminate --estimator sppm --state; README.) Intermediates: scene.h5 and the
+# checkpoint (one hitpoint or three sums per pixel).
+#
+# ESTIMATOR=ppm: progressive photon mapping with one fixed eye pass, stage by stage:
+#
 #   scene-bake → trace-hitpoints → trace-photons → build-grid → illuminate → synthesize
 #
 # Every stage's parameters go into a stamp file (pipelines/stamp.mk) that the stage depends on:
@@ -20,7 +32,8 @@ SCENE      ?= cornell-box
 OUT        ?= out
 WIDTH      ?= 512
 HEIGHT     ?= 512
-PASSES     ?= 16
+ESTIMATOR  ?= sppm
+PASSES     ?= $(if $(filter ppm,$(ESTIMATOR)),16,200)
 PHOTONS    ?= 100000
 ALPHA      ?= 0.7
 SEED       ?= 1
@@ -59,7 +72,10 @@ SYN_P   := --exposure $(EXPOSURE)
 T       := --threads $(THREADS)
 
 .PHONY: render
-ifeq ($(shell test $(PASSES) -gt $(STAGED_MAX_PASSES) && echo driver),driver)
+ifneq ($(ESTIMATOR),ppm)
+render: $(DIR)/render.exr
+	@echo "render: $(DIR)/render.exr ($(ESTIMATOR), $(PASSES) passes, render driver)"
+else ifeq ($(shell test $(PASSES) -gt $(STAGED_MAX_PASSES) && echo driver),driver)
 render: $(DIR)/render.exr
 	@echo "render: $(DIR)/render.exr ($(PASSES) passes, render driver)"
 else
@@ -101,8 +117,11 @@ $(DIR)/image.exr: $(DIR)/state.h5 $(BIN)/synthesize $(call param_stamp,$(DIR)/sy
 # state_parameters), so one older than their own stamp (or than the scene) is removed first: a
 # rerun after e.g. an ALPHA change starts afresh, one after a PASSES change (or an interruption)
 # resumes.
-DRIVER_P := $(EYE_P) --passes $(PASSES) --photons $(PHOTONS) $(ILL_P) $(SYN_P)
-STATE_P  := $(EYE_P) --photons $(PHOTONS) --alpha $(ALPHA)
+# sppm and pppm gather through the CPU grid of each pass (DEVICE=opencl traces their eye and
+# photon passes on the device), so they take no --method.
+DRIVER_ILL_P := $(if $(filter ppm,$(ESTIMATOR)),$(ILL_P),--alpha $(ALPHA) --max-bins $(MAX_BINS) --device $(DEVICE))
+DRIVER_P := $(EYE_P) --estimator $(ESTIMATOR) --passes $(PASSES) --photons $(PHOTONS) $(DRIVER_ILL_P) $(SYN_P)
+STATE_P  := $(EYE_P) --estimator $(ESTIMATOR) --photons $(PHOTONS) --alpha $(ALPHA)
 CHECKPOINT := $(DIR)/render-checkpoint.h5
 $(DIR)/render.exr: $(DIR)/scene.h5 $(BIN)/render $(call param_stamp,$(DIR)/render.params,$(DRIVER_P)) \
                    $(call param_stamp,$(DIR)/render-state.params,$(STATE_P))

@@ -406,7 +406,7 @@ TEST_CASE("the Make DAG reruns exactly the stages whose parameters changed", "[t
   TempDir tmp("dag");
   const std::string make = "make --no-print-directory -C " + std::string(PF_SOURCE_DIR) +
                            " -f pipelines/render.mk BIN=" + test::bin_dir() + " OUT=" +
-                           tmp.dir.string() + " WIDTH=32 HEIGHT=24 PASSES=2";
+                           tmp.dir.string() + " WIDTH=32 HEIGHT=24 PASSES=2 ESTIMATOR=ppm";
   // Runs make with `vars` and returns the stages it ran, in order.
   auto stages = [&](const std::string& vars) {
     std::string log = tmp / "make.log";
@@ -432,9 +432,10 @@ TEST_CASE("the Make DAG reruns exactly the stages whose parameters changed", "[t
   CHECK(stages("PHOTONS=4000 ALPHA=0.5 SPP=2 EXPOSURE=1") == "");
 }
 
-// Long runs go through the render driver with a checkpoint (render.mk). A rerun after a state
-// option changed starts afresh (render --resume would refuse the old checkpoint), one after more
-// PASSES resumes; both give the image of an uninterrupted run with those options.
+// Long runs go through the render driver with a checkpoint (render.mk), and so do the default
+// estimator's (sppm) and pppm's at any length. A rerun after a state option changed starts afresh
+// (render --resume would refuse the old checkpoint), one after more PASSES resumes; both give the
+// image of an uninterrupted run with those options.
 TEST_CASE("the Make DAG's render driver restarts after a state option changed, resumes otherwise",
           "[tools][dag][resume]") {
   TempDir tmp("dag-driver");
@@ -452,12 +453,23 @@ TEST_CASE("the Make DAG's render driver restarts after a state option changed, r
                 .exit_code == 0);
     return read_exr(tmp / name);
   };
-  make_ok("PASSES=3 ALPHA=0.7");
+  make_ok("ESTIMATOR=ppm PASSES=3 ALPHA=0.7");
   REQUIRE(std::filesystem::exists(dir + "/render-checkpoint.h5"));
-  make_ok("PASSES=3 ALPHA=0.5");
+  make_ok("ESTIMATOR=ppm PASSES=3 ALPHA=0.5");
   CHECK(same_pixels(read_exr(dir + "/render.exr"), fresh("--passes 3 --alpha 0.5", "a.exr")));
-  make_ok("PASSES=5 ALPHA=0.5");
+  make_ok("ESTIMATOR=ppm PASSES=5 ALPHA=0.5");
   CHECK(same_pixels(read_exr(dir + "/render.exr"), fresh("--passes 5 --alpha 0.5", "b.exr")));
+  // The default estimator, SPPM: the driver at any pass count, restarted after the estimator
+  // changed, resumed after more passes.
+  make_ok("PASSES=3 ALPHA=0.5");
+  CHECK(same_pixels(read_exr(dir + "/render.exr"),
+                    fresh("--estimator sppm --passes 3 --alpha 0.5", "c.exr")));
+  make_ok("PASSES=4 ALPHA=0.5");
+  CHECK(same_pixels(read_exr(dir + "/render.exr"),
+                    fresh("--estimator sppm --passes 4 --alpha 0.5", "d.exr")));
+  make_ok("ESTIMATOR=pppm PASSES=2 ALPHA=0.5");
+  CHECK(same_pixels(read_exr(dir + "/render.exr"),
+                    fresh("--estimator pppm --passes 2 --alpha 0.5", "e.exr")));
 }
 
 TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are refused",

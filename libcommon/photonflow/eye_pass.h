@@ -8,8 +8,10 @@
 //             gather then skips photons flagged PF_PHOTON_DIRECT so nothing is counted twice.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "photonflow/pixel_sampler.h"
 #include "photonflow/scene.h"
 
 namespace pf {
@@ -20,6 +22,16 @@ enum class DirectMode {
 };
 const char* direct_mode_name(DirectMode m);
 
+// Where eye samples go inside their pixel (pixel_sampler.h has the definitions).
+enum class PixelSampler {
+  Strata = PF_SAMPLER_STRATA,  // PPM's fixed eye pass: centre, or a stratified grid for spp > 1
+  Random = PF_SAMPLER_RANDOM,  // independent jitter, new every pass
+  Sobol = PF_SAMPLER_SOBOL,    // per-pixel scrambled (0,2)-sequence indexed by pass·spp + sample
+};
+const char* pixel_sampler_name(PixelSampler s);
+// "strata" | "random" | "sobol" (InputError naming --pixel-sampler otherwise).
+PixelSampler parse_pixel_sampler(const std::string& name);
+
 struct EyePassOptions {
   int spp = 1;             // eye samples per pixel (1: pixel centre; n > 1: stratified jitter)
   int max_depth = 16;      // specular bounces before a path is dropped
@@ -28,6 +40,11 @@ struct EyePassOptions {
   float radius = 0.f;      // initial radius R0, world units; 0 = automatic (default_radius)
   uint32_t seed = 1;
   int threads = 0;         // 0 = all cores; results do not depend on it
+  // Which eye pass this is: SPPM and probabilistic PPM trace a new one before every photon pass
+  // (pass p uses eye stream (seed, 0xE7E0000 + p, pixel·spp + s) and shadow stream
+  // (seed, 0x5AD0000 + p, same index)); PPM's one eye pass is pass 0.
+  uint32_t pass = 0;
+  PixelSampler sampler = PixelSampler::Strata;
 };
 
 struct EyePassResult {

@@ -66,6 +66,14 @@ void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, u
 void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGrid& grid,
                               uint64_t emitted, const PpmOptions& opt);
 
+// The gather of one site from a prebuilt grid, the core of ppm_pass_grid and of the per-pixel
+// estimators (sppm.h): the photons that `site` (its position, normal, mesh and material) accepts
+// within `radius` (the rule above), and their τ_M = Σ f_r·Φ_p (eq. 3.17) into tau_m, summed in
+// increasing photon index as every gather method sums. Returns M, the photons gathered. The
+// caller has checked the site's material against the scene; a mesh outside the grid gathers none.
+int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
+                bool skip_direct, float tau_m[3]);
+
 struct ClassicOptions {
   int k = 100;                  // nearest global photons per estimate (eq. 3.10)
   float caustic_radius = 0.f;   // fixed radius of the caustic estimate; 0 = the hitpoints' R0

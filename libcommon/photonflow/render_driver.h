@@ -1,8 +1,10 @@
 // render_driver.h — progressive photon mapping in one process (the `render` tool): the same stage
-// functions as the staged route (trace_hitpoints, trace_photons, ppm_pass, synthesize), with no
-// files between passes, an iteration interface (SmallVCM's RunIteration), atomic checkpoints
-// of the hitpoint state for --resume, and progressive snapshots with a run record (the
-// (passes, seconds) pairs of the speed–accuracy pipeline, pipelines/accuracy.mk).
+// functions as the staged route (trace_hitpoints, trace_photons, ppm_pass / sppm_pass /
+// pppm_pass, synthesize), with no files between passes, an iteration interface (SmallVCM's
+// RunIteration), atomic checkpoints of the state for --resume, a wall-clock budget, and
+// progressive snapshots with a run record (the (passes, seconds) pairs of the speed–accuracy
+// pipeline, pipelines/accuracy.mk). Three estimators (sppm.h): ppm (one fixed eye pass), sppm and
+// pppm (a new eye pass before every photon pass).
 //
 // With the same scene, seed and options, pass p here traces exactly the photons that
 // `trace-photons --first-pass p` writes, and gathers them exactly as `illuminate` does, so both
@@ -20,8 +22,10 @@
 #include "photonflow/eye_pass.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/image.h"
+#include "photonflow/pass_sums.h"
 #include "photonflow/photon_pass.h"
 #include "photonflow/provenance.h"
+#include "photonflow/sppm.h"
 #include "photonflow/stage_files.h"
 
 namespace pf {
@@ -30,7 +34,11 @@ struct RenderOptions {
   EyePassOptions eye;
   PhotonPassOptions photons;
   PpmOptions ppm;
-  int passes = 16;                 // total photon passes of the run
+  Estimator estimator = Estimator::Ppm;
+  int passes = 16;                 // photon passes of the run in total (pppm: from first_pass)
+  int first_pass = 0;              // pppm: the first pass of this run's range
+  double time_budget = 0;          // seconds of rendering (RenderStatus::seconds); 0 = none: the
+                                   // run ends after the pass that reaches it
   std::string checkpoint;          // hitpoint-state file ("" = none)
   int checkpoint_every = 10;       // passes between checkpoints
   int snapshot_every = 0;          // passes between snapshot callbacks (0 = none)
@@ -38,16 +46,18 @@ struct RenderOptions {
   ClContext* device = nullptr;     // OpenCL backend (cl_backend.h, ppm.method); nullptr = CPU
 };
 
+// The ppm and sppm estimators, whose state is a HitpointSet (sppm: one hitpoint per pixel).
 class ProgressiveRenderer {
  public:
-  // Starts a run: the eye pass, no photons yet.
+  // Starts a run: ppm's eye pass, or sppm's empty per-pixel state; no photons yet.
   ProgressiveRenderer(const Scene& scene, const RenderOptions& opt);
   // Continues a run from a saved hitpoint state (a checkpoint), checked against the scene's
   // tables (check_against_scene); `path`, the file it came from, names it in the InputError.
   ProgressiveRenderer(const Scene& scene, const RenderOptions& opt, HitpointSet state,
                       const std::string& path = "");
 
-  // One photon pass (trace photons of pass `passes_done()`) and its PPM gather.
+  // One photon pass (trace photons of pass `passes_done()`) and its gather: ppm into the fixed
+  // hitpoints; sppm after its eye pass `passes_done()` into the pixels (sppm_pass).
   void run_iteration();
   int passes_done() const { return state_.passes; }
   uint64_t photons_emitted() const { return state_.photons_emitted; }
@@ -78,6 +88,37 @@ class ProgressiveRenderer {
   std::unique_ptr<DevicePpmState> device_state_;
 };
 
+// Traces the eye pass of pass `pass` (EyePassOptions::pass) and photon pass `pass`, and sorts
+// the photons into `grid`: the per-pass work of sppm and pppm, on opt.device when it is set.
+// Returns the photons emitted; `stored` gets the photons stored.
+uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
+                    EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored);
+
+// The pppm estimator: sums of the pass estimates over passes [first_pass, first_pass + passes).
+class PppmRenderer {
+ public:
+  // A fresh range starting at opt.first_pass.
+  PppmRenderer(const Scene& scene, const RenderOptions& opt);
+  // Continues a saved range (a checkpoint); `path` names it in errors.
+  PppmRenderer(const Scene& scene, const RenderOptions& opt, PassSums sums,
+               const std::string& path = "");
+  void run_iteration();                        // pass first_pass + passes_done()
+  int passes_done() const { return sums_.passes; }
+  uint64_t photons_emitted() const { return sums_.photons_emitted; }
+  uint64_t photons_traced() const { return photons_stored_; }
+  const PassSums& state() const { return sums_; }
+  void save_state(const std::string& path, const Provenance& prov) const;
+
+ private:
+  const Scene& scene_;
+  RenderOptions opt_;
+  PassSums sums_;
+  uint64_t photons_stored_ = 0;
+  EyePassResult eye_;
+  PhotonBuffers photon_chunks_;
+  PhotonGrid grid_;
+};
+
 // Where a run stands after a pass (snapshot callbacks and the run record).
 //   seconds: wall time of this process's rendering work — the eye pass (unless the run resumed
 //   from a checkpoint) and every photon pass with its gather — without the time spent in snapshot
@@ -91,24 +132,36 @@ struct RenderStatus {
   uint64_t photons_stored = 0;    // photons stored by the passes this process traced
   double seconds = 0;             // rendering wall time (above)
   double build_seconds = 0;       // OpenCL program builds so far (not in `seconds`)
-  double mean_radius = 0;         // mean gather radius R of the hitpoints (eq. 3.16), world units
+  double mean_radius = 0;         // mean gather radius R of the hitpoints or pixels (eq. 3.16),
+                                  // pppm: r_i of the last pass (KZ11 eq. 19), world units
   bool resumed = false;           // the run continued a checkpoint
   bool stopped = false;           // on_pass asked to stop before opt.passes (an interrupt)
+  bool budget_reached = false;    // the run ended at opt.time_budget before opt.passes
 };
 
 // InputError naming the option when one is out of range: the eye and photon pass options
 // (check_options), --passes > 0, --alpha in (0, 1], --max-bins > 0, --checkpoint-every > 0 with
-// a checkpoint, --snapshot-every >= 0, --snapshot-at within 1..--passes. render_progressive
-// calls it first.
+// a checkpoint, --snapshot-every >= 0, --snapshot-at within 1..--passes, --time >= 0 and finite,
+// --first-pass >= 0 (pppm only) with the range's passes int32 indices, --spp 1 with sppm.
+// render_progressive and render_pppm call it first.
 void check_options(const RenderOptions& opt);
 
 // The options a PPM state depends on, as canonical text under their tool option names ("alpha" →
 // "0.7", "seed", "photons", "spp", "max-depth", "max-bounces", "direct", "shadow-samples",
-// "radius"). render_progressive records them in every checkpoint's provenance parameters as
+// "radius"; with sppm and pppm also "estimator" and "pixel-sampler"). render_progressive
+// records them in every checkpoint's provenance parameters as
 // "state.<name>" and resumes only a checkpoint whose record equals this run's: a state continued
 // under other options would be neither run's image. (Passes, snapshots, threads, device, method
 // and work-group size may change: every gather method gathers the same photons.)
 std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
+// The same record for the staged route (illuminate --estimator pppm), from the options recorded in
+// the provenance of its eye pass (trace-hitpoints: spp, max-depth, direct, shadow-samples, radius,
+// seed, pixel-sampler) and photon pass (trace-photons: photons, max-bounces, seed) and its alpha:
+// equal to render's for the same options, so parts of either route merge. InputError naming the
+// file whose provenance lacks one.
+std::map<std::string, std::string> staged_state_parameters(
+    Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
+    const std::string& photons_path, float alpha);
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final
@@ -124,6 +177,14 @@ HitpointSet render_progressive(
     const std::function<bool(int, double)>& on_pass = {},
     const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot = {},
     RenderStatus* status = nullptr);
+
+// The pppm run: as render_progressive, over passes [opt.first_pass, opt.first_pass + opt.passes),
+// its checkpoint a pass-sums file (pass_sums.h) that --resume continues when its range starts at
+// opt.first_pass and its options equal this run's. Returns the sums.
+PassSums render_pppm(const Scene& scene, const RenderOptions& opt, bool resume,
+                     const Provenance& prov, const std::function<bool(int, double)>& on_pass = {},
+                     const std::function<void(const PassSums&, const RenderStatus&)>& on_snapshot = {},
+                     RenderStatus* status = nullptr);
 
 // One image a run wrote (a snapshot or the final image) and the run's status when it was taken.
 struct RenderImageRecord {

@@ -37,6 +37,8 @@ struct HitpointSet {
   std::string estimator = "none";  // "none" (fresh), "ppm" or "classic"
   uint64_t photons_emitted = 0;  // N_emitted of eq. 3.19, all passes applied so far
   int passes = 0;                // photon passes applied so far (PPM)
+  int eye_pass = 0;              // the eye pass the hitpoints came from (EyePassOptions::pass;
+                                 // sppm and pppm trace eye pass p for photon pass p)
   std::string scene_id;
 };
 
@@ -73,7 +75,8 @@ struct GridSet {
 };
 
 // The fresh hitpoint state of an eye pass (estimator "none", no photons yet).
-HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id);
+HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id,
+                              int eye_pass = 0);
 
 void save_hitpoints(const HitpointSet& h, const std::string& path, const Provenance& prov);
 HitpointSet load_hitpoints(const std::string& path);
@@ -83,6 +86,7 @@ HitpointSet load_hitpoints(const std::string& path);
 float hitpoints_radius0(const std::string& path, const HitpointSet& h);
 // The provenance group of a hitpoints file (the render driver checks a checkpoint's with it).
 Provenance load_hitpoints_provenance(const std::string& path);
+Provenance load_photons_provenance(const std::string& path);
 void save_photons(const PhotonSet& p, const std::string& path, const Provenance& prov);
 PhotonSet load_photons(const std::string& path);
 void save_grids(const GridSet& g, const std::string& path, const Provenance& prov);

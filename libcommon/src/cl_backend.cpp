@@ -134,7 +134,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
              sb.leaf_groups, sb.mats, sb.lights,
              sb.light_cdf, sb.light_count, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
-             cl_uint(opt.seed), eps, cl_int(off), count, slots, used, emitted, direct);
+             cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps, cl_int(off),
+             count, slots, used, emitted, direct);
     dev.run(k, size_t(count));
     const size_t nslots = size_t(count) * size_t(spp);
     flags.resize(nslots);

@@ -20,6 +20,21 @@ const char* direct_mode_name(DirectMode m) {
   return m == DirectMode::Photons ? "photons" : "shadow-rays";
 }
 
+const char* pixel_sampler_name(PixelSampler s) {
+  switch (s) {
+    case PixelSampler::Strata: return "strata";
+    case PixelSampler::Random: return "random";
+    case PixelSampler::Sobol: return "sobol";
+  }
+  return "?";
+}
+
+PixelSampler parse_pixel_sampler(const std::string& name) {
+  require_choice("pixel-sampler", name, {"strata", "random", "sobol"});
+  return name == "strata" ? PixelSampler::Strata
+                          : name == "random" ? PixelSampler::Random : PixelSampler::Sobol;
+}
+
 int eye_strata_columns(int spp) {
   int rows = 1;
   for (int r = 1; int64_t(r) * r <= int64_t(spp); ++r)
@@ -102,7 +117,7 @@ void check_options(const EyePassOptions& opt) {
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
   const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
-  const int columns = eye_strata_columns(spp), strata_rows = spp / columns;
+  const int columns = eye_strata_columns(spp);
   CameraFrame cam(scene.camera);
   EyePassResult res;
   res.width = W;
@@ -126,12 +141,10 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
       Vec3 emitted, direct;
       for (int s = 0; s < spp; ++s) {
         uint32_t index = uint32_t(pix * spp + s);
-        pf_rng rng = pf_rng_start(opt.seed, kEyeStream, index);
-        float jx = 0.5f, jy = 0.5f;
-        if (spp > 1) {  // stratified jitter, one sample per cell of a columns × rows grid
-          jx = (float(s % columns) + pf_rng_next(&rng)) / float(columns);
-          jy = (float(s / columns) + pf_rng_next(&rng)) / float(strata_rows);
-        }
+        pf_rng rng = pf_rng_start(opt.seed, kEyeStream + opt.pass, index);
+        float jx, jy;
+        pf_eye_jitter(int(opt.sampler), opt.seed, opt.pass, uint32_t(pix), s, spp, columns, &rng,
+                      &jx, &jy);
         Ray ray{cam.eye(), cam.direction(float(x) + jx, float(y) + jy)};
         Vec3 T(1.f / spp, 1.f / spp, 1.f / spp);  // throughput × box filter weight
         for (int depth = 0; depth <= opt.max_depth; ++depth) {
@@ -155,7 +168,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
             row_buf.push_back(hp);
             if (opt.direct == DirectMode::ShadowRays)
               direct += T * direct_light(scene, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
-                                         opt.shadow_samples, opt.seed, 0, index);
+                                         opt.shadow_samples, opt.seed, opt.pass, index);
             break;
           }
           if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) break;  // black emitter

@@ -34,10 +34,9 @@ void check_alpha(float alpha) {
 // Eq. 3.17 over the m accepted photons photon(0), ..., photon(m−1), which the caller lists in
 // increasing original photon index (the same order for every gather method and thread count, so
 // the sums are reproducible and the grid and FLANN gathers agree to the bit): τ_M = Σ f_r·Φ_p,
-// each term one float product summed in double; then eq. 3.14, 3.16, 3.18.
+// each term one float product summed in double, rounded to float at the end.
 template <class PhotonAt>
-inline void gather_update(pf_hitpoint& hp, const Vec3& fr, size_t m, PhotonAt&& photon,
-                          float alpha) {
+inline void sum_flux(const Vec3& fr, size_t m, PhotonAt&& photon, float tau_m[3]) {
   double tau[3] = {0, 0, 0};
   for (size_t k = 0; k < m; ++k) {
     const pf_photon& p = photon(k);
@@ -45,7 +44,17 @@ inline void gather_update(pf_hitpoint& hp, const Vec3& fr, size_t m, PhotonAt&& 
     tau[1] += double(fr.y * p.flux[1]);
     tau[2] += double(fr.z * p.flux[2]);
   }
-  const float tau_m[3] = {float(tau[0]), float(tau[1]), float(tau[2])};
+  tau_m[0] = float(tau[0]);
+  tau_m[1] = float(tau[1]);
+  tau_m[2] = float(tau[2]);
+}
+
+// Eq. 3.17 (sum_flux), then eq. 3.14, 3.16, 3.18.
+template <class PhotonAt>
+inline void gather_update(pf_hitpoint& hp, const Vec3& fr, size_t m, PhotonAt&& photon,
+                          float alpha) {
+  float tau_m[3];
+  sum_flux(fr, m, photon, tau_m);
   pf_ppm_update(&hp, int(m), tau_m, alpha);  // eq. 3.14, 3.16, 3.18
 }
 
@@ -77,77 +86,81 @@ void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, u
   ppm_pass_grid_prechecked(scene, h, grid, emitted, opt);
 }
 
+int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
+                bool skip_direct, float tau_m[3]) {
+  tau_m[0] = tau_m[1] = tau_m[2] = 0.f;
+  const int mesh = site.mesh;
+  const int mesh_count = int(grid.mesh_grid.size());
+  if (mesh < 0 || mesh >= mesh_count || !(radius >= 0.f)) return 0;  // nothing to gather
+  const pf_mesh_grid& g = grid.mesh_grid[size_t(mesh)];
+  if (g.photon_count == 0) return 0;
+  const pf_photon* photons = grid.photons.data();
+  const int32_t* order = grid.order.data();
+  const int32_t* cell_start = grid.cell_start.data();
+  // Per-thread work space, kept from call to call.
+  thread_local std::vector<int32_t> cand;   // sorted-array indices of the accepted photons
+  thread_local std::vector<uint64_t> keys;  // (original index << 32) | sorted index: sum order
+  const float q[3] = {site.position[0], site.position[1], site.position[2]};
+  const float nrm[3] = {site.normal[0], site.normal[1], site.normal[2]};
+  // The bin box of PhotonGrid::for_each_in_radius (see there for the padding).
+  const float pad = radius * 1.0001f;
+  int lo[3], hi3[3];
+  const int n[3] = {g.nx, g.ny, g.nz};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = grid_coord(q[a] - pad, g.lo[a], g.bin_size, n[a]);
+    hi3[a] = grid_coord(q[a] + pad, g.lo[a], g.bin_size, n[a]);
+  }
+  size_t m = 0;
+  for (int z = lo[2]; z <= hi3[2]; ++z) {
+    for (int y = lo[1]; y <= hi3[1]; ++y) {
+      const int row = g.first_bin + (y + z * g.ny) * g.nx;
+      const int begin = cell_start[row + lo[0]];
+      const int end = cell_start[row + hi3[0] + 1];  // bins lo..hi of a row are contiguous
+      if (cand.size() < m + size_t(end - begin)) cand.resize(2 * (m + size_t(end - begin)));
+      int32_t* out = cand.data();
+      for (int i = begin; i < end; ++i) {
+        const pf_photon& p = photons[i];
+        const bool inside =
+            pf_ppm_in_radius(pf_ppm_dist2(q[0], q[1], q[2], p.position[0], p.position[1],
+                                          p.position[2]),
+                             radius) != 0;
+        // photon_accepted, evaluated without branches.
+        const bool facing = p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
+        const bool ok = inside & (p.mesh == mesh) &
+                        !(skip_direct & ((p.flags & PF_PHOTON_DIRECT) != 0)) & facing;
+        out[m] = i;
+        m += ok ? 1 : 0;
+      }
+    }
+  }
+  if (m == 0) return 0;
+  // Sum order: original photon index. The candidates come as one ascending run per bin.
+  if (keys.size() < m) keys.resize(2 * m);
+  uint64_t* k = keys.data();
+  for (size_t j = 0; j < m; ++j)
+    k[j] = (uint64_t(uint32_t(order[cand[j]])) << 32) | uint32_t(cand[j]);
+  sort_keys(k, m);
+  sum_flux(brdf(scene, site), m,
+           [&](size_t j) -> const pf_photon& { return photons[uint32_t(k[j])]; }, tau_m);
+  return int(m);
+}
+
 void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGrid& grid,
                               uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
   const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
   const float alpha = opt.alpha;
   const int64_t count = int64_t(h.hitpoints.size());
-  const int mesh_count = int(grid.mesh_grid.size());
-  const pf_photon* photons = grid.photons.data();
-  const int32_t* order = grid.order.data();
-  const int32_t* cell_start = grid.cell_start.data();
   // The grid holds the photons sorted by bin. Each hitpoint scans the bins of its sphere's box
   // (the bins PhotonGrid::for_each_in_radius visits), keeps the photons that pass the gather rule
   // (pf_ppm_in_radius and photon_accepted) without branching, orders them by original photon
   // index (grid.order) and sums them in that order, exactly as the FLANN gather does.
-#pragma omp parallel num_threads(worker_threads(opt.threads))
-  {
-    // Per-thread work space, kept from pass to pass.
-    thread_local std::vector<int32_t> cand;   // sorted-array indices of the accepted photons
-    thread_local std::vector<uint64_t> keys;  // (original index << 32) | sorted index: sum order
-#pragma omp for schedule(dynamic, 256)
-    for (int64_t hi = 0; hi < count; ++hi) {
-      pf_hitpoint& hp = h.hitpoints[size_t(hi)];
-      const int mesh = hp.mesh;
-      const float radius = hp.radius;
-      if (mesh < 0 || mesh >= mesh_count || !(radius >= 0.f)) continue;  // nothing to gather
-      const pf_mesh_grid& g = grid.mesh_grid[size_t(mesh)];
-      if (g.photon_count == 0) continue;
-      const float q[3] = {hp.position[0], hp.position[1], hp.position[2]};
-      const float nrm[3] = {hp.normal[0], hp.normal[1], hp.normal[2]};
-      // The bin box of PhotonGrid::for_each_in_radius (see there for the padding).
-      const float pad = radius * 1.0001f;
-      int lo[3], hi3[3];
-      const int n[3] = {g.nx, g.ny, g.nz};
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = grid_coord(q[a] - pad, g.lo[a], g.bin_size, n[a]);
-        hi3[a] = grid_coord(q[a] + pad, g.lo[a], g.bin_size, n[a]);
-      }
-      size_t m = 0;
-      for (int z = lo[2]; z <= hi3[2]; ++z) {
-        for (int y = lo[1]; y <= hi3[1]; ++y) {
-          const int row = g.first_bin + (y + z * g.ny) * g.nx;
-          const int begin = cell_start[row + lo[0]];
-          const int end = cell_start[row + hi3[0] + 1];  // bins lo..hi of a row are contiguous
-          if (cand.size() < m + size_t(end - begin)) cand.resize(2 * (m + size_t(end - begin)));
-          int32_t* out = cand.data();
-          for (int i = begin; i < end; ++i) {
-            const pf_photon& p = photons[i];
-            const bool inside =
-                pf_ppm_in_radius(pf_ppm_dist2(q[0], q[1], q[2], p.position[0], p.position[1],
-                                              p.position[2]),
-                                 radius) != 0;
-            // photon_accepted, evaluated without branches.
-            const bool facing = p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
-            const bool ok = inside & (p.mesh == mesh) &
-                            !(skip_direct & ((p.flags & PF_PHOTON_DIRECT) != 0)) & facing;
-            out[m] = i;
-            m += ok ? 1 : 0;
-          }
-        }
-      }
-      if (m == 0) continue;  // pf_ppm_update leaves the hitpoint unchanged
-      // Sum order: original photon index. The candidates come as one ascending run per bin.
-      if (keys.size() < m) keys.resize(2 * m);
-      uint64_t* k = keys.data();
-      for (size_t j = 0; j < m; ++j)
-        k[j] = (uint64_t(uint32_t(order[cand[j]])) << 32) | uint32_t(cand[j]);
-      sort_keys(k, m);
-      gather_update(hp, brdf(scene, hp), m,
-                    [&](size_t j) -> const pf_photon& { return photons[uint32_t(k[j])]; },
-                    alpha);
-    }
+#pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
+  for (int64_t hi = 0; hi < count; ++hi) {
+    pf_hitpoint& hp = h.hitpoints[size_t(hi)];
+    float tau_m[3];
+    const int m = gather_site(scene, grid, hp, hp.radius, skip_direct, tau_m);
+    pf_ppm_update(&hp, m, tau_m, alpha);  // eq. 3.14, 3.16, 3.18 (m = 0: unchanged)
   }
   finish_pass(h, emitted);
 }

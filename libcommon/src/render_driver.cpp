@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <cstdint>
 #include <sstream>
 
@@ -15,16 +16,48 @@
 namespace pf {
 
 namespace {
-HitpointSet fresh_state(const Scene& scene, const EyePassOptions& eye, ClContext* device) {
-  EyePassResult r = device ? trace_hitpoints(scene, eye, *device) : trace_hitpoints(scene, eye);
-  return make_hitpoint_set(std::move(r), eye.direct, scene.scene_id);
+EyePassResult eye_pass(const Scene& scene, const EyePassOptions& eye, ClContext* device) {
+  return device ? trace_hitpoints(scene, eye, *device) : trace_hitpoints(scene, eye);
+}
+
+float initial_radius(const Scene& scene, const EyePassOptions& eye) {
+  return eye.radius > 0.f ? eye.radius : default_radius(scene);
+}
+
+HitpointSet fresh_state(const Scene& scene, const RenderOptions& opt) {
+  if (opt.estimator == Estimator::Sppm)
+    return make_sppm_state(scene, initial_radius(scene, opt.eye), opt.eye.direct);
+  return make_hitpoint_set(eye_pass(scene, opt.eye, opt.device), opt.eye.direct, scene.scene_id);
 }
 }  // namespace
+
+uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
+                    EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored) {
+  EyePassOptions eo = opt.eye;
+  eo.pass = pass;
+  eye = eye_pass(scene, eo, opt.device);
+  PhotonGridParams gp;
+  gp.max_bins = opt.ppm.max_bins;
+  gp.default_radius = radius0;  // the smallest bin size, as ppm_grid_params
+  if (opt.device) {  // device photon tracing; the gather runs on the host (docs/FORMATS.md)
+    PhotonPassResult p = trace_photons(scene, pass, opt.photons, *opt.device);
+    stored = p.photons.size();
+    const PhotonSpan span{p.photons.data(), p.photons.size()};
+    build_photon_grid_into(grid, &span, 1, int(scene.mesh_names.size()), gp, opt.ppm.threads);
+    return p.emitted;
+  }
+  const uint64_t emitted = trace_photons_into(scene, pass, opt.photons, chunks);
+  stored = chunks.size();
+  const std::vector<PhotonSpan> spans = chunks.spans();
+  build_photon_grid_into(grid, spans.data(), spans.size(), int(scene.mesh_names.size()), gp,
+                         opt.ppm.threads);
+  return emitted;
+}
 
 // Both constructors check the state's ids against the scene once; a pass never changes them, so
 // the CPU grid gather of every pass skips that check (ppm_pass_grid_prechecked).
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
-    : scene_(scene), opt_(opt), state_(fresh_state(scene, opt.eye, opt.device)) {
+    : scene_(scene), opt_(opt), state_(fresh_state(scene, opt)) {
   check_against_scene("", state_, scene_);
 }
 
@@ -32,9 +65,22 @@ ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions
                                          HitpointSet state, const std::string& path)
     : scene_(scene), opt_(opt), state_(std::move(state)) {
   check_against_scene(path, state_, scene_);
+  if (is_sppm_state(state_) &&
+      state_.hitpoints.size() != size_t(state_.width) * size_t(state_.height))
+    throw input_error(path, "is an SPPM state without one hitpoint per pixel",
+                      "the file is damaged; start without --resume");
 }
 
 void ProgressiveRenderer::run_iteration() {
+  if (opt_.estimator == Estimator::Sppm) {  // a new eye pass, then the pass's photons per pixel
+    EyePassResult eye;
+    size_t stored = 0;
+    const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(state_.passes), state_.radius0,
+                                        eye, photon_chunks_, grid_, stored);
+    photons_stored_ += stored;
+    sppm_pass(scene_, state_, eye, grid_, emitted, opt_.ppm);
+    return;
+  }
   if (opt_.device) {  // OpenCL backend: device photon tracing and opt.ppm.method's gather
     if (gather_method_info(opt_.ppm.method).clusters && !opt_.ppm.clusters) {
       clusters_ = std::make_unique<ClusterSet>(
@@ -74,6 +120,35 @@ void ProgressiveRenderer::run_iteration() {
   }
 }
 
+PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt)
+    : scene_(scene),
+      opt_(opt),
+      sums_(make_pass_sums(scene.camera.width, scene.camera.height, opt.first_pass,
+                           initial_radius(scene, opt.eye), opt.ppm.alpha, opt.eye.direct,
+                           scene.scene_id, state_parameters(opt))) {}
+
+PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt, PassSums sums,
+                           const std::string& path)
+    : scene_(scene), opt_(opt), sums_(std::move(sums)) {
+  if (sums_.width != scene.camera.width || sums_.height != scene.camera.height)
+    throw input_error(path, "is " + std::to_string(sums_.width) + "x" +
+                                std::to_string(sums_.height) + ", the scene's camera " +
+                                std::to_string(scene.camera.width) + "x" +
+                                std::to_string(scene.camera.height));
+}
+
+void PppmRenderer::run_iteration() {
+  size_t stored = 0;
+  const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(sums_.end_pass()), sums_.radius1,
+                                      eye_, photon_chunks_, grid_, stored);
+  photons_stored_ += stored;
+  pppm_pass(scene_, sums_, eye_, grid_, emitted, opt_.ppm);
+}
+
+void PppmRenderer::save_state(const std::string& path, const Provenance& prov) const {
+  save_pass_sums(sums_, path, prov);
+}
+
 void ProgressiveRenderer::save_state(const std::string& path, const Provenance& prov) const {
   save_hitpoints(state(), path, prov);
 }
@@ -86,6 +161,17 @@ void check_options(const RenderOptions& opt) {
   require_positive("max-bins", opt.ppm.max_bins);
   if (!opt.checkpoint.empty()) require_positive("checkpoint-every", opt.checkpoint_every);
   if (opt.snapshot_every < 0) throw input_error("", "--snapshot-every must be >= 0");
+  if (!(opt.time_budget >= 0) || !std::isfinite(opt.time_budget))
+    throw input_error("", "--time must be a number of seconds >= 0 (0: no budget)");
+  if (opt.first_pass < 0) throw input_error("", "--first-pass must be >= 0");
+  if (opt.first_pass > 0 && opt.estimator != Estimator::Pppm)
+    throw input_error("", "--first-pass applies to --estimator pppm, whose passes are independent",
+                      "continue a ppm or sppm run with --checkpoint and --resume");
+  if (!pass_indices_fit(opt.first_pass, opt.passes))
+    throw input_error("", "--first-pass + --passes runs past pass 2^31-1");
+  if (opt.estimator == Estimator::Sppm && opt.eye.spp != 1)
+    throw input_error("", "--estimator sppm takes one eye sample per pixel and pass",
+                      "drop --spp: every pass traces a new sample in each pixel");
   for (int p : opt.snapshot_at)
     if (p < 1 || p > opt.passes)
       throw input_error("", "--snapshot-at " + std::to_string(p) +
@@ -94,7 +180,7 @@ void check_options(const RenderOptions& opt) {
 }
 
 std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
-  return {{"spp", std::to_string(opt.eye.spp)},
+  std::map<std::string, std::string> p{{"spp", std::to_string(opt.eye.spp)},
           {"max-depth", std::to_string(opt.eye.max_depth)},
           {"direct", direct_mode_name(opt.eye.direct)},
           {"shadow-samples", std::to_string(opt.eye.shadow_samples)},
@@ -105,13 +191,54 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
           {"photons", std::to_string(opt.photons.photons)},
           {"max-bounces", std::to_string(opt.photons.max_bounces)},
           {"alpha", default_text(opt.ppm.alpha)}};
+  if (opt.estimator != Estimator::Ppm) {
+    p["estimator"] = estimator_name(opt.estimator);
+    p["pixel-sampler"] = pixel_sampler_name(opt.eye.sampler);
+  }
+  return p;
+}
+
+std::map<std::string, std::string> staged_state_parameters(
+    Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
+    const std::string& photons_path, float alpha) {
+  auto text = [](const Provenance& p, const std::string& path, const char* name) {
+    const auto it = p.parameters.find(name);
+    if (it == p.parameters.end())
+      throw input_error(path, std::string("records no --") + name + " of the tool that wrote it",
+                        "remake it with this version");
+    return it->second;
+  };
+  auto number = [&](const Provenance& p, const std::string& path, const char* name) {
+    const std::string t = text(p, path, name);
+    try {
+      return std::stod(t);
+    } catch (const std::exception&) {
+      throw input_error(path, std::string("records --") + name + " '" + t + "', not a number");
+    }
+  };
+  RenderOptions o;
+  o.estimator = e;
+  o.eye.spp = int(number(eye, eye_path, "spp"));
+  o.eye.max_depth = int(number(eye, eye_path, "max-depth"));
+  o.eye.direct = text(eye, eye_path, "direct") == "shadow-rays" ? DirectMode::ShadowRays
+                                                                 : DirectMode::Photons;
+  o.eye.shadow_samples = int(number(eye, eye_path, "shadow-samples"));
+  o.eye.radius = float(number(eye, eye_path, "radius"));
+  o.eye.seed = uint32_t(number(eye, eye_path, "seed"));
+  o.eye.sampler = parse_pixel_sampler(text(eye, eye_path, "pixel-sampler"));
+  o.photons.photons = uint32_t(number(photons, photons_path, "photons"));
+  o.photons.max_bounces = int(number(photons, photons_path, "max-bounces"));
+  o.photons.seed = uint32_t(number(photons, photons_path, "seed"));
+  o.ppm.alpha = alpha;
+  return state_parameters(o);
 }
 
 namespace {
 
 // Refuses a checkpoint whose recorded state options differ from this run's (state_parameters).
 void require_same_state(const std::string& checkpoint, const RenderOptions& opt) {
-  const Provenance made = load_hitpoints_provenance(checkpoint);
+  const Provenance made = opt.estimator == Estimator::Pppm ? load_pass_sums_provenance(checkpoint)
+                                                           : load_hitpoints_provenance(checkpoint);
   for (const auto& [name, value] : state_parameters(opt)) {
     const auto it = made.parameters.find("state." + name);
     if (it == made.parameters.end())
@@ -127,44 +254,37 @@ void require_same_state(const std::string& checkpoint, const RenderOptions& opt)
 
 }  // namespace
 
-HitpointSet render_progressive(
-    const Scene& scene, const RenderOptions& opt, bool resume, const Provenance& prov,
-    const std::function<bool(int, double)>& on_pass,
-    const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot,
-    RenderStatus* status) {
-  check_options(opt);
-  // Wall-clock seconds of the run, for the checkpoints' provenance (prov.wall_time_s holds the
-  // caller's seconds before this call).
-  Stopwatch wall;
-  bool from_checkpoint = resume && !opt.checkpoint.empty() && access(opt.checkpoint.c_str(), F_OK) == 0;
-  std::unique_ptr<ProgressiveRenderer> r;
-  if (from_checkpoint) {
-    HitpointSet loaded = load_hitpoints(opt.checkpoint);
-    require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
-    // Checks the state's indices against the scene's tables; no work yet (that is run_iteration).
-    r = std::make_unique<ProgressiveRenderer>(scene, opt, std::move(loaded), opt.checkpoint);
-    const HitpointSet& state = r->state();
-    if (state.estimator == "classic")
-      throw input_error(opt.checkpoint, "holds a classic photon-mapping estimate, not a PPM state",
-                        "delete it or pass another --checkpoint");
-    if (state.passes > opt.passes)
-      throw input_error(opt.checkpoint,
-                        "already has " + std::to_string(state.passes) + " passes, more than --passes",
-                        "raise --passes or start without --resume");
-    require_same_state(opt.checkpoint, opt);
-  }
-  Provenance checkpoint_prov = prov;  // the run's, with the options its state depends on
-  for (const auto& [name, value] : state_parameters(opt))
-    checkpoint_prov.parameters["state." + name] = value;
+namespace {
+
+// Mean gather radius of a state, for the run record.
+double mean_radius(const HitpointSet& h) {
+  double sum = 0;
+  for (const pf_hitpoint& x : h.hitpoints) sum += double(x.radius);
+  return h.hitpoints.empty() ? 0.0 : sum / double(h.hitpoints.size());
+}
+double mean_radius(const PassSums& s) {  // r_i of the last pass summed
+  return s.passes > 0 ? pppm_radius(s.radius1, s.alpha, s.end_pass() - 1) : double(s.radius1);
+}
+
+// The pass loop every estimator shares: `r` continues a checkpoint (from_checkpoint) or is made
+// by make() on the rendering clock (ppm's eye pass); passes until opt.passes, opt.time_budget or
+// an on_pass that says stop; checkpoints every opt.checkpoint_every passes and at the end;
+// snapshots; the status.
+template <class Renderer, class State, class Make>
+State drive(const RenderOptions& opt, std::unique_ptr<Renderer> r, Make&& make,
+            const Provenance& checkpoint_prov, const Stopwatch& wall,
+            const std::function<bool(int, double)>& on_pass,
+            const std::function<void(const State&, const RenderStatus&)>& on_snapshot,
+            RenderStatus* status) {
   // The rendering clock (RenderStatus::seconds): starts before the eye pass; the time spent in
   // checkpoints, snapshot callbacks and OpenCL program builds is taken off it.
   Stopwatch clock;
   double aside = 0;
   const double build0 = opt.device ? opt.device->build_seconds() : 0.0;
-  if (!from_checkpoint) r = std::make_unique<ProgressiveRenderer>(scene, opt);  // the eye pass
   RenderStatus st;
   st.target = opt.passes;
-  st.resumed = from_checkpoint;
+  st.resumed = r != nullptr;
+  if (!r) r = make();
   auto update_status = [&] {
     st.passes = r->passes_done();
     st.photons_emitted = r->photons_emitted();
@@ -172,26 +292,24 @@ HitpointSet render_progressive(
     st.build_seconds = opt.device ? opt.device->build_seconds() - build0 : 0.0;
     st.seconds = clock.seconds() - aside - st.build_seconds;
   };
-  // The hitpoints' mean radius, for the record (outside the rendering clock).
-  auto mean_radius = [&] {
-    const std::vector<pf_hitpoint>& hp = r->state().hitpoints;
-    double sum = 0;
-    for (const pf_hitpoint& x : hp) sum += double(x.radius);
-    return hp.empty() ? 0.0 : sum / double(hp.size());
-  };
   update_status();
-  st.mean_radius = mean_radius();
+  st.mean_radius = mean_radius(r->state());
   double photons = 0;
   while (r->passes_done() < opt.passes) {
     r->run_iteration();
-    if (r->passes_done() == opt.passes) r->state();  // the last state back from the device, on the clock
     photons += double(opt.photons.photons);
     update_status();
+    st.budget_reached = opt.time_budget > 0 && st.seconds >= opt.time_budget &&
+                        r->passes_done() < opt.passes;
+    const bool last = r->passes_done() == opt.passes || st.budget_reached;
+    if (last) {  // the last state back from the device, on the clock
+      r->state();
+      update_status();
+    }
     // Time outside the rendering clock; a program built inside (the device synthesis of a first
     // snapshot) is already in build_seconds and is not taken off twice.
     Stopwatch outside;
     const double built_before = opt.device ? opt.device->build_seconds() : 0.0;
-    const bool last = r->passes_done() == opt.passes;
     bool saved = false;
     auto save_checkpoint = [&] {
       Provenance at = checkpoint_prov;
@@ -203,19 +321,99 @@ HitpointSet render_progressive(
         (r->passes_done() % opt.checkpoint_every == 0 || last))
       save_checkpoint();
     const bool snapshot = on_snapshot && snapshot_due(opt, r->passes_done());
-    if (snapshot || last) st.mean_radius = mean_radius();
+    if (snapshot || last) st.mean_radius = mean_radius(r->state());
     if (snapshot) on_snapshot(r->state(), st);
     aside += outside.seconds() - ((opt.device ? opt.device->build_seconds() : 0.0) - built_before);
     if (on_pass && !on_pass(r->passes_done(), photons) && !last) {
       // Asked to stop: the passes so far are kept in the checkpoint, for --resume.
       if (!opt.checkpoint.empty() && !saved) save_checkpoint();
-      st.mean_radius = mean_radius();
+      st.mean_radius = mean_radius(r->state());
       st.stopped = true;
       break;
     }
+    if (last) break;
   }
   if (status) *status = st;
   return r->state();
+}
+
+// The checkpoint's provenance: the run's, with the options its state depends on.
+Provenance with_state_parameters(const Provenance& prov, const RenderOptions& opt) {
+  Provenance p = prov;
+  for (const auto& [name, value] : state_parameters(opt)) p.parameters["state." + name] = value;
+  return p;
+}
+
+bool checkpoint_exists(const RenderOptions& opt, bool resume) {
+  return resume && !opt.checkpoint.empty() && access(opt.checkpoint.c_str(), F_OK) == 0;
+}
+
+}  // namespace
+
+HitpointSet render_progressive(
+    const Scene& scene, const RenderOptions& opt, bool resume, const Provenance& prov,
+    const std::function<bool(int, double)>& on_pass,
+    const std::function<void(const HitpointSet&, const RenderStatus&)>& on_snapshot,
+    RenderStatus* status) {
+  check_options(opt);
+  if (opt.estimator == Estimator::Pppm)
+    throw std::invalid_argument("render_progressive: the pppm estimator runs in render_pppm");
+  // Wall-clock seconds of the run, for the checkpoints' provenance (prov.wall_time_s holds the
+  // caller's seconds before this call).
+  Stopwatch wall;
+  std::unique_ptr<ProgressiveRenderer> r;
+  if (checkpoint_exists(opt, resume)) {
+    HitpointSet loaded = load_hitpoints(opt.checkpoint);
+    require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
+    // Checks the state's indices against the scene's tables; no work yet (that is run_iteration).
+    r = std::make_unique<ProgressiveRenderer>(scene, opt, std::move(loaded), opt.checkpoint);
+    const HitpointSet& state = r->state();
+    if (state.estimator == "classic")
+      throw input_error(opt.checkpoint, "holds a classic photon-mapping estimate, not a PPM state",
+                        "delete it or pass another --checkpoint");
+    if (is_sppm_state(state) != (opt.estimator == Estimator::Sppm))
+      throw input_error(opt.checkpoint,
+                        std::string("holds ") + (is_sppm_state(state) ? "an SPPM" : "a PPM") +
+                            " state, this run is --estimator " + estimator_name(opt.estimator),
+                        "use the checkpoint's estimator or start without --resume");
+    if (state.passes > opt.passes)
+      throw input_error(opt.checkpoint,
+                        "already has " + std::to_string(state.passes) + " passes, more than --passes",
+                        "raise --passes or start without --resume");
+    require_same_state(opt.checkpoint, opt);
+  }
+  return drive<ProgressiveRenderer, HitpointSet>(
+      opt, std::move(r), [&] { return std::make_unique<ProgressiveRenderer>(scene, opt); },
+      with_state_parameters(prov, opt), wall, on_pass, on_snapshot, status);
+}
+
+PassSums render_pppm(const Scene& scene, const RenderOptions& opt, bool resume,
+                     const Provenance& prov, const std::function<bool(int, double)>& on_pass,
+                     const std::function<void(const PassSums&, const RenderStatus&)>& on_snapshot,
+                     RenderStatus* status) {
+  check_options(opt);
+  if (opt.estimator != Estimator::Pppm)
+    throw std::invalid_argument("render_pppm: the estimator must be pppm");
+  Stopwatch wall;
+  std::unique_ptr<PppmRenderer> r;
+  if (checkpoint_exists(opt, resume)) {
+    PassSums loaded = load_pass_sums(opt.checkpoint);
+    require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
+    if (loaded.first_pass != opt.first_pass)
+      throw input_error(opt.checkpoint,
+                        "starts at pass " + std::to_string(loaded.first_pass) +
+                            ", this run at --first-pass " + std::to_string(opt.first_pass),
+                        "use the checkpoint's --first-pass or start without --resume");
+    if (loaded.passes > opt.passes)
+      throw input_error(opt.checkpoint,
+                        "already has " + std::to_string(loaded.passes) + " passes, more than --passes",
+                        "raise --passes or start without --resume");
+    require_same_state(opt.checkpoint, opt);
+    r = std::make_unique<PppmRenderer>(scene, opt, std::move(loaded), opt.checkpoint);
+  }
+  return drive<PppmRenderer, PassSums>(
+      opt, std::move(r), [&] { return std::make_unique<PppmRenderer>(scene, opt); },
+      with_state_parameters(prov, opt), wall, on_pass, on_snapshot, status);
 }
 
 bool snapshot_due(const RenderOptions& opt, int passes) {

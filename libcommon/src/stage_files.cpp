@@ -84,6 +84,13 @@ std::string fmt3(const Vec3& p) {
   return o.str();
 }
 
+// A pixel of an SPPM state that no eye path has reached yet (sppm.h: make_sppm_state): mesh and
+// material −1, nothing gathered. The only hitpoint whose ids may lie outside the scene's tables.
+bool unreached_sppm_pixel(const HitpointSet& h, const pf_hitpoint& hp) {
+  return h.estimator == "sppm" && hp.mesh == -1 && hp.material == -1 && hp.n_photons == 0.f &&
+         hp.flux[0] == 0.f && hp.flux[1] == 0.f && hp.flux[2] == 0.f;
+}
+
 // "<what> id <value> is outside the scene's <size> <table>", for the messages.
 std::string out_of(const char* what, int32_t value, size_t size, const char* table) {
   return std::string(what) + " id " + std::to_string(value) + " is outside the scene's " +
@@ -119,6 +126,7 @@ void check_against_scene(const std::string& path, const HitpointSet& h, const Sc
                            "trace-hitpoints";
   for (size_t i = 0; i < h.hitpoints.size(); ++i) {
     const pf_hitpoint& hp = h.hitpoints[i];
+    if (unreached_sppm_pixel(h, hp)) continue;
     if (hp.mesh < 0 || size_t(hp.mesh) >= meshes)
       throw input_error(path, "hitpoint " + std::to_string(i) + ": " +
                                   out_of("mesh", hp.mesh, meshes, "meshes"), hint);
@@ -181,8 +189,10 @@ void accept_input(Provenance& prov, const std::string& role, const std::string& 
 
 // ---- hitpoints.h5 ---------------------------------------------------------------------------
 
-HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id) {
+HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::string& scene_id,
+                              int eye_pass) {
   HitpointSet h;
+  h.eye_pass = eye_pass;
   h.hitpoints = std::move(eye.hitpoints);
   h.emitted = std::move(eye.emitted);
   h.direct = std::move(eye.direct);
@@ -213,6 +223,7 @@ void save_hitpoints(const HitpointSet& h, const std::string& path, const Provena
   w.attr("/", "estimator", h.estimator);
   w.attr("/", "photons_emitted", int64_t(h.photons_emitted));
   w.attr("/", "passes", int64_t(h.passes));
+  w.attr("/", "eye_pass", int64_t(h.eye_pass));
   write_provenance(w, prov);
   w.commit();
 }
@@ -245,6 +256,8 @@ HitpointSet load_hitpoints(const std::string& path) {
   h.photons_emitted = uint64_t(attr_in(r, path, "/", "photons_emitted", 0,
                                        std::numeric_limits<int64_t>::max(), hint));
   h.passes = int(attr_in(r, path, "/", "passes", 0, kIntMax, hint));
+  // Files written before the estimators with a new eye pass every pass hold eye pass 0.
+  if (r.has_attr("/", "eye_pass")) h.eye_pass = int(attr_in(r, path, "/", "eye_pass", 0, kIntMax, hint));
   h.hitpoints = r.read<pf_hitpoint>("/hitpoints", h5_type_hitpoint());
   h.emitted = r.read<float>("/image/emitted");
   h.direct = r.read<float>("/image/direct");
@@ -255,7 +268,7 @@ HitpointSet load_hitpoints(const std::string& path) {
     if (hp.pixel_x < 0 || hp.pixel_x >= h.width || hp.pixel_y < 0 || hp.pixel_y >= h.height)
       throw input_error(path, "a hitpoint's pixel lies outside the image", hint);
     // mesh and material index the scene's tables: their upper bounds are check_against_scene's.
-    if (hp.mesh < 0 || hp.material < 0)
+    if ((hp.mesh < 0 || hp.material < 0) && !unreached_sppm_pixel(h, hp))
       throw input_error(path, "hitpoint " + std::to_string(i) + " has a negative " +
                                   (hp.mesh < 0 ? "mesh" : "material") + " id", hint);
     if (!finite3(hp.position))
@@ -287,6 +300,10 @@ void save_photons(const PhotonSet& p, const std::string& path, const Provenance&
   w.describe("/pass_emitted", "photons", "photons emitted in each pass");
   write_provenance(w, prov);
   w.commit();
+}
+
+Provenance load_photons_provenance(const std::string& path) {
+  return read_provenance(h5::Reader(path, kPhotonsFormat, kPhotonsVersion));
 }
 
 PhotonSet load_photons(const std::string& path) {

@@ -3,7 +3,10 @@
 // so that illuminate can be called pass after pass, with any --method of gather_method.h (the CPU
 // grid/FLANN gathers or the OpenCL variants of thesis ch. 7.3; --clusters feeds the clustered
 // ones). --estimator classic: classic photon mapping (k nearest global photons + fixed-radius
-// caustic estimate, thesis eq. 3.10).
+// caustic estimate, thesis eq. 3.10). --estimator sppm | pppm: one pass of the estimators that trace
+// a new eye pass every pass (sppm.h): --hitpoints is eye pass p (trace-hitpoints --estimator sppm
+// --pass p), --photons photon pass p, --state the state after passes < p (none for p = 0); writes
+// the SPPM state (a hitpoints file) or the PPPM pass sums.
 #include <iostream>
 #include <memory>
 
@@ -13,7 +16,10 @@
 #include "photonflow/device_options.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/options.h"
+#include "photonflow/pass_sums.h"
 #include "photonflow/progress.h"
+#include "photonflow/render_driver.h"
+#include "photonflow/sppm.h"
 #include "photonflow/tool_main.h"
 
 int main(int argc, char** argv) {
@@ -27,7 +33,9 @@ int main(int argc, char** argv) {
       ("grid", "prebuilt photon grids (from build-grid; PPM with --method grid)",
        cxxopts::value<std::string>())
       ("o,output", "output hitpoint state (.h5)", cxxopts::value<std::string>())
-      ("estimator", "ppm | classic", cxxopts::value<std::string>()->default_value("ppm"))
+      ("estimator", "ppm | classic | sppm | pppm", cxxopts::value<std::string>()->default_value("ppm"))
+      ("state", "sppm: the SPPM state, pppm: the pass sums, after the passes before this one "
+       "(an earlier illuminate's output); none for the first pass", cxxopts::value<std::string>())
       ("alpha", "PPM: fraction of new photons kept, in (0, 1] (eq. 3.14)",
        cxxopts::value<float>()->default_value("0.7"))
       ("clusters", "PPM, --method kmeans-clusters | grid-kmeans | grid-gridclusters: hitpoint "
@@ -53,15 +61,85 @@ int main(int argc, char** argv) {
       throw pf::input_error("", "--photons or --grid is required", "see illuminate --help");
     pf::require_not_both(a, "photons", "grid", "the grid's photons are gathered, --photons would "
                          "be ignored");
-    pf::check_output_options(a, {"scene", "hitpoints", "photons", "grid", "clusters"}, {"output"});
+    pf::check_output_options(a, {"scene", "hitpoints", "photons", "grid", "clusters", "state"},
+                             {"output"});
     std::string estimator = a["estimator"].as<std::string>();
-    pf::require_choice("estimator", estimator, {"ppm", "classic"});
+    pf::require_choice("estimator", estimator, {"ppm", "classic", "sppm", "pppm"});
     pf::PpmOptions ppm;
     ppm.alpha = a["alpha"].as<float>();
     ppm.max_bins = a["max-bins"].as<int>();
     ppm.threads = a["threads"].as<int>();
     pf::require_in_unit_interval("alpha", ppm.alpha);
     pf::require_positive("max-bins", ppm.max_bins);
+    if (estimator == "sppm" || estimator == "pppm") {
+      // The per-pass visible points move, so the gather is the CPU grid's (render --device opencl
+      // traces them on the device); prebuilt grids and clusters belong to fixed hitpoints.
+      if (a.count("grid") || a.count("clusters") || a.count("method") ||
+          pf::device_options(a).device != "cpu")
+        throw pf::input_error("", "--estimator " + estimator + " gathers with the CPU grid from "
+                                  "--photons (no --grid, --clusters, --method or --device)",
+                              "render --estimator " + estimator + " --device opencl runs its "
+                              "passes on a device");
+      if (!a.count("photons")) throw pf::input_error("", "--photons is required here");
+      pf::Stopwatch clock;
+      const std::string scene_path = a["scene"].as<std::string>();
+      const std::string eye_path = a["hitpoints"].as<std::string>();
+      const std::string ph_path = a["photons"].as<std::string>();
+      const pf::Scene scene = pf::load_scene(scene_path);
+      const pf::HitpointSet eye = pf::load_hitpoints(eye_path);
+      const pf::PhotonSet photons = pf::load_photons(ph_path);
+      pf::Provenance prov;
+      prov.tool = "illuminate";
+      prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
+      pf::accept_input(prov, "hitpoints", eye_path, eye, scene, scene_path);
+      pf::accept_input(prov, "photons", ph_path, photons, scene, scene_path);
+      pf::record_options(prov, a);
+      prov.command_line = pf::join_command_line(argc, argv);
+      const std::string out = a["output"].as<std::string>();
+      if (estimator == "sppm") {
+        pf::HitpointSet state;
+        if (a.count("state")) {
+          const std::string sp = a["state"].as<std::string>();
+          state = pf::load_hitpoints(sp);
+          pf::accept_input(prov, "state", sp, state, scene, scene_path);
+          if (!pf::is_sppm_state(state))
+            throw pf::input_error(sp, "is not an SPPM state", "give an illuminate --estimator sppm output");
+        } else {
+          state = pf::make_sppm_state(scene, eye.radius0, eye.direct_mode);
+        }
+        pf::sppm_stage(scene, state, eye, eye_path, photons, ph_path, ppm);
+        prov.wall_time_s = clock.seconds();
+        pf::save_hitpoints(state, out, prov);
+        std::cout << "illuminate: sppm, " << state.passes << " pass(es) in state, "
+                  << state.photons_emitted << " photons emitted, " << clock.seconds() << " s\n";
+        return 0;
+      }
+      const auto params = pf::staged_state_parameters(
+          pf::Estimator::Pppm, pf::load_hitpoints_provenance(eye_path), eye_path,
+          pf::load_photons_provenance(ph_path), ph_path, ppm.alpha);
+      pf::PassSums sums;
+      if (a.count("state")) {
+        const std::string sp = a["state"].as<std::string>();
+        sums = pf::load_pass_sums(sp);
+        pf::require_scene(sp, sums.scene_id, scene.scene_id, scene_path);
+        if (sums.parameters != params)
+          throw pf::input_error(sp, "was made with other options than these eye and photon passes",
+                                "continue it with the same seed and options");
+        prov.add_input("state", sp, pf::kPassSumsFormat, sums.scene_id);
+      } else {
+        sums = pf::make_pass_sums(scene.camera.width, scene.camera.height, eye.eye_pass,
+                                  eye.radius0, ppm.alpha, eye.direct_mode, scene.scene_id, params);
+      }
+      pf::pppm_stage(scene, sums, eye, eye_path, photons, ph_path, ppm);
+      prov.wall_time_s = clock.seconds();
+      pf::save_pass_sums(sums, out, prov);
+      std::cout << "illuminate: pppm, passes [" << sums.first_pass << ", " << sums.end_pass()
+                << "), " << sums.photons_emitted << " photons emitted, " << clock.seconds()
+                << " s\n";
+      return 0;
+    }
+    if (a.count("state"))
+      throw pf::input_error("", "--state belongs to --estimator sppm and pppm");
     pf::ClassicOptions classic;
     classic.k = a["k"].as<int>();
     classic.caustic_radius = a["caustic-radius"].as<float>();

@@ -1,10 +1,15 @@
-// render — progressive photon mapping in one process: eye pass, then `--passes` photon passes
-// with their gathers, no files between passes; checkpoints of the hitpoint state every
-// --checkpoint-every passes (atomic) and --resume to continue a killed run; snapshots of the
+// render — progressive photon mapping in one process: `--passes` photon passes with their
+// gathers, no files between passes, by one of three estimators (--estimator; sppm.h): ppm (one
+// eye pass first, fixed hitpoints), sppm (a new eye pass every pass, statistics per pixel), pppm
+// (independent passes with a shrinking global radius; --first-pass and --sums make the partial
+// results that `merge` combines). Checkpoints of the state every --checkpoint-every passes
+// (atomic) and --resume to continue a killed run; a wall-clock budget (--time); snapshots of the
 // image every --snapshot-every passes and a JSON run record (--stats) for convergence charts.
 // Same stage functions as trace-hitpoints → trace-photons → illuminate → synthesize, so both
 // routes give one image.
+#include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <iostream>
 #include <vector>
 
@@ -23,12 +28,25 @@ int main(int argc, char** argv) {
       ("scene", "baked scene (scene.h5)", cxxopts::value<std::string>())
       ("o,output", "output OpenEXR image; a PNG preview goes beside it",
        cxxopts::value<std::string>())
-      ("passes", "photon passes in total", cxxopts::value<int>()->default_value("16"))
+      ("estimator", "ppm (one fixed eye pass) | sppm (new eye pass every pass, per-pixel "
+       "statistics) | pppm (independent passes, global radius; mergeable)",
+       cxxopts::value<std::string>()->default_value("ppm"))
+      ("passes", "photon passes in total (pppm: from --first-pass); with --time the most passes",
+       cxxopts::value<int>()->default_value("16"))
+      ("time", "rendering budget in seconds: stop after the pass that reaches it, then write the "
+       "image and the run record; 0 = none", cxxopts::value<double>()->default_value("0"))
+      ("first-pass", "pppm: index of the first pass of this run's range (0-based)",
+       cxxopts::value<int>()->default_value("0"))
+      ("sums", "pppm: write the partial result (per-pixel sums of the passes, for merge) here",
+       cxxopts::value<std::string>()->default_value(""))
+      ("pixel-sampler", "where eye samples go in their pixel: auto (strata for ppm, sobol "
+       "otherwise) | strata | random | sobol", cxxopts::value<std::string>()->default_value("auto"))
       ("photons", "photons emitted per pass", cxxopts::value<int64_t>()->default_value("100000"))
       ("alpha", "fraction of new photons kept, in (0, 1] (eq. 3.14)",
        cxxopts::value<float>()->default_value("0.7"))
       ("max-bins", "grid bins along a mesh's longest extent", cxxopts::value<int>()->default_value("64"))
-      ("spp", "eye samples per pixel", cxxopts::value<int>()->default_value("1"))
+      ("spp", "eye samples per pixel (ppm; pppm: per pass; sppm: 1)",
+       cxxopts::value<int>()->default_value("1"))
       ("max-depth", "specular bounces of eye paths", cxxopts::value<int>()->default_value("16"))
       ("max-bounces", "bounces of photon paths", cxxopts::value<int>()->default_value("16"))
       ("direct", "photons | shadow-rays", cxxopts::value<std::string>()->default_value("photons"))
@@ -59,10 +77,23 @@ int main(int argc, char** argv) {
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
-    pf::require_options(o, a, {"scene", "output"});
-
     pf::RenderOptions opt;
+    opt.estimator = pf::parse_estimator(a["estimator"].as<std::string>());
+    const bool pppm = opt.estimator == pf::Estimator::Pppm;
+    const std::string sums = a["sums"].as<std::string>();
+    if (!sums.empty() && !pppm)
+      throw pf::input_error("", "--sums writes the partial result of --estimator pppm");
+    // A pppm range may write only its sums (the parts of a merge); every other run an image.
+    if (sums.empty())
+      pf::require_options(o, a, {"scene", "output"});
+    else
+      pf::require_options(o, a, {"scene"});
     opt.passes = a["passes"].as<int>();
+    opt.time_budget = a["time"].as<double>();
+    opt.first_pass = a["first-pass"].as<int>();
+    if (opt.time_budget > 0 && a.count("passes") == 0)  // the budget alone ends the run
+      opt.passes = std::numeric_limits<int>::max() - std::max(0, opt.first_pass);
+    const std::string sampler = a["pixel-sampler"].as<std::string>();
     int64_t photons = a["photons"].as<int64_t>();
     pf::require_positive("photons", double(photons));
     if (photons > int64_t(UINT32_MAX)) throw pf::input_error("", "--photons must be below 2^32");
@@ -77,6 +108,10 @@ int main(int argc, char** argv) {
     opt.eye.radius = a["radius"].as<float>();
     opt.eye.seed = seed;
     opt.eye.threads = threads;
+    opt.eye.sampler = sampler == "auto" ? (opt.estimator == pf::Estimator::Ppm
+                                               ? pf::PixelSampler::Strata
+                                               : pf::PixelSampler::Sobol)
+                                        : pf::parse_pixel_sampler(sampler);
     opt.photons.photons = uint32_t(photons);
     opt.photons.seed = seed;
     opt.photons.max_bounces = a["max-bounces"].as<int>();
@@ -91,7 +126,7 @@ int main(int argc, char** argv) {
     opt.snapshot_every = a["snapshot-every"].as<int>();
     opt.snapshot_at = pf::parse_pass_list(a["snapshot-at"].as<std::string>(), "snapshot-at");
     pf::check_options(opt);
-    const std::string out = a["output"].as<std::string>();
+    const std::string out = pf::path_option(a, "output");
     std::string pattern = a["snapshot"].as<std::string>();
     if (pattern.empty()) {
       const std::filesystem::path p(out);
@@ -100,12 +135,12 @@ int main(int argc, char** argv) {
     }
     pf::check_snapshot_pattern(pattern, opt);
     const std::string stats = a["stats"].as<std::string>();
-    const std::string png = pf::preview_path(out);
+    const std::string png = out.empty() ? "" : pf::preview_path(out);
     const bool snapshots = opt.snapshot_every > 0 || !opt.snapshot_at.empty();
     // The last snapshot's name stands for all of them (same directory); the checkpoint is read
     // back by --resume, an output all the same.
     pf::check_outputs({pf::path_option(a, "scene")},
-                      {out, png, stats, opt.checkpoint,
+                      {out, png, stats, opt.checkpoint, sums,
                        snapshots ? pf::render_snapshot_name(pattern, opt.passes, opt.passes) : ""});
 
     pf::Stopwatch clock;
@@ -119,6 +154,15 @@ int main(int argc, char** argv) {
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "render");
     opt.device = dev.get();
     opt.ppm.method = pf::method_option(a, dev.get());
+    // The gather methods of gather_method.h work on fixed hitpoints (clusters, device-resident
+    // state); sppm and pppm gather each pass's new visible points through the CPU grid.
+    if (opt.estimator != pf::Estimator::Ppm && a.count("method") &&
+        opt.ppm.method != pf::GatherMethod::Grid)
+      throw pf::input_error("", "--estimator " + a["estimator"].as<std::string>() +
+                                    " gathers through each pass's CPU grid; --method " +
+                                    pf::gather_method_name(opt.ppm.method) +
+                                    " belongs to ppm's fixed hitpoints",
+                            "drop --method (--device opencl still traces the passes there)");
     prov.parameters["method"] = pf::gather_method_name(opt.ppm.method);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
@@ -130,26 +174,45 @@ int main(int argc, char** argv) {
     auto image_of = [&](const pf::HitpointSet& h) {
       return dev ? pf::synthesize(h, *dev) : pf::synthesize(h);
     };
+    auto snapshot = [&](const pf::Image& img, const pf::RenderStatus& s) {
+      const std::string file = pf::render_snapshot_name(pattern, s.passes, opt.passes);
+      pf::write_exr(img, file);
+      written.push_back({file, s});
+      std::cout << "render: snapshot " << file << " (" << s.passes << " passes, " << s.seconds
+                << " s)\n";
+    };
+    auto on_pass = [&](int done, double n) {
+      progress.update(done, n);
+      return !pf::interrupted();
+    };
     pf::RenderStatus status;
     // Ctrl-C (or SIGTERM) ends the run after the pass in progress, with the checkpoint saved.
     const pf::StopOnInterrupt stop(
         "render: stopping after this pass (interrupt again to stop at once)\n");
-    pf::HitpointSet h = pf::render_progressive(
-        scene, opt, a.count("resume") > 0, prov,
-        [&](int done, double n) {
-          progress.update(done, n);
-          return !pf::interrupted();
-        },
-        [&](const pf::HitpointSet& state, const pf::RenderStatus& s) {
-          const std::string file = pf::render_snapshot_name(pattern, s.passes, opt.passes);
-          pf::write_exr(image_of(state), file);
-          written.push_back({file, s});
-          std::cout << "render: snapshot " << file << " (" << s.passes << " passes, " << s.seconds
-                    << " s)\n";
-        },
-        &status);
+    pf::Image img;
+    pf::PassSums range;
+    const bool resume = a.count("resume") > 0;
+    if (pppm) {
+      range = pf::render_pppm(
+          scene, opt, resume, prov, on_pass,
+          [&](const pf::PassSums& state, const pf::RenderStatus& s) {
+            snapshot(pf::synthesize(state), s);
+          },
+          &status);
+    } else {
+      const pf::HitpointSet h = pf::render_progressive(
+          scene, opt, resume, prov, on_pass,
+          [&](const pf::HitpointSet& state, const pf::RenderStatus& s) {
+            snapshot(image_of(state), s);
+          },
+          &status);
+      if (!status.stopped) img = image_of(h);
+    }
+    prov.wall_time_s = clock.seconds();
     if (status.stopped) {
       progress.end_line();
+      // The run record still lists what the run wrote (its snapshots).
+      if (!stats.empty()) pf::write_render_record(stats, prov, written);
       std::cerr << "render: interrupted after " << status.passes << " of " << opt.passes
                 << " passes; "
                 << (opt.checkpoint.empty()
@@ -159,14 +222,22 @@ int main(int argc, char** argv) {
                 << "\n";
       return pf::kExitInterrupted;
     }
-    pf::Image img = image_of(h);
-    pf::write_exr(img, out);
-    written.push_back({out, status});
-    pf::write_png(img, png, a["exposure"].as<float>());
+    progress.end_line();
+    if (pppm) {
+      if (!sums.empty()) pf::save_pass_sums(range, sums, prov);
+      img = pf::synthesize(range);
+    }
+    if (!out.empty()) {
+      pf::write_exr(img, out);
+      written.push_back({out, status});
+      pf::write_png(img, png, a["exposure"].as<float>());
+    }
     prov.wall_time_s = clock.seconds();
     if (!stats.empty()) pf::write_render_record(stats, prov, written);
-    std::cout << "render: " << out << " (" << h.width << "x" << h.height << ", " << h.passes
-              << " passes, " << h.photons_emitted << " photons, " << clock.seconds() << " s)\n";
+    std::cout << "render: " << (out.empty() ? sums : out) << " (" << scene.camera.width << "x"
+              << scene.camera.height << ", " << pf::estimator_name(opt.estimator) << ", "
+              << status.passes << " passes" << (status.budget_reached ? " (--time reached)" : "")
+              << ", " << status.photons_emitted << " photons, " << clock.seconds() << " s)\n";
     return 0;
   });
 }

@@ -1,10 +1,12 @@
 // synthesize — image synthesis (thesis eq. 3.19): L = τ/(π R² N_emitted) per hitpoint, times its
 // weight, plus the emitted and direct layers; writes an OpenEXR (linear RGB + AOV layers radius,
-// photons, hitpoints) and an sRGB PNG preview.
+// photons, hitpoints) and an sRGB PNG preview. With --sums instead of --hitpoints: the mean of the
+// pass estimates of a probabilistic PPM range (pass_sums.h; render --sums or merge --sums).
 #include <iostream>
 
 #include "photonflow/cl_backend.h"
 #include "photonflow/device_options.h"
+#include "photonflow/pass_sums.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/synthesize.h"
 #include "photonflow/tool_main.h"
@@ -14,6 +16,8 @@ int main(int argc, char** argv) {
     cxxopts::Options o("synthesize", "Turn a hitpoint state into an image (EXR + PNG preview).");
     o.add_options()
       ("hitpoints", "hitpoint state (from illuminate)", cxxopts::value<std::string>())
+      ("sums", "pppm pass sums instead (from render --sums, merge --sums or illuminate "
+       "--estimator pppm)", cxxopts::value<std::string>())
       ("o,output", "output OpenEXR image (linear RGB, W/(sr m^2))", cxxopts::value<std::string>())
       ("png", "sRGB PNG preview; default: the output with .png; 'none': no preview",
        cxxopts::value<std::string>()->default_value(""))
@@ -24,11 +28,30 @@ int main(int argc, char** argv) {
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
-    pf::require_options(o, a, {"hitpoints", "output"});
+    const bool from_sums = a.count("sums") > 0;
+    if (from_sums && a.count("hitpoints"))
+      throw pf::input_error("", "give --hitpoints or --sums, not both");
+    if (from_sums)
+      pf::require_options(o, a, {"sums", "output"});
+    else
+      pf::require_options(o, a, {"hitpoints", "output"});
     std::string out = a["output"].as<std::string>();
     std::string png = a["png"].as<std::string>();
     if (png.empty()) png = pf::preview_path(out);
-    pf::check_outputs({pf::path_option(a, "hitpoints")}, {out, png == "none" ? "" : png});
+    pf::check_outputs({pf::path_option(a, from_sums ? "sums" : "hitpoints")},
+                      {out, png == "none" ? "" : png});
+    if (from_sums) {
+      const pf::PassSums s = pf::load_pass_sums(a["sums"].as<std::string>());
+      if (s.passes == 0)
+        throw pf::input_error(a["sums"].as<std::string>(), "holds no pass", "render passes first");
+      const pf::Image img = pf::synthesize(s);
+      pf::write_exr(img, out);
+      if (png != "none") pf::write_png(img, png, a["exposure"].as<float>());
+      std::cout << "synthesize: " << out << (png != "none" ? " and " + png : "") << " ("
+                << s.width << "x" << s.height << ", passes [" << s.first_pass << ", "
+                << s.end_pass() << "), " << s.photons_emitted << " photons)\n";
+      return 0;
+    }
     pf::HitpointSet h = pf::load_hitpoints(a["hitpoints"].as<std::string>());
     if (h.estimator == "none")
       throw pf::input_error(a["hitpoints"].as<std::string>(), "has no photons gathered yet",

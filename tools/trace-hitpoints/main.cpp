@@ -8,6 +8,7 @@
 #include "photonflow/device_options.h"
 #include "photonflow/eye_pass.h"
 #include "photonflow/options.h"
+#include "photonflow/sppm.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/tool_main.h"
 
@@ -31,6 +32,13 @@ int main(int argc, char** argv) {
       ("radius", "initial radius R0 in world units; 0 = automatic: max(scene diagonal / 200, "
        "4 pixel footprints at the look-at distance)",
        cxxopts::value<float>()->default_value("0"))
+      ("estimator", "the estimator the hitpoints are for: ppm (one eye pass, pass 0) | sppm | "
+       "pppm (eye pass --pass of a run that traces one every pass)",
+       cxxopts::value<std::string>()->default_value("ppm"))
+      ("pass", "sppm/pppm: which eye pass (0-based; the photon pass it meets has the same index)",
+       cxxopts::value<int>()->default_value("0"))
+      ("pixel-sampler", "where samples go in their pixel: auto (strata for ppm, sobol otherwise) "
+       "| strata | random | sobol", cxxopts::value<std::string>()->default_value("auto"))
       ("seed", "random seed (jitter, glass choices, light samples)",
        cxxopts::value<uint32_t>()->default_value("1"))
       ("threads", "worker threads, 0 = all cores (results do not depend on it)",
@@ -53,6 +61,19 @@ int main(int argc, char** argv) {
     opt.radius = a["radius"].as<float>();
     opt.seed = a["seed"].as<uint32_t>();
     opt.threads = a["threads"].as<int>();
+    const pf::Estimator estimator = pf::parse_estimator(a["estimator"].as<std::string>());
+    const int pass = a["pass"].as<int>();
+    if (pass < 0) throw pf::input_error("", "--pass must be >= 0");
+    if (pass > 0 && estimator == pf::Estimator::Ppm)
+      throw pf::input_error("", "--pass applies to --estimator sppm or pppm (ppm has one eye pass)");
+    if (estimator == pf::Estimator::Sppm && opt.spp != 1)
+      throw pf::input_error("", "--estimator sppm takes one eye sample per pixel and pass",
+                            "drop --spp: every pass traces a new sample in each pixel");
+    opt.pass = uint32_t(pass);
+    const std::string sampler = a["pixel-sampler"].as<std::string>();
+    opt.sampler = sampler != "auto" ? pf::parse_pixel_sampler(sampler)
+                  : estimator == pf::Estimator::Ppm ? pf::PixelSampler::Strata
+                                                    : pf::PixelSampler::Sobol;
     pf::check_options(opt);
 
     pf::Stopwatch clock;
@@ -61,12 +82,13 @@ int main(int argc, char** argv) {
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "trace-hitpoints");
     pf::EyePassResult r = dev ? pf::trace_hitpoints(scene, opt, *dev) : pf::trace_hitpoints(scene, opt);
 
-    pf::HitpointSet h = pf::make_hitpoint_set(std::move(r), opt.direct, scene.scene_id);
+    pf::HitpointSet h = pf::make_hitpoint_set(std::move(r), opt.direct, scene.scene_id, pass);
 
     pf::Provenance prov;
     prov.tool = "trace-hitpoints";
     prov.seed = opt.seed;
     pf::record_options(prov, a);
+    prov.parameters["pixel-sampler"] = pf::pixel_sampler_name(opt.sampler);  // auto resolved
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);

@@ -1,0 +1,109 @@
+/*
+ * pixel_sampler.h — where inside its pixel an eye sample goes, shared by the C++ host
+ * (eye_pass.cpp) and the OpenCL eye kernel (trace_hitpoints.cl), so both backends trace the same
+ * camera rays.
+ *
+ * Three samplers (pf_int codes, EyePassOptions::sampler on the host):
+ *   PF_SAMPLER_STRATA  the fixed eye pass of PPM: the pixel centre for one sample per pixel, else
+ *                      one jittered sample per cell of a columns × rows grid (eye_strata_columns).
+ *                      The jitter draws are the first two dimensions of the sample's eye stream.
+ *   PF_SAMPLER_RANDOM  independent uniform jitter: dimensions 0 and 1 of the sample's eye stream,
+ *                      which is (seed, eye stream + pass, pixel·spp + s) — a new position every
+ *                      pass (SPPM and probabilistic PPM, whose every pass traces a new eye pass).
+ *   PF_SAMPLER_SOBOL   a per-pixel scrambled (0,2)-sequence indexed by the sample's position in
+ *                      the pixel's sample stream over passes, i = pass·spp + s: the first two
+ *                      dimensions of Sobol's sequence (van der Corput in base 2, and the Pascal
+ *                      matrix generator; Kollig & Keller 2002), each Owen-scrambled with its own
+ *                      per-pixel seed by the hash-based nested uniform scramble of Burley (2020,
+ *                      "Practical hash-based Owen scrambling"). Owen scrambling keeps the (0,2)
+ *                      property: the first 2^k samples of every pixel put one sample in each of the
+ *                      2^k elementary intervals of every shape (2^a × 2^b cells, a + b = k), so a
+ *                      pixel's edge error falls faster than with independent jitter. The eye
+ *                      stream's dimensions 0 and 1 are drawn and left unused, so glass choices
+ *                      use the same dimensions under every pass-based sampler.
+ * All integer arithmetic is 32-bit unsigned (exact and equal on both sides); the float of a sample
+ * is its top 24 bits times 2^-24, as pf_rng_unit.
+ */
+#ifndef PHOTONFLOW_PIXEL_SAMPLER_H
+#define PHOTONFLOW_PIXEL_SAMPLER_H
+
+#include "photonflow/cl_compat.h"
+#include "photonflow/rng.h"
+
+#define PF_SAMPLER_STRATA 0
+#define PF_SAMPLER_RANDOM 1
+#define PF_SAMPLER_SOBOL 2
+
+/* Bits of x in reverse order. */
+PF_INLINE pf_uint pf_reverse_bits32(pf_uint x) {
+  x = ((x >> 1) & 0x55555555U) | ((x & 0x55555555U) << 1);
+  x = ((x >> 2) & 0x33333333U) | ((x & 0x33333333U) << 2);
+  x = ((x >> 4) & 0x0f0f0f0fU) | ((x & 0x0f0f0f0fU) << 4);
+  x = ((x >> 8) & 0x00ff00ffU) | ((x & 0x00ff00ffU) << 8);
+  return (x >> 16) | (x << 16);
+}
+
+/* Dimension 0 of Sobol's sequence as 32 fraction bits: the radical inverse of i in base 2. */
+PF_INLINE pf_uint pf_sobol_dim0(pf_uint i) { return pf_reverse_bits32(i); }
+
+/* Dimension 1 of Sobol's sequence as 32 fraction bits: its generator matrix is Pascal's triangle
+ * mod 2; column j (bit j of i) is formed from column j−1 by v ^= v >> 1, starting at bit 31. */
+PF_INLINE pf_uint pf_sobol_dim1(pf_uint i) {
+  pf_uint r = 0U;
+  for (pf_uint v = 0x80000000U; i != 0U; i >>= 1, v ^= v >> 1)
+    if (i & 1U) r ^= v;
+  return r;
+}
+
+/* Burley's hash-based Owen scramble of fraction bits x (bit 31 = the most significant digit):
+ * reversed, each bit is flipped by a hash of the bits below it (which, reversed back, are the
+ * digits above it) — a nested uniform scramble, a permutation of every elementary interval. */
+PF_INLINE pf_uint pf_owen_scramble(pf_uint x, pf_uint seed) {
+  x = pf_reverse_bits32(x);
+  x += seed;
+  x ^= x * 0x6c50b47cU;
+  x ^= x * 0xb82f1e52U;
+  x ^= x * 0xc7afe638U;
+  x ^= x * 0x8d22f6e6U;
+  return pf_reverse_bits32(x);
+}
+
+/* Scrambling seeds of a pixel's two dimensions: a hash of (seed, pixel, dimension) with its own
+ * pass slot (0x50B0000), distinct from every stream the renderer draws from. */
+PF_INLINE pf_uint pf_sobol_pixel_seed(pf_uint seed, pf_uint pixel, pf_uint dim) {
+  return pf_rng_bits(pf_rng_key(seed, 0x50B0000U), pixel, dim);
+}
+
+/* Sample i of pixel `pixel`'s scrambled (0,2)-sequence, in [0, 1)² with 24-bit resolution. */
+PF_INLINE void pf_sobol_pixel_sample(pf_uint seed, pf_uint pixel, pf_uint i, pf_float* jx,
+                                     pf_float* jy) {
+  *jx = pf_rng_unit(pf_owen_scramble(pf_sobol_dim0(i), pf_sobol_pixel_seed(seed, pixel, 0U)));
+  *jy = pf_rng_unit(pf_owen_scramble(pf_sobol_dim1(i), pf_sobol_pixel_seed(seed, pixel, 1U)));
+}
+
+/* The sub-pixel position (jx, jy) in [0, 1)² of eye sample s (of spp) of pixel `pixel` in pass
+ * `pass`, by `sampler`. `rng` is the sample's eye stream, started at dimension 0; it comes back
+ * advanced past the draws the sampler made (none for STRATA with spp = 1, two otherwise). */
+PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint pixel, pf_int s,
+                             pf_int spp, pf_int columns, pf_rng* rng, pf_float* jx,
+                             pf_float* jy) {
+  if (sampler == PF_SAMPLER_STRATA) {
+    *jx = 0.5f;
+    *jy = 0.5f;
+    if (spp > 1) { /* one sample per cell of a columns × (spp / columns) grid */
+      *jx = ((pf_float)(s % columns) + pf_rng_next(rng)) / (pf_float)columns;
+      *jy = ((pf_float)(s / columns) + pf_rng_next(rng)) / (pf_float)(spp / columns);
+    }
+    return;
+  }
+  const pf_float u0 = pf_rng_next(rng);
+  const pf_float u1 = pf_rng_next(rng);
+  if (sampler == PF_SAMPLER_RANDOM) {
+    *jx = u0;
+    *jy = u1;
+    return;
+  }
+  pf_sobol_pixel_sample(seed, pixel, pass * (pf_uint)spp + (pf_uint)s, jx, jy);
+}
+
+#endif /* PHOTONFLOW_PIXEL_SAMPLER_H */

@@ -1,0 +1,220 @@
+// SPPM and probabilistic PPM: see sppm.h.
+#include "photonflow/sppm.h"
+
+#include <omp.h>
+
+#include <cmath>
+
+#include "photonflow/error.h"
+#include "photonflow/options.h"
+#include "photonflow/pass_sums.h"
+#include "photonflow/ppm.h"
+#include "photonflow/sampling.h"
+#include "photonflow/threads.h"
+
+namespace pf {
+
+const char* estimator_name(Estimator e) {
+  switch (e) {
+    case Estimator::Ppm: return "ppm";
+    case Estimator::Sppm: return "sppm";
+    case Estimator::Pppm: return "pppm";
+  }
+  return "?";
+}
+
+Estimator parse_estimator(const std::string& name) {
+  require_choice("estimator", name, {"ppm", "sppm", "pppm"});
+  return name == "ppm" ? Estimator::Ppm : name == "sppm" ? Estimator::Sppm : Estimator::Pppm;
+}
+
+bool is_sppm_state(const HitpointSet& h) { return h.estimator == "sppm"; }
+
+HitpointSet make_sppm_state(const Scene& scene, float radius0, DirectMode mode) {
+  HitpointSet h;
+  h.width = scene.camera.width;
+  h.height = scene.camera.height;
+  h.direct_mode = mode;
+  h.radius0 = radius0;
+  h.estimator = "sppm";
+  h.scene_id = scene.scene_id;
+  const size_t n = size_t(h.width) * size_t(h.height);
+  h.emitted.assign(n * 3, 0.f);
+  h.direct.assign(n * 3, 0.f);
+  h.hitpoints.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    pf_hitpoint hp{};
+    hp.weight[0] = hp.weight[1] = hp.weight[2] = 1.f;  // β is inside τ (sppm.h)
+    hp.radius = radius0;
+    hp.pixel_x = int(i % size_t(h.width));
+    hp.pixel_y = int(i / size_t(h.width));
+    hp.mesh = -1;  // no visible point yet
+    hp.material = -1;
+    h.hitpoints[i] = hp;
+  }
+  return h;
+}
+
+namespace {
+
+void require_alpha(float alpha) {
+  if (!(alpha > 0.f && alpha <= 1.f))
+    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(alpha));
+}
+
+// Pixel index of every visible point of `eye`, which must fit a width × height image; with
+// one_per_pixel, InputError when two visible points share a pixel (SPPM keeps one per pixel).
+std::vector<size_t> visible_pixels(const EyePassResult& eye, int width, int height,
+                                   bool one_per_pixel) {
+  if (eye.width != width || eye.height != height)
+    throw input_error("", "the eye pass is " + std::to_string(eye.width) + "x" +
+                              std::to_string(eye.height) + ", the state " + std::to_string(width) +
+                              "x" + std::to_string(height));
+  std::vector<size_t> px(eye.hitpoints.size());
+  for (size_t i = 0; i < px.size(); ++i) {
+    const pf_hitpoint& v = eye.hitpoints[i];
+    if (v.pixel_x < 0 || v.pixel_x >= width || v.pixel_y < 0 || v.pixel_y >= height)
+      throw input_error("", "visible point " + std::to_string(i) + " lies outside the image");
+    px[i] = size_t(v.pixel_y) * size_t(width) + size_t(v.pixel_x);
+    if (one_per_pixel && i > 0 && px[i] <= px[i - 1])
+      throw input_error("", "SPPM takes one eye sample per pixel and pass",
+                        "use --spp 1 (every pass traces a new sample)");
+  }
+  return px;
+}
+
+}  // namespace
+
+void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
+               const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
+  require_alpha(opt.alpha);
+  const std::vector<size_t> px = visible_pixels(eye, state.width, state.height, true);
+  if (state.hitpoints.size() != size_t(state.width) * size_t(state.height))
+    throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
+  const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
+  const float alpha = opt.alpha;
+  const int64_t count = int64_t(eye.hitpoints.size());
+#pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
+  for (int64_t i = 0; i < count; ++i) {
+    const pf_hitpoint& v = eye.hitpoints[size_t(i)];
+    pf_hitpoint& s = state.hitpoints[px[size_t(i)]];
+    float tau_m[3];
+    const int m = gather_site(scene, grid, v, s.radius, skip_direct, tau_m);
+    for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
+    pf_ppm_update(&s, m, tau_m, alpha);                  // thesis eq. 3.14, 3.16, 3.18
+    for (int c = 0; c < 3; ++c) {
+      s.position[c] = v.position[c];
+      s.normal[c] = v.normal[c];
+      s.dir[c] = v.dir[c];
+    }
+    s.mesh = v.mesh;
+    s.material = v.material;
+  }
+  // L̄_d over k passes as a running mean: L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) / k.
+  const float k = float(state.passes + 1);
+  for (size_t j = 0; j < state.emitted.size(); ++j) {
+    state.emitted[j] += (eye.emitted[j] - state.emitted[j]) / k;
+    state.direct[j] += (eye.direct[j] - state.direct[j]) / k;
+  }
+  state.passes += 1;
+  state.photons_emitted += emitted;
+  state.estimator = "sppm";
+}
+
+double pppm_radius(double r1, double alpha, int pass) {
+  double r2 = r1 * r1;
+  for (int j = 1; j <= pass; ++j) r2 *= (double(j) + alpha) / (double(j) + 1.0);  // KZ11 eq. 19
+  return std::sqrt(r2);
+}
+
+void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
+               const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
+  require_alpha(sums.alpha);
+  const std::vector<size_t> px = visible_pixels(eye, sums.width, sums.height, false);
+  const float r = float(pppm_radius(sums.radius1, sums.alpha, sums.end_pass()));
+  // L_d,i: light the eye paths saw directly.
+  for (size_t j = 0; j < sums.sum.size(); ++j)
+    sums.sum[j] += double(eye.emitted[j]) + double(eye.direct[j]);
+  if (emitted > 0) {
+    // β f_r Φ / (π r_i² N_p) of every visible point, in parallel; added to the pixels in order
+    // afterwards (several samples of a pixel may share it).
+    const bool skip = sums.direct_mode == DirectMode::ShadowRays;
+    const double norm = 1.0 / (double(kPi) * double(r) * double(r) * double(emitted));
+    const int64_t count = int64_t(eye.hitpoints.size());
+    std::vector<double> add(size_t(count) * 3);
+#pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
+    for (int64_t i = 0; i < count; ++i) {
+      const pf_hitpoint& v = eye.hitpoints[size_t(i)];
+      float tau_m[3];
+      gather_site(scene, grid, v, r, skip, tau_m);
+      for (int c = 0; c < 3; ++c)
+        add[size_t(i) * 3 + size_t(c)] = double(v.weight[c]) * double(tau_m[c]) * norm;
+    }
+    for (size_t i = 0; i < px.size(); ++i)
+      for (int c = 0; c < 3; ++c) sums.sum[px[i] * 3 + size_t(c)] += add[i * 3 + size_t(c)];
+  }
+  sums.passes += 1;
+  sums.photons_emitted += emitted;
+}
+
+namespace {
+
+// Eye pass p of a trace-hitpoints file, checked against photon pass p of `photons`.
+EyePassResult staged_eye_pass(const HitpointSet& eye, const std::string& eye_path, int pass,
+                              DirectMode mode, const PhotonSet& photons,
+                              const std::string& photons_path) {
+  if (eye.estimator != "none")
+    throw input_error(eye_path, "is a hitpoint state, not an eye pass",
+                      "give trace-hitpoints --estimator sppm|pppm --pass " + std::to_string(pass));
+  if (eye.eye_pass != pass)
+    throw input_error(eye_path, "is eye pass " + std::to_string(eye.eye_pass) + ", the state needs pass " +
+                                    std::to_string(pass),
+                      "trace it with --pass " + std::to_string(pass));
+  if (eye.direct_mode != mode)
+    throw input_error(eye_path, std::string("was traced with --direct ") +
+                                    direct_mode_name(eye.direct_mode) + ", the state has " +
+                                    direct_mode_name(mode));
+  if (photons.first_pass != pass || photons.pass_count() != 1)
+    throw input_error(photons_path, "holds passes " + std::to_string(photons.first_pass) + " … " +
+                                        std::to_string(photons.first_pass + photons.pass_count() - 1) +
+                                        ", this step needs pass " + std::to_string(pass) + " alone",
+                      "trace it with --first-pass " + std::to_string(pass) + " --passes 1");
+  EyePassResult r;
+  r.hitpoints = eye.hitpoints;
+  r.emitted = eye.emitted;
+  r.direct = eye.direct;
+  r.radius = eye.radius0;
+  r.width = eye.width;
+  r.height = eye.height;
+  return r;
+}
+
+PhotonGrid staged_grid(const Scene& scene, const PhotonSet& photons, float radius0,
+                       const PpmOptions& opt) {
+  PhotonGridParams gp;
+  gp.max_bins = opt.max_bins;
+  gp.default_radius = radius0;
+  return build_photon_grid(photons.photons, int(scene.mesh_names.size()), gp);
+}
+
+}  // namespace
+
+void sppm_stage(const Scene& scene, HitpointSet& state, const HitpointSet& eye,
+                const std::string& eye_path, const PhotonSet& photons,
+                const std::string& photons_path, const PpmOptions& opt) {
+  const EyePassResult r =
+      staged_eye_pass(eye, eye_path, state.passes, state.direct_mode, photons, photons_path);
+  sppm_pass(scene, state, r, staged_grid(scene, photons, state.radius0, opt),
+            photons.pass_emitted[0], opt);
+}
+
+void pppm_stage(const Scene& scene, PassSums& sums, const HitpointSet& eye,
+                const std::string& eye_path, const PhotonSet& photons,
+                const std::string& photons_path, const PpmOptions& opt) {
+  const EyePassResult r =
+      staged_eye_pass(eye, eye_path, sums.end_pass(), sums.direct_mode, photons, photons_path);
+  pppm_pass(scene, sums, r, staged_grid(scene, photons, sums.radius1, opt),
+            photons.pass_emitted[0], opt);
+}
+
+}  // namespace pf

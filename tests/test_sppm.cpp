@@ -1,0 +1,456 @@
+// The estimators with a new eye pass every pass (sppm.h): SPPM (Hachisuka & Jensen 2009) and
+// probabilistic PPM (Knaus & Zwicker 2011). Closed forms (white furnace, a floor under a point
+// light), agreement with PPM where no pixel sees an edge, the light outline that a fixed eye pass
+// never resolves, the pixel sampler's stratification, the exact merge of pass ranges, resumes,
+// the wall-clock budget, and CPU against OpenCL.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include "photonflow/camera.h"
+#include "photonflow/pass_sums.h"
+#include "photonflow/pixel_sampler.h"
+#include "photonflow/render_driver.h"
+#include "photonflow/sampling.h"
+#include "photonflow/sppm.h"
+#include "photonflow/synthesize.h"
+#include "support.h"
+#include "support_cl.h"
+
+using namespace pf;
+
+namespace {
+
+// The image of a run of `opt` with any estimator.
+Image render_image(const Scene& s, const RenderOptions& opt, RenderStatus* status = nullptr) {
+  const Provenance prov;
+  if (opt.estimator == Estimator::Pppm) return synthesize(render_pppm(s, opt, false, prov, {}, {}, status));
+  return synthesize(render_progressive(s, opt, false, prov, {}, {}, status));
+}
+
+RenderOptions options(Estimator e, int passes, uint32_t photons, float radius) {
+  RenderOptions opt;
+  opt.estimator = e;
+  opt.passes = passes;
+  opt.photons.photons = photons;
+  opt.eye.radius = radius;
+  opt.eye.sampler = e == Estimator::Ppm ? PixelSampler::Strata : PixelSampler::Sobol;
+  return opt;
+}
+
+// A floor y = 0 (albedo rho, 8 × 8) under a point light of intensity I at height h, the camera
+// looking straight down: L(x) = ρ/π · I h / d³ (direct light only).
+Scene floor_scene(float rho, float intensity, float h, int size) {
+  Scene s;
+  s.triangles = test::quad(Vec3(-4, 0, -4), Vec3(-4, 0, 4), Vec3(4, 0, 4), Vec3(4, 0, -4), 0);
+  s.mesh_names = {"floor"};
+  pf_material m{};
+  m.type = PF_MAT_DIFFUSE;
+  m.ior = 1.f;
+  m.color[0] = m.color[1] = m.color[2] = rho;
+  s.materials = {m};
+  s.material_names = {"floor"};
+  pf_light l{};
+  l.type = PF_LIGHT_POINT;
+  l.position[1] = h;
+  l.radiance[0] = l.radiance[1] = l.radiance[2] = intensity;
+  s.lights = {l};
+  s.camera = pf_camera{{0.f, 3.f, 0.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 40.f, size, size};
+  finish_scene(s);
+  return s;
+}
+
+// Mean of ρ/π · I h / d³ over pixel (x, y) of the floor scene (8 × 8 point rule: the pixel's
+// samples move inside it from pass to pass, so the pixel's value is its area mean).
+double floor_expected(const Scene& s, int x, int y, float rho, float intensity, float h) {
+  const CameraFrame cam(s.camera);
+  double sum = 0;
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i < 8; ++i) {
+      const Vec3 d = cam.direction(float(x) + (float(i) + 0.5f) / 8.f, float(y) + (float(j) + 0.5f) / 8.f);
+      const Vec3 p = cam.eye() + d * (cam.eye().y / -d.y);
+      const Vec3 w = Vec3(0, h, 0) - p;
+      const double d2 = double(dot(w, w)), dist = std::sqrt(d2);
+      sum += rho / kPi * intensity * (double(w.y) / dist) / d2;
+    }
+  return sum / 64.0;
+}
+
+// A square emitter (radiance le, black: it reflects nothing) seen head-on against nothing: the
+// image is the light alone, and a pixel's exact value is le times the part of its area that the
+// square covers. The square's sides fall between pixel centres at fractional positions.
+Scene lamp_scene(float le, int size) {
+  Scene s;
+  const float a = 0.437f, z = -2.f;
+  s.triangles = test::quad(Vec3(-a, -a * 0.81f, z), Vec3(a, -a * 0.81f, z), Vec3(a, a * 1.13f, z),
+                           Vec3(-a, a * 1.13f, z), 0);
+  s.mesh_names = {"lamp"};
+  pf_material m{};
+  m.type = PF_MAT_EMITTER;
+  m.ior = 1.f;
+  m.emission[0] = m.emission[1] = m.emission[2] = le;
+  s.materials = {m};
+  s.material_names = {"lamp"};
+  s.camera = pf_camera{{0.f, 0.f, 0.f}, {0.f, 0.f, -1.f}, {0, 1, 0}, 40.f, size, size};
+  finish_scene(s);
+  return s;
+}
+
+// The lamp's exact image: the square's corners projected to pixel coordinates (an axis-aligned
+// rectangle: the square is parallel to the image plane), and each pixel's covered fraction.
+std::vector<double> lamp_expected(const Scene& s, float le) {
+  const pf_camera& c = s.camera;
+  const double t = std::tan(double(c.fov_y_deg) * kPi / 360.0);  // square pixels
+  auto px = [&](double x, double z) { return (x / -z / t + 1.0) * 0.5 * c.width; };
+  auto py = [&](double y, double z) { return (1.0 - y / -z / t) * 0.5 * c.height; };
+  double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+  for (const pf_triangle& tr : s.triangles)
+    for (const float* v : {tr.v0, tr.v1, tr.v2}) {
+      x0 = std::min(x0, px(v[0], v[2]));
+      x1 = std::max(x1, px(v[0], v[2]));
+      y0 = std::min(y0, py(v[1], v[2]));
+      y1 = std::max(y1, py(v[1], v[2]));
+    }
+  std::vector<double> e(size_t(c.width) * size_t(c.height));
+  for (int y = 0; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x) {
+      const double cx = std::max(0.0, std::min(x1, x + 1.0) - std::max(x0, double(x)));
+      const double cy = std::max(0.0, std::min(y1, y + 1.0) - std::max(y0, double(y)));
+      e[size_t(y * c.width + x)] = le * cx * cy;
+    }
+  return e;
+}
+
+// RMSE over the pixels the lamp's outline crosses (expected strictly between 0 and le).
+double outline_rmse(const Image& img, const std::vector<double>& expected, float le) {
+  double sum = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < expected.size(); ++i) {
+    if (expected[i] <= 1e-6 * le || expected[i] >= le * (1 - 1e-6)) continue;
+    const double d = double(img.rgb[3 * i + 1]) - expected[i];
+    sum += d * d;
+    ++n;
+  }
+  REQUIRE(n > 20);
+  return std::sqrt(sum / double(n));
+}
+
+}  // namespace
+
+TEST_CASE("white furnace: SPPM and probabilistic PPM converge to Le/(1-rho)", "[sppm][furnace]") {
+  const float rho = 0.5f, le = 1.f, expected = le / (1.f - rho);
+  const Scene s = test::furnace_scene(rho, le, 16);
+  for (Estimator e : {Estimator::Sppm, Estimator::Pppm}) {
+    RenderOptions opt = options(e, 8, 50000, 0.15f);
+    opt.photons.max_bounces = 64;
+    const Image img = render_image(s, opt);
+    double sum = 0, worst = 0;
+    for (float v : img.rgb) {
+      sum += v;
+      worst = std::max(worst, std::fabs(v / expected - 1.0));
+    }
+    const double mean_err = std::fabs(sum / double(img.rgb.size()) / expected - 1.0);
+    INFO(estimator_name(e) << ": mean error " << mean_err << ", worst pixel " << worst);
+    CHECK(mean_err < 0.01);
+    CHECK(worst < 0.06);
+  }
+}
+
+TEST_CASE("SPPM, PPPM and PPM agree with L = rho I h / (pi d^3) where no pixel sees an edge",
+          "[sppm][transport]") {
+  // Only direct light reaches the camera, all of it by photons, and every pixel sees the floor:
+  // the estimators differ only in where samples lie inside the pixel and in their radii. The
+  // pixel's value is the mean over its area (floor_expected; PPM's centre sample differs from it
+  // by under 0.1% here). Tolerances as in test_transport's PPM case: 3% on the mean, 50% per pixel.
+  // Caught: β left out of τ (SPPM), the pass radius r_i² = r_1² Π (j + α)/(j + 1) off by one pass
+  // or squared twice (PPPM), the running mean of the layers divided by the wrong pass count.
+  const float rho = 0.8f, intensity = 5.f, h = 1.f;
+  const int size = 16;
+  const Scene s = floor_scene(rho, intensity, h, size);
+  double mean_expected = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) mean_expected += floor_expected(s, x, y, rho, intensity, h);
+  mean_expected /= size * size;
+  std::vector<Image> images;
+  for (Estimator e : {Estimator::Ppm, Estimator::Sppm, Estimator::Pppm}) {
+    const Image img = render_image(s, options(e, 8, 100000, 0.06f));
+    double mean = 0, worst = 0;
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        const double v = img.get(x, y).y;
+        mean += v / (size * size);
+        worst = std::max(worst, std::fabs(v / floor_expected(s, x, y, rho, intensity, h) - 1.0));
+      }
+    INFO(estimator_name(e) << ": mean " << mean << ", expected " << mean_expected << ", worst "
+                           << worst);
+    CHECK(mean == Approx(mean_expected).epsilon(0.03));
+    CHECK(worst < 0.5);
+    images.push_back(img);
+  }
+  // The three images agree pixel by pixel within their noise (relative RMSE, measured 0.07-0.09).
+  CHECK(test::relative_rmse(images[1], images[0]) < 0.2);
+  CHECK(test::relative_rmse(images[2], images[0]) < 0.2);
+}
+
+TEST_CASE("a light's outline converges with SPPM and PPPM, never with PPM's fixed eye pass",
+          "[sppm][outline]") {
+  // lamp_scene's exact image is the covered part of each pixel. PPM samples every pixel once, at
+  // its centre, so an outline pixel stays 0 or le however many passes run. SPPM and PPPM move the
+  // sample every pass: with the scrambled (0,2)-sequence the outline error falls about as 1/k
+  // (measured: 16× the passes, 18× less error), with independent jitter as 1/sqrt(k) (3.8×).
+  const float le = 1.f;
+  const Scene s = lamp_scene(le, 24);
+  const std::vector<double> expected = lamp_expected(s, le);
+  auto error = [&](Estimator e, PixelSampler sampler, int passes) {
+    RenderOptions opt = options(e, passes, 16, 0.01f);
+    opt.eye.sampler = sampler;
+    return outline_rmse(render_image(s, opt), expected, le);
+  };
+  const double ppm4 = error(Estimator::Ppm, PixelSampler::Strata, 4);
+  const double ppm64 = error(Estimator::Ppm, PixelSampler::Strata, 64);
+  INFO("ppm: " << ppm4 << " -> " << ppm64);
+  CHECK(ppm64 > 0.9 * ppm4);  // a floor: the fixed eye pass
+  CHECK(ppm64 > 0.1 * le);
+  for (Estimator e : {Estimator::Sppm, Estimator::Pppm}) {
+    const double sobol4 = error(e, PixelSampler::Sobol, 4), sobol64 = error(e, PixelSampler::Sobol, 64);
+    const double rand4 = error(e, PixelSampler::Random, 4), rand64 = error(e, PixelSampler::Random, 64);
+    INFO(estimator_name(e) << ": sobol " << sobol4 << " -> " << sobol64 << ", random " << rand4
+                           << " -> " << rand64);
+    CHECK(sobol64 < 0.2 * sobol4);
+    CHECK(rand64 < 0.45 * rand4);
+    CHECK(sobol64 < 0.5 * rand64);  // the sequence beats independent jitter at equal passes
+  }
+}
+
+TEST_CASE("pixel sampler: the first 2^k samples of a pixel fill every elementary interval",
+          "[sppm][sampler]") {
+  // The (0,2)-sequence property, kept by Owen scrambling: for every k <= 10 and every shape of
+  // 2^k cells (2^a columns × 2^(k−a) rows) the first 2^k samples of a pixel lie one per cell. Four
+  // pixels of two seeds. The independent jitter (PF_SAMPLER_RANDOM) fails it, so the check can
+  // fail.
+  auto stratified = [](auto&& sample, int k) {
+    const int n = 1 << k;
+    std::vector<float> xs(static_cast<size_t>(n)), ys(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) sample(uint32_t(i), xs[size_t(i)], ys[size_t(i)]);
+    for (int a = 0; a <= k; ++a) {
+      const int cols = 1 << a, rows = 1 << (k - a);
+      std::vector<int> hits(size_t(n), 0);
+      for (int i = 0; i < n; ++i) {
+        const float x = xs[size_t(i)], y = ys[size_t(i)];
+        if (!(x >= 0.f && x < 1.f && y >= 0.f && y < 1.f)) return false;
+        const int cx = int(x * float(cols)), cy = int(y * float(rows));
+        if (++hits[size_t(cy * cols + cx)] > 1) return false;
+      }
+    }
+    return true;
+  };
+  for (uint32_t seed : {1u, 77u})
+    for (uint32_t pixel : {0u, 1u, 513u, 262143u}) {
+      for (int k = 0; k <= 10; ++k) {
+        INFO("seed " << seed << ", pixel " << pixel << ", k " << k);
+        CHECK(stratified(
+            [&](uint32_t i, float& x, float& y) { pf_sobol_pixel_sample(seed, pixel, i, &x, &y); },
+            k));
+      }
+      // Through pf_eye_jitter, sample i of pass p is index p (spp 1).
+      CHECK(stratified(
+          [&](uint32_t i, float& x, float& y) {
+            pf_rng rng = pf_rng_start(seed, 0xE7E0000u + i, pixel);
+            pf_eye_jitter(PF_SAMPLER_SOBOL, seed, i, pixel, 0, 1, 1, &rng, &x, &y);
+          },
+          8));
+    }
+  int random_ok = 0;
+  for (uint32_t pixel = 0; pixel < 16; ++pixel)
+    random_ok += stratified(
+        [&](uint32_t i, float& x, float& y) {
+          pf_rng rng = pf_rng_start(1, 0xE7E0000u + i, pixel);
+          pf_eye_jitter(PF_SAMPLER_RANDOM, 1, i, pixel, 0, 1, 1, &rng, &x, &y);
+        },
+        4);
+  CHECK(random_ok == 0);
+  // Different pixels get different scrambles.
+  float x0, y0, x1, y1;
+  pf_sobol_pixel_sample(1, 0, 0, &x0, &y0);
+  pf_sobol_pixel_sample(1, 1, 0, &x1, &y1);
+  CHECK((x0 != x1 || y0 != y1));
+}
+
+TEST_CASE("PPPM: sums of disjoint pass ranges merge into one run's, in any part order",
+          "[sppm][pppm][merge]") {
+  const Scene s = test::room_scene(PF_MAT_GLASS, 24, 18);
+  RenderOptions opt = options(Estimator::Pppm, 6, 3000, 0.f);
+  opt.eye.direct = DirectMode::ShadowRays;
+  const Provenance prov;
+  const PassSums whole = render_pppm(s, opt, false, prov);
+  REQUIRE(whole.passes == 6);
+  std::vector<PassSums> parts;
+  for (auto [first, count] : {std::pair{4, 2}, std::pair{0, 1}, std::pair{1, 3}}) {
+    RenderOptions o = opt;
+    o.first_pass = first;
+    o.passes = count;
+    parts.push_back(render_pppm(s, o, false, prov));
+  }
+  const PassSums merged = merge_pass_sums(parts, {"c.h5", "a.h5", "b.h5"}, 0, 6);
+  CHECK(merged.first_pass == 0);
+  CHECK(merged.passes == 6);
+  CHECK(merged.photons_emitted == whole.photons_emitted);
+  double worst = 0, scale = 0;
+  for (size_t j = 0; j < whole.sum.size(); ++j) {
+    worst = std::max(worst, std::fabs(merged.sum[j] - whole.sum[j]));
+    scale = std::max(scale, std::fabs(whole.sum[j]));
+  }
+  INFO("largest difference " << worst << " of sums up to " << scale);
+  REQUIRE(scale > 0);
+  CHECK(worst <= 1e-12 * scale);  // the order of the double additions only
+  // The radius sequence: r_i² = r_1² Π_{j<i} (j + α)/(j + 1); r_2² = r_1² (1 + α)/2.
+  CHECK(pppm_radius(2.0, 0.5, 0) == 2.0);
+  CHECK(pppm_radius(2.0, 0.5, 1) == Approx(std::sqrt(4.0 * 1.5 / 2.0)));
+  CHECK(pppm_radius(2.0, 0.5, 2) == Approx(std::sqrt(4.0 * 1.5 / 2.0 * 2.5 / 3.0)));
+  // Refusals: overlap, gap, range not covered, another option set.
+  CHECK_THROWS_AS(merge_pass_sums({parts[1], parts[2], parts[2]}, {"a", "b", "b2"}), InputError);
+  CHECK_THROWS_AS(merge_pass_sums({parts[1], parts[0]}, {"a", "c"}), InputError);
+  CHECK_THROWS_AS(merge_pass_sums({parts[1], parts[2]}, {"a", "b"}, 0, 6), InputError);
+  PassSums other = parts[0];
+  other.parameters["seed"] = "2";
+  CHECK_THROWS_AS(merge_pass_sums({parts[1], parts[2], other}, {"a", "b", "c"}), InputError);
+}
+
+TEST_CASE("SPPM and PPPM: a resumed run equals the uninterrupted one; --time ends a run",
+          "[sppm][resume]") {
+  const Scene s = test::room_scene(PF_MAT_GLASS, 20, 16);
+  test::TempDir tmp("pf-sppm-resume");
+  for (Estimator e : {Estimator::Sppm, Estimator::Pppm}) {
+    RenderOptions opt = options(e, 5, 2000, 0.f);
+    opt.checkpoint = tmp / (std::string(estimator_name(e)) + ".h5");
+    opt.checkpoint_every = 1;
+    const Provenance prov;
+    RenderOptions first = opt;
+    first.passes = 2;
+    Image whole, resumed;
+    if (e == Estimator::Pppm) {
+      const PassSums a = render_pppm(s, opt, false, prov);
+      render_pppm(s, first, false, prov);
+      const PassSums b = render_pppm(s, opt, true, prov);
+      CHECK(a.sum == b.sum);
+      CHECK(b.passes == 5);
+    } else {
+      const HitpointSet a = render_progressive(s, opt, false, prov);
+      render_progressive(s, first, false, prov);
+      const HitpointSet b = render_progressive(s, opt, true, prov);
+      REQUIRE(a.hitpoints.size() == b.hitpoints.size());
+      CHECK(std::memcmp(a.hitpoints.data(), b.hitpoints.data(),
+                        a.hitpoints.size() * sizeof(pf_hitpoint)) == 0);
+      CHECK(a.emitted == b.emitted);
+      CHECK(b.passes == 5);
+      CHECK(load_hitpoints(opt.checkpoint).estimator == "sppm");
+    }
+    // A budget that the first pass already spends ends the run there, as a finished run.
+    RenderOptions budget = options(e, 50, 2000, 0.f);
+    budget.time_budget = 1e-9;
+    RenderStatus st;
+    render_image(s, budget, &st);
+    CHECK(st.passes == 1);
+    CHECK(st.budget_reached);
+    CHECK_FALSE(st.stopped);
+  }
+}
+
+TEST_CASE("OpenCL: SPPM and PPPM images equal the CPU backend's", "[sppm][opencl]") {
+  auto dev = test::test_device();
+  if (!dev) return;
+  const Scene s = test::room_scene(PF_MAT_GLASS, 40, 30);
+  for (Estimator e : {Estimator::Sppm, Estimator::Pppm}) {
+    RenderOptions opt = options(e, 6, 4000, 0.f);
+    opt.eye.direct = DirectMode::ShadowRays;
+    const Image cpu = render_image(s, opt);
+    opt.device = dev.get();
+    const Image gpu = render_image(s, opt);
+    const double rmse = test::relative_rmse(gpu, cpu);
+    INFO(estimator_name(e) << ": relative RMSE opencl vs cpu " << rmse);
+    CHECK(rmse <= 1e-3);
+  }
+}
+
+namespace {
+
+// Runs a tool that must succeed.
+void ok(const std::string& tool, const std::string& args, const test::TempDir& tmp) {
+  const test::ToolRun r = test::run_tool(tool, args, tmp);
+  INFO(tool << " " << args << "\n" << r.err);
+  REQUIRE(r.exit_code == 0);
+}
+
+// Runs a tool that must refuse: exit 2, one line on stderr, and no file at `output`.
+void refused(const std::string& tool, const std::string& args, const test::TempDir& tmp,
+             const std::string& output, const std::string& needle) {
+  const test::ToolRun r = test::run_tool(tool, args, tmp);
+  INFO(tool << " " << args << "\n" << r.err);
+  CHECK(r.exit_code == 2);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(r.err.find(needle) != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(output));
+}
+
+}  // namespace
+
+TEST_CASE("staged route: trace-hitpoints --pass, trace-photons, illuminate --estimator sppm|pppm "
+          "give render's image; parts of both routes merge", "[sppm][tools]") {
+  test::TempDir tmp("pf-sppm-staged");
+  const std::string scene = tmp / "scene.h5";
+  ok("scene-bake", test::source_dir() + "/data/cornell-spheres.dae -o " + scene +
+                       " --width 24 --height 20", tmp);
+  const std::string common = " --scene " + scene + " ";
+  for (const std::string e : {"sppm", "pppm"}) {
+    std::string state;
+    for (int p = 0; p < 3; ++p) {
+      const std::string eye = tmp / ("eye" + std::to_string(p) + ".h5");
+      const std::string ph = tmp / ("ph" + std::to_string(p) + ".h5");
+      const std::string next = tmp / (e + std::to_string(p) + ".h5");
+      ok("trace-hitpoints", common + "--estimator " + e + " --pass " + std::to_string(p) +
+                                " --direct shadow-rays -o " + eye, tmp);
+      ok("trace-photons", common + "--first-pass " + std::to_string(p) +
+                              " --passes 1 --photons 3000 -o " + ph, tmp);
+      ok("illuminate", common + "--estimator " + e + " --hitpoints " + eye + " --photons " + ph +
+                           (state.empty() ? "" : " --state " + state) + " -o " + next, tmp);
+      state = next;
+    }
+    const std::string staged = tmp / (e + "-staged.exr"), rendered = tmp / (e + "-render.exr");
+    ok("synthesize", (e == "sppm" ? "--hitpoints " : "--sums ") + state + " -o " + staged, tmp);
+    ok("render", common + "--estimator " + e +
+                     " --passes 3 --photons 3000 --direct shadow-rays -o " + rendered, tmp);
+    const Image a = read_exr(staged), b = read_exr(rendered);
+    CHECK(a.rgb == b.rgb);  // the same stage functions: the same bits
+    if (e == "pppm") {
+      // The staged range [0, 3) and render's [3, 5) are one run's [0, 5).
+      const std::string part = tmp / "part35.h5", merged = tmp / "merged.exr";
+      ok("render", common + "--estimator pppm --first-pass 3 --passes 2 --photons 3000 "
+                            "--direct shadow-rays --sums " + part, tmp);
+      ok("merge", state + " " + part + " --range 0:5 -o " + merged, tmp);
+      ok("render", common + "--estimator pppm --passes 5 --photons 3000 --direct shadow-rays -o " +
+                       rendered, tmp);
+      const Image m = read_exr(merged), w = read_exr(rendered);
+      CHECK(test::relative_rmse(m, w) < 1e-6);
+      // Refusals: a gap, an overlap, another seed, a range not covered; illuminate with the
+      // wrong eye pass; a negative budget. One line, exit 2, no output.
+      const std::string out = tmp / "bad.exr";
+      ok("render", common + "--estimator pppm --first-pass 4 --passes 1 --photons 3000 "
+                            "--direct shadow-rays --sums " + tmp / "part4.h5", tmp);
+      ok("render", common + "--estimator pppm --first-pass 3 --passes 1 --photons 3000 "
+                            "--direct shadow-rays --seed 2 --sums " + tmp / "seed2.h5", tmp);
+      refused("merge", state + " " + tmp / "part4.h5" + " -o " + out, tmp, out, "are in no part");
+      refused("merge", state + " " + part + " " + tmp / "part4.h5" + " -o " + out, tmp, out,
+              "overlap");
+      refused("merge", state + " " + tmp / "seed2.h5" + " -o " + out, tmp, out, "seed");
+      refused("merge", state + " --range 0:5 -o " + out, tmp, out, "render the missing passes");
+      refused("illuminate", common + "--estimator pppm --hitpoints " + tmp / "eye1.h5" +
+                                " --photons " + tmp / "ph2.h5" + " --state " + state + " -o " + out,
+              tmp, out, "eye pass 1");
+      refused("render", common + "--estimator sppm --time -1 -o " + out, tmp, out, "--time");
+      refused("render", common + "--estimator sppm --spp 4 -o " + out, tmp, out, "--spp");
+    }
+  }
+}
