@@ -36,7 +36,8 @@ void commit_temp(const std::string& tmp, const std::string& path);
 
 // A temporary output file being written: temp_path(final_path), tracked while it exists so that an
 // interrupt (interrupt.h) removes it, and removed on destruction unless commit() renamed it into
-// place. Creating one removes the stale temporaries of final_path (remove_stale_temps). Every writer (h5io.h, image.h, text_file.h, procedural.h) writes through one.
+// place. Every writer (h5io.h, image.h, text_file.h, procedural.h) writes through one. Creating
+// one removes the stale temporaries of final_path (remove_stale_temps).
 class TempOutput {
  public:
   explicit TempOutput(const std::string& final_path);
