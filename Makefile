@@ -37,6 +37,7 @@ render: build
 	@$(MAKE) --no-print-directory -f pipelines/render.mk BIN=$(BIN) SCENE=$(SCENE) OUT=$(OUT)
 
 test: build
+	@tools/setup/install-deps.sh debian-packages.txt debian-packages-test.txt
 	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
 
 # Every process the tests start (the tools too) writes its sanitizer reports into
@@ -90,3 +91,53 @@ accuracy: build
 
 clean:
 	rm -rf $(BUILD)
+
+# On a Slurm cluster (pipelines/slurm/; `make slurm-help` prints this block's help).
+#   make slurm-render    bake SCENE, submit a job array of TASKS tasks (task k renders passes
+#                        k*PASSES_PER_TASK .. (k+1)*PASSES_PER_TASK-1 with --estimator pppm) and a
+#                        merge job after it (afterok) that writes RUN/image.exr and RUN/run.json
+#   make slurm-status    which tasks of RUN are done, queued or missing
+#   make slurm-resubmit  submit only the missing tasks of RUN (a failed or cancelled task), and the merge
+#   make slurm-local     the same tasks and merge on this machine with make -j JOBS (no Slurm)
+# Variables: RUN (the run folder, on a file system all nodes share; default OUT/slurm-SCENE),
+# TASKS (4), PASSES_PER_TASK (16), PHOTONS (100000), SEED (1), ALPHA (0.7), RADIUS (0 = automatic),
+# CPUS_PER_TASK (1), PARTITION, TIME_LIMIT (per task, e.g. 30:00), MEM (per task, e.g. 2G),
+# FANIN (parts merged at once, default 64; more are merged as a tree), and for the scene SCENE,
+# WIDTH, HEIGHT, BAKE_FLAGS as for `make render`. The build (BUILD) must be on the shared file system.
+RUN             ?= $(OUT)/slurm-$(SCENE)
+TASKS           ?= 4
+PASSES_PER_TASK ?= 16
+PHOTONS         ?= 100000
+SEED            ?= 1
+ALPHA           ?= 0.7
+RADIUS          ?= 0
+CPUS_PER_TASK   ?= 1
+PARTITION       ?=
+TIME_LIMIT      ?=
+MEM             ?=
+FANIN           ?= 64
+SLURM_SUBMIT = pipelines/slurm/submit.sh --scene $(OUT)/$(SCENE)/scene.h5 --out $(RUN) \
+  --bin $(BIN) --tasks $(TASKS) --passes-per-task $(PASSES_PER_TASK) --photons $(PHOTONS) \
+  --seed $(SEED) --alpha $(ALPHA) --radius $(RADIUS) --cpus-per-task $(CPUS_PER_TASK) \
+  --fanin $(FANIN) $(if $(PARTITION),--partition $(PARTITION)) \
+  $(if $(TIME_LIMIT),--time $(TIME_LIMIT)) $(if $(MEM),--mem $(MEM))
+.PHONY: slurm-help slurm-render slurm-status slurm-resubmit slurm-local slurm-scene
+slurm-help:
+	@sed -n '/^# On a Slurm cluster/,/^RUN /p' Makefile | sed '$$d; s/^# \{0,1\}//'
+
+slurm-scene: build
+	@$(MAKE) --no-print-directory -f pipelines/render.mk BIN=$(BIN) SCENE=$(SCENE) OUT=$(OUT) \
+	  $(OUT)/$(SCENE)/scene.h5
+
+slurm-render: slurm-scene
+	@$(SLURM_SUBMIT)
+
+slurm-status:
+	@pipelines/slurm/resubmit.sh --status $(RUN)
+
+slurm-resubmit:
+	@pipelines/slurm/resubmit.sh $(RUN)
+
+slurm-local: slurm-scene
+	@[ -f $(RUN)/run.env ] || $(SLURM_SUBMIT) --prepare-only
+	@$(MAKE) --no-print-directory -j$(JOBS) -f pipelines/slurm/local.mk RUN=$(RUN)

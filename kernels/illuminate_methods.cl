@@ -522,15 +522,17 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  * leaving m and τ_M in accumulators for ppm_apply, and it reduces the largest finite positive
  * new radius (order-preserving ints, grid_shared.h) into rmax_next[0] (zero on entry): the next
  * pass's cell size, so that a state kept on the device needs no copy to the host between passes
- * (cl_gather.h, DevicePpmState). `lmax` holds one int per work-item. */
+ * (cl_gather.h, DevicePpmState). `lmax` holds one int per work-item. With `weighted` (SPPM: the
+ * states are pixels, the sites that pass's visible points) τ_M is multiplied by the site's eye-path
+ * throughput β (weights[3·i .. 3·i + 2]) before the update, as sppm_pass does (sppm.h). */
 __kernel void gather_hash_grid(__global const pf_gather_site* sites,
                                __global pf_ppm_state* states, int count,
                                __global const pf_photon_payload* payload,
                                __global const pf_photon_keys4* keys, __global const int* slot_start,
                                float ox, float oy, float oz, float cell, int nx, int ny, int nz,
                                uint mask, int unique, __global const pf_material* mats,
-                               int skip_direct, float alpha, __global int* rmax_next,
-                               __local int* lmax) {
+                               int skip_direct, float alpha, __global const float* weights,
+                               int weighted, __global int* rmax_next, __local int* lmax) {
   const int hi = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
   int r_next = 0; /* pf_float_ordered(0.0f) */
   pf_gather_hp h;
@@ -571,7 +573,9 @@ __kernel void gather_hash_grid(__global const pf_gather_site* sites,
     pf_pending_flush(&h, payload, &pend);
   }
   if (hi < count) {
-    const float tau_m[3] = {(float)h.t0, (float)h.t1, (float)h.t2};
+    float tau_m[3] = {(float)h.t0, (float)h.t1, (float)h.t2};
+    if (weighted)
+      for (int c = 0; c < 3; ++c) tau_m[c] = tau_m[c] * weights[3 * hi + c];
     pf_ppm_update_state(&states[hi], h.m, tau_m, alpha);
     const float r = states[hi].radius;
     if (isfinite(r) && r > 0.0f) r_next = pf_float_ordered(r);

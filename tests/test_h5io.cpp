@@ -12,6 +12,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "photonflow/h5io.h"
@@ -97,6 +98,16 @@ TEST_CASE("SHA-256: long messages fed in one piece, FIPS 180-2 vectors", "[hash]
   Sha256 b;
   b.update(million.data(), million.size());
   CHECK(b.hex() == "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+TEST_CASE("SHA-256: a moved hash goes on where it was", "[hash]") {
+  Sha256 a;
+  a.update("ab", 2);
+  Sha256 b(std::move(a));  // the digest in progress moves with it
+  b.update("c", 1);
+  Sha256 c;
+  c = std::move(b);
+  CHECK(c.hex() == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");  // "abc"
 }
 
 TEST_CASE("SHA-256 of files of every length around the padding boundaries equals sha256sum",

@@ -1,7 +1,8 @@
 // Image metrics (issue 7, image_metrics.h) and the imgcompare tool: hand-computable cases
 // (identical images, constant offsets, flat images' SSIM), SSIM against a direct 2-D
-// implementation written here, masks (EXR and PNG, stored and compressed with every filter
-// type), non-finite pixels, size mismatches refused, JSON output.
+// implementation written here, masks (EXR and PNG: every filter type, grey, RGB16, palette,
+// alpha, Adam7; damaged and truncated files refused), non-finite pixels, size mismatches refused,
+// JSON output.
 #include <catch2/catch.hpp>
 
 #include <zlib.h>
@@ -366,10 +367,10 @@ TEST_CASE("image_metrics: non-finite pixels are left out and counted", "[image_m
   CHECK(std::isfinite(m.ssim));
 }
 
-TEST_CASE("image_metrics: PNG masks: stored and compressed, all filters, grey, RGB16, palette",
+TEST_CASE("image_metrics: PNG masks: all filters, grey, RGB16, palette, alpha, Adam7",
           "[image_metrics][mask][png]") {
   TempDir tmp("metrics-png");
-  SECTION("the preview writer's PNG (stored deflate blocks) reads back") {
+  SECTION("the preview writer's PNG reads back") {
     Image img(7, 5);
     for (int y = 0; y < 5; ++y)
       for (int x = 0; x < 7; ++x) img.set(x, y, Vec3(x / 6.f, y / 4.f, (x + y) % 2 ? 1.f : 0.f));
@@ -464,16 +465,53 @@ TEST_CASE("image_metrics: PNG masks: stored and compressed, all filters, grey, R
           CHECK(c.get(x, y)[k] == float(val(x, y, k) / 255.0));
         }
   }
-  SECTION("interlaced files and palette indices past the palette are refused") {
+  SECTION("Adam7-interlaced files decode (libpng de-interlaces them)") {
+    // 11×9 8-bit grey: every one of the seven passes has pixels. Each pass is a sub-image of the
+    // pixels (x0 + i·dx, y0 + j·dy), its rows filtered with type None (PNG spec. §8.2).
+    const int w = 11, h = 9;
+    auto val = [](int x, int y) { return uint8_t((x * 23 + y * 41 + 7) % 256); };
+    const int adam7[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
+                             {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};  // x0, y0, dx, dy
+    std::string raw;
+    for (const auto& p : adam7) {
+      const int cols = w > p[0] ? (w - p[0] + p[2] - 1) / p[2] : 0;
+      const int rows = h > p[1] ? (h - p[1] + p[3] - 1) / p[3] : 0;
+      if (cols == 0 || rows == 0) continue;
+      for (int j = 0; j < rows; ++j) {
+        raw += '\0';
+        for (int i = 0; i < cols; ++i) raw += char(val(p[0] + i * p[2], p[1] + j * p[3]));
+      }
+    }
+    uLongf zlen = compressBound(uLong(raw.size()));
+    std::string z(zlen, '\0');
+    REQUIRE(compress2(reinterpret_cast<Bytef*>(&z[0]), &zlen,
+                      reinterpret_cast<const Bytef*>(raw.data()), uLong(raw.size()), 9) == Z_OK);
+    z.resize(zlen);
+    std::string png = "\x89PNG\r\n\x1a\n", ihdr;
+    put_be32(ihdr, uint32_t(w));
+    put_be32(ihdr, uint32_t(h));
+    ihdr += std::string{char(8), char(0), char(0), char(0), char(1)};  // grey 8, Adam7
+    put_chunk(png, "IHDR", ihdr);
+    put_chunk(png, "IDAT", z);
+    put_chunk(png, "IEND", "");
+    Image m = decode_png(png, "adam7.png");
+    REQUIRE(m.width == w);
+    REQUIRE(m.height == h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) CHECK(m.get(x, y).y == float(val(x, y) / 255.0));
+    // A non-interlaced file whose header says Adam7: the passes need more data than it holds.
     std::vector<std::string> rows(3, std::string(3, '\x10'));
-    std::string png = make_png(3, 3, 8, 0, rows, 1);
+    std::string plain = make_png(3, 3, 8, 0, rows, 1);
     // IHDR data starts at byte 16; its interlace byte is the 13th; the CRC follows the data.
-    png[16 + 12] = 1;
-    std::string interlaced = png.substr(0, 29);
-    const uint32_t crc = uint32_t(crc32(0L, reinterpret_cast<const Bytef*>(png.data() + 12), 17));
-    put_be32(interlaced, crc);
-    interlaced += png.substr(33);
-    CHECK_THROWS_WITH(decode_png(interlaced, "i.png"), Catch::Contains("interlaced"));
+    plain[16 + 12] = 1;
+    std::string mislabelled = plain.substr(0, 29);
+    const uint32_t crc =
+        uint32_t(crc32(0L, reinterpret_cast<const Bytef*>(plain.data() + 12), 17));
+    put_be32(mislabelled, crc);
+    mislabelled += plain.substr(33);
+    CHECK_THROWS_WITH(decode_png(mislabelled, "i.png"), Catch::Contains("damaged PNG image data"));
+  }
+  SECTION("palette indices past the palette are refused") {
     // Index 2 with a palette of two entries.
     std::string palette = {char(0), char(0), char(0), char(255), char(255), char(255)};
     std::vector<std::string> idx(2, std::string{char(0), char(1), char(2)});
@@ -506,9 +544,11 @@ TEST_CASE("image_metrics: PNG masks: stored and compressed, all filters, grey, R
     // allocated (here 4 GB).
     CHECK_THROWS_WITH(decode_png(png_from_raw(65536, 65536, row + row + row), "huge.png"),
                       Catch::Contains("need more data than its"));
+    // Filter type 5 does not exist (PNG spec. §9.2); the message is libpng's.
     const std::string bad_filter = std::string(1, '\x05') + "abc";
     CHECK_THROWS_WITH(decode_png(png_from_raw(3, 3, row + bad_filter + row), "filter.png"),
-                      Catch::Contains("unknown PNG filter type"));
+                      Catch::Contains("filter.png: has damaged PNG image data: bad adaptive filter "
+                                      "value"));
   }
   SECTION("damaged or foreign files are refused") {
     std::vector<std::string> rows(3, std::string(3, '\x7f'));
@@ -630,6 +670,22 @@ TEST_CASE("image_metrics: imgcompare tool: metrics printed and written, bad inpu
   refused((tmp / "test.exr") + " " + (tmp / "ref.exr") + " --mask " + (tmp / "small.exr"),
           "mask must have the images' size");
   refused(tmp / "test.exr", "two images");
+  // A damaged mask PNG: cut anywhere (a file copied in part, a download stopped), or a flipped
+  // byte in its image data (CRC mismatch): one line naming the mask, exit 2, no JSON.
+  const std::string mask_png = test::file_bytes(tmp / "mask.png");
+  REQUIRE(mask_png.size() > 60);
+  for (size_t keep : {size_t(0), size_t(5), size_t(8), size_t(20), size_t(33), size_t(45),
+                      mask_png.size() / 2, mask_png.size() - 12, mask_png.size() - 1}) {
+    INFO("first " << keep << " of " << mask_png.size() << " bytes");
+    std::ofstream(tmp / "cut-mask.png", std::ios::binary) << mask_png.substr(0, keep);
+    refused((tmp / "test.exr") + " " + (tmp / "ref.exr") + " --mask " + (tmp / "cut-mask.png"),
+            "cut-mask.png: ");
+  }
+  std::string flipped = mask_png;
+  flipped[41] ^= 0x20;  // inside IDAT (its data starts at byte 41)
+  std::ofstream(tmp / "bad-mask.png", std::ios::binary) << flipped;
+  refused((tmp / "test.exr") + " " + (tmp / "ref.exr") + " --mask " + (tmp / "bad-mask.png"),
+          "bad-mask.png: has damaged PNG image data: ");
   auto help = test::run_tool("imgcompare", "--help", tmp);
   CHECK(help.exit_code == 0);
   for (const char* k : {"--mask", "--json", "relMSE", "PSNR", "SSIM", "peak"})

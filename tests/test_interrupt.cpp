@@ -182,11 +182,13 @@ TEST_CASE("interrupts: render and cluster's GA stop after the step in progress, 
 
   SECTION("render") {
     const std::string ck = tmp / "ck.h5", out = tmp / "r.exr", snap = tmp / "s-{pass}.exr";
+    const std::string stats = tmp / "run.json";
     // 100 000 passes: far more than the run gets to before the signal.
     const Interrupted r = interrupt_once(
         "render",
         "--scene " + scene + " -o " + out + " --photons 200 --passes 100000" + " --checkpoint " +
-            ck + " --checkpoint-every 100000 --snapshot-at 1" + " --snapshot " + snap,
+            ck + " --checkpoint-every 100000 --snapshot-at 1" + " --snapshot " + snap +
+            " --stats " + stats,
         tmp / "s-000001.exr", tmp);
     REQUIRE(r.started);
     const std::string& err = r.err;
@@ -201,6 +203,11 @@ TEST_CASE("interrupts: render and cluster's GA stop after the step in progress, 
     CHECK(err.find("interrupted after " + std::to_string(passes) + " of") != std::string::npos);
     CHECK_FALSE(fs::exists(out));
     CHECK_FALSE(fs::exists(tmp / "r.png"));
+    // The run record lists what the run wrote: the snapshot of pass 1, not the final image.
+    REQUIRE(fs::exists(stats));
+    const std::string record = test::file_bytes(stats);
+    CHECK(record.find("\"path\": \"" + (tmp / "s-000001.exr") + "\"") != std::string::npos);
+    CHECK(record.find("\"path\": \"" + out + "\"") == std::string::npos);
     no_temporary_files(tmp);
   }
 

@@ -1,6 +1,6 @@
 // Small text helpers of text_file.h and options.h: JSON string literals decoded by an RFC 8259
-// decoder written here, JSON numbers read back with strtod, numbered snapshot names that sort in
-// order, and parse_vec3's refusals.
+// decoder written here, JSON numbers read back with strtod, the records' layout read back by
+// nlohmann's parser, numbered snapshot names that sort in order, and parse_vec3's refusals.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -11,6 +11,8 @@
 #include <limits>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "photonflow/error.h"
 #include "photonflow/options.h"
@@ -52,7 +54,7 @@ std::string json_decode(const std::string& lit) {
         const std::string hex = lit.substr(i + 1, 4);
         REQUIRE(std::all_of(hex.begin(), hex.end(), [](char h) { return std::isxdigit(h); }));
         const long v = std::strtol(hex.c_str(), nullptr, 16);
-        REQUIRE(v < 0x80);  // only what json_string escapes: control characters
+        REQUIRE(v < 0x80);  // only what nlohmann escapes: control characters
         out += char(v);
         i += 4;
         break;
@@ -65,31 +67,81 @@ std::string json_decode(const std::string& lit) {
 
 }  // namespace
 
-TEST_CASE("json_string: every byte round-trips through an RFC 8259 decoder", "[text]") {
-  std::string all;
-  for (int c = 1; c < 256; ++c) all += char(c);
-  CHECK(json_decode(json_string(all)) == all);
+TEST_CASE("json_text: strings round-trip through an RFC 8259 decoder, non-UTF-8 bytes become U+FFFD",
+          "[text]") {
+  std::string ascii;
+  for (int c = 1; c < 128; ++c) ascii += char(c);
+  CHECK(json_decode(json_text(ascii)) == ascii);
   for (const std::string s : {std::string(), std::string("plain"), std::string("a\"b"),
                               std::string("back\\slash"), std::string("C:\\dir\\\"x\""),
-                              std::string("line\nbreak\ttab\r"), std::string("\x01\x1f")}) {
+                              std::string("line\nbreak\ttab\r"), std::string("\x01\x1f"),
+                              std::string("gr\xc3\xbc\xc3\x9f" "e \xe6\x97\xa5 \xf0\x9f\x98\x80")}) {
     INFO(s);
-    CHECK(json_decode(json_string(s)) == s);
+    CHECK(json_decode(json_text(s)) == s);  // UTF-8 (the last one) is kept as it is
   }
-  CHECK(json_string("abc") == "\"abc\"");
+  CHECK(json_text("abc") == "\"abc\"");
+  // JSON text is UTF-8 (RFC 8259 §8.1): a byte that is not part of a UTF-8 sequence (a Latin-1
+  // file name) is written as U+FFFD, so that the record stays readable by strict parsers.
+  const std::string fffd = "\xef\xbf\xbd";
+  CHECK(json_decode(json_text("caf\xe9.exr")) == "caf" + fffd + ".exr");
+  CHECK(json_decode(json_text("\x80 \xff")) == fffd + " " + fffd);
+  CHECK(json_decode(json_text("cut \xc3")) == "cut " + fffd);
 }
 
-TEST_CASE("json_number: 17 digits read back exactly, non-finite values are null", "[text]") {
-  for (double v : {0.0, 1.0, -2.5, 0.1, 1.0 / 3.0, 6.02214076e23, 1e-300,
+TEST_CASE("json_value: numbers read back exactly, whole numbers without a fraction, non-finite "
+          "values null", "[text]") {
+  for (double v : {0.0, 1.0, -2.5, 0.1, 1.0 / 3.0, 6.02214076e23, 1e-300, 1e16, 1e17, -1e17,
                    std::numeric_limits<double>::max(), std::numeric_limits<double>::denorm_min()}) {
     INFO(v);
-    const std::string t = json_number(v);
+    const std::string t = json_text(json_value(v));
     char* end = nullptr;
     CHECK(std::strtod(t.c_str(), &end) == v);
     CHECK(*end == '\0');
   }
-  CHECK(json_number(std::numeric_limits<double>::infinity()) == "null");
-  CHECK(json_number(-std::numeric_limits<double>::infinity()) == "null");
-  CHECK(json_number(std::nan("")) == "null");
+  // Whole numbers as printf's %.17g wrote them (the run records' earlier text).
+  CHECK(json_text(json_value(0.0)) == "0");
+  CHECK(json_text(json_value(2.0)) == "2");
+  CHECK(json_text(json_value(-3.0)) == "-3");
+  CHECK(json_text(json_value(1e16)) == "10000000000000000");
+  CHECK(json_text(json_value(0.25)) == "0.25");
+  CHECK(json_text(json_value(0.1)) == "0.1");  // the fewest digits that read back
+  CHECK(json_text(json_value(std::numeric_limits<double>::infinity())) == "null");
+  CHECK(json_text(json_value(-std::numeric_limits<double>::infinity())) == "null");
+  CHECK(json_text(json_value(std::nan(""))) == "null");
+}
+
+TEST_CASE("json_record_text: one member per line, one line per list entry, a JSON parser reads "
+          "it back", "[text]") {
+  Json doc = Json::object();
+  doc["name"] = "r \"1\"";
+  doc["count"] = 3;
+  doc["none"] = nullptr;
+  doc["parameters"] = Json::object();
+  doc["parameters"]["b"] = "2";
+  doc["parameters"]["a"] = "1";  // kept in the order added
+  doc["images"] = Json::array();
+  doc["images"].push_back({{"path", "a.exr"}, {"passes", 4}, {"ok", true}});
+  doc["images"].push_back({{"path", "b.exr"}, {"passes", 8}, {"ok", false}});
+  doc["empty"] = Json::array();
+  const std::string text = json_record_text(doc);
+  CHECK(text ==
+        "{\n"
+        "  \"name\": \"r \\\"1\\\"\",\n"
+        "  \"count\": 3,\n"
+        "  \"none\": null,\n"
+        "  \"parameters\": {\n"
+        "    \"b\": \"2\",\n"
+        "    \"a\": \"1\"\n"
+        "  },\n"
+        "  \"images\": [\n"
+        "    {\"path\": \"a.exr\", \"passes\": 4, \"ok\": true},\n"
+        "    {\"path\": \"b.exr\", \"passes\": 8, \"ok\": false}\n"
+        "  ],\n"
+        "  \"empty\": [\n"
+        "  ]\n"
+        "}\n");
+  CHECK(Json::parse(text) == doc);
+  CHECK_THROWS_AS(json_record_text(Json::array()), std::invalid_argument);
 }
 
 TEST_CASE("numbered_name: zero-padded to the total's digits, so the names sort in order",
@@ -154,7 +206,7 @@ TEST_CASE("option checks: positive, (0, 1], one of a list; defaults read back", 
   CHECK(default_text(-42) == "-42");
 }
 
-TEST_CASE("provenance_json_fields: each input's members under their own names", "[text][provenance]") {
+TEST_CASE("provenance_json: each input's members under their own names", "[text][provenance]") {
   const std::string dir = "/tmp/pf-text-prov-" + std::to_string(getpid());
   const std::string a = dir + "-a.txt", b = dir + "-b.txt";
   std::ofstream(a) << "abc";
@@ -168,19 +220,19 @@ TEST_CASE("provenance_json_fields: each input's members under their own names", 
   p.param("method", "grid");
   p.add_input("scene", a, "photonflow.scene", "id-a");
   p.add_input("hitpoints", b, "photonflow.hitpoints", "id-b");
-  const std::string js = provenance_json_fields(p);
+  const std::string js = json_record_text(provenance_json(p));
   std::remove(a.c_str());
   std::remove(b.c_str());
   CHECK(js.find("\"tool\": \"trace-photons\"") != std::string::npos);
   CHECK(js.find("\"seed\": 42") != std::string::npos);
-  CHECK(js.find("\"command_line\": " + json_string(p.command_line)) != std::string::npos);
+  CHECK(js.find("\"command_line\": " + json_text(p.command_line)) != std::string::npos);
   CHECK(js.find("\"wall_time_s\": 0.5") != std::string::npos);
   CHECK(js.find("\"photons\": \"1000\"") != std::string::npos);
   CHECK(js.find("\"method\": \"grid\"") != std::string::npos);
-  CHECK(js.find("{\"role\": \"scene\", \"path\": " + json_string(a) +
+  CHECK(js.find("{\"role\": \"scene\", \"path\": " + json_text(a) +
                 ", \"sha256\": \"ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad\", "
                 "\"format\": \"photonflow.scene\", \"scene_id\": \"id-a\"}") != std::string::npos);
-  CHECK(js.find("{\"role\": \"hitpoints\", \"path\": " + json_string(b) +
+  CHECK(js.find("{\"role\": \"hitpoints\", \"path\": " + json_text(b) +
                 ", \"sha256\": \"e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855\", "
                 "\"format\": \"photonflow.hitpoints\", \"scene_id\": \"id-b\"}") != std::string::npos);
 }

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "photonflow/cl_runtime.h"
+#include "photonflow/eye_pass.h"
 #include "photonflow/gather_method.h"
 #include "photonflow/photon_grid.h"
 #include "photonflow/shared_types.h"
@@ -107,6 +108,15 @@ class DevicePpmState {
   // them: trace_photons_device made them from the checked scene. Other methods download them and
   // take the copying route.
   GatherTimes pass(const DevicePhotons& photons, const PpmOptions& opt);
+  // One SPPM pass (sppm.h) over an SPPM state (one hitpoint per pixel): `eye` holds eye pass p's
+  // visible points, whose sites and throughputs β go up; the pixels' R, N, τ stay on the device,
+  // where the hashed-grid gather multiplies each τ_M by β and updates them; the emitted and direct
+  // layers are averaged on the host. The same state as sppm_pass(scene, h, eye, grid of the
+  // photons, emitted, opt), bit for bit where the device rounds division and sqrt correctly.
+  GatherTimes sppm_pass(const EyePassResult& eye, const std::vector<pf_photon>& photons,
+                        uint64_t emitted, const PpmOptions& opt);
+  GatherTimes sppm_pass(const EyePassResult& eye, const DevicePhotons& photons,
+                        const PpmOptions& opt);
   // h.hitpoints ← the device's state (nothing when already current).
   void sync();
   // Copies h.hitpoints to the device now (a hash-grid pass does it when needed); benchmarks
@@ -121,6 +131,9 @@ class DevicePpmState {
   // A hash-grid pass over photons on the host (host) or on the device (device), np of them.
   GatherTimes hash_grid(const pf_photon* host, const ClBuffer* device, size_t np, uint64_t emitted,
                         const PpmOptions& opt);
+  GatherTimes sppm_hash_grid(const EyePassResult& eye, const pf_photon* host,
+                             const ClBuffer* device, size_t np, uint64_t emitted,
+                             const PpmOptions& opt);
 
   const Scene& scene_;
   HitpointSet& h_;
@@ -129,6 +142,7 @@ class DevicePpmState {
   // hash-grid pass). A pass changes only the states: sync copies those back.
   ClBuffer sites_, states_;
   ClBuffer mats_;                // the scene's materials, written with the hitpoints
+  ClBuffer weights_;             // SPPM: the pass's eye-path throughputs β, 3 per pixel
   bool host_current_ = true;     // h_.hitpoints holds the latest state
   bool device_current_ = false;  // hps_ holds it
   float rmax_ = 0.f;             // largest finite positive radius of the device's state
@@ -136,6 +150,14 @@ class DevicePpmState {
   // hash_grid.h), so that a work-group's hitpoints read the same rows of the hashed grid.
   std::vector<int32_t> order_;
 };
+
+// The gather of one probabilistic-PPM pass (sppm.h) on the device: eye pass p's visible points
+// gather the device's photons of pass p within the pass's global radius (pppm_pass_radius) through
+// the hashed grid; returns β·τ_M per visible point (3 floats), which pppm_accumulate adds to the
+// sums, as pppm_pass's host gather does (the same values where the device rounds like the host).
+std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& eye, float radius,
+                                      DirectMode direct, const DevicePhotons& photons,
+                                      const PpmOptions& opt, ClContext& dev);
 
 // The grid-cluster gather alone (gather_grid_clusters, the kernel of grid-kmeans and
 // grid-gridclusters), for timing many clusterings of one eye pass against one photon pass: the

@@ -5,20 +5,27 @@
 #include <cstdint>
 #include <string>
 
+struct evp_md_ctx_st;  // OpenSSL's EVP_MD_CTX (openssl/types.h), kept out of this header
+
 namespace pf {
 
+// SHA-256 (FIPS 180-4) through OpenSSL's libcrypto (EVP interface), fed in pieces of any size:
+// a file or a dataset is hashed as it streams, never held whole. Not copyable (it owns an
+// EVP_MD_CTX); movable.
 class Sha256 {
  public:
   Sha256();
+  ~Sha256();
+  Sha256(Sha256&& other) noexcept;
+  Sha256& operator=(Sha256&& other) noexcept;
+  Sha256(const Sha256&) = delete;
+  Sha256& operator=(const Sha256&) = delete;
+
   void update(const void* data, size_t len);
-  std::string hex();  // finishes the hash; 64 lowercase hex digits
+  std::string hex();  // finishes the hash; 64 lowercase hex digits; call once
 
  private:
-  void block(const uint8_t* p);
-  uint32_t h_[8];
-  uint8_t buf_[64];
-  size_t buf_len_ = 0;
-  uint64_t total_ = 0;
+  evp_md_ctx_st* ctx_ = nullptr;  // OpenSSL's EVP_MD_CTX
 };
 
 // Hash of a file's bytes. Throws InputError if the file cannot be read.

@@ -57,16 +57,19 @@ float srgb_encode(float linear);
 // to [0, 1] (NaN → 0), sRGB-encoded and rounded to the nearest of 0..255.
 std::vector<uint8_t> to_srgb8(const Image& img, float exposure_stops);
 
-// A complete PNG file (8-bit RGB, no interlace) of w×h pixels from `rgb8` (3·w·h bytes). The
-// zlib stream uses stored (uncompressed) deflate blocks: valid PNG, no zlib dependency.
+// A complete PNG file (8-bit RGB, no interlace) of w×h pixels from `rgb8` (3·w·h bytes), written
+// by libpng (zlib level 1, Sub filter on every row: image.cpp). std::invalid_argument if the sizes
+// do not match.
 std::vector<uint8_t> encode_png(int w, int h, const std::vector<uint8_t>& rgb8);
 
 // Writes the sRGB preview PNG of img's RGB (to_srgb8 then encode_png).
 void write_png(const Image& img, const std::string& path, float exposure_stops = 0.f);
 
-// Decodes a PNG file's bytes into an RGB image with values in [0, 1] (8- and 16-bit grey, grey +
-// alpha, RGB, RGBA and palette images, non-interlaced; alpha ignored; zlib inflates the data);
-// `name` names the file in InputError messages. Reads masks (image_metrics.h).
+// Decodes a PNG file's bytes into an RGB image with values in [0, 1] through libpng: grey of 1 to
+// 16 bits, grey + alpha, RGB, RGBA (8 or 16 bits) and palette images, non-interlaced or Adam7;
+// alpha and transparency ignored; a sample v of n bits becomes v / (2^n − 1). At most 65536
+// pixels a side. Anything libpng refuses (damaged chunks or image data, a cut file) and palette
+// indices past the palette are one-line InputErrors naming `name`. Reads masks (image_metrics.h).
 Image decode_png(const std::string& bytes, const std::string& name);
 
 }  // namespace pf

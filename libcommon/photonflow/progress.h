@@ -3,6 +3,7 @@
 #pragma once
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdarg>
 #include <cstdio>
 #include <string>
@@ -51,6 +52,13 @@ class Progress {
   // `total` steps of `what` (e.g. "pass"); `unit` names the rate's unit (e.g. "photons").
   Progress(std::string what, long total, std::string unit)
       : what_(std::move(what)), unit_(std::move(unit)), total_(total) {}
+  // A wall-clock budget in seconds (render --time): the ETA is then the earlier of the steps'
+  // and the budget's end, and with steps past counting (`total` a mere cap) the line shows the
+  // budget instead of the total.
+  void set_budget(double seconds, bool steps_capped_only) {
+    budget_ = seconds;
+    no_total_ = steps_capped_only;
+  }
   // Reports that `done` steps are finished and `amount` units were processed in all.
   void update(long done, double amount) {
     if (!line_.tty()) return;
@@ -59,8 +67,13 @@ class Progress {
     last_ = t;
     double rate = t > 0 ? amount / t : 0.0;
     double eta = done > 0 ? t * double(total_ - done) / double(done) : 0.0;
-    line_.draw(done >= total_, "%s %ld/%ld  %.3g %s/s  ETA %.0f s   ", what_.c_str(), done, total_,
-               rate, unit_.c_str(), eta);
+    if (budget_ > 0) eta = std::min(eta, std::max(0.0, budget_ - t));
+    if (no_total_)
+      line_.draw(done >= total_, "%s %ld (budget %.0f s)  %.3g %s/s  ETA %.0f s   ", what_.c_str(),
+                 done, budget_, rate, unit_.c_str(), eta);
+    else
+      line_.draw(done >= total_, "%s %ld/%ld  %.3g %s/s  ETA %.0f s   ", what_.c_str(), done,
+                 total_, rate, unit_.c_str(), eta);
   }
   // Ends a line left open by a run that stops early (an interrupt).
   void end_line() { line_.end_line(); }
@@ -68,6 +81,8 @@ class Progress {
  private:
   std::string what_, unit_;
   long total_;
+  double budget_ = 0;
+  bool no_total_ = false;
   TerminalLine line_;
   Stopwatch clock_;
   double last_ = -1.0;

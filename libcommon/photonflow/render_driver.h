@@ -88,8 +88,9 @@ class ProgressiveRenderer {
   std::unique_ptr<DevicePpmState> device_state_;
 };
 
-// Traces the eye pass of pass `pass` (EyePassOptions::pass) and photon pass `pass`, and sorts
-// the photons into `grid`: the per-pass work of sppm and pppm, on opt.device when it is set.
+// Traces the eye pass of pass `pass` (EyePassOptions::pass) and photon pass `pass` on the CPU,
+// and sorts the photons into `grid`: the per-pass work of sppm and pppm before their CPU gather
+// (on a device they trace and gather there: DevicePpmState::sppm_pass, pppm_gather_device).
 // Returns the photons emitted; `stored` gets the photons stored.
 uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
                     EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored);

@@ -58,6 +58,18 @@ HitpointSet make_sppm_state(const Scene& scene, float radius0, DirectMode mode);
 void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
 
+// The two halves of sppm_pass around the gather, for the device's SPPM pass (cl_gather.h,
+// DevicePpmState::sppm_pass), which gathers on the device in between:
+//   sppm_sites: one site per pixel of `state` — the pixel's visible point in `eye`, or a site
+//     with mesh −1 where the eye path found none — and its throughput β (3 floats, 0 without one);
+//     InputError as sppm_pass when the eye pass does not fit the state;
+//   sppm_finish_pass: every pixel with a visible point takes its position, normal, direction, mesh
+//     and material; the emitted and direct layers take the pass's into their running mean; the
+//     pass is counted with its `emitted` photons.
+void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,
+                std::vector<float>& beta);
+void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted);
+
 // r_i of pass p (0-based; i = p + 1) for initial radius r1: r_i² = r1² · Π_{j=1..i−1} (j + α)/(j + 1)
 // (KZ11 eq. 19 unrolled), evaluated in double in that order so that every machine gets the same
 // radius for the same pass.
@@ -68,6 +80,13 @@ double pppm_radius(double r1, double alpha, int pass);
 // emitted.
 void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
+// The radius r_i of the pass pppm_pass applies next, as the float the gather uses.
+float pppm_pass_radius(const PassSums& sums);
+// pppm_pass after its gather: tau_beta holds β·τ_M (float products, 3 per visible point of `eye`,
+// τ_M gathered within pppm_pass_radius(sums)); adds L_p of every pixel to the sums and counts the
+// pass. The device's gather (cl_gather.h, pppm_gather_device) ends here too.
+void pppm_accumulate(PassSums& sums, const EyePassResult& eye, const std::vector<float>& tau_beta,
+                     uint64_t emitted);
 
 // The staged route of both (illuminate --estimator sppm | pppm): `eye` is a trace-hitpoints file
 // of eye pass p (estimator "none", eye_pass p) and `photons` holds photon pass p alone; the grid is

@@ -17,6 +17,7 @@
 #include "photonflow/hash_grid.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/provenance.h"
+#include "photonflow/sppm.h"
 
 namespace pf {
 
@@ -385,9 +386,12 @@ struct PassPhotons {
 // from the checked scene, are used where they are): opt.hash_order — then gathers and applies
 // eq. 3.14–3.18 in one kernel. Returns the new state's rmax (reduced by the kernel, so a state
 // kept on the device needs no copy to the host between passes).
+// With `weights` (SPPM, DevicePpmState::sppm_pass), τ_M of hitpoint i is multiplied by
+// weights[3i .. 3i + 2] before the update.
 float hash_grid_pass(const Scene& scene, const SplitHitpoints& hps, const ClBuffer& mats, size_t nh,
                      DirectMode direct, float rmax, const PassPhotons& photons,
-                     const PpmOptions& opt, ClContext& dev, GatherTimes& times) {
+                     const PpmOptions& opt, ClContext& dev, GatherTimes& times,
+                     const ClBuffer* weights = nullptr) {
   const size_t np = photons.n;
   require_one_buffer(dev, np, sizeof(pf_photon), "photons", opt.method);
   const int mesh_count = int(scene.mesh_names.size());
@@ -435,8 +439,9 @@ float hash_grid_pass(const Scene& scene, const SplitHitpoints& hps, const ClBuff
   dev.args(k, *hps.sites, *hps.states, cl_int(nh), *d.payload, *d.keys, *d.slot_start, g.origin[0],
            g.origin[1], g.origin[2], g.cell, cl_int(g.n[0]), cl_int(g.n[1]), cl_int(g.n[2]),
            cl_uint(g.mask), cl_int(g.unique), mats,
-           cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha, next,
-           ClLocal{L * sizeof(cl_int)});
+           cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha,
+           weights ? *weights : dev.scratch("ppm.no-weights", sizeof(float)),
+           cl_int(weights ? 1 : 0), next, ClLocal{L * sizeof(cl_int)});
   dev.run(k, nh);
   times.gather = since(dev, t0);
   times.work_items = nh;
@@ -724,6 +729,99 @@ GatherTimes DevicePpmState::hash_grid(const pf_photon* host, const ClBuffer* dev
   return times;
 }
 
+GatherTimes DevicePpmState::sppm_pass(const EyePassResult& eye, const std::vector<pf_photon>& photons,
+                                      uint64_t emitted, const PpmOptions& opt) {
+  return sppm_hash_grid(eye, photons.data(), nullptr, photons.size(), emitted, opt);
+}
+
+GatherTimes DevicePpmState::sppm_pass(const EyePassResult& eye, const DevicePhotons& photons,
+                                      const PpmOptions& opt) {
+  return sppm_hash_grid(eye, nullptr, photons.photons, photons.count, photons.emitted, opt);
+}
+
+GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_photon* host,
+                                           const ClBuffer* device, size_t np, uint64_t emitted,
+                                           const PpmOptions& opt) {
+  Stopwatch wall;
+  GatherTimes times;
+  if (!is_sppm_state(h_))
+    throw std::invalid_argument("DevicePpmState::sppm_pass: the state is not an SPPM state");
+  PpmOptions o = opt;
+  o.method = GatherMethod::HashGrid;
+  const size_t nh = h_.hitpoints.size();
+  check_pass(o, nh, np);
+  // The pass's sites: each pixel's visible point (mesh −1 where the eye path found none) and its
+  // throughput β; the host copy of the state takes the visible points too (sppm_pass's fields).
+  std::vector<pf_hitpoint> sites;
+  std::vector<float> beta;
+  sppm_sites(h_, eye, sites, beta);
+  upload();
+  if (nh > 0) {
+    if (weights_.bytes() < nh * 3 * sizeof(float)) weights_ = dev_.buffer(nh * 3 * sizeof(float));
+    dev_.write(weights_, nh * 3 * sizeof(float), beta.data());
+    {  // the sites alone: the states stay where they are
+      ClMapping m(dev_, sites_, nh * sizeof(pf_gather_site), ClMapping::Mode::Write);
+      pf_gather_site* s = m.as<pf_gather_site>();
+      for (size_t i = 0; i < nh; ++i) {
+        for (int a = 0; a < 3; ++a) {
+          s[i].position[a] = sites[i].position[a];
+          s[i].normal[a] = sites[i].normal[a];
+        }
+        s[i].mesh = sites[i].mesh;
+        s[i].material = sites[i].material;
+      }
+      m.unmap();
+    }
+    if (np > 0) {
+      rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, nh, h_.direct_mode,
+                             rmax_, PassPhotons{host, device, np}, o, dev_, times, &weights_);
+      host_current_ = false;
+    }
+  }
+  sppm_finish_pass(h_, eye, emitted);
+  times.total = wall.seconds();
+  return times;
+}
+
+std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& eye, float radius,
+                                      DirectMode direct, const DevicePhotons& photons,
+                                      const PpmOptions& opt, ClContext& dev) {
+  const size_t nh = eye.hitpoints.size(), np = photons.count;
+  std::vector<float> tau_beta(nh * 3, 0.f);
+  // One hashed-grid pass with α = 1 over fresh states (R = r_i, N = 0, τ = 0): eq. 3.14–3.18 then
+  // leave R, set N = M and τ = β·τ_M exactly (ratio (0 + M)/(0 + M) = 1), which are read back.
+  PpmOptions o = opt;
+  o.method = GatherMethod::HashGrid;
+  o.alpha = 1.f;
+  check_pass(o, nh, np);
+  if (nh == 0 || np == 0) return tau_beta;
+  require_one_buffer(dev, nh, sizeof(pf_gather_site), "visible points", o.method);
+  std::vector<pf_hitpoint> fresh(eye.hitpoints);
+  std::vector<float> beta(nh * 3);
+  for (size_t i = 0; i < nh; ++i) {
+    fresh[i].radius = radius;
+    fresh[i].n_photons = 0.f;
+    for (int c = 0; c < 3; ++c) {
+      fresh[i].flux[c] = 0.f;
+      beta[i * 3 + size_t(c)] = eye.hitpoints[i].weight[c];
+    }
+  }
+  const SplitHitpoints hps{&dev.scratch("pppm.sites", nh * sizeof(pf_gather_site)),
+                           &dev.scratch("pppm.states", nh * sizeof(pf_ppm_state))};
+  write_split(dev, hps, fresh.data(), nullptr, nh);
+  const ClBuffer& weights = dev.scratch("pppm.weights", nh * 3 * sizeof(float));
+  dev.write(weights, nh * 3 * sizeof(float), beta.data());
+  const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
+  dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
+  GatherTimes times;
+  hash_grid_pass(scene, hps, mats, nh, direct, radius, PassPhotons{nullptr, photons.photons, np},
+                 o, dev, times, &weights);
+  read_split_states(dev, hps, fresh.data(), nullptr, nh);
+  for (size_t i = 0; i < nh; ++i)
+    for (int c = 0; c < 3; ++c) tau_beta[i * 3 + size_t(c)] = fresh[i].flux[c];
+  return tau_beta;
+}
+
 void DevicePpmState::upload() {
   if (device_current_) return;
   sync();  // never overwrite a newer device state with an older host copy
@@ -739,8 +837,12 @@ void DevicePpmState::upload() {
     if (!mats_.get()) mats_ = dev_.buffer(std::max<size_t>(mat_bytes, 4));
     dev_.write(mats_, mat_bytes, scene_.materials.data());
     const float origin[3] = {scene_.bounds.lo.x, scene_.bounds.lo.y, scene_.bounds.lo.z};
-    order_ = hitpoint_cell_order(h_.hitpoints, origin, kHitpointOrderCell * rmax_);
-    write_split(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(), order_.data(), nh);
+    // SPPM's sites move every pass (sppm_pass writes them): pixels stay in pixel order, which
+    // keeps neighbouring pixels, mostly neighbouring sites, together.
+    order_ = is_sppm_state(h_) ? std::vector<int32_t>()
+                               : hitpoint_cell_order(h_.hitpoints, origin, kHitpointOrderCell * rmax_);
+    write_split(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(),
+                order_.empty() ? nullptr : order_.data(), nh);
   }
   device_current_ = true;
 }
@@ -749,8 +851,8 @@ void DevicePpmState::sync() {
   if (host_current_) return;
   const size_t nh = h_.hitpoints.size();
   if (nh > 0)
-    read_split_states(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(), order_.data(),
-                      nh);
+    read_split_states(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(),
+                      order_.empty() ? nullptr : order_.data(), nh);
   host_current_ = true;
 }
 

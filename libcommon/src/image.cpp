@@ -1,4 +1,4 @@
-// image.cpp — Image, OpenEXR I/O (OpenEXR 3 C++ API), sRGB preview and a minimal PNG encoder.
+// image.cpp — Image, OpenEXR I/O (OpenEXR 3 C++ API), sRGB preview, PNG through libpng.
 #include "photonflow/image.h"
 
 #include <OpenEXR/ImfChannelList.h>
@@ -6,13 +6,15 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
-#include <zlib.h>
+#include <png.h>
 
 #include <algorithm>
-#include <array>
+#include <csetjmp>
 #include <cstdint>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <new>
 #include <stdexcept>
 
 #include "photonflow/error.h"
@@ -21,75 +23,6 @@
 namespace pf {
 
 namespace {
-
-// CRC-32 (ISO 3309 / PNG, reflected polynomial 0xEDB88320), table-driven.
-uint32_t crc32(const uint8_t* data, size_t n, uint32_t crc = 0) {
-  static const std::array<uint32_t, 256> table = [] {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t i = 0; i < 256; ++i) {
-      uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  crc = ~crc;
-  for (size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xFFu] ^ (crc >> 8);
-  return ~crc;
-}
-
-// Adler-32 (RFC 1950), the zlib stream's checksum of the uncompressed data.
-uint32_t adler32(const uint8_t* data, size_t n) {
-  uint32_t a = 1, b = 0;
-  const uint32_t mod = 65521;
-  while (n > 0) {
-    size_t block = std::min<size_t>(n, 5552);  // largest run without 32-bit overflow
-    n -= block;
-    for (size_t i = 0; i < block; ++i) {
-      a += *data++;
-      b += a;
-    }
-    a %= mod;
-    b %= mod;
-  }
-  return (b << 16) | a;
-}
-
-void put_u32_be(std::vector<uint8_t>& out, uint32_t v) {
-  out.push_back(static_cast<uint8_t>(v >> 24));
-  out.push_back(static_cast<uint8_t>(v >> 16));
-  out.push_back(static_cast<uint8_t>(v >> 8));
-  out.push_back(static_cast<uint8_t>(v));
-}
-
-// Appends one PNG chunk: length, type, data, CRC-32 of type and data.
-void put_chunk(std::vector<uint8_t>& out, const char type[4], const std::vector<uint8_t>& data) {
-  put_u32_be(out, static_cast<uint32_t>(data.size()));
-  size_t start = out.size();
-  out.insert(out.end(), type, type + 4);
-  out.insert(out.end(), data.begin(), data.end());
-  put_u32_be(out, crc32(&out[start], out.size() - start));
-}
-
-// zlib stream (RFC 1950) of `raw` in stored deflate blocks (RFC 1951 §3.2.4, BTYPE = 00).
-std::vector<uint8_t> zlib_stored(const std::vector<uint8_t>& raw) {
-  // CMF 0x78: deflate with a 32 KiB window; FLG 0x01: no dictionary, FCHECK with 0x7801 % 31 == 0.
-  std::vector<uint8_t> z = {0x78, 0x01};
-  size_t pos = 0;
-  do {
-    size_t len = std::min<size_t>(raw.size() - pos, 65535);
-    bool last = pos + len == raw.size();
-    z.push_back(last ? 1 : 0);  // BFINAL, BTYPE = 00 (stored); the rest of the byte is padding
-    z.push_back(static_cast<uint8_t>(len));
-    z.push_back(static_cast<uint8_t>(len >> 8));
-    z.push_back(static_cast<uint8_t>(~len));
-    z.push_back(static_cast<uint8_t>(~len >> 8));
-    z.insert(z.end(), raw.begin() + pos, raw.begin() + pos + len);
-    pos += len;
-  } while (pos < raw.size());
-  put_u32_be(z, adler32(raw.data(), raw.size()));
-  return z;
-}
 
 bool is_rgb_channel(const std::string& name) { return name == "R" || name == "G" || name == "B"; }
 
@@ -192,25 +125,163 @@ std::vector<uint8_t> to_srgb8(const Image& img, float exposure_stops) {
   return out;
 }
 
+// ---- PNG through libpng ---------------------------------------------------------------------
+//
+// libpng reports an error by calling the error function and then leaving the libpng call with
+// longjmp to the setjmp of that call's caller. A longjmp skips C++ destructors, so every function
+// below that calls setjmp (the png_* "steps") holds only plain data, and owns nothing: buffers
+// belong to the C++ callers (encode_png, decode_png), which never call setjmp themselves, and the
+// libpng structures are freed by a guard in those callers. A step returns false when libpng
+// failed, with libpng's message in PngIo::message.
+
+namespace {
+
+// What libpng's callbacks share with the steps: plain data only (see above).
+struct PngIo {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  const unsigned char* in = nullptr;  // reading: the file's bytes
+  size_t in_size = 0, in_pos = 0;
+  std::vector<uint8_t>* out = nullptr;  // writing: the file's bytes, appended
+  char message[160] = {};               // libpng's error text
+  char short_read[64] = {};             // png_read_memory's error text
+};
+
+// libpng's error function: keeps the message (made one line) and leaves by longjmp.
+void png_on_error(png_structp png, png_const_charp msg) {
+  auto* io = static_cast<PngIo*>(png_get_error_ptr(png));
+  std::snprintf(io->message, sizeof io->message, "%s", msg ? msg : "unknown error");
+  for (char* c = io->message; *c; ++c)
+    if (static_cast<unsigned char>(*c) < 0x20) *c = ' ';
+  png_longjmp(png, 1);
+}
+
+// Warnings (an ancillary chunk with a bad CRC, dropped; an unknown sRGB profile) are not errors
+// of the mask and would be a second stderr line: ignored.
+void png_on_warning(png_structp, png_const_charp) {}
+
+void png_read_memory(png_structp png, png_bytep data, size_t n) {
+  auto* io = static_cast<PngIo*>(png_get_io_ptr(png));
+  if (n > io->in_size - io->in_pos) {
+    std::snprintf(io->short_read, sizeof io->short_read, "the file ends early, after %zu bytes",
+                  io->in_size);
+    png_error(png, io->short_read);
+  }
+  std::memcpy(data, io->in + io->in_pos, n);
+  io->in_pos += n;
+}
+
+void png_write_memory(png_structp png, png_bytep data, size_t n) {
+  auto* io = static_cast<PngIo*>(png_get_io_ptr(png));
+  bool full = false;
+  try {
+    io->out->insert(io->out->end(), data, data + n);
+  } catch (const std::bad_alloc&) {
+    full = true;  // png_error below, outside the handler: a longjmp must not leave a catch block
+  }
+  if (full) png_error(png, "out of memory");
+}
+
+void png_flush_none(png_structp) {}
+
+// Frees libpng's structures when the C++ caller leaves, normally or by an exception.
+struct PngGuard {
+  PngIo* io;
+  bool writing;
+  ~PngGuard() {
+    if (writing)
+      png_destroy_write_struct(&io->png, io->info ? &io->info : nullptr);
+    else
+      png_destroy_read_struct(&io->png, io->info ? &io->info : nullptr, nullptr);
+  }
+};
+
+// Preview encoding: zlib level 1 with the Sub filter on every row. On a 1920x1080 render-like
+// preview (bench_io; docs/BENCHMARKS.md, "PNG, SHA-256 and JSON through libraries") it took about
+// 0.2 s for half the raw bytes; libpng's default (level 6, a filter chosen per row) about 1.8 s
+// for a file no smaller; stored blocks (level 0) 13 ms for the raw size.
+constexpr int kPngZlibLevel = 1;
+constexpr int kPngFilters = PNG_FILTER_SUB;
+
+// Step: the whole PNG of `rows` (8-bit RGB) into io->out.
+bool png_write_rgb8(PngIo* io, png_uint_32 w, png_uint_32 h, png_bytepp rows) {
+  if (setjmp(png_jmpbuf(io->png))) return false;
+  png_set_write_fn(io->png, io, png_write_memory, png_flush_none);
+  png_set_IHDR(io->png, io->info, w, h, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_compression_level(io->png, kPngZlibLevel);
+  png_set_filter(io->png, PNG_FILTER_TYPE_BASE, kPngFilters);
+  png_write_info(io->png, io->info);
+  png_write_image(io->png, rows);
+  png_write_end(io->png, nullptr);
+  return true;
+}
+
+// The file's header, and the rows after the transforms decode_png asks for.
+struct PngHeader {
+  png_uint_32 width = 0, height = 0;
+  int depth = 0, colour = 0, interlace = 0;
+  size_t file_row_bytes = 0;  // a scanline as stored (before the transforms)
+  size_t row_bytes = 0;       // a row as decoded: 8- or 16-bit samples, or palette indices
+  int channels = 0;           // samples per decoded pixel: 1 (grey, index) or 3 (RGB)
+};
+
+// Step: signature and chunks up to the first IDAT (IHDR, PLTE, ...).
+bool png_read_header(PngIo* io, PngHeader* hdr) {
+  if (setjmp(png_jmpbuf(io->png))) return false;
+  png_set_read_fn(io->png, io, png_read_memory);
+  png_read_info(io->png, io->info);
+  hdr->width = png_get_image_width(io->png, io->info);
+  hdr->height = png_get_image_height(io->png, io->info);
+  hdr->depth = png_get_bit_depth(io->png, io->info);
+  hdr->colour = png_get_color_type(io->png, io->info);
+  hdr->interlace = png_get_interlace_type(io->png, io->info);
+  hdr->file_row_bytes = png_get_rowbytes(io->png, io->info);
+  return true;
+}
+
+// Step: the transforms to samples decode_png converts: grey of 1, 2 or 4 bits scaled to 8 bits
+// (v·255/(2^depth − 1), so v/(2^depth − 1) is kept exactly), palette indices one per byte, alpha
+// dropped; 16-bit samples stay 16-bit (big-endian); Adam7-interlaced files de-interlaced.
+bool png_set_transforms(PngIo* io, PngHeader* hdr) {
+  if (setjmp(png_jmpbuf(io->png))) return false;
+  if (hdr->colour == PNG_COLOR_TYPE_GRAY && hdr->depth < 8) png_set_expand_gray_1_2_4_to_8(io->png);
+  if (hdr->colour == PNG_COLOR_TYPE_PALETTE && hdr->depth < 8) png_set_packing(io->png);
+  if (hdr->colour & PNG_COLOR_MASK_ALPHA) png_set_strip_alpha(io->png);
+  png_set_interlace_handling(io->png);
+  png_read_update_info(io->png, io->info);
+  hdr->row_bytes = png_get_rowbytes(io->png, io->info);
+  hdr->channels = png_get_channels(io->png, io->info);
+  return true;
+}
+
+// Step: every row (all passes of an interlaced file), then the chunks up to IEND.
+bool png_read_rows(PngIo* io, png_bytepp rows) {
+  if (setjmp(png_jmpbuf(io->png))) return false;
+  png_read_image(io->png, rows);
+  png_read_end(io->png, nullptr);
+  return true;
+}
+
+}  // namespace
+
 std::vector<uint8_t> encode_png(int w, int h, const std::vector<uint8_t>& rgb8) {
   if (w <= 0 || h <= 0 || rgb8.size() != 3 * static_cast<size_t>(w) * static_cast<size_t>(h))
     throw std::invalid_argument("encode_png: size does not match the pixel data");
-  std::vector<uint8_t> out = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-  std::vector<uint8_t> ihdr;
-  put_u32_be(ihdr, static_cast<uint32_t>(w));
-  put_u32_be(ihdr, static_cast<uint32_t>(h));
-  ihdr.insert(ihdr.end(), {8, 2, 0, 0, 0});  // 8 bits, truecolour, deflate, filter 0, no interlace
-  put_chunk(out, "IHDR", ihdr);
-  // Scanlines, each preceded by filter type 0 (None).
-  const size_t row = 3 * static_cast<size_t>(w);
-  std::vector<uint8_t> raw;
-  raw.reserve((row + 1) * h);
-  for (int y = 0; y < h; ++y) {
-    raw.push_back(0);
-    raw.insert(raw.end(), rgb8.begin() + y * row, rgb8.begin() + (y + 1) * row);
-  }
-  put_chunk(out, "IDAT", zlib_stored(raw));
-  put_chunk(out, "IEND", {});
+  std::vector<png_bytep> rows(static_cast<size_t>(h));
+  for (int y = 0; y < h; ++y)
+    rows[size_t(y)] = const_cast<png_bytep>(rgb8.data() + 3 * size_t(w) * size_t(y));
+  std::vector<uint8_t> out;
+  out.reserve(rgb8.size() / 2 + 1024);
+  PngIo io;
+  io.out = &out;
+  io.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &io, png_on_error, png_on_warning);
+  if (!io.png) throw std::bad_alloc();
+  PngGuard guard{&io, true};
+  io.info = png_create_info_struct(io.png);
+  if (!io.info) throw std::bad_alloc();
+  if (!png_write_rgb8(&io, png_uint_32(w), png_uint_32(h), rows.data()))
+    throw std::runtime_error(std::string("encode_png: libpng: ") + io.message);
   return out;
 }
 
@@ -219,144 +290,71 @@ void write_png(const Image& img, const std::string& path, float exposure_stops) 
   write_file_atomic(path, reinterpret_cast<const char*>(png.data()), png.size());
 }
 
-// ---- PNG decoding (masks) --------------------------------------------------------------------
-
-namespace {
-
-uint32_t be32(const unsigned char* p) {
-  return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | uint32_t(p[3]);
-}
-
-// PNG Paeth predictor (PNG spec. §9.4).
-int paeth(int a, int b, int c) {
-  const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
-  if (pa <= pb && pa <= pc) return a;
-  return pb <= pc ? b : c;
-}
-
-}  // namespace
-
 Image decode_png(const std::string& bytes, const std::string& name) {
-  static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
-  const size_t n = bytes.size();
-  if (n < 8 || !std::equal(sig, sig + 8, p)) throw input_error(name, "is not a PNG file");
-  uint32_t W = 0, H = 0;
-  int depth = 0, ctype = -1, interlace = 0;
-  std::vector<unsigned char> palette, idat;
-  bool ended = false;
-  for (size_t at = 8; at < n && !ended;) {
-    if (n - at < 12) throw input_error(name, "is a truncated PNG file");
-    const uint32_t len = be32(p + at);
-    if (len > n - at - 12) throw input_error(name, "is a truncated PNG file");
-    const std::string type(reinterpret_cast<const char*>(p + at + 4), 4);
-    const unsigned char* d = p + at + 8;
-    const uint32_t crc = uint32_t(::crc32(::crc32(0L, Z_NULL, 0), p + at + 4, len + 4));
-    if (crc != be32(d + len)) throw input_error(name, "is a damaged PNG file (CRC mismatch)");
-    if (type == "IHDR") {
-      if (len != 13) throw input_error(name, "has a bad PNG header");
-      W = be32(d);
-      H = be32(d + 4);
-      depth = d[8];
-      ctype = d[9];
-      interlace = d[12];
-      if (d[10] != 0 || d[11] != 0) throw input_error(name, "uses an unknown PNG compression");
-    } else if (type == "PLTE") {
-      palette.assign(d, d + len);
-    } else if (type == "IDAT") {
-      idat.insert(idat.end(), d, d + len);
-    } else if (type == "IEND") {
-      ended = true;
-    }
-    at += size_t(len) + 12;
-  }
-  if (ctype < 0 || !ended) throw input_error(name, "is an incomplete PNG file");
-  int channels;
-  switch (ctype) {
-    case 0: channels = 1; break;
-    case 2: channels = 3; break;
-    case 3: channels = 1; break;
-    case 4: channels = 2; break;
-    case 6: channels = 4; break;
-    default: throw input_error(name, "has an unknown PNG colour type");
-  }
-  const bool depth_ok = (ctype == 0 && (depth == 1 || depth == 2 || depth == 4 || depth == 8 ||
-                                        depth == 16)) ||
-                        (ctype == 3 && (depth == 1 || depth == 2 || depth == 4 || depth == 8)) ||
-                        ((ctype == 2 || ctype == 4 || ctype == 6) && (depth == 8 || depth == 16));
-  if (!depth_ok) throw input_error(name, "has an invalid PNG bit depth");
-  if (interlace != 0)
-    throw input_error(name, "is an interlaced PNG", "save the mask without interlacing");
-  if (W == 0 || H == 0 || W > (1u << 16) || H > (1u << 16))
-    throw input_error(name, "has an unsupported PNG size");
-  if (ctype == 3 && palette.size() < 3) throw input_error(name, "has no PNG palette");
+  if (bytes.size() < 8 || png_sig_cmp(p, 0, 8) != 0) throw input_error(name, "is not a PNG file");
+  PngIo io;
+  io.in = p;
+  io.in_size = bytes.size();
+  io.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &io, png_on_error, png_on_warning);
+  if (!io.png) throw std::bad_alloc();
+  PngGuard guard{&io, false};
+  io.info = png_create_info_struct(io.png);
+  if (!io.info) throw std::bad_alloc();
 
-  // Inflate (RFC 1950/1951 through zlib) into H filtered scanlines.
-  const size_t row = (size_t(W) * size_t(channels) * size_t(depth) + 7) / 8;
-  const size_t bpp = std::max<size_t>(1, size_t(channels) * size_t(depth) / 8);
+  PngHeader hdr;
+  if (!png_read_header(&io, &hdr))
+    throw input_error(name, std::string("is a damaged PNG file: ") + io.message, "save it again");
+  const uint32_t W = hdr.width, H = hdr.height;
+  if (W > (1u << 16) || H > (1u << 16)) throw input_error(name, "has an unsupported PNG size");
   // Deflate expands at most about 1032:1 (RFC 1951: a 258-byte match per 2 bits at best), so a
-  // header that asks for more scanline bytes than that is damaged; refused before the buffer for
-  // them is allocated (65536 × 65536 RGBA16 would be 34 GB).
-  const size_t raw_bytes = size_t(H) * (row + 1);
-  if (raw_bytes / 1100 > idat.size())
+  // header that asks for more scanline bytes than that of the whole file is damaged; refused
+  // before the rows are allocated (65536 × 65536 RGBA16 would be 34 GB).
+  const size_t raw_bytes = size_t(H) * (hdr.file_row_bytes + 1);
+  if (raw_bytes / 1100 > bytes.size())
     throw input_error(name, "is a damaged PNG file: its header's " + std::to_string(W) + "x" +
                                 std::to_string(H) + " pixels need more data than its " +
-                                std::to_string(idat.size()) + " compressed bytes can hold");
-  std::vector<unsigned char> raw(raw_bytes);
-  z_stream zs{};
-  if (inflateInit(&zs) != Z_OK) throw input_error(name, "cannot start zlib");
-  zs.next_in = idat.data();
-  zs.avail_in = uInt(idat.size());
-  zs.next_out = raw.data();
-  zs.avail_out = uInt(raw.size());
-  const int zr = inflate(&zs, Z_FINISH);
-  const size_t got = raw.size() - zs.avail_out;
-  inflateEnd(&zs);
-  if ((zr != Z_STREAM_END && zr != Z_BUF_ERROR) || got != raw.size())
-    throw input_error(name, "has damaged PNG image data");
+                                std::to_string(bytes.size()) + " bytes can hold");
+  if (!png_set_transforms(&io, &hdr))
+    throw input_error(name, std::string("is a damaged PNG file: ") + io.message, "save it again");
+  const bool palette = hdr.colour == PNG_COLOR_TYPE_PALETTE;
+  const int depth = palette ? 8 : hdr.depth < 8 ? 8 : hdr.depth;  // of the decoded samples
+  if ((hdr.channels != 1 && hdr.channels != 3) ||
+      hdr.row_bytes != size_t(W) * size_t(hdr.channels) * size_t(depth / 8))
+    throw std::logic_error("decode_png: libpng's rows are not the layout its transforms ask for");
 
-  // Undo the per-row filters (PNG spec. §9.2) in place.
-  std::vector<unsigned char> prev(row, 0);
-  for (uint32_t y = 0; y < H; ++y) {
-    unsigned char* line = &raw[size_t(y) * (row + 1)];
-    const int f = line[0];
-    unsigned char* cur = line + 1;
-    for (size_t i = 0; i < row; ++i) {
-      const int a = i >= bpp ? cur[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
-      int v = cur[i];
-      switch (f) {
-        case 0: break;
-        case 1: v += a; break;
-        case 2: v += b; break;
-        case 3: v += (a + b) / 2; break;
-        case 4: v += paeth(a, b, c); break;
-        default: throw input_error(name, "has an unknown PNG filter type");
-      }
-      cur[i] = static_cast<unsigned char>(v);
-    }
-    std::copy(cur, cur + row, prev.begin());
-  }
+  std::vector<unsigned char> raw(size_t(H) * hdr.row_bytes);
+  std::vector<png_bytep> rows(H);
+  for (uint32_t y = 0; y < H; ++y) rows[y] = raw.data() + size_t(y) * hdr.row_bytes;
+  if (!png_read_rows(&io, rows.data()))
+    throw input_error(name, std::string("has damaged PNG image data: ") + io.message,
+                      "save it again");
+
+  png_colorp entries = nullptr;
+  int entry_count = 0;
+  if (palette && png_get_PLTE(io.png, io.info, &entries, &entry_count) != PNG_INFO_PLTE)
+    throw input_error(name, "has no PNG palette");
 
   // Samples to RGB in [0, 1] (alpha dropped).
   Image img(static_cast<int>(W), static_cast<int>(H));
-  const double maxv = double((1u << depth) - 1);
+  const double maxv = depth == 16 ? 65535.0 : 255.0;
   for (uint32_t y = 0; y < H; ++y) {
-    const unsigned char* cur = &raw[size_t(y) * (row + 1) + 1];
+    const unsigned char* cur = rows[y];
     auto sample = [&](size_t k) -> uint32_t {  // k-th sample of the row
       if (depth == 16) return (uint32_t(cur[2 * k]) << 8) | cur[2 * k + 1];
-      if (depth == 8) return cur[k];
-      const size_t bit = k * size_t(depth);
-      return (uint32_t(cur[bit / 8]) >> (8 - depth - bit % 8)) & ((1u << depth) - 1);
+      return cur[k];
     };
     for (uint32_t x = 0; x < W; ++x) {
       float rgb[3];
-      const size_t k = size_t(x) * size_t(channels);
-      if (ctype == 3) {
-        const size_t e = sample(k);
-        if (3 * e + 2 >= palette.size())
+      const size_t k = size_t(x) * size_t(hdr.channels);
+      if (palette) {
+        const uint32_t e = sample(k);
+        if (e >= uint32_t(entry_count))
           throw input_error(name, "has a PNG palette index out of range");
-        for (int c = 0; c < 3; ++c) rgb[c] = float(palette[3 * e + size_t(c)] / 255.0);
-      } else if (ctype == 0 || ctype == 4) {
+        rgb[0] = float(entries[e].red / 255.0);
+        rgb[1] = float(entries[e].green / 255.0);
+        rgb[2] = float(entries[e].blue / 255.0);
+      } else if (hdr.channels == 1) {
         rgb[0] = rgb[1] = rgb[2] = float(sample(k) / maxv);
       } else {
         for (int c = 0; c < 3; ++c) rgb[c] = float(sample(k + size_t(c)) / maxv);

@@ -2,6 +2,7 @@
 #include "photonflow/image_metrics.h"
 
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -222,21 +223,27 @@ Image read_mask(const std::string& path) {
 
 std::string metrics_json(const ImageMetrics& m, const std::string& test_path,
                          const std::string& reference_path, const std::string& mask_path) {
-  std::ostringstream o;
-  o << "{\n  \"test\": " << json_string(test_path)
-    << ",\n  \"reference\": " << json_string(reference_path)
-    << ",\n  \"mask\": " << (mask_path.empty() ? "null" : json_string(mask_path))
-    << ",\n  \"width\": " << m.width << ",\n  \"height\": " << m.height
-    << ",\n  \"pixels\": " << m.pixels << ",\n  \"masked_out\": " << m.masked_out
-    << ",\n  \"nonfinite\": " << m.nonfinite << ",\n  \"mse\": " << json_number(m.mse)
-    << ",\n  \"rmse\": " << json_number(m.rmse) << ",\n  \"relmse\": " << json_number(m.rel_mse)
-    << ",\n  \"relmse_epsilon\": " << json_number(kRelMseEpsilon)
-    << ",\n  \"mae\": " << json_number(m.mae) << ",\n  \"psnr\": " << json_number(m.psnr)
-    << ",\n  \"psnr_peak\": " << json_number(m.peak) << ",\n  \"ssim\": " << json_number(m.ssim)
-    << ",\n  \"ssim_dynamic_range\": " << json_number(m.ssim_range)
-    << ",\n  \"ssim_window\": " << json_string(ssim_window_name(m.ssim_window))
-    << ",\n  \"ssim_centres\": " << m.ssim_centres << "\n}\n";
-  return o.str();
+  Json doc = Json::object();
+  doc["test"] = test_path;
+  doc["reference"] = reference_path;
+  doc["mask"] = mask_path.empty() ? Json(nullptr) : Json(mask_path);
+  doc["width"] = m.width;
+  doc["height"] = m.height;
+  doc["pixels"] = m.pixels;
+  doc["masked_out"] = m.masked_out;
+  doc["nonfinite"] = m.nonfinite;
+  doc["mse"] = json_value(m.mse);
+  doc["rmse"] = json_value(m.rmse);
+  doc["relmse"] = json_value(m.rel_mse);
+  doc["relmse_epsilon"] = json_value(kRelMseEpsilon);
+  doc["mae"] = json_value(m.mae);
+  doc["psnr"] = json_value(m.psnr);
+  doc["psnr_peak"] = json_value(m.peak);
+  doc["ssim"] = json_value(m.ssim);
+  doc["ssim_dynamic_range"] = json_value(m.ssim_range);
+  doc["ssim_window"] = ssim_window_name(m.ssim_window);
+  doc["ssim_centres"] = m.ssim_centres;
+  return json_record_text(doc);
 }
 
 std::string metrics_text(const ImageMetrics& m) {

@@ -2,13 +2,13 @@
 #include "photonflow/pathtrace.h"
 
 #include <omp.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -302,20 +302,23 @@ Image pathtrace(const Scene& scene, const PathTraceOptions& opt,
 
 std::string pathtrace_record_json(const Provenance& prov,
                                   const std::vector<PathTraceImageRecord>& images) {
-  std::ostringstream o;
-  o << "{\n" << provenance_json_fields(prov) << ",\n  \"images\": [";
-  const char* sep = "";
+  Json doc = provenance_json(prov);
+  Json list = Json::array();
   for (const auto& im : images) {
     const PathTraceStatus& s = im.status;
-    o << sep << "\n    {\"path\": " << json_string(im.path) << ", \"samples\": " << s.samples
-      << ", \"target\": " << s.target << ", \"seconds\": " << json_number(s.seconds)
-      << ", \"paths\": " << s.paths << ", \"rays\": " << s.rays
-      << ", \"nonfinite\": " << s.nonfinite
-      << ", \"timed_out\": " << (s.timed_out ? "true" : "false") << "}";
-    sep = ",";
+    Json entry = Json::object();
+    entry["path"] = im.path;
+    entry["samples"] = s.samples;
+    entry["target"] = s.target;
+    entry["seconds"] = json_value(s.seconds);
+    entry["paths"] = s.paths;
+    entry["rays"] = s.rays;
+    entry["nonfinite"] = s.nonfinite;
+    entry["timed_out"] = s.timed_out;
+    list.push_back(std::move(entry));
   }
-  o << "\n  ]\n}\n";
-  return o.str();
+  doc["images"] = std::move(list);
+  return json_record_text(doc);
 }
 
 void write_pathtrace_record(const std::string& path, const Provenance& prov,

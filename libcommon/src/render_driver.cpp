@@ -2,12 +2,12 @@
 #include "photonflow/render_driver.h"
 
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdint>
-#include <sstream>
 
 #include "photonflow/cl_backend.h"
 #include "photonflow/options.h"
@@ -35,17 +35,10 @@ uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
                     EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored) {
   EyePassOptions eo = opt.eye;
   eo.pass = pass;
-  eye = eye_pass(scene, eo, opt.device);
+  eye = trace_hitpoints(scene, eo);
   PhotonGridParams gp;
   gp.max_bins = opt.ppm.max_bins;
   gp.default_radius = radius0;  // the smallest bin size, as ppm_grid_params
-  if (opt.device) {  // device photon tracing; the gather runs on the host (docs/FORMATS.md)
-    PhotonPassResult p = trace_photons(scene, pass, opt.photons, *opt.device);
-    stored = p.photons.size();
-    const PhotonSpan span{p.photons.data(), p.photons.size()};
-    build_photon_grid_into(grid, &span, 1, int(scene.mesh_names.size()), gp, opt.ppm.threads);
-    return p.emitted;
-  }
   const uint64_t emitted = trace_photons_into(scene, pass, opt.photons, chunks);
   stored = chunks.size();
   const std::vector<PhotonSpan> spans = chunks.spans();
@@ -72,6 +65,20 @@ ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions
 }
 
 void ProgressiveRenderer::run_iteration() {
+  if (opt_.estimator == Estimator::Sppm && opt_.device) {
+    // OpenCL: eye pass and photons traced on the device, the photons never leave it, and the
+    // pixels' R, N, τ stay there between passes (DevicePpmState::sppm_pass).
+    EyePassOptions eo = opt_.eye;
+    eo.pass = uint32_t(state_.passes);
+    const EyePassResult eye = trace_hitpoints(scene_, eo, *opt_.device);
+    if (!device_state_) device_state_ = std::make_unique<DevicePpmState>(scene_, state_, *opt_.device);
+    const ClWaitScope no_wait(*opt_.device, false);
+    const DevicePhotons pass =
+        trace_photons_device(scene_, uint32_t(state_.passes), opt_.photons, *opt_.device);
+    photons_stored_ += pass.count;
+    device_state_->sppm_pass(eye, pass, opt_.ppm);
+    return;
+  }
   if (opt_.estimator == Estimator::Sppm) {  // a new eye pass, then the pass's photons per pixel
     EyePassResult eye;
     size_t stored = 0;
@@ -138,6 +145,20 @@ PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt, PassSum
 }
 
 void PppmRenderer::run_iteration() {
+  if (opt_.device) {  // eye pass, photons and gather on the device; the sums on the host
+    EyePassOptions eo = opt_.eye;
+    eo.pass = uint32_t(sums_.end_pass());
+    eye_ = trace_hitpoints(scene_, eo, *opt_.device);
+    const ClWaitScope no_wait(*opt_.device, false);
+    const DevicePhotons pass =
+        trace_photons_device(scene_, uint32_t(sums_.end_pass()), opt_.photons, *opt_.device);
+    photons_stored_ += pass.count;
+    pppm_accumulate(sums_, eye_,
+                    pppm_gather_device(scene_, eye_, pppm_pass_radius(sums_), sums_.direct_mode,
+                                       pass, opt_.ppm, *opt_.device),
+                    pass.emitted);
+    return;
+  }
   size_t stored = 0;
   const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(sums_.end_pass()), sums_.radius1,
                                       eye_, photon_chunks_, grid_, stored);
@@ -465,22 +486,24 @@ void check_snapshot_pattern(const std::string& pattern, const RenderOptions& opt
 }
 
 std::string render_record_json(const Provenance& prov, const std::vector<RenderImageRecord>& images) {
-  std::ostringstream o;
-  o << "{\n" << provenance_json_fields(prov) << ",\n  \"images\": [";
-  const char* sep = "";
+  Json doc = provenance_json(prov);
+  Json list = Json::array();
   for (const auto& im : images) {
     const RenderStatus& s = im.status;
-    o << sep << "\n    {\"path\": " << json_string(im.path) << ", \"passes\": " << s.passes
-      << ", \"target\": " << s.target << ", \"photons_emitted\": " << s.photons_emitted
-      << ", \"photons_stored\": " << s.photons_stored
-      << ", \"seconds\": " << json_number(s.seconds)
-      << ", \"build_seconds\": " << json_number(s.build_seconds)
-      << ", \"mean_radius\": " << json_number(s.mean_radius)
-      << ", \"resumed\": " << (s.resumed ? "true" : "false") << "}";
-    sep = ",";
+    Json entry = Json::object();
+    entry["path"] = im.path;
+    entry["passes"] = s.passes;
+    entry["target"] = s.target;
+    entry["photons_emitted"] = s.photons_emitted;
+    entry["photons_stored"] = s.photons_stored;
+    entry["seconds"] = json_value(s.seconds);
+    entry["build_seconds"] = json_value(s.build_seconds);
+    entry["mean_radius"] = json_value(s.mean_radius);
+    entry["resumed"] = s.resumed;
+    list.push_back(std::move(entry));
   }
-  o << "\n  ]\n}\n";
-  return o.str();
+  doc["images"] = std::move(list);
+  return json_record_text(doc);
 }
 
 void write_render_record(const std::string& path, const Provenance& prov,

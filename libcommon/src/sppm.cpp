@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <stdexcept>
 
 #include "photonflow/error.h"
 #include "photonflow/options.h"
@@ -102,6 +103,29 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
     const int m = gather_site(scene, grid, v, s.radius, skip_direct, tau_m);
     for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
     pf_ppm_update(&s, m, tau_m, alpha);                  // thesis eq. 3.14, 3.16, 3.18
+  }
+  sppm_finish_pass(state, eye, emitted);
+}
+
+void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,
+                std::vector<float>& beta) {
+  const std::vector<size_t> px = visible_pixels(eye, state.width, state.height, true);
+  const size_t n = size_t(state.width) * size_t(state.height);
+  if (state.hitpoints.size() != n)
+    throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
+  pf_hitpoint none{};
+  none.mesh = none.material = -1;
+  sites.assign(n, none);
+  beta.assign(n * 3, 0.f);
+  for (size_t i = 0; i < px.size(); ++i) {
+    sites[px[i]] = eye.hitpoints[i];
+    for (int c = 0; c < 3; ++c) beta[px[i] * 3 + size_t(c)] = eye.hitpoints[i].weight[c];
+  }
+}
+
+void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted) {
+  for (const pf_hitpoint& v : eye.hitpoints) {  // visible_pixels checked the pixels
+    pf_hitpoint& s = state.hitpoints[size_t(v.pixel_y) * size_t(state.width) + size_t(v.pixel_x)];
     for (int c = 0; c < 3; ++c) {
       s.position[c] = v.position[c];
       s.normal[c] = v.normal[c];
@@ -127,31 +151,46 @@ double pppm_radius(double r1, double alpha, int pass) {
   return std::sqrt(r2);
 }
 
+float pppm_pass_radius(const PassSums& sums) {
+  return float(pppm_radius(sums.radius1, sums.alpha, sums.end_pass()));
+}
+
 void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
   require_alpha(sums.alpha);
-  const std::vector<size_t> px = visible_pixels(eye, sums.width, sums.height, false);
-  const float r = float(pppm_radius(sums.radius1, sums.alpha, sums.end_pass()));
-  // L_d,i: light the eye paths saw directly.
-  for (size_t j = 0; j < sums.sum.size(); ++j)
-    sums.sum[j] += double(eye.emitted[j]) + double(eye.direct[j]);
+  const float r = pppm_pass_radius(sums);
+  const bool skip = sums.direct_mode == DirectMode::ShadowRays;
+  const int64_t count = int64_t(eye.hitpoints.size());
+  std::vector<float> tau_beta(size_t(count) * 3, 0.f);
   if (emitted > 0) {
-    // β f_r Φ / (π r_i² N_p) of every visible point, in parallel; added to the pixels in order
-    // afterwards (several samples of a pixel may share it).
-    const bool skip = sums.direct_mode == DirectMode::ShadowRays;
-    const double norm = 1.0 / (double(kPi) * double(r) * double(r) * double(emitted));
-    const int64_t count = int64_t(eye.hitpoints.size());
-    std::vector<double> add(size_t(count) * 3);
 #pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
     for (int64_t i = 0; i < count; ++i) {
       const pf_hitpoint& v = eye.hitpoints[size_t(i)];
       float tau_m[3];
       gather_site(scene, grid, v, r, skip, tau_m);
-      for (int c = 0; c < 3; ++c)
-        add[size_t(i) * 3 + size_t(c)] = double(v.weight[c]) * double(tau_m[c]) * norm;
+      for (int c = 0; c < 3; ++c) tau_beta[size_t(i) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
     }
+  }
+  pppm_accumulate(sums, eye, tau_beta, emitted);
+}
+
+void pppm_accumulate(PassSums& sums, const EyePassResult& eye, const std::vector<float>& tau_beta,
+                     uint64_t emitted) {
+  require_alpha(sums.alpha);
+  const std::vector<size_t> px = visible_pixels(eye, sums.width, sums.height, false);
+  if (tau_beta.size() != px.size() * 3)
+    throw std::invalid_argument("pppm_accumulate: one β·τ_M per visible point");
+  const float r = pppm_pass_radius(sums);
+  // L_d,i: light the eye paths saw directly.
+  for (size_t j = 0; j < sums.sum.size(); ++j)
+    sums.sum[j] += double(eye.emitted[j]) + double(eye.direct[j]);
+  if (emitted > 0) {
+    // β Σ f_r Φ / (π r_i² N_p) of every visible point, added to its pixel in order (several
+    // samples of a pixel may share it).
+    const double norm = 1.0 / (double(kPi) * double(r) * double(r) * double(emitted));
     for (size_t i = 0; i < px.size(); ++i)
-      for (int c = 0; c < 3; ++c) sums.sum[px[i] * 3 + size_t(c)] += add[i * 3 + size_t(c)];
+      for (int c = 0; c < 3; ++c)
+        sums.sum[px[i] * 3 + size_t(c)] += double(tau_beta[i * 3 + size_t(c)]) * norm;
   }
   sums.passes += 1;
   sums.photons_emitted += emitted;

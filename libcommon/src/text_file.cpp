@@ -1,9 +1,12 @@
 // Text outputs: see text_file.h.
 #include "photonflow/text_file.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
-#include <cstdio>
-#include <sstream>
+#include <cstdint>
+#include <stdexcept>
+#include <utility>
 
 #include "photonflow/version.h"
 
@@ -12,53 +15,87 @@
 
 namespace pf {
 
-std::string json_string(const std::string& text) {
-  std::string out = "\"";
-  for (unsigned char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += char(c);
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += char(c);
-    }
-  }
-  return out + "\"";
+Json json_value(double v) {
+  if (!std::isfinite(v)) return nullptr;
+  if (std::trunc(v) == v && std::fabs(v) < 1e17 && !(v == 0.0 && std::signbit(v)))
+    return static_cast<int64_t>(v);
+  return v;
 }
 
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-std::string provenance_json_fields(const Provenance& prov) {
-  std::ostringstream o;
-  o << "  \"tool\": " << json_string(prov.tool)
-    << ",\n  \"version\": " << json_string(PHOTONFLOW_VERSION)
-    << ",\n  \"git_hash\": " << json_string(PHOTONFLOW_GIT_HASH)
-    << ",\n  \"seed\": " << prov.seed
-    << ",\n  \"command_line\": " << json_string(prov.command_line)
-    << ",\n  \"wall_time_s\": " << json_number(prov.wall_time_s) << ",\n  \"parameters\": {";
+std::string json_text(const Json& value) {
+  std::string out;
   const char* sep = "";
-  for (const auto& [k, v] : prov.parameters) {
-    o << sep << "\n    " << json_string(k) << ": " << json_string(v);
+  if (value.is_object()) {
+    out = "{";
+    for (const auto& [key, member] : value.items()) {
+      out += sep + json_text(key) + ": " + json_text(member);
+      sep = ", ";
+    }
+    return out + "}";
+  }
+  if (value.is_array()) {
+    out = "[";
+    for (const Json& element : value) {
+      out += sep + json_text(element);
+      sep = ", ";
+    }
+    return out + "]";
+  }
+  return value.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+
+std::string json_record_text(const Json& doc) {
+  if (!doc.is_object()) throw std::invalid_argument("json_record_text: a record is an object");
+  std::string out = "{";
+  const char* sep = "";
+  for (const auto& [key, member] : doc.items()) {
+    out += sep;
+    out += "\n  " + json_text(key) + ": ";
+    const char* inner = "";
+    if (member.is_object()) {
+      out += "{";
+      for (const auto& [k, v] : member.items()) {
+        out += inner;
+        out += "\n    " + json_text(k) + ": " + json_text(v);
+        inner = ",";
+      }
+      out += "\n  }";
+    } else if (member.is_array()) {
+      out += "[";
+      for (const Json& v : member) {
+        out += inner;
+        out += "\n    " + json_text(v);
+        inner = ",";
+      }
+      out += "\n  ]";
+    } else {
+      out += json_text(member);
+    }
     sep = ",";
   }
-  o << "\n  },\n  \"inputs\": [";
-  sep = "";
-  for (const auto& in : prov.inputs) {
-    o << sep << "\n    {\"role\": " << json_string(in.role) << ", \"path\": " << json_string(in.path)
-      << ", \"sha256\": " << json_string(in.sha256) << ", \"format\": " << json_string(in.format)
-      << ", \"scene_id\": " << json_string(in.scene_id) << "}";
-    sep = ",";
-  }
-  o << "\n  ]";
-  return o.str();
+  return out + "\n}\n";
+}
+
+Json provenance_json(const Provenance& prov) {
+  Json doc = Json::object();
+  doc["tool"] = prov.tool;
+  doc["version"] = PHOTONFLOW_VERSION;
+  doc["git_hash"] = PHOTONFLOW_GIT_HASH;
+  doc["seed"] = prov.seed;
+  doc["command_line"] = prov.command_line;
+  doc["wall_time_s"] = json_value(prov.wall_time_s);
+  Json parameters = Json::object();
+  for (const auto& [name, value] : prov.parameters) parameters[name] = value;
+  doc["parameters"] = std::move(parameters);
+  Json inputs = Json::array();
+  for (const auto& in : prov.inputs)
+    inputs.push_back({{"role", in.role},
+                      {"path", in.path},
+                      {"sha256", in.sha256},
+                      {"format", in.format},
+                      {"scene_id", in.scene_id}});
+  doc["inputs"] = std::move(inputs);
+  return doc;
 }
 
 std::string numbered_name(const std::string& pattern, const std::string& key, int n, int total) {

@@ -17,7 +17,9 @@
 
 int main(int argc, char** argv) {
   return pf::run_tool("cluster", [&] {
-    cxxopts::Options o("cluster", "Group hitpoints into work-group clusters (thesis ch. 7.3, 8).");
+    cxxopts::Options o("cluster", "Group hitpoints into work-group clusters (thesis ch. 7.3, 8). "
+                       "Clusters belong to fixed hitpoints (PPM's one eye pass); SPPM and PPPM "
+                       "trace new visible points every pass and take none.");
     o.add_options()
       ("scene", "baked scene (scene.h5); its scene_id must match the hitpoints'",
        cxxopts::value<std::string>())

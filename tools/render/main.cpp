@@ -170,6 +170,7 @@ int main(int argc, char** argv) {
 
     prov.wall_time_s = clock.seconds();  // so far; checkpoints add the run's (render_driver.cpp)
     pf::Progress progress("pass", opt.passes, "photons");
+    if (opt.time_budget > 0) progress.set_budget(opt.time_budget, a.count("passes") == 0);
     std::vector<pf::RenderImageRecord> written;
     auto image_of = [&](const pf::HitpointSet& h) {
       return dev ? pf::synthesize(h, *dev) : pf::synthesize(h);
