@@ -99,12 +99,14 @@ struct ToolRun {
 };
 
 // Runs `tool args` from bin_dir(), capturing stdout and stderr; `env` ("NAME=value ...") is set
-// for the tool alone.
+// for the tool alone. With `seconds` > 0 the tool is killed (SIGKILL) after that time and the run's
+// exit code is 137: a test of a refusal that used to hang fails instead of hanging the suite.
 inline ToolRun run_tool(const std::string& tool, const std::string& args, const TempDir& tmp,
-                        const std::string& env = "") {
+                        const std::string& env = "", int seconds = 0) {
   std::string out = tmp / ".stdout", err = tmp / ".stderr";
-  std::string cmd = (env.empty() ? "" : "env " + env + " ") + bin_dir() + "/" + tool + " " + args +
-                    " >" + out + " 2>" + err;
+  std::string cmd = (env.empty() ? "" : "env " + env + " ") +
+                    (seconds > 0 ? "timeout -s KILL " + std::to_string(seconds) + " " : "") +
+                    bin_dir() + "/" + tool + " " + args + " >" + out + " 2>" + err;
   int status = std::system(cmd.c_str());
   ToolRun r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

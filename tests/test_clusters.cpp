@@ -431,3 +431,21 @@ TEST_CASE("k-means makes K = hitpoints / work-group size clusters per mesh (ch. 
     CHECK(cl.radius < 0.1f * float(wg) / 2 + 0.06f);
   }
 }
+
+TEST_CASE("k-means assigns a hitpoint at any finite distance (no float overflow)", "[clusters]") {
+  // A hitpoint 1e20 away: its squared float distance to every centre overflowed to infinity, no
+  // centre was ever nearer than FLT_MAX, and its cluster index stayed INT32_MAX (SIGSEGV writing
+  // the members). The tools refuse such a file on reading (stage_files.h); the clustering itself
+  // must still give a valid partition.
+  for (float far : {1e20f, -1e20f, 3e38f}) {
+    INFO("position " << far);
+    HitpointSet h = hand_set();
+    h.hitpoints[4].position[0] = far;
+    h.hitpoints[11].position[2] = far;  // mesh 1's too
+    for (int wg : {2, 4}) {
+      const ClusterSet c = cluster_kmeans(h, wg, 5, 1, 2);
+      CHECK(check_clusters(c, h) == "");
+      CHECK(radii_contain(c, h));  // the far hitpoint's cluster reaches it too
+    }
+  }
+}

@@ -328,6 +328,19 @@ TEST_CASE("render driver: pass lists and snapshot names", "[render][snapshots]")
   for (int p = 1; p <= 9; ++p)
     if (snapshot_due(o, p)) due.push_back(p);
   CHECK(due == std::vector<int>{1, 4, 6, 8});
+
+  // A pattern without {pass} names one file: refused when more than one snapshot is due.
+  o.passes = 9;
+  CHECK_NOTHROW(check_snapshot_pattern("s-{pass}.exr", o));
+  CHECK_THROWS_WITH(check_snapshot_pattern("fixed.exr", o),
+                    Catch::Contains("--snapshot 'fixed.exr' has no {pass}: its 4 snapshots"));
+  o.snapshot_every = 0;
+  o.snapshot_at = {6, 6};  // one snapshot, listed twice: one file is right
+  CHECK_NOTHROW(check_snapshot_pattern("fixed.exr", o));
+  o.snapshot_every = 5;  // 5 and 6
+  CHECK_THROWS_AS(check_snapshot_pattern("fixed.exr", o), InputError);
+  o.snapshot_at = {5};  // 5 only
+  CHECK_NOTHROW(check_snapshot_pattern("fixed.exr", o));
 }
 
 TEST_CASE("render driver: the run record lists every image with its status",
@@ -387,6 +400,21 @@ TEST_CASE("render tool: snapshots and run record", "[render][snapshots][tools]")
                                  (tmp / "snaps") + "/{pass}.exr", tmp)
               .exit_code == 0);
   CHECK(std::filesystem::exists(tmp / "snaps/3.exr"));
+  // A pattern without {pass} for one snapshot is one file; for more, refused before any work
+  // (before: every snapshot overwrote the one before).
+  REQUIRE(run_tool("render", base + "-o " + (tmp / "one.exr") + " --snapshot-at 2 --snapshot " +
+                                 (tmp / "one-snap.exr"), tmp)
+              .exit_code == 0);
+  CHECK(std::filesystem::exists(tmp / "one-snap.exr"));
+  auto same = run_tool("render", base + "-o " + (tmp / "same.exr") + " --snapshot-every 1 " +
+                                     "--snapshot " + (tmp / "same-snap.exr"), tmp);
+  INFO(same.err);
+  CHECK(same.exit_code == kExitBadInput);
+  CHECK(same.err == "render: --snapshot '" + (tmp / "same-snap.exr") + "' has no {pass}: its 4 "
+                    "snapshots would overwrite each other (put {pass} in the name, e.g. "
+                    "snap-{pass}.exr)\n");
+  CHECK_FALSE(std::filesystem::exists(tmp / "same.exr"));
+  CHECK_FALSE(std::filesystem::exists(tmp / "same-snap.exr"));
   // Bad options: one line, exit 2, no image.
   for (const std::string& bad : {std::string("--snapshot-at 0"), std::string("--snapshot-at 1,x"),
                                  std::string("--snapshot-every -1"),

@@ -222,11 +222,153 @@ TEST_CASE("scene-bake: --help explains every option", "[scene_bake_tool]") {
   CHECK(r.code == 0);
   for (const char* opt :
        {"--output", "--eye", "--look-at", "--up", "--fov", "--width", "--height", "--insert",
-        "--insert-box", "--insert-material", "--kd-ct", "--kd-ci", "--kd-empty-bonus",
+        "--insert-box", "--insert-material", "--up-axis", "--kd-ct", "--kd-ci", "--kd-empty-bonus",
         "--kd-max-depth", "--kd-max-leaf", "--import-memory-mb", "--import-seconds", "--threads",
         "--help", "INPUT", "degrees", "pixels",
         "default"}) {
     INFO(opt);
     CHECK(r.out.find(opt) != std::string::npos);
   }
+}
+
+namespace {
+
+// Writes a small room without a camera, up = +z: a floor quad at z = 0 (x, y in 0..1) and a lamp
+// facing down at z = 1.
+std::string write_z_up_room(const fs::path& dir) {
+  std::ofstream(dir / "room.mtl") << "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\n"
+                                     "Ke 10 10 10\n";
+  std::ofstream(dir / "room.obj") << "mtllib room.mtl\n"
+                                     "o floor\nusemtl white\n"
+                                     "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"
+                                     "o lamp\nusemtl lamp\n"
+                                     "v 0.4 0.4 1\nv 0.4 0.6 1\nv 0.6 0.6 1\nv 0.6 0.4 1\n"
+                                     "f 5 6 7 8\n";
+  return (dir / "room.obj").string();
+}
+
+// A square pyramid modelled y-up: base 1 x 1 at y = 0, apex at y = 4.
+std::string write_pyramid(const fs::path& dir) {
+  std::ofstream(dir / "pyramid.obj") << "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nv 0.5 4 0.5\n"
+                                        "f 1 2 3 4\nf 1 5 2\nf 2 5 3\nf 3 5 4\nf 4 5 1\n";
+  return (dir / "pyramid.obj").string();
+}
+
+// The bounds of a baked scene's inserted triangles (meshes "insert0:...") and of the others, and
+// the mean of the inserted vertices.
+struct InsertGeometry {
+  pf::Bounds inserted, scene;
+  pf::Vec3 mean{0, 0, 0};
+};
+InsertGeometry insert_geometry(const pf::Scene& s) {
+  InsertGeometry g;
+  size_t n = 0;
+  for (const pf_triangle& t : s.triangles) {
+    const bool ins = s.mesh_names[size_t(t.mesh)].rfind("insert0:", 0) == 0;
+    for (const float* v : {t.v0, t.v1, t.v2}) {
+      (ins ? g.inserted : g.scene).extend(pf::Vec3(v));
+      if (ins) {
+        g.mean = g.mean + pf::Vec3(v);
+        ++n;
+      }
+    }
+  }
+  if (n) g.mean = g.mean * (1.f / float(n));
+  return g;
+}
+
+}  // namespace
+
+TEST_CASE("scene-bake: the camera line says where each camera value came from",
+          "[scene_bake_tool]") {
+  // Before: "(default framing)" for any OBJ without a camera, also when every value was given.
+  const fs::path dir = scratch("camera-source");
+  const std::string obj = write_z_up_room(dir), out = " -o '" + (dir / "scene.h5").string() + "'";
+  const std::string dae = "'" + src("data/cornell-box.dae") + "'";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"'" + obj + "'" + out + " --eye 0.5,-2,0.5 --look-at 0.5,0.5,0.5 --up 0,0,1 --fov 50",
+       "(eye, look-at, up, fov from options)"},
+      {"'" + obj + "'" + out, "(eye, look-at, up, fov from default framing)"},
+      {"'" + obj + "'" + out + " --eye 0.5,0.5,3", "(eye from options; look-at, up, fov from "
+                                                   "default framing)"},
+      {dae + out, "(eye, look-at, up, fov from file)"},
+      {dae + out + " --fov 30 --up 0,1,0.1", "(up, fov from options; eye, look-at from file)"},
+  };
+  for (const auto& [args, says] : cases) {
+    INFO(args);
+    const Run r = run_tool(args, dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const size_t at = r.out.find("  camera     ");
+    REQUIRE(at != std::string::npos);
+    const std::string line = r.out.substr(at, r.out.find('\n', at) - at);
+    INFO(line);
+    CHECK(line.size() >= says.size());
+    CHECK(line.compare(line.size() - says.size(), says.size(), says) == 0);
+  }
+}
+
+TEST_CASE("scene-bake: --insert stands the mesh on the floor of the scene's up axis",
+          "[scene_bake_tool]") {
+  // Before: +y was taken as up, so in a +z-up scene an inserted mesh lay on its side, centred
+  // mid-room in z. The pyramid (y-up, 4 high on a 1 x 1 base) must stand on the floor along the
+  // up axis (its lowest point there, its height along up, its base at the floor side).
+  const fs::path dir = scratch("up-axis");
+  const std::string obj = write_z_up_room(dir), pyramid = write_pyramid(dir);
+  const std::string out = (dir / "scene.h5").string();
+  // The Cornell box (+y up, camera up +y) turned about x by +90 degrees (+y → +z: camera up +z)
+  // and by −90 degrees (+y → −z): auto takes the axis from the file's camera.
+  const std::string box = read_text(src("data/cornell-box.dae"));
+  auto turned = [&](const std::string& name, const char* angle) {
+    std::string s = box;
+    const std::string open = "<visual_scene id=\"scene\" name=\"scene\">";
+    REQUIRE(s.find(open) != std::string::npos);
+    s.replace(s.find(open), open.size(),
+              open + "<node id=\"turn\" name=\"turn\"><rotate>1 0 0 " + angle + "</rotate>");
+    s.replace(s.find("</visual_scene>"), 15, "</node></visual_scene>");
+    std::ofstream(dir / name) << s;
+    return (dir / name).string();
+  };
+  struct Case {
+    std::string args;
+    int axis, sign;
+  };
+  const std::vector<Case> cases = {
+      {"'" + src("data/cornell-box.dae") + "'", 1, 1},
+      {"'" + turned("z-up.dae", "90") + "'", 2, 1},
+      {"'" + turned("minus-z-up.dae", "-90") + "'", 2, -1},
+      {"'" + obj + "' --eye 0.5,-2,0.5 --look-at 0.5,0.5,0.3 --up 0,0,1", 2, 1},  // --up
+      {"'" + obj + "' --up-axis z", 2, 1},  // the option over the default camera's +y
+      {"'" + turned("z-up2.dae", "90") + "' --up-axis -z --insert-box 0.2,0.3,0.6,0.6,0.7,1", 2,
+       -1},  // the option over the file's camera; a box of its own (0.4 on every axis)
+  };
+  for (const Case& k : cases) {
+    INFO(k.args);
+    fs::remove(out);
+    const Run r = run_tool(k.args + " -o '" + out + "' --insert '" + pyramid + "'", dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.find(std::string("up axis    ") + (k.sign > 0 ? "+" : "-") + "xyz"[k.axis]) !=
+          std::string::npos);
+    const InsertGeometry g = insert_geometry(pf::load_scene(out));
+    const int a = k.axis;
+    const pf::Vec3 ext = g.scene.extent();
+    // Box: 0.4 of the scene on every axis (default box and the one given); the pyramid's
+    // extents after turning are 1, 1 and 4 (along up).
+    float scale = 0.4f * ext[a] / 4.f;
+    for (int b = 0; b < 3; ++b)
+      if (b != a) scale = std::min(scale, 0.4f * ext[b]);
+    const float height = g.inserted.extent()[a];
+    CHECK(height == Approx(4.f * scale).epsilon(1e-4));
+    for (int b = 0; b < 3; ++b) CHECK(g.inserted.extent()[b] <= height * 1.0001f);
+    // On the floor: the scene's lo along +axis, hi along −axis.
+    const float floor_at = k.sign > 0 ? g.scene.lo[a] : g.scene.hi[a];
+    const float base = k.sign > 0 ? g.inserted.lo[a] : g.inserted.hi[a];
+    CHECK(base == Approx(floor_at).margin(1e-5));
+    // Standing, not upside down: the vertices' mean (4 base corners, 1 apex) near the floor.
+    CHECK(std::fabs(g.mean[a] - base) < 0.5f * height);
+  }
+  const Run bad = run_tool("'" + obj + "' -o '" + out + "' --up-axis w", dir);
+  CHECK(bad.code == 2);
+  CHECK(bad.err == "scene-bake: --up-axis must be x, y, z, -x, -y, -z or auto, got 'w'\n");
 }

@@ -458,8 +458,8 @@ TEST_CASE("inserted meshes fit their box and take the given material", "[scene_i
     ib.extend(Vec3(t.v2));
     CHECK(s.material_names[size_t(t.material)] == "insert-default");
   }
-  const Vec3 lo = base.bounds.lo + ins.box_lo * base.bounds.extent();
-  const Vec3 hi = base.bounds.lo + ins.box_hi * base.bounds.extent();
+  const Vec3 lo = base.bounds.lo + *ins.box_lo * base.bounds.extent();
+  const Vec3 hi = base.bounds.lo + *ins.box_hi * base.bounds.extent();
   for (int a = 0; a < 3; ++a) {
     CHECK(ib.lo[a] >= lo[a] - 1e-5f);
     CHECK(ib.hi[a] <= hi[a] + 1e-5f);

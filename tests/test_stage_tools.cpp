@@ -471,3 +471,56 @@ TEST_CASE("the Make DAG's render driver restarts after a state option changed, r
   CHECK(same_pixels(read_exr(dir + "/render.exr"),
                     fresh("--estimator pppm --passes 2 --alpha 0.5", "e.exr")));
 }
+
+TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are refused",
+          "[tools][badinput]") {
+  TempDir tmp("stages-audit");
+  bake(tmp, "cornell-box.dae", "box.h5");
+  const std::string box = tmp / "box.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5",
+                    grid = tmp / "grid.h5", out = tmp / "out.h5";
+  REQUIRE(run_tool("trace-hitpoints", "--scene " + box + " -o " + hp, tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-photons", "--scene " + box + " -o " + ph + " --photons 2000", tmp)
+              .exit_code == 0);
+  REQUIRE(run_tool("build-grid", "--scene " + box + " --photons " + ph + " --hitpoints " + hp +
+                                     " -o " + grid, tmp).exit_code == 0);
+
+  // --photons beside --grid: before, the grid's photons were gathered and --photons (and its
+  // provenance) silently dropped.
+  check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
+                                           ph + " --grid " + grid + " -o " + out, tmp),
+                out, "--photons and --grid exclude each other");
+
+  // A hitpoints file whose radius0 is not a length: named with the attribute (before:
+  // "--radius must be positive", an option never given).
+  HitpointSet h = load_hitpoints(hp);
+  const Provenance prov = load_hitpoints_provenance(hp);
+  for (float r0 : {0.f, -1.f}) {
+    INFO("radius0 " << r0);
+    h.radius0 = r0;
+    const std::string bad = tmp / "hp-r0.h5";
+    std::filesystem::remove(bad);
+    save_hitpoints(h, bad, prov);
+    const test::ToolRun r = run_tool("build-grid", "--scene " + box + " --photons " + ph +
+                                                       " --hitpoints " + bad + " -o " + out, tmp);
+    check_refused(r, out, bad + ": attribute radius0 = ");
+    CHECK(r.err.find("--radius must be") == std::string::npos);
+  }
+
+  // A hitpoint at 1e20 in the unit box: before, k-means' float distances overflowed (SIGSEGV in
+  // cluster and illuminate --method grid-kmeans | kmeans-clusters); now refused on reading,
+  // naming the file, dataset and element.
+  h = load_hitpoints(hp);
+  h.hitpoints[7].position[0] = 1e20f;
+  const std::string far = tmp / "hp-far.h5";
+  save_hitpoints(h, far, prov);
+  const std::string where = far + ": /hitpoints[7]: position 1e+20,";
+  check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + far + " --photons " +
+                                           ph + " -o " + out, tmp),
+                out, where);
+  check_refused(run_tool("cluster", "--scene " + box + " --hitpoints " + far + " -o " + out +
+                                        " --method kmeans", tmp),
+                out, where);
+  check_refused(run_tool("build-grid", "--scene " + box + " --photons " + ph + " --hitpoints " +
+                                           far + " -o " + out, tmp),
+                out, where);
+}

@@ -15,12 +15,18 @@
 //     failed in an OpenMP worker thread (before: std::terminate, SIGABRT);
 //   - a full disk (a file-size limit here) is one line and exit 2 with no output and no temporary
 //     file, from HDF5, OpenEXR, OBJ and the import's child alike (before: HDF5 crashed at exit);
-//   - synthesize --png none writes no preview.
-// Plus the library pieces themselves: preview_path, check_outputs, commit_temp.
+//   - synthesize --png none writes no preview;
+//   - an input that is not a regular file (a FIFO, a directory, a device) is refused at once;
+//   - outputs with names of up to 255 bytes are written (their temporary names fit), and a run
+//     removes the temporaries of its output that a killed run left.
+// Plus the library pieces themselves: preview_path, check_outputs, commit_temp, temp_path,
+// remove_stale_temps.
 #include <catch2/catch.hpp>
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -432,4 +438,146 @@ TEST_CASE("outputs: synthesize --png none writes no preview", "[tools][outputs]"
   CHECK(run_tool("synthesize", "--hitpoints " + c.st + " -o " + (tmp / "b.exr"), tmp).exit_code ==
         0);
   CHECK(fs::exists(tmp / "b.png"));  // the default: beside the output
+}
+
+namespace {
+// Runs f in a child process with a time limit: 2 when it threw InputError (its line in *what), 0
+// when it returned, -1 when it crashed or was still running after `seconds` (SIGALRM).
+int in_child(const std::function<void()>& f, int seconds, std::string* what = nullptr) {
+  int fd[2];
+  REQUIRE(pipe(fd) == 0);
+  const pid_t pid = fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    close(fd[0]);
+    alarm(unsigned(seconds));
+    int code = 0;
+    try {
+      f();
+    } catch (const InputError& e) {
+      const std::string line = e.what();
+      code = write(fd[1], line.data(), line.size()) < 0 ? 3 : 2;
+    } catch (...) {
+      code = 1;
+    }
+    _exit(code);
+  }
+  close(fd[1]);
+  std::string line;
+  char buf[512];
+  ssize_t n;
+  while ((n = read(fd[0], buf, sizeof buf)) > 0) line.append(buf, size_t(n));
+  close(fd[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (what) *what = line;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+}  // namespace
+
+TEST_CASE("outputs: a FIFO or directory or device as an input is refused at once and not waited on",
+          "[tools][outputs]") {
+  // Before: every stage blocked for ever opening a FIFO input (H5Fis_hdf5, OpenEXR, assimp's
+  // child until its time limit). Each run here is killed after 20 s (exit 137: the test fails
+  // instead of hanging).
+  TempDir tmp("fifo-in");
+  const Chain c = make_chain(tmp);
+  const std::string fifo = tmp / "fifo.h5", obj = tmp / "fifo.obj", exr = tmp / "img.exr";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  REQUIRE(mkfifo(obj.c_str(), 0600) == 0);
+  REQUIRE(run_tool("synthesize", "--hitpoints " + c.st + " -o " + exr, tmp).exit_code == 0);
+  const std::string out = tmp / "out.h5";
+  struct Case {
+    const char* tool;
+    std::string args, bad;
+  };
+  const std::vector<Case> cases = {
+      {"trace-hitpoints", "--scene " + fifo + " -o " + out, fifo},  // scene inputs
+      {"render", "--scene " + fifo + " -o " + (tmp / "r.exr"), fifo},
+      {"scene-bake", obj + " -o " + out, obj},
+      {"illuminate", "--scene " + c.scene + " --hitpoints " + c.hp + " --photons " + fifo +
+                         " -o " + out, fifo},  // HDF5 inputs
+      {"synthesize", "--hitpoints " + fifo + " -o " + (tmp / "s.exr"), fifo},
+      {"imgcompare", exr + " " + exr + " --mask " + fifo, fifo},  // an image input
+      {"synthesize", "--hitpoints " + tmp.dir.string() + " -o " + (tmp / "s.exr"),
+       tmp.dir.string()},  // a directory
+      {"trace-photons", "--scene /dev/zero -o " + out, "/dev/zero"},  // a device
+  };
+  for (const Case& k : cases) {
+    INFO(k.tool << " " << k.args);
+    const test::ToolRun r = run_tool(k.tool, k.args, tmp, "", 20);
+    check_refused(r, tmp, k.bad + ": is not a regular file", {out, tmp / "r.exr", tmp / "s.exr"});
+  }
+  // The readers refuse it too (a library caller that skips check_outputs), in a child process
+  // with a time limit.
+  std::string line;
+  CHECK(in_child([&] { h5::Reader r(fifo, "photonflow.hitpoints", 1); }, 20, &line) == 2);
+  CHECK(line == fifo + ": is not a regular file (give a file, not a pipe, directory or device; "
+                       "a pipe's reader would wait for ever)");
+  CHECK(in_child([&] { read_exr(fifo); }, 20) == 2);
+  CHECK(fs::is_fifo(fifo));  // left as it was
+}
+
+TEST_CASE("outputs: temporary names fit the file system's limit for outputs of up to 255 bytes",
+          "[tools][outputs]") {
+  TempDir tmp("long-names");
+  const std::string name255 = std::string(252, 'n') + ".h5";
+  const std::string t = temp_path(tmp / name255);
+  const fs::path tp(t);
+  CHECK(tp.parent_path() == tmp.dir);                            // beside the output
+  CHECK(tp.filename().string().size() <= 255);                   // fits
+  CHECK(tp.filename().string().rfind(std::string(200, 'n'), 0) == 0);  // recognisable
+  CHECK(t.find(".tmp.") != std::string::npos);
+  // Unique: two long names that differ only at the end get different temporary names.
+  CHECK(temp_path(tmp / (std::string(252, 'n') + ".h6")) != t);
+  CHECK(temp_path(tmp / "short.h5") == (tmp / "short.h5") + ".tmp." + std::to_string(getpid()));
+
+  const Chain c = make_chain(tmp);
+  // Before: "cannot be created" (the probe "<name>.tmp.<pid>" passed 255 bytes), exit 2.
+  const std::string hp = tmp / name255;
+  test::ToolRun r = run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + hp, tmp);
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(fs::is_regular_file(hp));
+  const std::string exr = tmp / (std::string(251, 'e') + ".exr");
+  r = run_tool("synthesize", "--hitpoints " + c.st + " -o " + exr, tmp);
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(fs::is_regular_file(exr));
+  CHECK(fs::is_regular_file(preview_path(exr)));
+  CHECK(test::temporary_files(tmp.dir).empty());
+}
+
+TEST_CASE("outputs: a run removes the temporaries a killed run of the same output left",
+          "[tools][outputs]") {
+  // After kill -9 "<out>.tmp.<pid>" stayed for ever, also after a successful --resume. Now every
+  // writer removes the temporaries of its output whose process is gone, and no other file.
+  TempDir tmp("stale-temps");
+  const Chain c = make_chain(tmp);
+  const pid_t dead = fork();
+  REQUIRE(dead >= 0);
+  if (dead == 0) _exit(0);
+  REQUIRE(waitpid(dead, nullptr, 0) == dead);  // reaped: the pid names no process now
+  for (const std::string& name : std::vector<std::string>{"out.h5", std::string(252, 'n') + ".h5"}) {
+    INFO(name.size() << "-byte name");
+    const std::string out = tmp / name;
+    const std::string stale = temp_path(out, long(dead)), live = temp_path(out, long(getpid()));
+    const std::string other = temp_path(tmp / "other.h5", long(dead));  // another output's
+    const std::string near = stale + "x";                                 // not the pattern
+    for (const std::string& f : {stale, live, other, near}) std::ofstream(f) << "partial";
+    test::ToolRun r = run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + out, tmp);
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK_FALSE(fs::exists(stale));
+    CHECK(fs::exists(live));  // this test process is alive
+    CHECK(fs::exists(other));
+    CHECK(fs::exists(near));
+    for (const std::string& f : {live, other, near}) fs::remove(f);
+  }
+  // The library call alone: only the dead process's file of that output goes.
+  const std::string out = tmp / "x.h5";
+  std::ofstream(temp_path(out, long(dead))) << "partial";
+  std::ofstream(temp_path(out, long(getpid()))) << "partial";
+  CHECK(remove_stale_temps(out) == 1);
+  CHECK(fs::exists(temp_path(out, long(getpid()))));
 }

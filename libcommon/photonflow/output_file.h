@@ -10,8 +10,24 @@
 
 namespace pf {
 
-// "<path>.tmp.<pid>": the temporary name beside `path`, unique per process.
+// "<path>.tmp.<pid>": the temporary name beside `path` (same directory), unique per process.
+// A file name too long for that (the suffix would pass the file system's 255-byte name limit, from
+// 241 bytes on) gives "<first 223 bytes of the name>~<16 hex digits>.tmp.<pid>", the digits a
+// checksum of the whole name.
 std::string temp_path(const std::string& path);
+// The same for process `pid`.
+std::string temp_path(const std::string& path, long pid);
+
+// Removes the temporary files of output `path` that a killed run left: the regular files named
+// exactly temp_path(path, pid) whose process is gone (kill(pid, 0) fails with ESRCH). Never the
+// file of a live process or this one's. Returns how many it removed. Every TempOutput calls it.
+size_t remove_stale_temps(const std::string& path);
+
+// Refuses an input that exists and is not a regular file (a FIFO, a directory, a device): a
+// FIFO's reader would block for ever. InputError "<path>: is not a regular file". A missing file
+// passes (its reader names it). check_outputs runs it on every input of a run, and the readers
+// (h5::Reader, read_exr, read_mask, scene import) run it too.
+void require_regular_input(const std::string& path);
 
 // Renames the finished `tmp` onto `path`. Refuses (InputError naming `path`, `tmp` removed) when
 // `path` exists and is not a regular file — a rename would replace a device node such as /dev/null
@@ -20,7 +36,8 @@ void commit_temp(const std::string& tmp, const std::string& path);
 
 // A temporary output file being written: temp_path(final_path), tracked while it exists so that an
 // interrupt (interrupt.h) removes it, and removed on destruction unless commit() renamed it into
-// place. Every writer (h5io.h, image.h, text_file.h, procedural.h) writes through one.
+// place. Every writer (h5io.h, image.h, text_file.h, procedural.h) writes through one. Creating
+// one removes the stale temporaries of final_path (remove_stale_temps).
 class TempOutput {
  public:
   explicit TempOutput(const std::string& final_path);
@@ -47,8 +64,8 @@ void remove_tracked_temps() noexcept;
 // naming `path` when the file cannot be created or written (the temporary file removed).
 void write_file_atomic(const std::string& path, const char* data, size_t n);
 
-// Checks a run's outputs before any work (empty paths are skipped). InputError naming the path
-// when an output
+// Checks a run's inputs and outputs before any work (empty paths are skipped). InputError naming
+// an input that is not a regular file (require_regular_input), or naming the path when an output
 //   - is one of the inputs (the same file, also through another name or a link) or is named twice,
 //   - exists and is not a regular file,
 //   - cannot be created: its directory is missing, or a probe file "<path>.tmp.<pid>" cannot be

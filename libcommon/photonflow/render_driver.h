@@ -204,6 +204,11 @@ std::vector<int> parse_pass_list(const std::string& text, const std::string& opt
 // digits of `total` so that names sort in pass order.
 std::string render_snapshot_name(const std::string& pattern, int passes, int total);
 
+// Refuses (InputError, before any work) a snapshot pattern without "{pass}" when opt asks for
+// more than one snapshot in its opt.passes passes (--snapshot-every, --snapshot-at): every
+// snapshot would overwrite the one before under the same name.
+void check_snapshot_pattern(const std::string& pattern, const RenderOptions& opt);
+
 // The run record (render's images carry no provenance) as a JSON object:
 //   {"tool", "version", "git_hash", "seed", "command_line", "wall_time_s",
 //    "parameters": {name: value, ...}, "inputs": [{"role", "path", "sha256", "format",

@@ -14,14 +14,33 @@
 
 namespace pf {
 
+// The scene's up direction, along which inserted meshes stand: a world axis (0 x, 1 y, 2 z) and
+// its sign; axis −1 = auto: the dominant axis of the camera's up vector (BakeOptions::up_axis).
+struct UpAxis {
+  int axis = -1;
+  int sign = 1;
+};
+// "x", "y", "z", "-x", "-y", "-z" or "auto" (scene-bake --up-axis); InputError naming the option
+// for anything else.
+UpAxis parse_up_axis(const std::string& text);
+// "+x" … "-z" ("auto" for axis −1).
+std::string up_axis_name(UpAxis a);
+// The axis along which `up` has its largest magnitude, with that component's sign: (0,1,0) → +y,
+// (0.1,0.2,−0.9) → −z; ties go to the earlier axis; +y for a zero or non-finite vector.
+UpAxis dominant_axis(const Vec3& up);
+
 // An extra mesh file inserted into the scene (how the large benchmark scenes are made).
-// The mesh is scaled uniformly to the largest size that fits the target box, centred in x and z,
-// with its lowest point on the box's bottom face (y is up: the mesh "stands" on the box floor).
+// The mesh, modelled y-up, is turned so that its +y points along the scene's up axis (a proper
+// rotation by a multiple of 90°, identity for +y), scaled uniformly to the largest size that fits
+// the target box, centred on the two other axes, with its lowest point along up on the box's
+// bottom face (the face at the floor side: lo for +axis, hi for −axis): it stands on the box floor.
 struct MeshInsert {
   std::string path;
   // Target box as fractions of the scene's bounds before insertion (0 = lo, 1 = hi per axis).
-  Vec3 box_lo{0.3f, 0.0f, 0.3f};
-  Vec3 box_hi{0.7f, 0.4f, 0.7f};
+  // Unset: 0.3 … 0.7 on the two horizontal axes and the 40 % of the up axis at its floor side
+  // (0 … 0.4 for +axis, 0.6 … 1 for −axis); for y up 0.3,0,0.3 … 0.7,0.4,0.7.
+  std::optional<Vec3> box_lo;
+  std::optional<Vec3> box_hi;
   // Name of a material of the main scene file for every inserted triangle; "" = a default
   // diffuse material (albedo kInsertAlbedo) named "insert-default".
   std::string material;
@@ -38,6 +57,7 @@ struct BakeOptions {
   std::optional<Vec3> look_at;
   std::optional<Vec3> up;
   std::optional<float> fov_y_deg;   // vertical field of view, degrees, in (0, 180)
+  UpAxis up_axis;                   // up for inserted meshes; auto: from the camera's up vector
   int width = 0;                    // pixels; 0 = 512, or derived from the other and the aspect
   int height = 0;                   // pixels; 0 = 512, or derived from the other and the aspect
   KdBuildParams kd;
@@ -56,6 +76,10 @@ struct BakeReport {
   size_t primitives_skipped = 0;      // point and line primitives ignored
   size_t inserted_triangles = 0;      // triangles that came from BakeOptions::inserts
   bool camera_from_file = false;      // the file had a camera (before overrides)
+  // Where each camera value came from: "eye, look-at from options; up, fov from file", with
+  // "from options", "from file" and "from default framing" (no camera in the file, no option).
+  std::string camera_source;
+  UpAxis insert_up{1, 1};             // the up axis the inserted meshes stand on (resolved)
   std::vector<std::string> warnings;  // one line each (clamped albedo, ignored lights, ...)
   double import_seconds = 0;          // reading files, flattening, materials, lights, camera
 };

@@ -80,6 +80,10 @@ HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::s
 
 void save_hitpoints(const HitpointSet& h, const std::string& path, const Provenance& prov);
 HitpointSet load_hitpoints(const std::string& path);
+// The initial radius R0 of a hitpoints file (attribute radius0) as a length other stages take
+// (build-grid's default radius): InputError naming `path` and the attribute unless it is positive
+// and finite.
+float hitpoints_radius0(const std::string& path, const HitpointSet& h);
 // The provenance group of a hitpoints file (the render driver checks a checkpoint's with it).
 Provenance load_hitpoints_provenance(const std::string& path);
 Provenance load_photons_provenance(const std::string& path);
@@ -101,7 +105,9 @@ void require_scene(const std::string& path, const std::string& scene_id,
 
 // Throws InputError naming `path` when the set indexes outside the scene's tables: a hitpoint's
 // mesh (mesh_names) or material (materials), a photon's mesh, a grid set's mesh count (one
-// mesh_grid per scene mesh) or one of its photons' meshes.
+// mesh_grid per scene mesh) or one of its photons' meshes; and when a hitpoint's position lies far
+// outside the scene's bounds (beyond the bounds grown on every side by their largest extent and
+// coordinate magnitude: a surface point lies inside them).
 void check_against_scene(const std::string& path, const HitpointSet& h, const Scene& scene);
 void check_against_scene(const std::string& path, const PhotonSet& p, const Scene& scene);
 void check_against_scene(const std::string& path, const GridSet& g, const Scene& scene);

@@ -123,6 +123,16 @@ inline void require_options(const cxxopts::Options& options, const cxxopts::Pars
                     "see " + options.program() + " --help");
 }
 
+// Refuses options `a` and `b` given together when a run reads only one of them (the other would be
+// ignored without a word, its file not even in the provenance): "--a and --b exclude each other:
+// <why>" (hint: give one of them).
+inline void require_not_both(const cxxopts::ParseResult& r, const char* a, const char* b,
+                             const std::string& why) {
+  if (r.count(a) && r.count(b))
+    throw input_error("", std::string("--") + a + " and --" + b + " exclude each other: " + why,
+                      "give one of them");
+}
+
 // A path option's value: given, else its default, else "" (for check_outputs' lists).
 inline std::string path_option(const cxxopts::ParseResult& r, const std::string& name) {
   if (r.count(name)) return r[name].as<std::string>();

@@ -161,12 +161,16 @@ struct CentreGrid {
   }
 
   // Nearest centre of p (ties: lower index). Searches shells of cells around p's cell until the
-  // best distance is no larger than the distance from p to the unsearched cells.
+  // best distance is no larger than the distance from p to the unsearched cells. Distances are in
+  // double, where the square of any float difference is finite, and the first centre seen is
+  // taken whatever its distance: a float square overflowed to infinity for a hitpoint 1e20 away,
+  // no centre was ever nearer than FLT_MAX, and the index stayed INT32_MAX (a write out of
+  // bounds in the caller).
   int32_t nearest(const float* p) const {
     int c[3];
     for (int a = 0; a < 3; ++a) c[a] = coord(p[a], a);
-    float best = FLT_MAX;
-    int32_t besti = std::numeric_limits<int32_t>::max();
+    double best = INFINITY;
+    int32_t besti = -1;
     const int maxr = std::max(n[0], std::max(n[1], n[2]));
     for (int r = 0; r <= maxr; ++r) {
       int z0 = std::max(0, c[2] - r), z1 = std::min(n[2] - 1, c[2] + r);
@@ -186,10 +190,11 @@ struct CentreGrid {
             const int e = row + x;
             for (int32_t t = start[size_t(e)]; t < start[size_t(e) + 1]; ++t) {
               const float* q = &pos[3 * size_t(t)];
-              float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
-              float d2 = dx * dx + dy * dy + dz * dz;
-              int32_t j = items[size_t(t)];
-              if (d2 < best || (d2 == best && j < besti)) {
+              const double dx = double(p[0]) - q[0], dy = double(p[1]) - q[1],
+                           dz = double(p[2]) - q[2];
+              const double d2 = dx * dx + dy * dy + dz * dz;
+              const int32_t j = items[size_t(t)];
+              if (besti < 0 || d2 < best || (d2 == best && j < besti)) {
                 best = d2;
                 besti = j;
               }
@@ -198,14 +203,15 @@ struct CentreGrid {
         }
       }
       // Distance from p to the cells outside the searched cube.
-      float bound = FLT_MAX;
+      double bound = INFINITY;
       for (int a = 0; a < 3; ++a) {
-        if (c[a] - r > 0) bound = std::min(bound, p[a] - (lo[a] + float(c[a] - r) * s));
-        if (c[a] + r < n[a] - 1) bound = std::min(bound, (lo[a] + float(c[a] + r + 1) * s) - p[a]);
+        if (c[a] - r > 0) bound = std::min(bound, double(p[a]) - (double(lo[a]) + double(c[a] - r) * s));
+        if (c[a] + r < n[a] - 1)
+          bound = std::min(bound, (double(lo[a]) + double(c[a] + r + 1) * s) - double(p[a]));
       }
-      if (bound == FLT_MAX) break;  // the whole grid was searched
-      bound = std::max(0.f, bound - 1e-5f * s);
-      if (besti != std::numeric_limits<int32_t>::max() && best <= bound * bound) break;
+      if (bound == INFINITY) break;  // the whole grid was searched
+      bound = std::max(0.0, bound - 1e-5 * double(s));
+      if (besti >= 0 && best <= bound * bound) break;
     }
     return besti;
   }
@@ -221,14 +227,14 @@ void kmeans_mesh(ClusterSet& out, int mesh, const std::vector<int32_t>& idx, con
   // Seeding: Morton order over the box, K runs of nearly equal size, centre = run mean.
   std::vector<std::pair<uint64_t, int32_t>> keyed(n);
   {
-    float ext[3];
-    for (int a = 0; a < 3; ++a) ext[a] = b.hi[a] - b.lo[a];
+    double ext[3];  // in double: a float extent of hitpoints near ±FLT_MAX overflows
+    for (int a = 0; a < 3; ++a) ext[a] = double(b.hi[a]) - double(b.lo[a]);
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (int64_t t = 0; t < int64_t(n); ++t) {
       const float* p = h.hitpoints[size_t(idx[size_t(t)])].position;
       uint64_t code = 0;
       for (int a = 0; a < 3; ++a) {
-        uint64_t q = ext[a] > 0.f ? uint64_t(double(p[a] - b.lo[a]) / ext[a] * 2097151.0) : 0;
+        uint64_t q = ext[a] > 0 ? uint64_t((double(p[a]) - b.lo[a]) / ext[a] * 2097151.0) : 0;
         code |= morton_spread3(std::min<uint64_t>(q, 2097151)) << a;
       }
       keyed[size_t(t)] = {code, idx[size_t(t)]};

@@ -386,6 +386,8 @@ struct GaState::Impl {
   }
 
   // ---- nearest centroid (grid search; ties to the lower id) ----
+  // The first candidate is taken whatever its distance (here and in the brute-force loops below),
+  // so that no comparison with an infinite or NaN distance can leave a hitpoint unassigned.
   int32_t nearest(int mesh, const float* p, int32_t exclude) const {
     const Mesh& m = meshes[size_t(mesh)];
     int c[3];
@@ -408,7 +410,7 @@ struct GaState::Impl {
               if (k == exclude) continue;
               const Slot& s = slots[size_t(k)];
               const double d = dist2(p, s.c);
-              if (d < best || (d == best && s.id < best_id)) {
+              if (best_slot < 0 || d < best || (d == best && s.id < best_id)) {
                 best = d;
                 best_id = s.id;
                 best_slot = k;
@@ -611,7 +613,7 @@ struct GaState::Impl {
       int32_t to = -1;
       for (int32_t j : cand) {
         const double d = dist2(x, slots[size_t(j)].c);
-        if (d < best || (d == best && slots[size_t(j)].id < best_id)) {
+        if (to < 0 || d < best || (d == best && slots[size_t(j)].id < best_id)) {
           best = d;
           best_id = slots[size_t(j)].id;
           to = j;
@@ -844,7 +846,7 @@ struct GaState::Impl {
       int32_t best_slot = -1;
       for (int32_t k : m.alive) {
         const double d = dist2(hp(int32_t(i)), slots[size_t(k)].c);
-        if (d < best || (d == best && slots[size_t(k)].id < best_id)) {
+        if (best_slot < 0 || d < best || (d == best && slots[size_t(k)].id < best_id)) {
           best = d;
           best_id = slots[size_t(k)].id;
           best_slot = k;

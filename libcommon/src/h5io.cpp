@@ -209,6 +209,7 @@ void Writer::commit() {
 Reader::Reader(const std::string& path, const std::string& format, int max_version) {
   quiet_hdf5();
   path_ = path;
+  require_regular_input(path);  // before H5Fis_hdf5, which would wait for ever on a FIFO
   if (access(path.c_str(), R_OK) != 0)
     throw input_error(path, "cannot read file", "check the path; run the stage that makes it");
   if (H5Fis_hdf5(path.c_str()) <= 0)

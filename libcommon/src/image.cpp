@@ -77,6 +77,7 @@ void write_exr(const Image& img, const std::string& path) {
 }
 
 Image read_exr(const std::string& path) {
+  require_regular_input(path);
   try {
     Imf::InputFile in(path.c_str());
     const Imath::Box2i dw = in.header().dataWindow();

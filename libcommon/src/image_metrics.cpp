@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "photonflow/error.h"
+#include "photonflow/output_file.h"
 #include "photonflow/text_file.h"
 
 namespace pf {
@@ -205,6 +206,7 @@ ImageMetrics compare_images(const Image& test, const Image& ref, const Image* ma
 }
 
 Image read_mask(const std::string& path) {
+  require_regular_input(path);
   std::ifstream f(path, std::ios::binary);
   if (!f) throw input_error(path, "cannot open the mask file", "check the path");
   char head[8] = {};

@@ -1,16 +1,22 @@
 // Output files: see output_file.h.
 #include "photonflow/output_file.h"
 
+#include <sys/stat.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <system_error>
+#include <utility>
 
 #include "photonflow/error.h"
+#include "photonflow/hash.h"
 
 namespace pf {
 
@@ -71,7 +77,9 @@ void remove_tracked_temps() noexcept {
 }
 
 TempOutput::TempOutput(const std::string& final_path)
-    : final_(final_path), tmp_(temp_path(final_path)), slot_(track(tmp_)) {}
+    : final_(final_path), tmp_(temp_path(final_path)), slot_(track(tmp_)) {
+  remove_stale_temps(final_path);  // left by a killed run writing the same output
+}
 
 TempOutput::~TempOutput() {
   if (!done_) std::remove(tmp_.c_str());
@@ -84,8 +92,73 @@ void TempOutput::commit() {
   commit_temp(tmp_, final_);
 }
 
+namespace {
+// The file system's limit on one name (NAME_MAX of Linux file systems), and the longest suffix
+// ".tmp.<pid>" (pids below 2^31: ten digits).
+constexpr size_t kNameMax = 255;
+constexpr size_t kSuffixMax = 15;
+
+// "<dir>/<name>" → {"<dir>/", "<name>"} ("" for a name without a directory).
+std::pair<std::string, std::string> split_name(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  if (slash == std::string::npos) return {"", path};
+  return {path.substr(0, slash + 1), path.substr(slash + 1)};
+}
+
+// The temporary names' stem of `path`: "<path>.tmp.", or, when the file name with the longest
+// suffix would pass kNameMax bytes, "<dir>/<first bytes of the name>~<16 hex digits>.tmp." with
+// the digits a checksum of the whole name (outputs that share the first bytes stay apart).
+std::string temp_stem(const std::string& path) {
+  const auto [dir, name] = split_name(path);
+  if (name.size() + kSuffixMax <= kNameMax) return path + ".tmp.";
+  size_t keep = kNameMax - kSuffixMax - 17;  // 17: "~" and 16 hex digits
+  while (keep > 0 && (static_cast<unsigned char>(name[keep]) & 0xC0) == 0x80) --keep;  // UTF-8
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx",
+                static_cast<unsigned long long>(checksum64(name.data(), name.size())));
+  return dir + name.substr(0, keep) + "~" + hex + ".tmp.";
+}
+}  // namespace
+
+std::string temp_path(const std::string& path, long pid) {
+  return temp_stem(path) + std::to_string(pid);
+}
+
 std::string temp_path(const std::string& path) {
-  return path + ".tmp." + std::to_string(static_cast<long>(getpid()));
+  return temp_path(path, static_cast<long>(getpid()));
+}
+
+size_t remove_stale_temps(const std::string& path) {
+  const std::string stem = temp_stem(path);
+  const auto [dir, prefix] = split_name(stem);
+  std::error_code ec;
+  size_t removed = 0;
+  for (fs::directory_iterator it(dir.empty() ? "." : dir, ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.size() > prefix.size() + 10 ||
+        name.compare(0, prefix.size(), prefix) != 0)
+      continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.find_first_not_of("0123456789") != std::string::npos || digits[0] == '0') continue;
+    const long pid = std::stol(digits);
+    if (pid > std::numeric_limits<pid_t>::max() || pid == static_cast<long>(getpid())) continue;
+    std::error_code e2;
+    if (!fs::is_regular_file(fs::symlink_status(it->path(), e2))) continue;
+    // Gone: no such process (a live one of another user answers EPERM and keeps its file).
+    if (kill(static_cast<pid_t>(pid), 0) == -1 && errno == ESRCH &&
+        unlink((dir + name).c_str()) == 0)
+      ++removed;
+  }
+  return removed;
+}
+
+void require_regular_input(const std::string& path) {
+  struct stat st {};
+  if (!path.empty() && stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+    throw input_error(path, "is not a regular file",
+                      "give a file, not a pipe, directory or device; a pipe's reader would wait "
+                      "for ever");
 }
 
 void commit_temp(const std::string& tmp, const std::string& path) {
@@ -114,6 +187,7 @@ void write_file_atomic(const std::string& path, const char* data, size_t n) {
 
 void check_outputs(const std::vector<std::string>& inputs,
                    const std::vector<std::string>& outputs) {
+  for (const std::string& in : inputs) require_regular_input(in);
   for (size_t i = 0; i < outputs.size(); ++i) {
     const std::string& out = outputs[i];
     if (out.empty()) continue;

@@ -469,6 +469,22 @@ std::string render_snapshot_name(const std::string& pattern, int passes, int tot
   return numbered_name(pattern, "{pass}", passes, total);
 }
 
+void check_snapshot_pattern(const std::string& pattern, const RenderOptions& opt) {
+  if (pattern.find("{pass}") != std::string::npos) return;
+  // Snapshots due in 1..passes: the multiples of snapshot_every, then the other listed passes.
+  int64_t due = opt.snapshot_every > 0 ? opt.passes / opt.snapshot_every : 0;
+  std::vector<int> extra;
+  for (int p : opt.snapshot_at)
+    if (p >= 1 && p <= opt.passes && !(opt.snapshot_every > 0 && p % opt.snapshot_every == 0) &&
+        std::find(extra.begin(), extra.end(), p) == extra.end())
+      extra.push_back(p);
+  due += int64_t(extra.size());
+  if (due > 1)
+    throw input_error("", "--snapshot '" + pattern + "' has no {pass}: its " +
+                              std::to_string(due) + " snapshots would overwrite each other",
+                      "put {pass} in the name, e.g. snap-{pass}.exr");
+}
+
 std::string render_record_json(const Provenance& prov, const std::vector<RenderImageRecord>& images) {
   Json doc = provenance_json(prov);
   Json list = Json::array();

@@ -140,6 +140,9 @@ class BudgetIOSystem : public Assimp::DefaultIOSystem {
  public:
   BudgetIOSystem(AddressSpaceCap& cap, uint64_t per_byte) : cap_(cap), per_byte_(per_byte) {}
   Assimp::IOStream* Open(const char* file, const char* mode) override {
+    // A FIFO or a directory (an OBJ's mtllib naming one) is not opened: its read would block.
+    struct stat st {};
+    if (stat(file, &st) == 0 && !S_ISREG(st.st_mode)) return nullptr;
     Assimp::IOStream* stream = Assimp::DefaultIOSystem::Open(file, mode);
     if (stream && per_byte_ > 0 && opened_.insert(file).second) {
       bytes_ += stream->FileSize();
@@ -565,14 +568,48 @@ pf_camera resolve_camera(const BakeOptions& o, const std::optional<FileCamera>& 
   return cam;
 }
 
-// Inserts one extra mesh file, fitted into its box (see MeshInsert).
-void insert_mesh(const MeshInsert& ins, size_t k, const Bounds& scene_bounds,
+// BakeReport::camera_source: each camera value from the options, else the file's camera, else the
+// default framing (resolve_camera's order).
+std::string camera_sources(const BakeOptions& o, const std::optional<FileCamera>& fc) {
+  const bool file_fov = fc && fc->fov_x_rad > 0.f;  // an unusable angle: the default 40 degrees
+  const std::pair<const char*, int> values[] = {
+      {"eye", o.eye ? 0 : fc ? 1 : 2},
+      {"look-at", o.look_at ? 0 : fc ? 1 : 2},
+      {"up", o.up ? 0 : fc ? 1 : 2},
+      {"fov", o.fov_y_deg ? 0 : file_fov ? 1 : 2}};
+  const char* from[3] = {" from options", " from file", " from default framing"};
+  std::string out;
+  for (int src = 0; src < 3; ++src) {
+    std::string names;
+    for (const auto& [name, s] : values)
+      if (s == src) names += (names.empty() ? "" : ", ") + std::string(name);
+    if (!names.empty()) out += (out.empty() ? "" : "; ") + names + from[src];
+  }
+  return out;
+}
+
+// Turns v so that +y goes to `up` (a proper rotation by a multiple of 90°: handedness, winding and
+// normals stay consistent).
+Vec3 turn_y_to(UpAxis up, const Vec3& v) {
+  if (up.axis == 1) return up.sign > 0 ? v : Vec3(v.x, -v.y, -v.z);
+  if (up.axis == 2) return up.sign > 0 ? Vec3(v.x, -v.z, v.y) : Vec3(v.x, v.z, -v.y);
+  return up.sign > 0 ? Vec3(v.y, -v.x, v.z) : Vec3(-v.y, v.x, v.z);
+}
+
+// Inserts one extra mesh file, fitted into its box (see MeshInsert), standing along `up`.
+void insert_mesh(const MeshInsert& ins, size_t k, UpAxis up, const Bounds& scene_bounds,
                  Flattener& main_file, const std::string& main_path, const ImportContext& ctx,
                  Scene& scene, BakeReport& report) {
-  if (!finite(ins.box_lo) || !finite(ins.box_hi) || ins.box_lo.x > ins.box_hi.x ||
-      ins.box_lo.y > ins.box_hi.y || ins.box_lo.z > ins.box_hi.z)
-    throw input_error(ins.path, "insert box " + fmt_vec(ins.box_lo) + " .. " +
-                                    fmt_vec(ins.box_hi) + " is empty or not finite",
+  const int ua = up.axis;
+  Vec3 box_lo(0.3f, 0.3f, 0.3f), box_hi(0.7f, 0.7f, 0.7f);
+  box_lo[ua] = up.sign > 0 ? 0.f : 0.6f;
+  box_hi[ua] = up.sign > 0 ? 0.4f : 1.f;
+  if (ins.box_lo) box_lo = *ins.box_lo;
+  if (ins.box_hi) box_hi = *ins.box_hi;
+  if (!finite(box_lo) || !finite(box_hi) || box_lo.x > box_hi.x || box_lo.y > box_hi.y ||
+      box_lo.z > box_hi.z)
+    throw input_error(ins.path, "insert box " + fmt_vec(box_lo) + " .. " +
+                                    fmt_vec(box_hi) + " is empty or not finite",
                       "give --insert-box as x0,y0,z0,x1,y1,z1 fractions with x0<=x1 etc.");
   int material;
   if (ins.material.empty()) {
@@ -605,12 +642,13 @@ void insert_mesh(const MeshInsert& ins, size_t k, const Bounds& scene_bounds,
 
   Bounds mb;
   for (auto& t : tris) {
+    for (float* v : {t.v0, t.v1, t.v2, t.n0, t.n1, t.n2}) turn_y_to(up, Vec3(v)).store(v);
     mb.extend(Vec3(t.v0));
     mb.extend(Vec3(t.v1));
     mb.extend(Vec3(t.v2));
   }
-  const Vec3 lo = scene_bounds.lo + ins.box_lo * scene_bounds.extent();
-  const Vec3 hi = scene_bounds.lo + ins.box_hi * scene_bounds.extent();
+  const Vec3 lo = scene_bounds.lo + box_lo * scene_bounds.extent();
+  const Vec3 hi = scene_bounds.lo + box_hi * scene_bounds.extent();
   float scale = INFINITY;
   for (int a = 0; a < 3; ++a)
     if (mb.extent()[a] > 0.f) scale = std::min(scale, (hi[a] - lo[a]) / mb.extent()[a]);
@@ -618,8 +656,10 @@ void insert_mesh(const MeshInsert& ins, size_t k, const Bounds& scene_bounds,
     throw input_error(ins.path, "insert box " + fmt_vec(lo) + " .. " + fmt_vec(hi) +
                                     " has no room for the mesh",
                       "give an --insert-box with a non-zero size on every axis");
-  const Vec3 anchor(mb.center().x, mb.lo.y, mb.center().z);
-  const Vec3 target(0.5f * (lo.x + hi.x), lo.y, 0.5f * (lo.z + hi.z));
+  // Centred on the horizontal axes; along up, the mesh's floor-side end on the box's floor face.
+  Vec3 anchor = mb.center(), target = (lo + hi) * 0.5f;
+  anchor[ua] = up.sign > 0 ? mb.lo[ua] : mb.hi[ua];
+  target[ua] = up.sign > 0 ? lo[ua] : hi[ua];
   for (auto& t : tris) {
     for (float* v : {t.v0, t.v1, t.v2}) ((Vec3(v) - anchor) * scale + target).store(v);
     scene.triangles.push_back(t);
@@ -647,10 +687,19 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   add_point_lights(*ai, file, scene, report);
   const std::optional<FileCamera> file_camera = read_camera(*ai, file, report);
   report.camera_from_file = file_camera.has_value();
+  report.camera_source = camera_sources(options, file_camera);
+  // Up for the inserts: --up-axis, else the camera's up as resolve_camera takes it.
+  if (options.up_axis.axis > 2 || (options.up_axis.sign != 1 && options.up_axis.sign != -1))
+    throw std::invalid_argument("bake_scene: up_axis out of range");
+  report.insert_up = options.up_axis.axis >= 0
+                         ? options.up_axis
+                         : dominant_axis(options.up ? *options.up
+                                                    : file_camera ? file_camera->up : Vec3(0, 1, 0));
 
   scene.compute_bounds();
   for (size_t k = 0; k < options.inserts.size(); ++k)
-    insert_mesh(options.inserts[k], k, scene.bounds, flattener, file, ctx, scene, report);
+    insert_mesh(options.inserts[k], k, report.insert_up, scene.bounds, flattener, file, ctx,
+                scene, report);
 
   bool emitter = !scene.lights.empty();
   for (size_t i = 0; i < scene.triangles.size() && !emitter; ++i)
@@ -774,6 +823,8 @@ std::string encode(const Scene& s, const BakeReport& r) {
   w.pod(uint64_t(r.primitives_skipped));
   w.pod(uint64_t(r.inserted_triangles));
   w.pod(r.camera_from_file);
+  w.text(r.camera_source);
+  w.pod(r.insert_up);
   w.texts(r.warnings);
   return w.bytes();
 }
@@ -793,6 +844,8 @@ Scene decode(const std::string& bytes, BakeReport& r) {
   r.primitives_skipped = size_t(in.pod<uint64_t>());
   r.inserted_triangles = size_t(in.pod<uint64_t>());
   r.camera_from_file = in.pod<bool>();
+  r.camera_source = in.text();
+  r.insert_up = in.pod<UpAxis>();
   r.warnings = in.texts();
   if (!in.done()) throw std::runtime_error("scene import: the child's record has extra bytes");
   return s;
@@ -868,6 +921,32 @@ Scene import_isolated(const BakeOptions& options, BakeReport& report) {
 }
 
 }  // namespace
+
+UpAxis parse_up_axis(const std::string& text) {
+  const char* names[] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    if (text == names[a]) return UpAxis{a, 1};
+    if (text == std::string("-") + names[a]) return UpAxis{a, -1};
+  }
+  if (text == "auto") return UpAxis{};
+  throw input_error("", "--up-axis must be x, y, z, -x, -y, -z or auto, got '" + text + "'");
+}
+
+std::string up_axis_name(UpAxis a) {
+  if (a.axis < 0 || a.axis > 2) return "auto";
+  return std::string(a.sign < 0 ? "-" : "+") + "xyz"[a.axis];
+}
+
+UpAxis dominant_axis(const Vec3& up) {
+  UpAxis best{1, 1};
+  float m = 0.f;
+  for (int a = 0; a < 3; ++a)
+    if (std::fabs(up[a]) > m) {  // false for NaN: a non-finite vector keeps +y
+      m = std::fabs(up[a]);
+      best = UpAxis{a, up[a] < 0.f ? -1 : 1};
+    }
+  return std::isfinite(up.x) && std::isfinite(up.y) && std::isfinite(up.z) ? best : UpAxis{1, 1};
+}
 
 Scene bake_scene(const BakeOptions& options, BakeReport& report) {
   report = BakeReport();

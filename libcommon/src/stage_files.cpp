@@ -1,9 +1,11 @@
 // Render-stage intermediates: see stage_files.h and docs/FORMATS.md.
 #include "photonflow/stage_files.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <sstream>
 
 #include "photonflow/camera.h"
 #include "photonflow/h5io.h"
@@ -61,6 +63,27 @@ int check_first_pass(const h5::Reader& r, const std::string& path, size_t passes
 
 bool finite3(const float* p) {
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
+
+// A point of the scene's surfaces (a hitpoint) lies in its bounds up to rounding. Refused only far
+// outside: beyond the bounds grown on every side by their largest extent and largest coordinate
+// magnitude (a hitpoint at 1e20 in a unit room made k-means' float distances overflow, clusters.cpp).
+bool near_bounds(const float* p, const Bounds& b) {
+  if (b.empty()) return true;
+  double margin = 0;
+  for (int a = 0; a < 3; ++a)
+    margin = std::max({margin, double(b.hi[a]) - double(b.lo[a]), std::fabs(double(b.lo[a])),
+                       std::fabs(double(b.hi[a]))});
+  for (int a = 0; a < 3; ++a)
+    if (!(double(p[a]) >= double(b.lo[a]) - margin && double(p[a]) <= double(b.hi[a]) + margin))
+      return false;
+  return true;
+}
+
+std::string fmt3(const Vec3& p) {
+  std::ostringstream o;
+  o << p.x << "," << p.y << "," << p.z;
+  return o.str();
 }
 
 // A pixel of an SPPM state that no eye path has reached yet (sppm.h: make_sppm_state): mesh and
@@ -215,6 +238,11 @@ void check_against_scene(const std::string& path, const HitpointSet& h, const Sc
     if (hp.material < 0 || size_t(hp.material) >= materials)
       throw input_error(path, "hitpoint " + std::to_string(i) + ": " +
                                   out_of("material", hp.material, materials, "materials"), hint);
+    if (!near_bounds(hp.position, scene.bounds))
+      throw input_error(path, "/hitpoints[" + std::to_string(i) + "]: position " +
+                                  fmt3(Vec3(hp.position)) + " lies far outside the scene's bounds " +
+                                  fmt3(scene.bounds.lo) + " .. " + fmt3(scene.bounds.hi),
+                        hint);
   }
 }
 
@@ -303,6 +331,16 @@ void save_hitpoints(const HitpointSet& h, const std::string& path, const Provena
   w.attr("/", "eye_pass", int64_t(h.eye_pass));
   write_provenance(w, prov);
   w.commit();
+}
+
+float hitpoints_radius0(const std::string& path, const HitpointSet& h) {
+  if (!(h.radius0 > 0.f && std::isfinite(h.radius0))) {
+    std::ostringstream v;
+    v << h.radius0;
+    throw input_error(path, "attribute radius0 = " + v.str() + " is not a positive finite radius",
+                      "remake the file with trace-hitpoints, or give build-grid --radius");
+  }
+  return h.radius0;
 }
 
 Provenance load_hitpoints_provenance(const std::string& path) {

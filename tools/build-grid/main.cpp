@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
       std::string hp_path = a["hitpoints"].as<std::string>();
       pf::HitpointSet h = pf::load_hitpoints(hp_path);
       pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
-      gp.default_radius = h.radius0;
+      gp.default_radius = pf::hitpoints_radius0(hp_path, h);
     }
     pf::require_positive("radius", gp.default_radius);
     pf::GridSet grids;

@@ -30,8 +30,8 @@ int main(int argc, char** argv) {
       ("hitpoints", "hitpoint state (from trace-hitpoints or an earlier illuminate)",
        cxxopts::value<std::string>())
       ("photons", "photons file (from trace-photons)", cxxopts::value<std::string>())
-      ("grid", "prebuilt photon grids (from build-grid; PPM with --method grid)",
-       cxxopts::value<std::string>())
+      ("grid", "prebuilt photon grids (from build-grid; PPM with --method grid; instead of "
+       "--photons)", cxxopts::value<std::string>())
       ("o,output", "output hitpoint state (.h5)", cxxopts::value<std::string>())
       ("estimator", "ppm | classic | sppm | pppm", cxxopts::value<std::string>()->default_value("ppm"))
       ("state", "sppm: the SPPM state, pppm: the pass sums, after the passes before this one "
@@ -59,6 +59,8 @@ int main(int argc, char** argv) {
     pf::require_options(o, a, {"scene", "hitpoints", "output"});
     if (!a.count("photons") && !a.count("grid"))
       throw pf::input_error("", "--photons or --grid is required", "see illuminate --help");
+    pf::require_not_both(a, "photons", "grid", "the grid's photons are gathered, --photons would "
+                         "be ignored");
     pf::check_output_options(a, {"scene", "hitpoints", "photons", "grid", "clusters", "state"},
                              {"output"});
     std::string estimator = a["estimator"].as<std::string>();

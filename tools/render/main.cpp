@@ -133,6 +133,7 @@ int main(int argc, char** argv) {
       pattern = std::filesystem::path(p).replace_extension().string() + "-{pass}p" +
                 (p.extension().empty() ? std::string(".exr") : p.extension().string());
     }
+    pf::check_snapshot_pattern(pattern, opt);
     const std::string stats = a["stats"].as<std::string>();
     const std::string png = out.empty() ? "" : pf::preview_path(out);
     const bool snapshots = opt.snapshot_every > 0 || !opt.snapshot_at.empty();

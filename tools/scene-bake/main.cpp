@@ -52,8 +52,10 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
               s.lights.size(), area, point, power);
   std::printf("  camera     eye %g,%g,%g look-at %g,%g,%g up %g,%g,%g fov %.4g deg %dx%d (%s)\n",
               c.eye[0], c.eye[1], c.eye[2], c.look_at[0], c.look_at[1], c.look_at[2], c.up[0],
-              c.up[1], c.up[2], c.fov_y_deg, c.width, c.height,
-              r.camera_from_file ? "from file" : "default framing");
+              c.up[1], c.up[2], c.fov_y_deg, c.width, c.height, r.camera_source.c_str());
+  if (r.inserted_triangles)
+    std::printf("  up axis    %s (the inserted meshes stand along it)\n",
+                pf::up_axis_name(r.insert_up).c_str());
   std::printf("  kd-tree    %zu nodes, %zu leaves, depth %d\n", s.kd.nodes.size(), leaves,
               s.kd.depth);
   std::printf("  time       import %.3f s, kd-tree build %.3f s\n", r.import_seconds,
@@ -88,9 +90,13 @@ int run(int argc, char** argv) {
     ("insert", "extra mesh file to insert into the scene (repeatable; default: none)",
      cxxopts::value<std::vector<std::string>>())
     ("insert-box", "box for the matching --insert as x0,y0,z0,x1,y1,z1, fractions of the scene "
-                   "bounds; the mesh is scaled uniformly to fit, centred in x and z, standing "
-                   "on the box bottom (repeatable; default: 0.3,0,0.3,0.7,0.4,0.7)",
-     cxxopts::value<std::vector<float>>())
+                   "bounds; the mesh is scaled uniformly to fit, centred on the horizontal axes, "
+                   "standing on the box's floor along --up-axis (repeatable; default: 0.3 .. 0.7 "
+                   "horizontally, the 40 % of the up axis at the floor: 0.3,0,0.3,0.7,0.4,0.7 "
+                   "for +y)", cxxopts::value<std::vector<float>>())
+    ("up-axis", "the scene's up for --insert: x, y, z, -x, -y, -z, or auto = the dominant axis "
+                "of the camera's up vector (--up, else the file's camera, else +y); the inserted "
+                "mesh's +y is turned to it", cxxopts::value<std::string>()->default_value("auto"))
     ("insert-material", "material name (from INPUT) for the matching --insert (repeatable; "
                         "default: insert-default, diffuse albedo 0.75)",
      cxxopts::value<std::vector<std::string>>())
@@ -135,6 +141,7 @@ int run(int argc, char** argv) {
     o.look_at = pf::parse_vec3("look-at", args["look-at"].as<std::string>());
   if (args.count("up")) o.up = pf::parse_vec3("up", args["up"].as<std::string>());
   if (args.count("fov")) o.fov_y_deg = args["fov"].as<float>();
+  o.up_axis = pf::parse_up_axis(args["up-axis"].as<std::string>());
   o.width = args["width"].as<int>();
   o.height = args["height"].as<int>();
   o.kd.cost_traversal = args["kd-ct"].as<float>();
@@ -194,8 +201,11 @@ int run(int argc, char** argv) {
     insert_text += sep + ins.path;
     material_text += sep + (ins.material.empty() ? std::string("insert-default") : ins.material);
     std::ostringstream b;
-    b << ins.box_lo.x << "," << ins.box_lo.y << "," << ins.box_lo.z << "," << ins.box_hi.x << ","
-      << ins.box_hi.y << "," << ins.box_hi.z;
+    if (ins.box_lo && ins.box_hi)
+      b << ins.box_lo->x << "," << ins.box_lo->y << "," << ins.box_lo->z << "," << ins.box_hi->x
+        << "," << ins.box_hi->y << "," << ins.box_hi->z;
+    else
+      b << "default";
     box_text += sep + b.str();
   }
   prov.param("insert", insert_text);
