@@ -19,6 +19,7 @@
 #include "photonflow/sampling.h"
 #include "photonflow/sppm.h"
 #include "photonflow/synthesize.h"
+#include "h5edit.h"
 #include "support.h"
 #include "support_cl.h"
 
@@ -452,6 +453,20 @@ TEST_CASE("staged route: trace-hitpoints --pass, trace-photons, illuminate --est
                                 " --photons " + tmp / "ph2.h5" + " --state " + state + " -o " + out,
               tmp, out, "eye pass 1");
       refused("render", common + "--estimator sppm --time -1 -o " + out, tmp, out, "--time");
+      // Values a sums file cannot hold: a negative or NaN sum, passes without photons.
+      const std::string edited = tmp / "edited.h5";
+      std::vector<double> sum = test::read_dataset<double>(part, "/sum", H5T_NATIVE_DOUBLE);
+      for (double bad : {-1.0, std::nan("")}) {
+        std::filesystem::copy_file(part, edited, std::filesystem::copy_options::overwrite_existing);
+        std::vector<double> v = sum;
+        v[7] = bad;
+        test::rewrite_dataset(edited, "/sum", H5T_NATIVE_DOUBLE, v);
+        refused("synthesize", "--sums " + edited + " -o " + out, tmp, out, "/sum[2]");
+        refused("merge", state + " " + edited + " -o " + out, tmp, out, "/sum[2]");
+      }
+      std::filesystem::copy_file(part, edited, std::filesystem::copy_options::overwrite_existing);
+      test::set_int_attr(edited, "/", "photons_emitted", 1);
+      refused("synthesize", "--sums " + edited + " -o " + out, tmp, out, "emitted 1 photons");
       refused("render", common + "--estimator sppm --spp 4 -o " + out, tmp, out, "--spp");
     }
   }

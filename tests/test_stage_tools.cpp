@@ -509,18 +509,24 @@ TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are r
   // A hitpoint at 1e20 in the unit box: before, k-means' float distances overflowed (SIGSEGV in
   // cluster and illuminate --method grid-kmeans | kmeans-clusters); now refused on reading,
   // naming the file, dataset and element.
-  h = load_hitpoints(hp);
-  h.hitpoints[7].position[0] = 1e20f;
-  const std::string far = tmp / "hp-far.h5";
-  save_hitpoints(h, far, prov);
-  const std::string where = far + ": /hitpoints[7]: position 1e+20,";
-  check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + far + " --photons " +
-                                           ph + " -o " + out, tmp),
-                out, where);
-  check_refused(run_tool("cluster", "--scene " + box + " --hitpoints " + far + " -o " + out +
-                                        " --method kmeans", tmp),
-                out, where);
-  check_refused(run_tool("build-grid", "--scene " + box + " --photons " + ph + " --hitpoints " +
-                                           far + " -o " + out, tmp),
-                out, where);
+  // 1e20 is beyond every coordinate the loaders accept (validate.h, ±1e12); 1e9 passes that
+  // bound and is refused against the scene's bounds.
+  for (const float x : {1e20f, 1e9f}) {
+    h = load_hitpoints(hp);
+    h.hitpoints[7].position[0] = x;
+    const std::string far = tmp / "hp-far.h5";
+    std::filesystem::remove(far);
+    save_hitpoints(h, far, prov);
+    const std::string where = x > 1e12f ? far + ": hitpoints[7].position[0] = 1.00000002e+20 is outside"
+                                        : far + ": /hitpoints[7]: position 1e+09,";
+    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + far + " --photons " +
+                                             ph + " -o " + out, tmp),
+                  out, where);
+    check_refused(run_tool("cluster", "--scene " + box + " --hitpoints " + far + " -o " + out +
+                                          " --method kmeans", tmp),
+                  out, where);
+    check_refused(run_tool("build-grid", "--scene " + box + " --photons " + ph + " --hitpoints " +
+                                             far + " -o " + out, tmp),
+                  out, where);
+  }
 }

@@ -10,6 +10,7 @@
 #include "photonflow/error.h"
 #include "photonflow/h5io.h"
 #include "photonflow/photon_pass.h"
+#include "photonflow/validate.h"
 
 namespace pf {
 
@@ -111,12 +112,20 @@ PassSums load_pass_sums(const std::string& path) {
   s.sum = r.read<double>("/sum");
   if (s.sum.size() != size_t(s.width) * size_t(s.height) * 3)
     throw input_error(path, "dataset /sum does not hold width × height × 3 values", kHint);
+  // Radiance is never negative, and each pass's estimate stays within the loaders' value bound
+  // (validate.h kMaxValue), so a sum lies in [0, kMaxValue · passes].
+  const double max_sum = double(kMaxValue) * double(std::max(s.passes, 1));
   for (size_t j = 0; j < s.sum.size(); ++j)
-    if (!std::isfinite(s.sum[j]))
+    if (!(s.sum[j] >= 0.0 && s.sum[j] <= max_sum))
       throw input_error(path, "dataset /sum[" + std::to_string(j / 3) + "] (pixel " +
                                   std::to_string(j / 3 % size_t(s.width)) + ", " +
-                                  std::to_string(j / 3 / size_t(s.width)) + ") is not finite",
+                                  std::to_string(j / 3 / size_t(s.width)) + ") = " +
+                                  std::to_string(s.sum[j]) + " is not a sum of radiances",
                         kHint);
+  if (s.photons_emitted < uint64_t(s.passes))
+    throw input_error(path, "its " + std::to_string(s.passes) + " passes emitted " +
+                                std::to_string(s.photons_emitted) + " photons (every pass emits)",
+                      kHint);
   if (s.passes == 0 && (s.photons_emitted != 0 ||
                         std::any_of(s.sum.begin(), s.sum.end(), [](double v) { return v != 0; })))
     throw input_error(path, "holds sums but no pass", kHint);
