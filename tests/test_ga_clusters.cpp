@@ -651,6 +651,24 @@ TEST_CASE("evolution: resume after an interruption = an uninterrupted run", "[ga
     INFO("mesh " << mesh);
     CHECK_THROWS_WITH(evolve_clusters(in, o), Catch::Contains(bad) && Catch::Contains("centroid 0"));
   }
+  // Values (issue 26): a centroid that is no world position, a fitness that is not a number.
+  {
+    const std::string bad = tmp / "nan-centroid.ck.h5";
+    std::filesystem::copy_file(tmp / "c.ck.h5", bad);
+    test::edit_dataset<GaCentroid>(bad, "/centroids", centroid.id(), [&](std::vector<GaCentroid>& v) {
+      v[1].position[2] = std::nanf("");
+    });
+    o.checkpoint = bad;
+    CHECK_THROWS_WITH(evolve_clusters(in, o),
+                      Catch::Contains(bad) && Catch::Contains("centroids[1].position"));
+    const std::string bad2 = tmp / "nan-fitness.ck.h5";
+    std::filesystem::copy_file(tmp / "c.ck.h5", bad2);
+    test::edit_dataset<double>(bad2, "/best_fitness", H5T_NATIVE_DOUBLE,
+                               [&](std::vector<double>& v) { v[2] = -1.0; });
+    o.checkpoint = bad2;
+    CHECK_THROWS_WITH(evolve_clusters(in, o),
+                      Catch::Contains(bad2) && Catch::Contains("best_fitness[2]"));
+  }
 }
 
 // ---- images (OpenCL) ---------------------------------------------------------------------------------

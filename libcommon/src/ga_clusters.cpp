@@ -25,6 +25,7 @@
 #include "photonflow/interrupt.h"
 #include "photonflow/provenance.h"
 #include "photonflow/threads.h"
+#include "photonflow/validate.h"
 
 namespace pf {
 
@@ -1042,6 +1043,19 @@ Checkpoint load_checkpoint(const std::string& path, const GaFitnessInputs& in, c
   ck.seconds = r.attr_double("/", "seconds");
   if (ck.generations < 1 || size_t(ck.generations) != ck.history.size() || ck.centroids.empty())
     throw input_error(path, "is a damaged checkpoint (generation count and history disagree)", hint);
+  // Values (validate.h): centroids are world positions, fitness values and seconds finite and
+  // not negative (every fitness of ga_clusters.h counts or times something).
+  const Validator v(path, "the file is damaged; delete it and rerun");
+  static const std::string kCentroids = "centroids", kHistory = "best_fitness";
+  for (size_t k = 0; k < ck.centroids.size(); ++k)
+    v.position(Name(kCentroids, k, "position"), ck.centroids[k].position);
+  for (size_t k = 0; k < ck.history.size(); ++k)
+    v.in_range(Name(kHistory, k), ck.history[k], 0.0, double(kMaxValue));
+  v.in_range("attribute best_fitness", ck.fitness, 0.0, double(kMaxValue));
+  v.in_range("attribute start_fitness", ck.start_fitness, 0.0, double(kMaxValue));
+  v.in_range("attribute seconds", ck.seconds, 0.0, double(kMaxValue));
+  v.int_in_range("attribute evaluations", r.attr_int("/", "evaluations"), 0,
+                 std::numeric_limits<int64_t>::max());
   // The chromosome indexes the hitpoints' meshes: every centroid on a mesh with hitpoints, every
   // such mesh with a centroid (what GaState's constructor assumes).
   const HitpointSet& h = *in.hitpoints;
