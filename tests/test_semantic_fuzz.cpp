@@ -50,7 +50,9 @@
 #include "photonflow/eye_pass.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/image.h"
+#include "photonflow/pass_sums.h"
 #include "photonflow/photon_pass.h"
+#include "photonflow/render_driver.h"
 #include "photonflow/sppm.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/synthesize.h"
@@ -154,11 +156,22 @@ void sppm_next(const Scene& s, HitpointSet& st, const std::vector<pf_photon>& ph
 }
 
 
+// The probabilistic-PPM run of the pass-sums fixture (2 passes) and of its continuation.
+RenderOptions pppm_options() {
+  RenderOptions o;
+  o.estimator = Estimator::Pppm;
+  o.passes = 2;
+  o.photons.photons = 1500;
+  o.photons.threads = o.eye.threads = o.ppm.threads = 1;
+  o.eye.sampler = PixelSampler::Sobol;
+  return o;
+}
+
 struct Fixture {
   TempDir tmp{"semfuzz"};
   std::string scene = tmp / "scene.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5",
               grid = tmp / "grid.h5", clusters = tmp / "clusters.h5", ckpt = tmp / "ckpt.h5",
-              sppm = tmp / "sppm.h5";
+              sppm = tmp / "sppm.h5", sums = tmp / "sums.h5";
   Fixture() {
     const Outcome o = isolated(
         [this] {
@@ -193,6 +206,7 @@ struct Fixture {
           save_hitpoints(h, ckpt, prov());
           for (int k = 0; k < 2; ++k) sppm_next(s, st, p.pass(k), p.pass_emitted[size_t(k)]);
           save_hitpoints(st, sppm, prov());
+          save_pass_sums(render_pppm(s, pppm_options(), false, prov()), sums, prov());
           return std::string();
         },
         120);
@@ -251,7 +265,7 @@ std::string check_state(const HitpointSet& h) {
 
 // ---- the stages -------------------------------------------------------------------------------
 
-enum class Kind { Scene, Hitpoints, Photons, Grid, Clusters, Checkpoint, Sppm };
+enum class Kind { Scene, Hitpoints, Photons, Grid, Clusters, Checkpoint, Sppm, PassSums };
 
 PpmOptions ppm_options() {
   PpmOptions o;
@@ -326,6 +340,18 @@ std::string run_stage(Kind kind, const std::string& file) {
     classic_estimate(s, c, ph.photons, emitted, co);
     bad = check_state(c);
     return bad.empty() ? "" : "classic: " + bad;
+  }
+  if (kind == Kind::PassSums) {  // synthesize --sums, and render --resume: one more pass
+    PassSums sums = load_pass_sums(file);
+    require_scene(file, sums.scene_id, s.scene_id, fx.scene);
+    std::string bad = non_finite(synthesize(sums));
+    if (!bad.empty()) return "synthesize: " + bad;
+    RenderOptions o = pppm_options();
+    o.passes = sums.passes + 1;
+    PppmRenderer r(s, o, std::move(sums), file);
+    r.run_iteration();
+    bad = non_finite(synthesize(r.state()));
+    return bad.empty() ? "" : "one more pass: " + bad;
   }
   if (kind == Kind::Sppm) {  // render --resume of an SPPM checkpoint: one more pass
     HitpointSet h = load_hitpoints(file);
@@ -594,7 +620,7 @@ std::string mutate(const std::string& file, Rng& rng, bool scene) {
 // The stage's tool on `file`: exit 0 with finite outputs, or 2 with one line and no output.
 void run_tool_on(Kind kind, const std::string& file, const std::string& what) {
   const Fixture& fx = fixture();
-  const bool image = kind == Kind::Checkpoint || kind == Kind::Sppm;
+  const bool image = kind == Kind::Checkpoint || kind == Kind::Sppm || kind == Kind::PassSums;
   const std::string out = fx.tmp / (image ? "tool-out.exr" : "tool-out.h5");
   std::filesystem::remove(out);
   std::string tool, args;
@@ -614,6 +640,7 @@ void run_tool_on(Kind kind, const std::string& file, const std::string& what) {
       break;
     case Kind::Checkpoint:
     case Kind::Sppm: tool = "synthesize"; args = "--hitpoints " + file + " --png none"; break;
+    case Kind::PassSums: tool = "synthesize"; args = "--sums " + file + " --png none"; break;
     case Kind::Clusters: return;
   }
   args += " -o " + out + (image ? "" : " --threads 1");
@@ -713,4 +740,7 @@ TEST_CASE("semantic fuzz: checkpoint (a PPM state)", "[fuzz][semantic]") {
 }
 TEST_CASE("semantic fuzz: SPPM checkpoint (one hitpoint per pixel)", "[fuzz][semantic]") {
   fuzz(Kind::Sppm, fixture().sppm, "sppm", 7);
+}
+TEST_CASE("semantic fuzz: pass sums (probabilistic PPM)", "[fuzz][semantic]") {
+  fuzz(Kind::PassSums, fixture().sums, "sums", 8);
 }
