@@ -365,6 +365,14 @@ Provenance with_state_parameters(const Provenance& prov, const RenderOptions& op
   return p;
 }
 
+// Refuses a checkpoint that already holds more passes than the run asks for.
+void require_passes_left(const RenderOptions& opt, int passes) {
+  if (passes > opt.passes)
+    throw input_error(opt.checkpoint,
+                      "already has " + std::to_string(passes) + " passes, more than --passes",
+                      "raise --passes or start without --resume");
+}
+
 bool checkpoint_exists(const RenderOptions& opt, bool resume) {
   return resume && !opt.checkpoint.empty() && access(opt.checkpoint.c_str(), F_OK) == 0;
 }
@@ -397,10 +405,7 @@ HitpointSet render_progressive(
                         std::string("holds ") + (is_sppm_state(state) ? "an SPPM" : "a PPM") +
                             " state, this run is --estimator " + estimator_name(opt.estimator),
                         "use the checkpoint's estimator or start without --resume");
-    if (state.passes > opt.passes)
-      throw input_error(opt.checkpoint,
-                        "already has " + std::to_string(state.passes) + " passes, more than --passes",
-                        "raise --passes or start without --resume");
+    require_passes_left(opt, state.passes);
     require_same_state(opt.checkpoint, opt);
   }
   return drive<ProgressiveRenderer, HitpointSet>(
@@ -425,10 +430,7 @@ PassSums render_pppm(const Scene& scene, const RenderOptions& opt, bool resume,
                         "starts at pass " + std::to_string(loaded.first_pass) +
                             ", this run at --first-pass " + std::to_string(opt.first_pass),
                         "use the checkpoint's --first-pass or start without --resume");
-    if (loaded.passes > opt.passes)
-      throw input_error(opt.checkpoint,
-                        "already has " + std::to_string(loaded.passes) + " passes, more than --passes",
-                        "raise --passes or start without --resume");
+    require_passes_left(opt, loaded.passes);
     require_same_state(opt.checkpoint, opt);
     r = std::make_unique<PppmRenderer>(scene, opt, std::move(loaded), opt.checkpoint);
   }
