@@ -79,13 +79,7 @@ inline void set_string_attr(const std::string& file, const std::string& obj,
 // Sets the float64 attribute `name` of object `obj`.
 inline void set_double_attr(const std::string& file, const std::string& obj,
                             const std::string& name, double value) {
-  h5::Handle f(H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
-  REQUIRE(f.valid());
-  h5::Handle o(H5Oopen(f.get(), obj.c_str(), H5P_DEFAULT));
-  REQUIRE(o.valid());
-  h5::Handle a(H5Aopen(o.get(), name.c_str(), H5P_DEFAULT));
-  REQUIRE(a.valid());
-  REQUIRE(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, &value) >= 0);
+  write_attr(file, obj, name, H5T_NATIVE_DOUBLE, &value);
 }
 
 // Recomputes the scene_id of a scene.h5 from its triangles, materials, lights and camera

@@ -146,9 +146,10 @@ void edit_dataset(const std::string& file, const std::string& dset, hid_t type,
   refresh_checksum(d.get());
 }
 
-// Sets the int64 attribute `name` of object `obj` of `file`.
-inline void set_int_attr(const std::string& file, const std::string& obj, const std::string& name, int64_t v) {
-  INFO("set " << file << " " << obj << "@" << name << " = " << v);
+// Overwrites the existing attribute `name` of object `obj` of `file` with the value at `v`, of
+// memory type `type`.
+inline void write_attr(const std::string& file, const std::string& obj, const std::string& name,
+                       hid_t type, const void* v) {
   h5::Handle f(H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
   REQUIRE(f.valid());
   // The object first, then its attribute: HDF5 1.10 cannot write an attribute opened with
@@ -157,7 +158,13 @@ inline void set_int_attr(const std::string& file, const std::string& obj, const 
   REQUIRE(o.valid());
   h5::Handle a(H5Aopen(o.get(), name.c_str(), H5P_DEFAULT));
   REQUIRE(a.valid());
-  REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &v) >= 0);
+  REQUIRE(H5Awrite(a.get(), type, v) >= 0);
+}
+
+// Sets the int64 attribute `name` of object `obj` of `file`.
+inline void set_int_attr(const std::string& file, const std::string& obj, const std::string& name, int64_t v) {
+  INFO("set " << file << " " << obj << "@" << name << " = " << v);
+  write_attr(file, obj, name, H5T_NATIVE_INT64, &v);
 }
 
 // Reverses a triangle's winding (and its normals): an outward mesh becomes inward.
