@@ -66,6 +66,9 @@ void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, u
 void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGrid& grid,
                               uint64_t emitted, const PpmOptions& opt);
 
+// InputError unless 0 < alpha <= 1 (eq. 3.14; the estimators of sppm.h too).
+void check_alpha(float alpha);
+
 // The gather of one site from a prebuilt grid, the core of ppm_pass_grid and of the per-pixel
 // estimators (sppm.h): the photons that `site` (its position, normal, mesh and material) accepts
 // within `radius` (the rule above), and their τ_M = Σ f_r·Φ_p (eq. 3.17) into tau_m, summed in

@@ -26,10 +26,6 @@ void finish_pass(HitpointSet& h, uint64_t emitted) {
   h.estimator = "ppm";
 }
 
-void check_alpha(float alpha) {
-  if (!(alpha > 0.f && alpha <= 1.f))
-    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(alpha));
-}
 
 // Eq. 3.17 over the m accepted photons photon(0), ..., photon(m−1), which the caller lists in
 // increasing original photon index (the same order for every gather method and thread count, so
@@ -79,6 +75,11 @@ void sort_keys(uint64_t* k, size_t n) {
 }
 
 }  // namespace
+
+void check_alpha(float alpha) {
+  if (!(alpha > 0.f && alpha <= 1.f))
+    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(alpha));
+}
 
 void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, uint64_t emitted,
                    const PpmOptions& opt) {

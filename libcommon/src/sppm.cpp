@@ -58,10 +58,6 @@ HitpointSet make_sppm_state(const Scene& scene, float radius0, DirectMode mode) 
 
 namespace {
 
-void require_alpha(float alpha) {
-  if (!(alpha > 0.f && alpha <= 1.f))
-    throw input_error("", "alpha must be in (0, 1], got " + std::to_string(alpha));
-}
 
 // Pixel index of every visible point of `eye`, which must fit a width × height image; with
 // one_per_pixel, InputError when two visible points share a pixel (SPPM keeps one per pixel).
@@ -88,7 +84,7 @@ std::vector<size_t> visible_pixels(const EyePassResult& eye, int width, int heig
 
 void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
-  require_alpha(opt.alpha);
+  check_alpha(opt.alpha);
   const std::vector<size_t> px = visible_pixels(eye, state.width, state.height, true);
   if (state.hitpoints.size() != size_t(state.width) * size_t(state.height))
     throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
@@ -157,7 +153,7 @@ float pppm_pass_radius(const PassSums& sums) {
 
 void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
-  require_alpha(sums.alpha);
+  check_alpha(sums.alpha);
   const float r = pppm_pass_radius(sums);
   const bool skip = sums.direct_mode == DirectMode::ShadowRays;
   const int64_t count = int64_t(eye.hitpoints.size());
@@ -176,7 +172,7 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
 
 void pppm_accumulate(PassSums& sums, const EyePassResult& eye, const std::vector<float>& tau_beta,
                      uint64_t emitted) {
-  require_alpha(sums.alpha);
+  check_alpha(sums.alpha);
   const std::vector<size_t> px = visible_pixels(eye, sums.width, sums.height, false);
   if (tau_beta.size() != px.size() * 3)
     throw std::invalid_argument("pppm_accumulate: one β·τ_M per visible point");
