@@ -4,15 +4,17 @@
 # "SPPM and probabilistic PPM" quotes the report (docs/results/estimators.md).
 #
 #   make -f pipelines/estimators.mk                      all: TIME s per run, 512×512 (long: the
-#                                                         references take 2 × REF_TIME per scene)
+#                                                         references take REF_PARTS × REF_TIME per scene)
 #   make -f pipelines/estimators.mk W=256 H=256 TIME=10 REF_TIME=120   a smaller, faster run
 #
 # Per scene of SCENES:
-#   ref.exr, ref2.exr  two references of REF_TIME seconds each, with seeds REF_SEED and REF_SEED+1:
-#                      path tracing for the diffuse box (unbiased), SPPM elsewhere (path tracing's
-#                      caustics and SDS paths converge too slowly); RMSE(ref, ref2)/√2 estimates a
-#                      reference's own error (its noise; a bias common to both is not seen), and
-#                      the report prints it beside the figures it is compared with.
+#   ref.exr, ref2.exr … ref<N>.exr   N = REF_PARTS_<scene> independent reference parts of REF_TIME
+#                      seconds each, seeds REF_SEED … REF_SEED+N−1: path tracing for the diffuse box
+#                      (unbiased), SPPM elsewhere (path tracing's caustics and SDS paths converge too
+#                      slowly). The reference is their mean (bench/estimators.py); the spread of
+#                      the parts estimates its own error (its noise; a bias common to all parts is
+#                      not seen), and the report prints it beside the figures it is compared with.
+#                      More parts cost REF_TIME each and keep the parts already rendered.
 #   pt, ppm, ppm-spp4, sppm, pppm   TIME seconds of rendering each (pathtrace --time-limit,
 #                      render --time; program start and file writes excluded by both), seed SEED.
 #   sppm-passes        SPPM for CURVE_PASSES passes with snapshots: error against passes.
@@ -38,6 +40,13 @@ CURVE_PASSES ?= 1000
 REF_KIND_cornell-box     ?= pt
 REF_KIND_cornell-spheres ?= sppm
 REF_KIND_sds-pool        ?= sppm
+# Reference parts per scene: enough that the mean's own error is under a quarter of the SPPM error
+# it is compared with (measured at 512×512, TIME=30, REF_TIME=300; docs/RESULTS.md section 6).
+REF_PARTS ?= 2
+REF_PARTS_cornell-box     ?= 6
+REF_PARTS_cornell-spheres ?= 4
+REF_PARTS_sds-pool        ?= 4
+ref_parts = $(or $(REF_PARTS_$(1)),$(REF_PARTS))
 
 include pipelines/stamp.mk
 
@@ -65,11 +74,10 @@ $(DIR)/$(1)/scene.h5: data/$(1).dae $(call param_stamp,$(DIR)/$(1)/.bake,$(W) $(
 $(DIR)/$(1)/mask.exr: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1)/.mask,$(MASK_SPP))
 	$(BIN)/emitter-mask --scene $$< -o $$@ --spp $(MASK_SPP) > /dev/null
 
-# References: $(2) = file, $(3) = seed
+# References: part 1 is ref.exr (seed REF_SEED), part i > 1 is ref<i>.exr (seed REF_SEED + i − 1).
 $(DIR)/$(1)/ref.exr: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1)/.ref,$(REF_KIND_$(1)) $(REF_TIME) $(REF_SEED) $(PHOTONS))
 	$(call REF_RECIPE,$(1),$$@,$(REF_SEED))
-$(DIR)/$(1)/ref2.exr: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1)/.ref2,$(REF_KIND_$(1)) $(REF_TIME) $(REF_SEED) $(PHOTONS))
-	$(call REF_RECIPE,$(1),$$@,$$$$(($(REF_SEED) + 1)))
+$(foreach i,$(shell seq 2 $(call ref_parts,$(1))),$(eval $(call REF_PART_RULE,$(1),$(i))))
 
 $(DIR)/$(1)/pt.exr: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1)/.pt,$(TIME) $(SEED) $(THREADS))
 	$(LOAD) $(DIR)/$(1)/runs.load
@@ -93,8 +101,15 @@ $(DIR)/$(1)/sppm-passes.json: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1
 	  --snapshot-at $(call snaps,$(CURVE_PASSES)) --snapshot '$(DIR)/$(1)/sppm-passes/{pass}.exr' \
 	  --stats $$@ $(T) | tail -1
 
-RUNS += $(foreach m,$(METHODS),$(DIR)/$(1)/$(m).exr) $(DIR)/$(1)/ref.exr $(DIR)/$(1)/ref2.exr \
+REFS_$(1) := $(DIR)/$(1)/ref.exr $(foreach i,$(shell seq 2 $(call ref_parts,$(1))),$(DIR)/$(1)/ref$(i).exr)
+RUNS += $(foreach m,$(METHODS),$(DIR)/$(1)/$(m).exr) $$(REFS_$(1)) \
         $(DIR)/$(1)/mask.exr $(DIR)/$(1)/sppm-passes.json
+endef
+
+# $(1) = scene, $(2) = part number > 1
+define REF_PART_RULE
+$(DIR)/$(1)/ref$(2).exr: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1)/.ref$(2),$(REF_KIND_$(1)) $(REF_TIME) $(REF_SEED) $(PHOTONS))
+	$$(call REF_RECIPE,$(1),$$@,$$$$(($(REF_SEED) + $(2) - 1)))
 endef
 
 # $(1) = scene, $(2) = output, $(3) = seed
@@ -123,6 +138,6 @@ report: $(RES)/estimators.md
 $(RES)/estimators.md: $(RUNS) bench/estimators.py
 	@mkdir -p $(RES)
 	$(PY) bench/estimators.py --dir $(DIR) --imgcompare $(BIN)/imgcompare --scenes "$(SCENES)" \
-	  --methods "$(METHODS)" --settings "W=$(W) H=$(H) TIME=$(TIME) REF_TIME=$(REF_TIME) \
+	  --methods "$(METHODS)" --ref-parts "$(foreach s,$(SCENES),$(s)=$(call ref_parts,$(s)))" --settings "W=$(W) H=$(H) TIME=$(TIME) REF_TIME=$(REF_TIME) \
 	  PHOTONS=$(PHOTONS) PPM_SPP=$(PPM_SPP) SEED=$(SEED) REF_SEED=$(REF_SEED) THREADS=$(THREADS) \
-	  CURVE_PASSES=$(CURVE_PASSES)" -o $@
+	  CURVE_PASSES=$(CURVE_PASSES)$(foreach s,$(SCENES), REF_PARTS_$(s)=$(call ref_parts,$(s)))" -o $@

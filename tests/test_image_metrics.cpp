@@ -566,11 +566,11 @@ TEST_CASE("image_metrics: PNG masks: all filters, grey, RGB16, palette, alpha, A
 
 TEST_CASE("image_metrics: JSON output", "[image_metrics][json]") {
   Image a = constant_image(12, 12, 1.f), b = constant_image(12, 12, 1.25f);
-  const std::string same = metrics_json(compare_images(a, a), "a.exr", "a.exr", "");
+  const std::string same = metrics_json(compare_images(a, a), "a.exr", {"a.exr"}, "");
   CHECK(same.find("\"psnr\": null") != std::string::npos);  // +inf has no JSON number
   CHECK(same.find("\"mask\": null") != std::string::npos);
   CHECK(same.find("\"rmse\": 0,") != std::string::npos);
-  const std::string diff = metrics_json(compare_images(b, a), "b \"q\".exr", "a.exr", "m.png");
+  const std::string diff = metrics_json(compare_images(b, a), "b \"q\".exr", {"a.exr"}, "m.png");
   CHECK(diff.find("\"rmse\": 0.25,") != std::string::npos);
   CHECK(diff.find("\"test\": \"b \\\"q\\\".exr\"") != std::string::npos);
   CHECK(diff.find("\"mask\": \"m.png\"") != std::string::npos);
@@ -592,7 +592,7 @@ TEST_CASE("image_metrics: every JSON number is the metric of its name", "[image_
   mask.set(3, 4, Vec3(0, 0, 0));
   mask.set(7, 9, Vec3(0, 0, 0));
   const ImageMetrics m = compare_images(test, ref, &mask);
-  const std::string js = metrics_json(m, "t.exr", "r.exr", "m.exr");
+  const std::string js = metrics_json(m, "t.exr", {"r.exr"}, "m.exr");
   CHECK(json_number(js, "width") == 20);
   CHECK(json_number(js, "height") == 18);
   CHECK(json_number(js, "pixels") == double(m.pixels));
@@ -690,4 +690,101 @@ TEST_CASE("image_metrics: imgcompare tool: metrics printed and written, bad inpu
   CHECK(help.exit_code == 0);
   for (const char* k : {"--mask", "--json", "relMSE", "PSNR", "SSIM", "peak"})
     CHECK(help.out.find(k) != std::string::npos);
+}
+
+TEST_CASE("image_metrics: a reference in parts: its mean, its own noise, the net RMSE",
+          "[image_metrics][parts]") {
+  // Truth t; parts b_j = t + independent noise of standard deviation sigma; a test image
+  // t + noise of standard deviation tau. Uniform noise on [-h, h) has sigma = h/sqrt(3).
+  const int W = 200, H = 150;
+  const Image truth = random_image(W, H, 71, 0.f, 2.f);
+  const float h_ref = 0.3f, h_test = 0.6f;
+  const double sigma = h_ref / std::sqrt(3.0), tau = h_test / std::sqrt(3.0);
+  Image test = truth;
+  const Image tn = random_image(W, H, 72, -h_test, h_test);
+  for (size_t i = 0; i < test.rgb.size(); ++i) test.rgb[i] += tn.rgb[i];
+  for (int n : {2, 3, 6}) {
+    INFO(n << " parts");
+    std::vector<Image> parts;
+    std::vector<std::string> names;
+    for (int j = 0; j < n; ++j) {
+      Image p = truth;
+      const Image noise = random_image(W, H, 100 + uint32_t(j), -h_ref, h_ref);
+      for (size_t i = 0; i < p.rgb.size(); ++i) p.rgb[i] += noise.rgb[i];
+      parts.push_back(p);
+      names.push_back("part" + std::to_string(j) + ".exr");
+    }
+    const ImageMetrics m = compare_with_parts(test, parts, nullptr, "test.exr", names);
+    CHECK(m.reference_parts == n);
+    // The mean is the reference: the same numbers as compare_images against it.
+    const ImageMetrics direct = compare_images(test, mean_image(parts, names));
+    CHECK(m.mse == direct.mse);
+    CHECK(m.ssim == direct.ssim);
+    // The mean's noise is sigma/sqrt(n) (90,000 values: a few per cent of statistical spread).
+    CHECK(m.reference_rmse == Approx(sigma / std::sqrt(double(n))).epsilon(0.03));
+    // MSE against the mean = tau² + sigma²/n; the net RMSE recovers tau.
+    CHECK(m.rmse == Approx(std::sqrt(tau * tau + sigma * sigma / n)).epsilon(0.03));
+    CHECK(m.rmse_net == Approx(tau).epsilon(0.03));
+    if (n == 2) {  // two parts: RMSE(b1, b2)/2, exactly up to rounding
+      CHECK(m.reference_rmse == Approx(compare_images(parts[0], parts[1]).rmse / 2).epsilon(1e-9));
+    }
+  }
+  // One part: no noise estimate (NaN, null in JSON); the metrics are those against the part.
+  const ImageMetrics one = compare_with_parts(test, {truth}, nullptr, "test.exr", {"t.exr"});
+  CHECK(one.reference_parts == 1);
+  CHECK(std::isnan(one.reference_rmse));
+  CHECK(one.mse == compare_images(test, truth).mse);
+  CHECK(metrics_json(one, "test.exr", {"t.exr"}, "").find("\"reference_rmse\": null") !=
+        std::string::npos);
+  // A mask: the noise is estimated over the same pixels as the error. Parts equal outside the
+  // masked-in half and different inside: the estimate sees only the inside.
+  Image a = constant_image(20, 20, 1.f), b = a, mask = constant_image(20, 20, 0.f);
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 10; ++x) {
+      mask.set(x, y, Vec3(1, 1, 1));
+      b.set(x, y, Vec3(1.5f, 1.5f, 1.5f));
+    }
+  const ImageMetrics masked = compare_with_parts(a, {a, b}, &mask, "a", {"a", "b"});
+  CHECK(masked.pixels == 200);
+  CHECK(masked.reference_rmse == Approx(0.25).epsilon(1e-9));  // |b1 − b2| / 2
+  // Parts of different sizes are refused, naming the part.
+  try {
+    compare_with_parts(a, {a, Image(20, 19)}, nullptr, "a", {"r1.exr", "r2.exr"});
+    FAIL("parts of different sizes were accepted");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("r2.exr") != std::string::npos);
+    CHECK(std::string(e.what()).find("same size") != std::string::npos);
+  }
+}
+
+TEST_CASE("image_metrics: imgcompare with a reference in parts", "[image_metrics][parts][tools]") {
+  TempDir tmp("imgcompare-parts");
+  Image truth = random_image(16, 16, 81), p1 = truth, p2 = truth, test = truth;
+  for (size_t i = 0; i < truth.rgb.size(); ++i) {
+    p1.rgb[i] += 0.1f;
+    p2.rgb[i] -= 0.1f;
+    test.rgb[i] += 0.25f;
+  }
+  write_exr(p1, tmp / "r1.exr");
+  write_exr(p2, tmp / "r2.exr");
+  write_exr(test, tmp / "test.exr");
+  auto r = test::run_tool("imgcompare", (tmp / "test.exr") + " " + (tmp / "r1.exr") + " " +
+                                            (tmp / "r2.exr") + " --json " + (tmp / "m.json"),
+                          tmp);
+  INFO("stderr: " << r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.out.find("the mean of 2 parts") != std::string::npos);
+  const std::string js = test::file_bytes(tmp / "m.json");
+  CHECK(json_number(js, "rmse") == Approx(0.25).epsilon(1e-5));           // against the mean
+  CHECK(json_number(js, "reference_rmse") == Approx(0.1).epsilon(1e-5));  // |p1 − p2| / 2
+  CHECK(json_number(js, "rmse_net") == Approx(std::sqrt(0.25 * 0.25 - 0.01)).epsilon(1e-5));
+  CHECK(js.find("\"reference_parts\": [") != std::string::npos);
+  write_exr(Image(16, 15), tmp / "small.exr");
+  auto bad = test::run_tool("imgcompare", (tmp / "test.exr") + " " + (tmp / "r1.exr") + " " +
+                                              (tmp / "small.exr") + " --json " + (tmp / "x.json"),
+                            tmp);
+  CHECK(bad.exit_code == 2);
+  CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
+  CHECK(bad.err.find("small.exr") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(tmp / "x.json"));
 }

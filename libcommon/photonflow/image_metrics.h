@@ -26,9 +26,20 @@
 //            fall back to every pixel of P with the window clipped at the image border and its
 //            weights renormalised (SsimWindow::Clipped). The window covers masked-out pixels too
 //            (the mask selects which centres are averaged).
+//
+// A reference in parts (compare_with_parts): n >= 1 independent renders b_1 … b_n of the same image
+// (other seeds, same method and effort). The reference is their mean b = 1/n Σ_j b_j, and for
+// n >= 2 its own noise is estimated from the parts' spread over the same pixels P:
+//   s² = 1/(n−1) Σ_j (b_j − b)²   per value (the unbiased sample variance),
+//   reference MSE = 1/N Σ s²/n,     reference_rmse = √(reference MSE)
+// (for n = 2 that is RMSE(b_1, b_2)/2; a bias common to every part is not seen). The test image
+// is independent of the parts, so E[MSE] = MSE against the truth + reference MSE for unbiased
+// parts, and rmse_net = √max(MSE − reference MSE, 0) estimates the test's own RMSE.
 #pragma once
 #include <cstddef>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "photonflow/image.h"
 
@@ -53,6 +64,10 @@ struct ImageMetrics {
   double ssim_range = 0;       // L of C1 and C2
   SsimWindow ssim_window = SsimWindow::Valid;
   size_t ssim_centres = 0;     // window centres averaged
+  // A reference in parts (compare_with_parts); NaN with one part.
+  int reference_parts = 1;
+  double reference_rmse = std::numeric_limits<double>::quiet_NaN();  // the mean's own noise
+  double rmse_net = std::numeric_limits<double>::quiet_NaN();        // √max(MSE − ref. MSE, 0)
 };
 
 // Compares `test` with `reference` (RGB only; layers are ignored). `mask`, when not null, selects
@@ -63,6 +78,17 @@ ImageMetrics compare_images(const Image& test, const Image& reference, const Ima
                             const std::string& reference_name = "reference",
                             const std::string& mask_name = "mask");
 
+// The mean of `parts` (RGB; layers dropped): InputError naming the part when the sizes differ or
+// there is no part.
+Image mean_image(const std::vector<Image>& parts, const std::vector<std::string>& names);
+
+// compare_images against the mean of `parts`, with reference_parts, reference_rmse and rmse_net
+// (see the top of this file) over the same compared pixels. names[j] names parts[j].
+ImageMetrics compare_with_parts(const Image& test, const std::vector<Image>& parts,
+                                const Image* mask, const std::string& test_name,
+                                const std::vector<std::string>& names,
+                                const std::string& mask_name = "mask");
+
 // A mask image from an OpenEXR (read_exr) or a PNG file (recognised by its signature; 8- and
 // 16-bit grey, grey + alpha, RGB, RGBA and palette images, non-interlaced; values scaled to
 // [0, 1], alpha ignored). InputError when it cannot be read.
@@ -71,9 +97,12 @@ Image read_mask(const std::string& path);
 // The metrics as a JSON object (RFC 8259; +∞ and NaN become null):
 //   {"test", "reference", "mask" (null without one), "width", "height", "pixels", "masked_out",
 //    "nonfinite", "mse", "rmse", "relmse", "relmse_epsilon", "mae", "psnr", "psnr_peak", "ssim",
-//    "ssim_dynamic_range", "ssim_window" ("valid" | "clipped"), "ssim_centres"}
+//    "ssim_dynamic_range", "ssim_window" ("valid" | "clipped"), "ssim_centres",
+//    "reference_parts" (the paths), "reference_rmse", "rmse_net" (null with one part)}
+// `reference_paths` are the reference's parts; "reference" is the first.
 std::string metrics_json(const ImageMetrics& m, const std::string& test_path,
-                         const std::string& reference_path, const std::string& mask_path);
+                         const std::vector<std::string>& reference_paths,
+                         const std::string& mask_path);
 
 // The metrics as text for a terminal, one metric per line.
 std::string metrics_text(const ImageMetrics& m);

@@ -100,28 +100,11 @@ std::vector<double> ssim_map(const std::vector<double>& x, const std::vector<dou
   return s;
 }
 
-}  // namespace
-
-ImageMetrics compare_images(const Image& test, const Image& ref, const Image* mask,
-                            const std::string& test_name, const std::string& ref_name,
-                            const std::string& mask_name) {
-  auto size = [](const Image& i) {
-    return std::to_string(i.width) + "x" + std::to_string(i.height);
-  };
-  if (test.width != ref.width || test.height != ref.height)
-    throw input_error(test_name, "is " + size(test) + " but " + ref_name + " is " + size(ref),
-                      "images must have the same size");
-  if (test.pixel_count() == 0) throw input_error(test_name, "is empty");
-  if (mask && (mask->width != ref.width || mask->height != ref.height))
-    throw input_error(mask_name, "is " + size(*mask) + " but the images are " + size(ref),
-                      "the mask must have the images' size");
-  const int W = ref.width, H = ref.height;
+// The compared pixels P (1) of test against ref: inside the mask and finite in both; counts the
+// pixels compared, masked out and non-finite into m.
+std::vector<uint8_t> compared_pixels(const Image& test, const Image& ref, const Image* mask,
+                                     ImageMetrics& m) {
   const size_t npix = ref.pixel_count();
-  ImageMetrics m;
-  m.width = W;
-  m.height = H;
-
-  // The compared pixels P.
   std::vector<uint8_t> in(npix, 0);
   for (size_t i = 0; i < npix; ++i) {
     if (mask) {
@@ -138,6 +121,79 @@ ImageMetrics compare_images(const Image& test, const Image& ref, const Image* ma
     in[i] = 1;
     ++m.pixels;
   }
+  return in;
+}
+
+std::string size_text(const Image& i) {
+  return std::to_string(i.width) + "x" + std::to_string(i.height);
+}
+
+}  // namespace
+
+Image mean_image(const std::vector<Image>& parts, const std::vector<std::string>& names) {
+  if (parts.empty()) throw input_error("", "no reference image", "give at least one");
+  const auto name = [&](size_t j) { return j < names.size() ? names[j] : "part " + std::to_string(j + 1); };
+  Image mean(parts[0].width, parts[0].height);
+  std::vector<double> sum(mean.rgb.size(), 0.0);
+  for (size_t j = 0; j < parts.size(); ++j) {
+    if (parts[j].width != mean.width || parts[j].height != mean.height)
+      throw input_error(name(j), "is " + size_text(parts[j]) + " but " + name(0) + " is " +
+                                     size_text(parts[0]),
+                        "the reference's parts must have the same size");
+    for (size_t i = 0; i < sum.size(); ++i) sum[i] += double(parts[j].rgb[i]);
+  }
+  for (size_t i = 0; i < sum.size(); ++i) mean.rgb[i] = float(sum[i] / double(parts.size()));
+  return mean;
+}
+
+ImageMetrics compare_with_parts(const Image& test, const std::vector<Image>& parts,
+                                const Image* mask, const std::string& test_name,
+                                const std::vector<std::string>& names,
+                                const std::string& mask_name) {
+  const Image mean = mean_image(parts, names);
+  ImageMetrics m = compare_images(test, mean, mask, test_name,
+                                  names.empty() ? std::string("reference") : names[0], mask_name);
+  m.reference_parts = int(parts.size());
+  if (parts.size() < 2) return m;
+  ImageMetrics counts;
+  const std::vector<uint8_t> in = compared_pixels(test, mean, mask, counts);
+  const double n = double(parts.size());
+  double var = 0;  // Σ s²/n over the compared values (header: reference MSE)
+  for (size_t i = 0; i < in.size(); ++i) {
+    if (!in[i]) continue;
+    for (size_t c = 3 * i; c < 3 * i + 3; ++c) {
+      double mu = 0;
+      for (const Image& p : parts) mu += double(p.rgb[c]);
+      mu /= n;
+      double ss = 0;
+      for (const Image& p : parts) ss += (double(p.rgb[c]) - mu) * (double(p.rgb[c]) - mu);
+      var += ss / (n - 1.0) / n;
+    }
+  }
+  const double ref_mse = var / (3.0 * double(m.pixels));
+  m.reference_rmse = std::sqrt(ref_mse);
+  m.rmse_net = std::sqrt(std::max(m.mse - ref_mse, 0.0));
+  return m;
+}
+
+ImageMetrics compare_images(const Image& test, const Image& ref, const Image* mask,
+                            const std::string& test_name, const std::string& ref_name,
+                            const std::string& mask_name) {
+  const auto size = size_text;
+  if (test.width != ref.width || test.height != ref.height)
+    throw input_error(test_name, "is " + size(test) + " but " + ref_name + " is " + size(ref),
+                      "images must have the same size");
+  if (test.pixel_count() == 0) throw input_error(test_name, "is empty");
+  if (mask && (mask->width != ref.width || mask->height != ref.height))
+    throw input_error(mask_name, "is " + size(*mask) + " but the images are " + size(ref),
+                      "the mask must have the images' size");
+  const int W = ref.width, H = ref.height;
+  const size_t npix = ref.pixel_count();
+  ImageMetrics m;
+  m.width = W;
+  m.height = H;
+
+  const std::vector<uint8_t> in = compared_pixels(test, ref, mask, m);
   if (m.pixels == 0)
     throw input_error(mask ? mask_name : test_name,
                       mask ? "selects no pixel with finite values in both images"
@@ -222,10 +278,11 @@ Image read_mask(const std::string& path) {
 }
 
 std::string metrics_json(const ImageMetrics& m, const std::string& test_path,
-                         const std::string& reference_path, const std::string& mask_path) {
+                         const std::vector<std::string>& reference_paths,
+                         const std::string& mask_path) {
   Json doc = Json::object();
   doc["test"] = test_path;
-  doc["reference"] = reference_path;
+  doc["reference"] = reference_paths.empty() ? std::string() : reference_paths[0];
   doc["mask"] = mask_path.empty() ? Json(nullptr) : Json(mask_path);
   doc["width"] = m.width;
   doc["height"] = m.height;
@@ -243,6 +300,9 @@ std::string metrics_json(const ImageMetrics& m, const std::string& test_path,
   doc["ssim_dynamic_range"] = json_value(m.ssim_range);
   doc["ssim_window"] = ssim_window_name(m.ssim_window);
   doc["ssim_centres"] = m.ssim_centres;
+  doc["reference_parts"] = reference_paths;
+  doc["reference_rmse"] = json_value(m.reference_rmse);
+  doc["rmse_net"] = json_value(m.rmse_net);
   return json_record_text(doc);
 }
 
@@ -267,7 +327,15 @@ std::string metrics_text(const ImageMetrics& m) {
                 m.pixels, m.width, m.height, m.masked_out, m.nonfinite, m.rmse, m.rel_mse,
                 kRelMseEpsilon, m.mae, psnr.c_str(), m.peak, m.ssim, m.ssim_range,
                 ssim_window_name(m.ssim_window), m.ssim_centres);
-  return buf;
+  std::string out = buf;
+  if (m.reference_parts > 1) {
+    std::snprintf(buf, sizeof buf,
+                  "reference: the mean of %d parts, its own RMSE %.6g (from their spread)\n"
+                  "RMSE net %.6g (RMSE with the reference's noise taken out)\n",
+                  m.reference_parts, m.reference_rmse, m.rmse_net);
+    out += buf;
+  }
+  return out;
 }
 
 void write_metrics_file(const std::string& path, const std::string& text) {
