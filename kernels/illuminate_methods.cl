@@ -204,13 +204,15 @@ static inline void pf_pending_flush(pf_gather_hp* h, __global const pf_photon_pa
  * pf_gather_global would: the same sums. */
 static inline void pf_gather_keyed(pf_gather_hp* h, __global const pf_photon_keys4* keys,
                                    __global const pf_photon_payload* payload, int j0, int j1,
-                                   const int skip_direct, pf_pending* pend) {
+                                   const int skip_direct, const float slab, pf_pending* pend) {
   /* With skip_direct the key must be 2·mesh (mesh matches, not direct), otherwise key >> 1 must
    * be the mesh. A hitpoint with mesh −1 matches no key (keys >= 0). */
   const int shift = skip_direct ? 0 : 1;
   const int want = skip_direct ? 2 * h->mesh : h->mesh;
   const float r2 = h->r * h->r;
   const float4 hx = (float4)(h->x), hy = (float4)(h->y), hz = (float4)(h->z);
+  const float4 nx = (float4)(h->nx), ny = (float4)(h->ny), nz = (float4)(h->nz);
+  const float kr = slab * h->r; /* pf_ppm_in_slab's bound */
   const int4 lane = (int4)(0, 1, 2, 3);
 #if PF_GATHER_LIST > 0
   int n = pend->n; /* <= PF_GATHER_LIST − 4 between blocks */
@@ -222,8 +224,9 @@ static inline void pf_gather_keyed(pf_gather_hp* h, __global const pf_photon_key
     const float4 dz = hz - vload4(2, k);
     const float4 d2 = dx * dx + dy * dy + dz * dz;
     const int4 j = (int4)(4 * b) + lane;
-    const int4 ok = ((vload4(3, (__global const int*)k) >> shift) == (int4)(want)) &
-                    (d2 <= (float4)(r2)) & (j >= (int4)(j0)) & (j < (int4)(j1));
+    int4 ok = ((vload4(3, (__global const int*)k) >> shift) == (int4)(want)) &
+              (d2 <= (float4)(r2)) & (j >= (int4)(j0)) & (j < (int4)(j1));
+    if (slab > 0.0f) ok &= fabs(dx * nx + dy * ny + dz * nz) <= (float4)(kr); /* pf_ppm_in_slab */
 #if PF_GATHER_LIST > 0
     /* The passing lanes' indices, compacted in lane order (pf_passing_lanes), are stored as one
      * vector at n, and n moves past those that passed: entries n .. n + 3 <= PF_GATHER_LIST − 1.
@@ -524,14 +527,16 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  * pass's cell size, so that a state kept on the device needs no copy to the host between passes
  * (cl_gather.h, DevicePpmState). `lmax` holds one int per work-item. With `weighted` (SPPM: the
  * states are pixels, the sites that pass's visible points) τ_M is multiplied by the site's eye-path
- * throughput β (weights[3·i .. 3·i + 2]) before the update, as sppm_pass does (sppm.h). */
+ * throughput β (weights[3·i .. 3·i + 2]) before the update, as sppm_pass does (sppm.h). `slab`
+ * > 0 (sppm and pppm, PpmOptions::slab) cuts each sphere to pf_ppm_in_slab's slab. */
 __kernel void gather_hash_grid(__global const pf_gather_site* sites,
                                __global pf_ppm_state* states, int count,
                                __global const pf_photon_payload* payload,
                                __global const pf_photon_keys4* keys, __global const int* slot_start,
                                float ox, float oy, float oz, float cell, int nx, int ny, int nz,
                                uint mask, int unique, __global const pf_material* mats,
-                               int skip_direct, float alpha, __global const float* weights,
+                               int skip_direct, float alpha, float slab,
+                               __global const float* weights,
                                int weighted, __global int* rmax_next, __local int* lmax) {
   const int hi = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
   int r_next = 0; /* pf_float_ordered(0.0f) */
@@ -551,10 +556,10 @@ __kernel void gather_hash_grid(__global const pf_gather_site* sites,
         if (unique) { /* the row's slots first .. first + len − 1 (mod table): 1 or 2 runs */
           const uint stop = first + len <= mask + 1 ? first + len : mask + 1;
           pf_gather_keyed(&h, keys, payload, slot_start[first], slot_start[stop], skip_direct,
-                          &pend);
+                          slab, &pend);
           if (first + len > mask + 1)
             pf_gather_keyed(&h, keys, payload, 0, slot_start[first + len - (mask + 1)], skip_direct,
-                            &pend);
+                            slab, &pend);
           continue;
         }
         for (uint dx = 0; dx < len && dx <= mask; ++dx) { /* dx > mask: repeats within the row */
@@ -567,7 +572,8 @@ __kernel void gather_hash_grid(__global const pf_gather_site* sites,
               if (((k - f) & mask) < len) { seen = 1; break; }
             }
           if (seen) continue;
-          pf_gather_keyed(&h, keys, payload, slot_start[k], slot_start[k + 1], skip_direct, &pend);
+          pf_gather_keyed(&h, keys, payload, slot_start[k], slot_start[k + 1], skip_direct, slab,
+                          &pend);
         }
       }
     pf_pending_flush(&h, payload, &pend);

@@ -481,9 +481,16 @@ TEST_CASE("OpenCL: the device's SPPM pass gives sppm_pass's state, bit for bit",
   auto dev = test::test_device();
   if (!dev) return;
   const Scene s = test::room_scene(PF_MAT_GLASS, 40, 30);
+  // Without and with the slab (PpmOptions::slab): the room's walls are one mesh, so its corners
+  // have photons of another face inside the sphere, which the slab leaves out.
+  const float slab = GENERATE(0.f, 0.25f);
+  INFO("slab " << slab);
   HitpointSet cpu = make_sppm_state(s, default_radius(s), DirectMode::ShadowRays), gpu = cpu;
+  HitpointSet sphere = cpu;  // the CPU without the slab, to see that the slab changes something
   DevicePpmState on_device(s, gpu, *dev);
   PpmOptions ppm;
+  ppm.slab = slab;
+  PpmOptions no_slab;
   for (uint32_t pass = 0; pass < 4; ++pass) {
     EyePassOptions eo;
     eo.pass = pass;
@@ -502,11 +509,16 @@ TEST_CASE("OpenCL: the device's SPPM pass gives sppm_pass's state, bit for bit",
     PhotonGridParams gp;
     gp.default_radius = cpu.radius0;
     gp.max_bins = ppm.max_bins;
-    sppm_pass(s, cpu, eye, build_photon_grid(ph.photons, int(s.mesh_names.size()), gp), ph.emitted,
-              ppm);
+    const PhotonGrid grid = build_photon_grid(ph.photons, int(s.mesh_names.size()), gp);
+    sppm_pass(s, cpu, eye, grid, ph.emitted, ppm);
+    sppm_pass(s, sphere, eye, grid, ph.emitted, no_slab);
     on_device.sppm_pass(eye, ph.photons, ph.emitted, ppm);
   }
   on_device.sync();
+  size_t changed = 0;  // pixels where the slab left photons out
+  for (size_t i = 0; i < cpu.hitpoints.size(); ++i)
+    changed += cpu.hitpoints[i].n_photons != sphere.hitpoints[i].n_photons ? 1 : 0;
+  CHECK((slab > 0.f) == (changed > 0));
   REQUIRE(gpu.passes == 4);
   CHECK(gpu.photons_emitted == cpu.photons_emitted);
   CHECK(gpu.estimator == "sppm");
@@ -543,7 +555,11 @@ TEST_CASE("OpenCL: the device's PPPM gather gives pppm_pass's sums", "[sppm][ope
   PassSums cpu = make_pass_sums(40, 30, 0, default_radius(s), 0.7f, DirectMode::Photons,
                                 s.scene_id, state_parameters(opt)),
            gpu = cpu;
+  PassSums sphere = cpu;  // the CPU without the slab
+  const float slab = GENERATE(0.f, 0.25f);
+  INFO("slab " << slab);
   PpmOptions ppm;
+  ppm.slab = slab;
   for (uint32_t pass = 0; pass < 3; ++pass) {
     EyePassOptions eo;
     eo.pass = pass;
@@ -555,8 +571,9 @@ TEST_CASE("OpenCL: the device's PPPM gather gives pppm_pass's sums", "[sppm][ope
     const PhotonPassResult ph = trace_photons(s, pass, po);
     PhotonGridParams gp;
     gp.default_radius = cpu.radius1;
-    pppm_pass(s, cpu, eye, build_photon_grid(ph.photons, int(s.mesh_names.size()), gp), ph.emitted,
-              ppm);
+    const PhotonGrid grid = build_photon_grid(ph.photons, int(s.mesh_names.size()), gp);
+    pppm_pass(s, cpu, eye, grid, ph.emitted, ppm);
+    pppm_pass(s, sphere, eye, grid, ph.emitted, PpmOptions());
     ClBuffer buf = dev->buffer(ph.photons.size() * sizeof(pf_photon), ph.photons.data());
     const DevicePhotons dp{&buf, ph.photons.size(), ph.emitted};
     pppm_accumulate(gpu, eye,
@@ -571,6 +588,74 @@ TEST_CASE("OpenCL: the device's PPPM gather gives pppm_pass's sums", "[sppm][ope
   }
   INFO("largest difference " << worst << " of sums up to " << scale);
   REQUIRE(scale > 0);
+  CHECK((slab > 0.f) == (cpu.sum != sphere.sum));
   if (!cl_float_options(dev->info().device_id).empty()) CHECK(cpu.sum == gpu.sum);
   CHECK(worst <= 1e-6 * scale);
+}
+
+TEST_CASE("slab: photons of another face of the same mesh are left out, the site's own plane kept",
+          "[sppm][slab]") {
+  // A visible point x on a block's front face (plane z = 0, normal +z) just below the top edge
+  // (y = 0.1 R); the top face is the plane y = 0.1 R behind it (z < 0), the same mesh. Photons:
+  // A on the front face (depth 0), B on the top face 0.5 R deep, C on the top face 0.2 R deep, all
+  // inside the sphere and arriving against the normal. The sphere gathers all three; the slab
+  // κ = 0.25 leaves out B alone (|n·(x − x_p)| = 0.5 R > κ R), and the boundary counts as inside.
+  const Scene s = floor_scene(0.5f, 1.f, 1.f, 8);  // one diffuse material for f_r
+  const float R = 0.1f;
+  auto photon = [](float x, float y, float z, float dy, float dz, float flux) {
+    pf_photon p{};
+    p.position[0] = x;
+    p.position[1] = y;
+    p.position[2] = z;
+    p.dir[1] = dy;
+    p.dir[2] = dz;
+    p.flux[0] = p.flux[1] = p.flux[2] = flux;
+    p.mesh = 0;
+    return p;
+  };
+  const std::vector<pf_photon> photons = {
+      photon(0.1f * R, -0.2f * R, 0.f, 0.f, -1.f, 1.f),         // A: the front face
+      photon(0.f, 0.1f * R, -0.5f * R, -0.6f, -0.8f, 10.f),     // B: the top face, deep
+      photon(0.f, 0.1f * R, -0.2f * R, -0.6f, -0.8f, 100.f)};   // C: the top face, shallow
+  PhotonGridParams gp;
+  gp.default_radius = R;
+  const PhotonGrid grid = build_photon_grid(photons, 1, gp);
+  pf_hitpoint site{};
+  site.normal[2] = 1.f;
+  site.mesh = 0;
+  site.material = 0;
+  float tau[3];
+  const double fr = 0.5 / kPi;
+  CHECK(gather_site(s, grid, site, R, false, 0.f, tau) == 3);
+  CHECK(tau[0] == Approx(fr * 111.0).epsilon(1e-6));
+  CHECK(gather_site(s, grid, site, R, false, 0.25f, tau) == 2);
+  CHECK(tau[0] == Approx(fr * 101.0).epsilon(1e-6));
+  CHECK(gather_site(s, grid, site, R, false, 0.5f, tau) == 3);  // B at exactly 0.5 R: inside
+  CHECK(gather_site(s, grid, site, R, false, 0.1f, tau) == 1);  // A alone
+  // The options: auto is 0.25 for sppm and pppm and 0 for ppm; ppm refuses a slab; a negative or
+  // non-numeric slab is one line naming --slab.
+  CHECK(parse_slab("auto", true) == kDefaultSlab);
+  CHECK(parse_slab("auto", false) == 0.f);
+  CHECK(parse_slab("0.5", true) == 0.5f);
+  CHECK(parse_slab("0", false) == 0.f);
+  for (const auto& [text, new_eye] : std::vector<std::pair<std::string, bool>>{
+           {"0.25", false}, {"-1", true}, {"nan", true}, {"inf", true}, {"x", true}, {"0.2x", true}}) {
+    INFO(text);
+    try {
+      parse_slab(text, new_eye);
+      FAIL("accepted");
+    } catch (const InputError& e) {
+      CHECK(std::string(e.what()).find("--slab") != std::string::npos);
+    }
+  }
+  // A state records its slab: a checkpoint of another slab is not resumed, parts of another slab
+  // do not merge (state_parameters).
+  RenderOptions a = options(Estimator::Sppm, 1, 100, 0.f), b = a;
+  a.ppm.slab = 0.25f;
+  CHECK(state_parameters(a).at("slab") == "0.25");
+  CHECK(state_parameters(a) != state_parameters(b));
+  RenderOptions ppm = options(Estimator::Ppm, 1, 100, 0.f);
+  CHECK(state_parameters(ppm).count("slab") == 0);
+  ppm.ppm.slab = 0.25f;
+  CHECK_THROWS_AS(check_options(ppm), InputError);
 }

@@ -72,6 +72,16 @@ void check_options(const EyePassOptions& opt);
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt);
 
+// What trace_hitpoints_into keeps between calls: the visible points of each image row.
+struct EyePassWork {
+  std::vector<std::vector<pf_hitpoint>> rows;
+};
+// trace_hitpoints into `res`, reusing the storage of res's vectors and of `work` from the last
+// call: the estimators that trace an eye pass every pass (sppm.h) allocate nothing after the
+// first. The same result as trace_hitpoints.
+void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePassResult& res,
+                          EyePassWork& work);
+
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with
 // shadow rays (`samples` per call; rng streams of (seed, pass, index)). Exposed for tests.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,

@@ -25,6 +25,9 @@ struct ClusterSet;  // clusters.h
 
 struct PpmOptions {
   float alpha = 0.7f;  // fraction of new photons kept, eq. 3.14 (0 < α ≤ 1)
+  // sppm and pppm: the gather region's slab half-thickness κ in units of R (ppm.h,
+  // pf_ppm_in_slab); 0 = the sphere alone (the thesis's rule, which ppm always uses).
+  float slab = 0.f;
   // How photons are found (gather_method.h): grid | flann on the CPU backend, the thesis's
   // variants and hash-grid on the OpenCL backend (cl_backend.h). All select the same photons.
   GatherMethod method = GatherMethod::Grid;
@@ -68,14 +71,24 @@ void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGr
 
 // InputError unless 0 < alpha <= 1 (eq. 3.14; the estimators of sppm.h too).
 void check_alpha(float alpha);
+// InputError naming --slab unless slab is 0 or a finite positive number.
+void check_slab(float slab);
+// InputError unless opt.slab is 0: the PPM passes (ppm_pass, the device's) gather in the sphere.
+void require_sphere(const PpmOptions& opt);
+
+// The slab of sppm and pppm when --slab is not given: measured on the diffuse box, it removes the
+// bias of photons from a block's top face gathered below its edge (docs/RESULTS.md section 6)
+// and leaves the spheres and the pool unchanged.
+constexpr float kDefaultSlab = 0.25f;
 
 // The gather of one site from a prebuilt grid, the core of ppm_pass_grid and of the per-pixel
 // estimators (sppm.h): the photons that `site` (its position, normal, mesh and material) accepts
 // within `radius` (the rule above), and their τ_M = Σ f_r·Φ_p (eq. 3.17) into tau_m, summed in
 // increasing photon index as every gather method sums. Returns M, the photons gathered. The
 // caller has checked the site's material against the scene; a mesh outside the grid gathers none.
+// `slab` > 0 cuts the sphere to the slab |n·(x − x_p)| <= slab·radius (pf_ppm_in_slab).
 int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
-                bool skip_direct, float tau_m[3]);
+                bool skip_direct, float slab, float tau_m[3]);
 
 struct ClassicOptions {
   int k = 100;                  // nearest global photons per estimate (eq. 3.10)

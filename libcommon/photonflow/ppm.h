@@ -3,7 +3,8 @@
  * (thesis ch. 3.4–3.5; Hachisuka et al. 2008):
  *   - the gather rule: a photon belongs to a hitpoint's disc when distance² <= R², with distance²
  *     computed by pf_ppm_dist2 (every gatherer — grid, FLANN map, kernels — uses these two
- *     functions, so they select exactly the same photons);
+ *     functions, so they select exactly the same photons); sppm and pppm may cut the sphere to
+ *     a slab about the tangent plane (pf_ppm_in_slab);
  *   - the per-pass hitpoint update, eq. 3.14, 3.16, 3.18;
  *   - the radiance estimates, eq. 3.19 (progressive) and eq. 3.10 (classic photon map).
  * Only a hitpoint's own mesh is gathered from (thesis ch. 7.3, photons sorted per mesh); see
@@ -44,6 +45,26 @@ PF_INLINE pf_float pf_ppm_dist2(pf_float ax, pf_float ay, pf_float az, pf_float 
 /* The gather rule: inside (boundary included) when distance² <= radius·radius. */
 PF_INLINE int pf_ppm_in_radius(pf_float dist2, pf_float radius) {
   return dist2 <= radius * radius;
+}
+
+/* The slab of the estimators that trace a new eye pass every pass (sppm.h, `--slab κ`): with
+ * κ > 0 a photon inside the sphere counts only when it also lies within κ·R of the visible
+ * point's tangent plane, |n·(x − x_p)| <= κ·R, with (dx, dy, dz) = x − x_p and n the visible
+ * point's normal, evaluated as ((dx·nx + dy·ny) + dz·nz) without FMA (as pf_ppm_dist2). The
+ * sphere alone takes photons from another face of the same mesh — below a box's top edge, the
+ * front face gathers the top face's photons as if they lay on its own plane, a bias that fades
+ * only as R falls below the pixel — while a flat or gently curved surface keeps every photon of
+ * the disc (a sphere of radius ρ departs from the tangent plane by R²/2ρ < κ·R while R < 2κρ).
+ * κ = 0: no slab, the thesis's sphere (PPM's rule). The hashed-grid kernel tests its four lanes
+ * with the same operations (illuminate_methods.cl, pf_gather_keyed). */
+PF_INLINE int pf_ppm_in_slab(pf_float dx, pf_float dy, pf_float dz, pf_float nx, pf_float ny,
+                             pf_float nz, pf_float slab, pf_float radius) {
+#ifdef __OPENCL_VERSION__
+#pragma OPENCL FP_CONTRACT OFF
+#endif
+  pf_float h = dx * nx + dy * ny + dz * nz;
+  if (!(slab > 0.0f)) return 1;
+  return (h < 0.0f ? -h : h) <= slab * radius;
 }
 
 /* Progressive update of one hitpoint after a photon pass that put `m` new photons carrying the

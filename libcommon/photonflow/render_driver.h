@@ -80,6 +80,8 @@ class ProgressiveRenderer {
   PhotonBuffers photon_chunks_;   // the pass's photons, per chunk as traced
   PhotonGrid grid_;               // their grid (GatherMethod::Grid), built straight from the chunks
   std::vector<pf_photon> photons_;  // their concatenation (GatherMethod::Flann)
+  EyePassResult eye_;             // sppm: the pass's eye pass, and its row buffers
+  EyePassWork eye_work_;
   // Clusters of a clustered device method, made once from the eye pass (or the checkpoint's
   // hitpoints, which have the same positions) when opt.ppm.clusters is not given.
   std::unique_ptr<ClusterSet> clusters_;
@@ -91,9 +93,11 @@ class ProgressiveRenderer {
 // Traces the eye pass of pass `pass` (EyePassOptions::pass) and photon pass `pass` on the CPU,
 // and sorts the photons into `grid`: the per-pass work of sppm and pppm before their CPU gather
 // (on a device they trace and gather there: DevicePpmState::sppm_pass, pppm_gather_device).
-// Returns the photons emitted; `stored` gets the photons stored.
+// Returns the photons emitted; `stored` gets the photons stored. Every buffer (eye, eye_work,
+// chunks, grid) keeps its storage from the last pass, so a pass allocates nothing new.
 uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
-                    EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored);
+                    EyePassResult& eye, EyePassWork& eye_work, PhotonBuffers& chunks,
+                    PhotonGrid& grid, size_t& stored);
 
 // The pppm estimator: sums of the pass estimates over passes [first_pass, first_pass + passes).
 class PppmRenderer {
@@ -116,6 +120,7 @@ class PppmRenderer {
   PassSums sums_;
   uint64_t photons_stored_ = 0;
   EyePassResult eye_;
+  EyePassWork eye_work_;
   PhotonBuffers photon_chunks_;
   PhotonGrid grid_;
 };
@@ -149,7 +154,7 @@ void check_options(const RenderOptions& opt);
 
 // The options a PPM state depends on, as canonical text under their tool option names ("alpha" →
 // "0.7", "seed", "photons", "spp", "max-depth", "max-bounces", "direct", "shadow-samples",
-// "radius"; with sppm and pppm also "estimator" and "pixel-sampler"). render_progressive
+// "radius"; with sppm and pppm also "estimator", "pixel-sampler" and "slab"). render_progressive
 // records them in every checkpoint's provenance parameters as
 // "state.<name>" and resumes only a checkpoint whose record equals this run's: a state continued
 // under other options would be neither run's image. (Passes, snapshots, threads, device, method
@@ -157,12 +162,12 @@ void check_options(const RenderOptions& opt);
 std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
 // The same record for the staged route (illuminate --estimator pppm), from the options recorded in
 // the provenance of its eye pass (trace-hitpoints: spp, max-depth, direct, shadow-samples, radius,
-// seed, pixel-sampler) and photon pass (trace-photons: photons, max-bounces, seed) and its alpha:
-// equal to render's for the same options, so parts of either route merge. InputError naming the
-// file whose provenance lacks one.
+// seed, pixel-sampler) and photon pass (trace-photons: photons, max-bounces, seed) and its alpha
+// and slab: equal to render's for the same options, so parts of either route merge. InputError
+// naming the file whose provenance lacks one.
 std::map<std::string, std::string> staged_state_parameters(
     Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
-    const std::string& photons_path, float alpha);
+    const std::string& photons_path, float alpha, float slab);
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final

@@ -41,6 +41,10 @@ enum class Estimator { Ppm, Sppm, Pppm };
 const char* estimator_name(Estimator e);
 // "ppm" | "sppm" | "pppm" (InputError naming --estimator otherwise).
 Estimator parse_estimator(const std::string& name);
+// The --slab option of render and illuminate (PpmOptions::slab): "auto" is kDefaultSlab for the
+// estimators with a new eye pass every pass (`new_eye_pass`) and 0 for ppm and classic; a number
+// must be >= 0, and 0 unless new_eye_pass. InputError naming --slab otherwise.
+float parse_slab(const std::string& text, bool new_eye_pass);
 // Estimator of a hitpoints file's `estimator` attribute for a state that continues: "sppm" is
 // SPPM, everything else a fixed eye pass.
 bool is_sppm_state(const HitpointSet& h);

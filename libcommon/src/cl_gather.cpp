@@ -439,7 +439,7 @@ float hash_grid_pass(const Scene& scene, const SplitHitpoints& hps, const ClBuff
   dev.args(k, *hps.sites, *hps.states, cl_int(nh), *d.payload, *d.keys, *d.slot_start, g.origin[0],
            g.origin[1], g.origin[2], g.cell, cl_int(g.n[0]), cl_int(g.n[1]), cl_int(g.n[2]),
            cl_uint(g.mask), cl_int(g.unique), mats,
-           cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha,
+           cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha, opt.slab,
            weights ? *weights : dev.scratch("ppm.no-weights", sizeof(float)),
            cl_int(weights ? 1 : 0), next, ClLocal{L * sizeof(cl_int)});
   dev.run(k, nh);
@@ -539,6 +539,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   GatherTimes times;
   const size_t nh = h.hitpoints.size(), np = photons.size();
   check_pass(opt, nh, np);
+  require_sphere(opt);
   check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
   const int mesh_count = int(scene.mesh_names.size());
   const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
@@ -718,6 +719,7 @@ GatherTimes DevicePpmState::hash_grid(const pf_photon* host, const ClBuffer* dev
   GatherTimes times;
   const size_t nh = h_.hitpoints.size();
   check_pass(opt, nh, np);
+  require_sphere(opt);
   if (nh > 0 && np > 0) {
     upload();
     rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, nh, h_.direct_mode,
@@ -750,6 +752,7 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
   o.method = GatherMethod::HashGrid;
   const size_t nh = h_.hitpoints.size();
   check_pass(o, nh, np);
+  check_slab(o.slab);
   // The pass's sites: each pixel's visible point (mesh −1 where the eye path found none) and its
   // throughput β; the host copy of the state takes the visible points too (sppm_pass's fields).
   std::vector<pf_hitpoint> sites;
@@ -794,6 +797,7 @@ std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& e
   o.method = GatherMethod::HashGrid;
   o.alpha = 1.f;
   check_pass(o, nh, np);
+  check_slab(o.slab);
   if (nh == 0 || np == 0) return tau_beta;
   require_one_buffer(dev, nh, sizeof(pf_gather_site), "visible points", o.method);
   std::vector<pf_hitpoint> fresh(eye.hitpoints);

@@ -116,10 +116,17 @@ void check_options(const EyePassOptions& opt) {
 }
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
+  EyePassResult res;
+  EyePassWork work;
+  trace_hitpoints_into(scene, opt, res, work);
+  return res;
+}
+
+void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePassResult& res,
+                          EyePassWork& work) {
   const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
   const int columns = eye_strata_columns(spp);
   CameraFrame cam(scene.camera);
-  EyePassResult res;
   res.width = W;
   res.height = H;
   res.radius = opt.radius > 0.f ? opt.radius : default_radius(scene);
@@ -129,7 +136,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
 
   // Each image row collects its hitpoints in (pixel, sample) order; the rows are concatenated in
   // order afterwards, so the result does not depend on the thread count.
-  std::vector<std::vector<pf_hitpoint>> rows(size_t(std::max(H, 0)));
+  std::vector<std::vector<pf_hitpoint>>& rows = work.rows;
+  rows.resize(size_t(std::max(H, 0)));
   int threads = worker_threads(opt.threads);
 
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
@@ -186,12 +194,9 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
   for (size_t y = 0; y < rows.size(); ++y) offset[y + 1] = offset[y] + rows[y].size();
   res.hitpoints.resize(offset.back());
 #pragma omp parallel for schedule(static) num_threads(threads)
-  for (int y = 0; y < H; ++y) {
+  for (int y = 0; y < H; ++y)
     std::copy(rows[size_t(y)].begin(), rows[size_t(y)].end(),
               res.hitpoints.begin() + long(offset[size_t(y)]));
-    std::vector<pf_hitpoint>().swap(rows[size_t(y)]);
-  }
-  return res;
 }
 
 }  // namespace pf

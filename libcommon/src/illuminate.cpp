@@ -81,6 +81,18 @@ void check_alpha(float alpha) {
     throw input_error("", "alpha must be in (0, 1], got " + std::to_string(alpha));
 }
 
+void require_sphere(const PpmOptions& opt) {
+  if (opt.slab != 0.f)
+    throw input_error("", "--slab applies to --estimator sppm and pppm",
+                      "ppm gathers in the sphere alone (the thesis's rule)");
+}
+
+void check_slab(float slab) {
+  if (!(slab >= 0.f) || !std::isfinite(slab))
+    throw input_error("", "--slab must be 0 (the sphere alone) or a positive number, got " +
+                              std::to_string(slab));
+}
+
 void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, uint64_t emitted,
                    const PpmOptions& opt) {
   check_against_scene("", h, scene);
@@ -88,7 +100,7 @@ void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, u
 }
 
 int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
-                bool skip_direct, float tau_m[3]) {
+                bool skip_direct, float slab, float tau_m[3]) {
   tau_m[0] = tau_m[1] = tau_m[2] = 0.f;
   const int mesh = site.mesh;
   const int mesh_count = int(grid.mesh_grid.size());
@@ -125,10 +137,13 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
             pf_ppm_in_radius(pf_ppm_dist2(q[0], q[1], q[2], p.position[0], p.position[1],
                                           p.position[2]),
                              radius) != 0;
-        // photon_accepted, evaluated without branches.
+        // photon_accepted, evaluated without branches, and the slab (pf_ppm_in_slab).
         const bool facing = p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
+        const bool in_slab = pf_ppm_in_slab(q[0] - p.position[0], q[1] - p.position[1],
+                                            q[2] - p.position[2], nrm[0], nrm[1], nrm[2], slab,
+                                            radius) != 0;
         const bool ok = inside & (p.mesh == mesh) &
-                        !(skip_direct & ((p.flags & PF_PHOTON_DIRECT) != 0)) & facing;
+                        !(skip_direct & ((p.flags & PF_PHOTON_DIRECT) != 0)) & facing & in_slab;
         out[m] = i;
         m += ok ? 1 : 0;
       }
@@ -149,6 +164,7 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
 void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGrid& grid,
                               uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
+  require_sphere(opt);
   const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
   const float alpha = opt.alpha;
   const int64_t count = int64_t(h.hitpoints.size());
@@ -160,7 +176,7 @@ void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGr
   for (int64_t hi = 0; hi < count; ++hi) {
     pf_hitpoint& hp = h.hitpoints[size_t(hi)];
     float tau_m[3];
-    const int m = gather_site(scene, grid, hp, hp.radius, skip_direct, tau_m);
+    const int m = gather_site(scene, grid, hp, hp.radius, skip_direct, 0.f, tau_m);  // sphere
     pf_ppm_update(&hp, m, tau_m, alpha);  // eq. 3.14, 3.16, 3.18 (m = 0: unchanged)
   }
   finish_pass(h, emitted);
@@ -176,6 +192,7 @@ PhotonGridParams ppm_grid_params(const HitpointSet& h, const PpmOptions& opt) {
 void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
               uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
+  require_sphere(opt);
   if (opt.method != GatherMethod::Grid && opt.method != GatherMethod::Flann)
     throw input_error("", std::string("--method ") + gather_method_name(opt.method) +
                               " runs on the OpenCL backend", "add --device opencl, or use --method grid or flann");

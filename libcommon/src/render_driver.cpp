@@ -32,10 +32,11 @@ HitpointSet fresh_state(const Scene& scene, const RenderOptions& opt) {
 }  // namespace
 
 uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
-                    EyePassResult& eye, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored) {
+                    EyePassResult& eye, EyePassWork& eye_work, PhotonBuffers& chunks,
+                    PhotonGrid& grid, size_t& stored) {
   EyePassOptions eo = opt.eye;
   eo.pass = pass;
-  eye = trace_hitpoints(scene, eo);
+  trace_hitpoints_into(scene, eo, eye, eye_work);
   PhotonGridParams gp;
   gp.max_bins = opt.ppm.max_bins;
   gp.default_radius = radius0;  // the smallest bin size, as ppm_grid_params
@@ -80,12 +81,11 @@ void ProgressiveRenderer::run_iteration() {
     return;
   }
   if (opt_.estimator == Estimator::Sppm) {  // a new eye pass, then the pass's photons per pixel
-    EyePassResult eye;
     size_t stored = 0;
     const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(state_.passes), state_.radius0,
-                                        eye, photon_chunks_, grid_, stored);
+                                        eye_, eye_work_, photon_chunks_, grid_, stored);
     photons_stored_ += stored;
-    sppm_pass(scene_, state_, eye, grid_, emitted, opt_.ppm);
+    sppm_pass(scene_, state_, eye_, grid_, emitted, opt_.ppm);
     return;
   }
   if (opt_.device) {  // OpenCL backend: device photon tracing and opt.ppm.method's gather
@@ -161,7 +161,7 @@ void PppmRenderer::run_iteration() {
   }
   size_t stored = 0;
   const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(sums_.end_pass()), sums_.radius1,
-                                      eye_, photon_chunks_, grid_, stored);
+                                      eye_, eye_work_, photon_chunks_, grid_, stored);
   photons_stored_ += stored;
   pppm_pass(scene_, sums_, eye_, grid_, emitted, opt_.ppm);
 }
@@ -179,6 +179,8 @@ void check_options(const RenderOptions& opt) {
   check_options(opt.photons);
   require_positive("passes", opt.passes);
   require_in_unit_interval("alpha", opt.ppm.alpha);
+  check_slab(opt.ppm.slab);
+  if (opt.estimator == Estimator::Ppm) require_sphere(opt.ppm);
   require_positive("max-bins", opt.ppm.max_bins);
   if (!opt.checkpoint.empty()) require_positive("checkpoint-every", opt.checkpoint_every);
   if (opt.snapshot_every < 0) throw input_error("", "--snapshot-every must be >= 0");
@@ -215,13 +217,14 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
   if (opt.estimator != Estimator::Ppm) {
     p["estimator"] = estimator_name(opt.estimator);
     p["pixel-sampler"] = pixel_sampler_name(opt.eye.sampler);
+    p["slab"] = default_text(opt.ppm.slab);
   }
   return p;
 }
 
 std::map<std::string, std::string> staged_state_parameters(
     Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
-    const std::string& photons_path, float alpha) {
+    const std::string& photons_path, float alpha, float slab) {
   auto text = [](const Provenance& p, const std::string& path, const char* name) {
     const auto it = p.parameters.find(name);
     if (it == p.parameters.end())
@@ -251,6 +254,7 @@ std::map<std::string, std::string> staged_state_parameters(
   o.photons.max_bounces = int(number(photons, photons_path, "max-bounces"));
   o.photons.seed = uint32_t(number(photons, photons_path, "seed"));
   o.ppm.alpha = alpha;
+  o.ppm.slab = slab;
   return state_parameters(o);
 }
 

@@ -59,25 +59,30 @@ HitpointSet make_sppm_state(const Scene& scene, float radius0, DirectMode mode) 
 namespace {
 
 
-// Pixel index of every visible point of `eye`, which must fit a width × height image; with
-// one_per_pixel, InputError when two visible points share a pixel (SPPM keeps one per pixel).
-std::vector<size_t> visible_pixels(const EyePassResult& eye, int width, int height,
-                                   bool one_per_pixel) {
+// Pixel index of a visible point (check_visible_pixels checked it) in an image `width` wide.
+inline size_t pixel_of(const pf_hitpoint& v, int width) {
+  return size_t(v.pixel_y) * size_t(width) + size_t(v.pixel_x);
+}
+
+// InputError unless every visible point of `eye` lies in a width × height image (the state's),
+// in pixel order; with one_per_pixel, also when two visible points share a pixel (SPPM keeps one
+// per pixel).
+void check_visible_pixels(const EyePassResult& eye, int width, int height, bool one_per_pixel) {
   if (eye.width != width || eye.height != height)
     throw input_error("", "the eye pass is " + std::to_string(eye.width) + "x" +
                               std::to_string(eye.height) + ", the state " + std::to_string(width) +
                               "x" + std::to_string(height));
-  std::vector<size_t> px(eye.hitpoints.size());
-  for (size_t i = 0; i < px.size(); ++i) {
+  size_t last = 0;
+  for (size_t i = 0; i < eye.hitpoints.size(); ++i) {
     const pf_hitpoint& v = eye.hitpoints[i];
     if (v.pixel_x < 0 || v.pixel_x >= width || v.pixel_y < 0 || v.pixel_y >= height)
       throw input_error("", "visible point " + std::to_string(i) + " lies outside the image");
-    px[i] = size_t(v.pixel_y) * size_t(width) + size_t(v.pixel_x);
-    if (one_per_pixel && i > 0 && px[i] <= px[i - 1])
+    const size_t px = pixel_of(v, width);
+    if (one_per_pixel && i > 0 && px <= last)
       throw input_error("", "SPPM takes one eye sample per pixel and pass",
                         "use --spp 1 (every pass traces a new sample)");
+    last = px;
   }
-  return px;
 }
 
 }  // namespace
@@ -85,7 +90,8 @@ std::vector<size_t> visible_pixels(const EyePassResult& eye, int width, int heig
 void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
-  const std::vector<size_t> px = visible_pixels(eye, state.width, state.height, true);
+  check_slab(opt.slab);
+  check_visible_pixels(eye, state.width, state.height, true);
   if (state.hitpoints.size() != size_t(state.width) * size_t(state.height))
     throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
   const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
@@ -94,9 +100,9 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
 #pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
   for (int64_t i = 0; i < count; ++i) {
     const pf_hitpoint& v = eye.hitpoints[size_t(i)];
-    pf_hitpoint& s = state.hitpoints[px[size_t(i)]];
+    pf_hitpoint& s = state.hitpoints[pixel_of(v, state.width)];
     float tau_m[3];
-    const int m = gather_site(scene, grid, v, s.radius, skip_direct, tau_m);
+    const int m = gather_site(scene, grid, v, s.radius, skip_direct, opt.slab, tau_m);
     for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
     pf_ppm_update(&s, m, tau_m, alpha);                  // thesis eq. 3.14, 3.16, 3.18
   }
@@ -105,7 +111,7 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
 
 void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,
                 std::vector<float>& beta) {
-  const std::vector<size_t> px = visible_pixels(eye, state.width, state.height, true);
+  check_visible_pixels(eye, state.width, state.height, true);
   const size_t n = size_t(state.width) * size_t(state.height);
   if (state.hitpoints.size() != n)
     throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
@@ -113,15 +119,16 @@ void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<
   none.mesh = none.material = -1;
   sites.assign(n, none);
   beta.assign(n * 3, 0.f);
-  for (size_t i = 0; i < px.size(); ++i) {
-    sites[px[i]] = eye.hitpoints[i];
-    for (int c = 0; c < 3; ++c) beta[px[i] * 3 + size_t(c)] = eye.hitpoints[i].weight[c];
+  for (const pf_hitpoint& v : eye.hitpoints) {
+    const size_t px = pixel_of(v, state.width);
+    sites[px] = v;
+    for (int c = 0; c < 3; ++c) beta[px * 3 + size_t(c)] = v.weight[c];
   }
 }
 
 void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted) {
-  for (const pf_hitpoint& v : eye.hitpoints) {  // visible_pixels checked the pixels
-    pf_hitpoint& s = state.hitpoints[size_t(v.pixel_y) * size_t(state.width) + size_t(v.pixel_x)];
+  for (const pf_hitpoint& v : eye.hitpoints) {  // check_visible_pixels checked the pixels
+    pf_hitpoint& s = state.hitpoints[pixel_of(v, state.width)];
     for (int c = 0; c < 3; ++c) {
       s.position[c] = v.position[c];
       s.normal[c] = v.normal[c];
@@ -141,6 +148,23 @@ void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emi
   state.estimator = "sppm";
 }
 
+float parse_slab(const std::string& text, bool new_eye_pass) {
+  if (text == "auto") return new_eye_pass ? kDefaultSlab : 0.f;
+  float v = 0.f;
+  try {
+    size_t used = 0;
+    v = std::stof(text, &used);
+    if (used != text.size()) throw std::invalid_argument(text);
+  } catch (const std::exception&) {
+    throw input_error("", "--slab must be auto or a number, got '" + text + "'");
+  }
+  check_slab(v);
+  if (v != 0.f && !new_eye_pass)
+    throw input_error("", "--slab applies to --estimator sppm and pppm",
+                      "ppm gathers in the sphere alone (the thesis's rule)");
+  return v;
+}
+
 double pppm_radius(double r1, double alpha, int pass) {
   double r2 = r1 * r1;
   for (int j = 1; j <= pass; ++j) r2 *= (double(j) + alpha) / (double(j) + 1.0);  // KZ11 eq. 19
@@ -154,17 +178,22 @@ float pppm_pass_radius(const PassSums& sums) {
 void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
   check_alpha(sums.alpha);
+  check_slab(opt.slab);
   const float r = pppm_pass_radius(sums);
   const bool skip = sums.direct_mode == DirectMode::ShadowRays;
   const int64_t count = int64_t(eye.hitpoints.size());
-  std::vector<float> tau_beta(size_t(count) * 3, 0.f);
+  // The calling thread's buffer, kept from pass to pass (no allocation per pass); the workers
+  // write it through `out` (a thread_local named inside the region would be each worker's own).
+  thread_local std::vector<float> tau_beta;
+  tau_beta.assign(size_t(count) * 3, 0.f);
+  float* const out = tau_beta.data();
   if (emitted > 0) {
 #pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
     for (int64_t i = 0; i < count; ++i) {
       const pf_hitpoint& v = eye.hitpoints[size_t(i)];
       float tau_m[3];
-      gather_site(scene, grid, v, r, skip, tau_m);
-      for (int c = 0; c < 3; ++c) tau_beta[size_t(i) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
+      gather_site(scene, grid, v, r, skip, opt.slab, tau_m);
+      for (int c = 0; c < 3; ++c) out[size_t(i) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
     }
   }
   pppm_accumulate(sums, eye, tau_beta, emitted);
@@ -173,8 +202,8 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
 void pppm_accumulate(PassSums& sums, const EyePassResult& eye, const std::vector<float>& tau_beta,
                      uint64_t emitted) {
   check_alpha(sums.alpha);
-  const std::vector<size_t> px = visible_pixels(eye, sums.width, sums.height, false);
-  if (tau_beta.size() != px.size() * 3)
+  check_visible_pixels(eye, sums.width, sums.height, false);
+  if (tau_beta.size() != eye.hitpoints.size() * 3)
     throw std::invalid_argument("pppm_accumulate: one β·τ_M per visible point");
   const float r = pppm_pass_radius(sums);
   // L_d,i: light the eye paths saw directly.
@@ -184,9 +213,11 @@ void pppm_accumulate(PassSums& sums, const EyePassResult& eye, const std::vector
     // β Σ f_r Φ / (π r_i² N_p) of every visible point, added to its pixel in order (several
     // samples of a pixel may share it).
     const double norm = 1.0 / (double(kPi) * double(r) * double(r) * double(emitted));
-    for (size_t i = 0; i < px.size(); ++i)
+    for (size_t i = 0; i < eye.hitpoints.size(); ++i) {
+      const size_t px = pixel_of(eye.hitpoints[i], sums.width);
       for (int c = 0; c < 3; ++c)
-        sums.sum[px[i] * 3 + size_t(c)] += double(tau_beta[i * 3 + size_t(c)]) * norm;
+        sums.sum[px * 3 + size_t(c)] += double(tau_beta[i * 3 + size_t(c)]) * norm;
+    }
   }
   sums.passes += 1;
   sums.photons_emitted += emitted;

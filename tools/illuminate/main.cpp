@@ -38,6 +38,9 @@ int main(int argc, char** argv) {
        "(an earlier illuminate's output); none for the first pass", cxxopts::value<std::string>())
       ("alpha", "PPM: fraction of new photons kept, in (0, 1] (eq. 3.14)",
        cxxopts::value<float>()->default_value("0.7"))
+      ("slab", "sppm, pppm: count only photons within SLAB x R of the visible point's tangent "
+       "plane (ppm.h); 0 = the sphere alone; auto = 0.25 for sppm and pppm, 0 otherwise",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("clusters", "PPM, --method kmeans-clusters | grid-kmeans | grid-gridclusters: hitpoint "
        "clusters of these hitpoints (clusters.h5 from the cluster stage); without it they are "
        "made once here", cxxopts::value<std::string>())
@@ -71,6 +74,8 @@ int main(int argc, char** argv) {
     ppm.threads = a["threads"].as<int>();
     pf::require_in_unit_interval("alpha", ppm.alpha);
     pf::require_positive("max-bins", ppm.max_bins);
+    ppm.slab = pf::parse_slab(a["slab"].as<std::string>(),
+                              estimator == "sppm" || estimator == "pppm");
     if (estimator == "sppm" || estimator == "pppm") {
       // The per-pass visible points move, so the gather is the CPU grid's (render --device opencl
       // traces them on the device); prebuilt grids and clusters belong to fixed hitpoints.
@@ -116,7 +121,7 @@ int main(int argc, char** argv) {
       }
       const auto params = pf::staged_state_parameters(
           pf::Estimator::Pppm, pf::load_hitpoints_provenance(eye_path), eye_path,
-          pf::load_photons_provenance(ph_path), ph_path, ppm.alpha);
+          pf::load_photons_provenance(ph_path), ph_path, ppm.alpha, ppm.slab);
       pf::PassSums sums;
       if (a.count("state")) {
         const std::string sp = a["state"].as<std::string>();

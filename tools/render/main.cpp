@@ -44,6 +44,9 @@ int main(int argc, char** argv) {
       ("photons", "photons emitted per pass", cxxopts::value<int64_t>()->default_value("100000"))
       ("alpha", "fraction of new photons kept, in (0, 1] (eq. 3.14)",
        cxxopts::value<float>()->default_value("0.7"))
+      ("slab", "sppm, pppm: count only photons within SLAB x R of the visible point's tangent "
+       "plane (ppm.h); 0 = the sphere alone; auto = 0.25 for sppm and pppm, 0 for ppm",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("max-bins", "grid bins along a mesh's longest extent", cxxopts::value<int>()->default_value("64"))
       ("spp", "eye samples per pixel (ppm; pppm: per pass; sppm: 1)",
        cxxopts::value<int>()->default_value("1"))
@@ -117,6 +120,7 @@ int main(int argc, char** argv) {
     opt.photons.max_bounces = a["max-bounces"].as<int>();
     opt.photons.threads = threads;
     opt.ppm.alpha = a["alpha"].as<float>();
+    opt.ppm.slab = pf::parse_slab(a["slab"].as<std::string>(), opt.estimator != pf::Estimator::Ppm);
     opt.ppm.max_bins = a["max-bins"].as<int>();
     opt.ppm.threads = threads;
     opt.checkpoint = a["checkpoint"].as<std::string>();
