@@ -137,17 +137,26 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
             pf_ppm_in_radius(pf_ppm_dist2(q[0], q[1], q[2], p.position[0], p.position[1],
                                           p.position[2]),
                              radius) != 0;
-        // photon_accepted, evaluated without branches, and the slab (pf_ppm_in_slab).
+        // photon_accepted, evaluated without branches.
         const bool facing = p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
-        const bool in_slab = pf_ppm_in_slab(q[0] - p.position[0], q[1] - p.position[1],
-                                            q[2] - p.position[2], nrm[0], nrm[1], nrm[2], slab,
-                                            radius) != 0;
         const bool ok = inside & (p.mesh == mesh) &
-                        !(skip_direct & ((p.flags & PF_PHOTON_DIRECT) != 0)) & facing & in_slab;
+                        !(skip_direct & ((p.flags & PF_PHOTON_DIRECT) != 0)) & facing;
         out[m] = i;
         m += ok ? 1 : 0;
       }
     }
+  }
+  if (slab > 0.f) {  // the slab (pf_ppm_in_slab) over the few accepted, in order
+    size_t kept = 0;
+    for (size_t j = 0; j < m; ++j) {
+      const pf_photon& p = photons[cand[j]];
+      cand[kept] = cand[j];
+      kept += pf_ppm_in_slab(q[0] - p.position[0], q[1] - p.position[1], q[2] - p.position[2],
+                             nrm[0], nrm[1], nrm[2], slab, radius) != 0
+                  ? 1
+                  : 0;
+    }
+    m = kept;
   }
   if (m == 0) return 0;
   // Sum order: original photon index. The candidates come as one ascending run per bin.
