@@ -8,6 +8,7 @@ Every number comes from build/bin/imgcompare (RMSE over RGB values) on the image
 wrote; run times come from the runs' JSON records (render --stats, pathtrace --stats).
 """
 import argparse
+import itertools
 import json
 import math
 import os
@@ -76,6 +77,94 @@ def fit_floor(points):
     return best[1], best[2], best[3]
 
 
+def solve(a, b):
+    """Solution of the small linear system a x = b (Gaussian elimination, partial pivoting), or
+    None when singular."""
+    n = len(b)
+    m = [list(a[i]) + [b[i]] for i in range(n)]
+    for c in range(n):
+        piv = max(range(c, n), key=lambda r: abs(m[r][c]))
+        if abs(m[piv][c]) < 1e-300:
+            return None
+        m[c], m[piv] = m[piv], m[c]
+        for r in range(n):
+            if r != c:
+                f = m[r][c] / m[c][c]
+                m[r] = [m[r][k] - f * m[c][k] for k in range(n + 1)]
+    return [m[i][n] / m[i][i] for i in range(n)]
+
+
+def nnls(cols, ys):
+    """Non-negative least squares min |X c − y|, c >= 0, for a few columns: the best feasible
+    unconstrained fit over every subset of the columns (exact for so few)."""
+    n = len(cols)
+    best = None
+    for r in range(1, n + 1):
+        for subset in itertools.combinations(range(n), r):
+            a = [[sum(cols[i][t] * cols[j][t] for t in range(len(ys))) for j in subset] for i in subset]
+            b = [sum(cols[i][t] * ys[t] for t in range(len(ys))) for i in subset]
+            x = solve(a, b)
+            if x is None or min(x) < 0:
+                continue
+            coef = [0.0] * n
+            for i, v in zip(subset, x):
+                coef[i] = v
+            res = sum((sum(coef[i] * cols[i][t] for i in range(n)) - ys[t]) ** 2 for t in range(len(ys)))
+            if best is None or res < best[0]:
+                best = (res, coef)
+    return best[1] if best else [0.0] * n
+
+
+def fit_kz(points, alpha):
+    """The error model of progressive photon mapping (Knaus & Zwicker 2011, section 4: variance
+    ∝ k^−α, bias ∝ r_k² ∝ k^−(1−α)) plus a floor: e² = b·k^(−2(1−α)) + v·k^(−α) + f², with b, v,
+    f² >= 0 (NNLS). Returns (f, b, v). A floor here is error the estimator's own bias and
+    variance do not explain: a fixed eye pass's outline pixels, or a systematic difference from
+    the reference."""
+    ks = [k for k, _ in points]
+    ys = [e * e for _, e in points]
+    cols = [[k ** (-2 * (1 - alpha)) for k in ks], [k ** (-alpha) for k in ks], [1.0] * len(ks)]
+    b, v, f2 = nnls(cols, ys)
+    return math.sqrt(f2), b, v
+
+
+def curve(imgcompare, snapdir, refs):
+    """(passes, RMSE net of the reference's noise, RMSE) of every snapshot in snapdir."""
+    pts = []
+    if os.path.isdir(snapdir):
+        for name in os.listdir(snapdir):
+            m = re.fullmatch(r"0*(\d+)\.exr", name)
+            if m:
+                j = compare_json(imgcompare, os.path.join(snapdir, name), refs)
+                pts.append((int(m.group(1)), j["rmse_net"], j["rmse"]))
+    return sorted(pts)
+
+
+def curve_lines(label, pts, e30, alpha):
+    """The report's lines for one error-against-passes curve: the values, the local slopes, and
+    the two floor fits over k >= 32 on the net error."""
+    if len(pts) < 4:
+        return []
+    out = ["%s against passes (all pixels; RMSE, and net of the reference's noise): " % label +
+           ", ".join("%d: %.4f (%.4f)" % (k, e, n) for k, n, e in pts), ""]
+    tail = [(k, n) for k, n, _ in pts if k >= 32]
+    if len(tail) < 3:
+        return out
+    # Over about a doubling (snapshots are about √2 apart): every point with the one two later.
+    slopes = ["%d→%d: %.2f" % (k1, k2, math.log(max(e2, 1e-12) / max(e1, 1e-12)) / math.log(k2 / k1))
+              for (k1, e1), (k2, e2) in zip(tail, tail[2:])]
+    ratio = lambda x: "" if not e30 else " (%.2f × the SPPM error at equal time)" % (x / e30)
+    f, p, _ = fit_floor(tail)
+    fk, b, v = fit_kz(tail, alpha)
+    out += ["Local slopes d log e / d log k of the net error: " + ", ".join(slopes) +
+            " (SPPM's bias alone would tend to −(1−α) = %.2f, its variance alone to −α/2 = %.2f)."
+            % (-(1 - alpha), -alpha / 2), "",
+            "Floor fits over k ≥ 32 on the net error: KZ11 model e² = b·k^(−2(1−α)) + v·k^(−α) + f² "
+            "(α = %.2g): f = %.4f%s; one free power e² = c·k^(−p) + f²: p = %.2f, f = %.4f%s."
+            % (alpha, fk, ratio(fk), p, f, ratio(f)), ""]
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--dir", required=True)
@@ -84,6 +173,7 @@ def main():
     ap.add_argument("--methods", required=True)
     ap.add_argument("--ref-parts", default="",
                     help="reference parts per scene: 'scene=N scene=N ...' (default 2 each)")
+    ap.add_argument("--alpha", type=float, default=0.7, help="the runs' α (render --alpha)")
     ap.add_argument("--settings", default="")
     ap.add_argument("-o", "--output", required=True)
     a = ap.parse_args()
@@ -122,32 +212,11 @@ def main():
         if (s, "sppm") in summary:
             lines.append("| ref. error / SPPM | %.2f | | | |" % (ref_all / summary[(s, "sppm")]))
         lines.append("")
-        # SPPM against passes.
-        snapdir = os.path.join(d, "sppm-passes")
-        pts = []
-        if os.path.isdir(snapdir):
-            for name in os.listdir(snapdir):
-                m = re.fullmatch(r"0*(\d+)\.exr", name)
-                if m:
-                    k = int(m.group(1))
-                    pts.append((k, compare(a.imgcompare, os.path.join(snapdir, name), ref)))
-        pts.sort()
-        if len(pts) >= 4:
-            # The tail (k >= 32) only: the first passes fall fast while the radius is large, and a
-            # free exponent fitted through them reads the slower tail as a floor. The measured
-            # error includes the reference's own noise (independent of the run's), so the fit is
-            # made on e² − ref_error² too.
-            fit = [(k, e) for k, e in pts if k >= 32]
-            e30 = summary.get((s, "sppm"))
-            lines += ["SPPM against passes (all pixels): " + ", ".join("%d: %.4f" % (k, e) for k, e in pts), ""]
-            if len(fit) >= 3:
-                f, p, c = fit_floor(fit)
-                corr = [(k, math.sqrt(max(e * e - ref_all * ref_all, 0.0))) for k, e in fit]
-                fc, pc, cc = fit_floor(corr)
-                ratio = lambda x: "" if not e30 else " (%.2f × the SPPM error at equal time)" % (x / e30)
-                lines += ["Fit e² = c·k^(−p) + f² over k ≥ 32: p = %.2f, floor f = %.4f%s; with the "
-                          "reference's noise taken out (e² − %.4f²): p = %.2f, f = %.4f%s." % (
-                              p, f, ratio(f), ref_all, pc, fc, ratio(fc)), ""]
+        # SPPM, and PPM's fixed eye pass, against passes.
+        e30 = summary.get((s, "sppm"))
+        for est, label in (("sppm", "SPPM"), ("ppm", "PPM (fixed eye pass)")):
+            lines += curve_lines(label, curve(a.imgcompare, os.path.join(d, est + "-passes"), ref),
+                                 e30, a.alpha)
         if (s, "pt") in summary:
             base = summary[(s, "pt")]
             lines += ["Ratios to path tracing at equal time (all pixels): " + ", ".join(

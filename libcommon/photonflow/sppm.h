@@ -18,7 +18,17 @@
 //
 // Both take the pass index p (0-based) for their eye pass (EyePassOptions::pass: streams of
 // (seed, pass, pixel)) and their photon pass, so a pass is the same wherever it runs. The gather
-// is illuminate.h's rule and order (gather_site), the photons those of trace_photons pass p.
+// is illuminate.h's rule and order (gather_site), the photons those of trace_photons pass p, with
+// the sphere cut to the slab |n·(x − x_p)| <= κ·R when PpmOptions::slab = κ > 0 (ppm.h,
+// pf_ppm_in_slab; render's default 0.25).
+//
+// | parameter (render) | default | meaning |
+// |--------------------|---------|---------|
+// | --estimator        | ppm     | ppm, sppm or pppm |
+// | --alpha            | 0.7     | α of eq. 3.14 (sppm) or of KZ11 eq. 19 (pppm) |
+// | --radius           | 0 = auto| R_1 in world units (default_radius) |
+// | --slab             | auto    | κ: 0.25 for sppm and pppm, 0 (the sphere) for ppm |
+// | --pixel-sampler    | auto    | sobol for sppm and pppm: where a pixel's eye samples go |
 //
 // | estimator | state                                    | memory      | passes merge |
 // |-----------|------------------------------------------|-------------|--------------|
