@@ -659,3 +659,29 @@ TEST_CASE("slab: photons of another face of the same mesh are left out, the site
   ppm.ppm.slab = 0.25f;
   CHECK_THROWS_AS(check_options(ppm), InputError);
 }
+
+TEST_CASE("trace_hitpoints_into: reused buffers give trace_hitpoints' result, pass after pass",
+          "[sppm][eye]") {
+  // The per-pass eye pass of sppm and pppm keeps its vectors (EyePassResult, EyePassWork) from
+  // call to call; rows left longer by an earlier call (more samples, more visible points) must
+  // not leak into a later one.
+  const Scene s = test::room_scene(PF_MAT_GLASS, 24, 18);
+  EyePassResult reused;
+  EyePassWork work;
+  for (const auto& [pass, spp] : std::vector<std::pair<uint32_t, int>>{{0, 4}, {1, 1}, {2, 2}, {0, 4}}) {
+    INFO("pass " << pass << ", spp " << spp);
+    EyePassOptions eo;
+    eo.pass = pass;
+    eo.spp = spp;
+    eo.sampler = PixelSampler::Sobol;
+    eo.direct = DirectMode::ShadowRays;
+    trace_hitpoints_into(s, eo, reused, work);
+    const EyePassResult fresh = trace_hitpoints(s, eo);
+    REQUIRE(reused.hitpoints.size() == fresh.hitpoints.size());
+    CHECK(test::same_hitpoints(reused.hitpoints, fresh.hitpoints));
+    CHECK(reused.emitted == fresh.emitted);
+    CHECK(reused.direct == fresh.direct);
+    CHECK(reused.width == fresh.width);
+    CHECK(reused.radius == fresh.radius);
+  }
+}

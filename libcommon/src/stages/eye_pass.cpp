@@ -142,7 +142,7 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
 
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
   for (int y = 0; y < H; ++y) {
-    thread_local std::vector<pf_hitpoint> row_buf;  // this thread's current row, reused
+    std::vector<pf_hitpoint>& row_buf = rows[size_t(y)];  // kept from the last call (work)
     row_buf.clear();
     for (int x = 0; x < W; ++x) {
       size_t pix = size_t(y) * W + x;
@@ -188,7 +188,6 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
       emitted.store(&res.emitted[pix * 3]);
       direct.store(&res.direct[pix * 3]);
     }
-    rows[size_t(y)].assign(row_buf.begin(), row_buf.end());
   }
   std::vector<size_t> offset(rows.size() + 1, 0);
   for (size_t y = 0; y < rows.size(); ++y) offset[y + 1] = offset[y] + rows[y].size();
