@@ -215,12 +215,15 @@ def report(a):
     rows = load_rows(a.dir, scenes)
     os.makedirs(a.res, exist_ok=True)
     labels_cl = sorted({r["label"] for r in rows if r["method"].startswith("cl-")})
+    # The estimators with a new eye pass every pass (ESTIMATORS of accuracy.mk), when run.
+    labels_new = [e for e in ("sppm", "pppm") if any(r["label"] == e for r in rows)]
     styles = {"pt": ("tab:red", "o"), "ppm": ("tab:blue", "s"),
               "cl-hash-grid": ("tab:green", "^"), "cl-grid-kmeans": ("tab:purple", "v"),
-              "ppm-ref": ("tab:gray", "x")}
+              "ppm-ref": ("tab:gray", "x"), "sppm": ("tab:brown", "P"), "pppm": ("tab:olive", "X")}
     names = {"pt": "path tracing", "ppm": "PPM CPU grid (α 0.7)",
              "cl-hash-grid": "PPM OpenCL hash-grid", "cl-grid-kmeans": "PPM OpenCL grid-kmeans",
-             "ppm-ref": "PPM reference recipe"}
+             "ppm-ref": "PPM reference recipe", "sppm": "SPPM CPU (α 0.7)",
+             "pppm": "probabilistic PPM CPU (α 0.7)"}
     out = []
     w = out.append
     w("# Speed against accuracy: generated tables\n")
@@ -244,7 +247,7 @@ def report(a):
     w("| scene | run | eye spp | passes or spp | photons emitted | seconds | RMSE | relMSE | SSIM |")
     w("|---|---|---:|---:|---:|---:|---:|---:|---:|")
     for s in scenes:
-        for lab in ["pt", "ppm"] + labels_cl + ["ppm-ref"]:
+        for lab in ["pt", "ppm"] + labels_new + labels_cl + ["ppm-ref"]:
             ser = series(rows, s, lab)
             if not ser:
                 continue
@@ -259,14 +262,14 @@ def report(a):
     w("RMSE interpolated (log–log) at the same rendering seconds; `–` where a run did not span "
       "that time. Ratio = PPM (CPU) ÷ path tracing.\n")
     w("| scene | seconds | path tracing | PPM CPU α 0.7 | " +
-      " | ".join(names.get(l, l) for l in labels_cl) + " | PPM ÷ PT |")
-    w("|---|---:|---:|---:|" + "---:|" * len(labels_cl) + "---:|")
+      " | ".join(names.get(l, l) for l in labels_new + labels_cl) + " | PPM ÷ PT |")
+    w("|---|---:|---:|---:|" + "---:|" * len(labels_new + labels_cl) + "---:|")
     equal_time = {}
     for s in scenes:
         pt, ppm = series(rows, s, "pt"), series(rows, s, "ppm")
         for t in (0.5, 1.0, 2.0, 5.0, 10.0, 20.0):
             e_pt, e_ppm = (at_time(pt, t) if pt else None), (at_time(ppm, t) if ppm else None)
-            cls = [at_time(series(rows, s, l), t) for l in labels_cl]
+            cls = [at_time(series(rows, s, l), t) for l in labels_new + labels_cl]
             if e_pt is None and e_ppm is None:
                 continue
             ratio = e_ppm / e_pt if e_pt and e_ppm else None
@@ -377,7 +380,7 @@ def report(a):
     n = len(scenes)
     fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.4), squeeze=False)
     for ax, s in zip(axes[0], scenes):
-        for lab in ["pt", "ppm"] + labels_cl:
+        for lab in ["pt", "ppm"] + labels_new + labels_cl:
             ser = series(rows, s, lab)
             if ser:
                 c, m = styles.get(lab, ("black", "."))
@@ -408,7 +411,7 @@ def report(a):
             x0, y0 = xs[0], ppm[0]["rmse"]
             ax.loglog([x0, xs[-1]], [y0, y0 * (xs[-1] / x0) ** (-1 / 3)], ":", color="black",
                       lw=1, label="slope −1/3")
-        for lab in labels_cl:
+        for lab in labels_new + labels_cl:
             ser = series(rows, s, lab)
             if ser:
                 c, m = styles.get(lab, ("black", "."))

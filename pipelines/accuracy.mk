@@ -6,6 +6,9 @@
 #             EYE_SPP_<scene> eye samples per pixel (more for glass and water: the eye pass draws
 #             the reflect-or-refract choice once per sample for the whole run, docs/PATHTRACE.md)
 #   ppm-a<α>  the α sweep: the same on the CPU, one run per α of ALPHAS, SWEEP_EYE_SPP eye samples
+#   sppm, pppm  the estimators with a new eye pass every pass (sppm.h; `render --estimator E`,
+#             α = 0.7, their defaults: one eye sample per pixel and pass, Sobol pixel sampler,
+#             slab 0.25), PASSES × PHOTONS as PPM; one per ESTIMATORS
 #   cl-<m>    PPM on OpenCL (`render --device opencl --method m`) for each m of CL_METHODS
 #   classic   classic photon mapping (`trace-photons` + `illuminate --estimator classic`), one
 #             image per photon-map size of CLASSIC_PHOTONS and k of CLASSIC_K
@@ -66,6 +69,7 @@ EYE_SPP_sds-pool        ?= 16
 SWEEP_EYE_SPP ?= 4
 ALPHAS   ?= 0.5 0.6 0.7 0.8 0.9
 CL_METHODS ?= hash-grid grid-kmeans
+ESTIMATORS ?= sppm pppm
 CL_PASSES  ?= 64
 # Classic photon mapping: photons emitted into the map, k nearest.
 CLASSIC_PHOTONS ?= 25000 100000 400000
@@ -187,6 +191,22 @@ $(DIR)/$(1)/$(2).tsv: $(DIR)/$(1)/scene.h5 $(DIR)/$(1)/ref.exr $(DIR)/$(1)/mask.
 TSVS += $(DIR)/$(1)/$(2).tsv
 endef
 
+# SPPM and PPPM on the CPU. $(1) = scene, $(2) = estimator.
+define EST_RULE
+$(DIR)/$(1)/$(2).tsv: $(DIR)/$(1)/scene.h5 $(DIR)/$(1)/ref.exr $(DIR)/$(1)/mask.exr \
+    $(call param_stamp,$(DIR)/$(1)/.$(2),$(PASSES) $(PHOTONS) $(SEED) $(THREADS))
+	@rm -rf $(DIR)/$(1)/$(2) && mkdir -p $(DIR)/$(1)/$(2)
+	$(LOAD) $(DIR)/$(1)/$(2).load
+	$(BIN)/render --scene $$< -o $(DIR)/$(1)/$(2)/final.exr --estimator $(2) \
+	  --passes $(PASSES) --photons $(PHOTONS) --seed $(SEED) \
+	  --snapshot-at $(call snaps,$(PASSES)) --snapshot '$(DIR)/$(1)/$(2)/{pass}.exr' \
+	  --stats $(DIR)/$(1)/$(2).json $(T) | tail -1
+	$(LOAD) $(DIR)/$(1)/$(2).load
+	$(COLLECT) --record $(DIR)/$(1)/$(2).json --method $(2) --label $(2) --alpha 0.7 \
+	  $$(RUNARGS_$(1)) --load $(DIR)/$(1)/$(2).load -o $$@
+TSVS += $(DIR)/$(1)/$(2).tsv
+endef
+
 # PPM on OpenCL. $(1) = scene, $(2) = OpenCL gather method. PoCL compiles a kernel for the
 # device when it is first launched and caches the result on disk; a one-pass warm-up run fills
 # that cache first, so the timed run measures rendering (program builds are also left out of
@@ -212,6 +232,7 @@ $(foreach s,$(SCENES),$(eval $(call SCENE_RULES,$(s))))
 $(foreach s,$(SCENES),$(eval $(call PPM_RULE,$(s),ppm,0.7,$(EYE_SPP_$(s)))))
 $(foreach s,$(SCENES),$(foreach a,$(ALPHAS),$(eval $(call PPM_RULE,$(s),ppm-a$(a),$(a),$(SWEEP_EYE_SPP)))))
 $(foreach s,$(SCENES),$(foreach m,$(CL_METHODS),$(eval $(call CL_RULE,$(s),$(m)))))
+$(foreach s,$(SCENES),$(foreach e,$(ESTIMATORS),$(eval $(call EST_RULE,$(s),$(e)))))
 
 # The PPM reference recipe on the diffuse box, against its path-traced reference.
 REFCHECK := $(DIR)/cornell-box/refcheck.tsv
@@ -243,4 +264,5 @@ $(REPORT): $(TSVS) bench/accuracy.py
 	  PASSES=$(PASSES) $(foreach s,$(SCENES),EYE_SPP_$(s)=$(EYE_SPP_$(s))) \
 	  SWEEP_EYE_SPP=$(SWEEP_EYE_SPP) CL_PASSES=$(CL_PASSES) REF_SPP=$(REF_SPP) MASK_SPP=$(MASK_SPP) \
 	  REF_PHOTONS=$(REF_PHOTONS) REF_PASSES=$(REF_PASSES) REF_EYE_SPP=$(REF_EYE_SPP) \
-	  SEED=$(SEED) REF_SEED=$(REF_SEED) THREADS=$(THREADS) REF_THREADS=$(REF_THREADS)"
+	  SEED=$(SEED) REF_SEED=$(REF_SEED) THREADS=$(THREADS) REF_THREADS=$(REF_THREADS) \
+	  ESTIMATORS=$(ESTIMATORS)"
