@@ -64,9 +64,9 @@ inline size_t pixel_of(const pf_hitpoint& v, int width) {
   return size_t(v.pixel_y) * size_t(width) + size_t(v.pixel_x);
 }
 
-// InputError unless every visible point of `eye` lies in a width × height image (the state's),
-// in pixel order; with one_per_pixel, also when two visible points share a pixel (SPPM keeps one
-// per pixel).
+// InputError unless every visible point of `eye` lies in a width × height image (the state's);
+// with one_per_pixel, also unless they come in strictly increasing pixel order (SPPM keeps one
+// per pixel, and the eye pass lists them in pixel order).
 void check_visible_pixels(const EyePassResult& eye, int width, int height, bool one_per_pixel) {
   if (eye.width != width || eye.height != height)
     throw input_error("", "the eye pass is " + std::to_string(eye.width) + "x" +
