@@ -130,55 +130,13 @@ std::string size_text(const Image& i) {
 
 }  // namespace
 
-Image mean_image(const std::vector<Image>& parts, const std::vector<std::string>& names) {
-  if (parts.empty()) throw input_error("", "no reference image", "give at least one");
-  const auto name = [&](size_t j) { return j < names.size() ? names[j] : "part " + std::to_string(j + 1); };
-  Image mean(parts[0].width, parts[0].height);
-  std::vector<double> sum(mean.rgb.size(), 0.0);
-  for (size_t j = 0; j < parts.size(); ++j) {
-    if (parts[j].width != mean.width || parts[j].height != mean.height)
-      throw input_error(name(j), "is " + size_text(parts[j]) + " but " + name(0) + " is " +
-                                     size_text(parts[0]),
-                        "the reference's parts must have the same size");
-    for (size_t i = 0; i < sum.size(); ++i) sum[i] += double(parts[j].rgb[i]);
-  }
-  for (size_t i = 0; i < sum.size(); ++i) mean.rgb[i] = float(sum[i] / double(parts.size()));
-  return mean;
-}
+namespace {
 
-ImageMetrics compare_with_parts(const Image& test, const std::vector<Image>& parts,
-                                const Image* mask, const std::string& test_name,
-                                const std::vector<std::string>& names,
-                                const std::string& mask_name) {
-  const Image mean = mean_image(parts, names);
-  ImageMetrics m = compare_images(test, mean, mask, test_name,
-                                  names.empty() ? std::string("reference") : names[0], mask_name);
-  m.reference_parts = int(parts.size());
-  if (parts.size() < 2) return m;
-  ImageMetrics counts;
-  const std::vector<uint8_t> in = compared_pixels(test, mean, mask, counts);
-  const double n = double(parts.size());
-  double var = 0;  // Σ s²/n over the compared values (header: reference MSE)
-  for (size_t i = 0; i < in.size(); ++i) {
-    if (!in[i]) continue;
-    for (size_t c = 3 * i; c < 3 * i + 3; ++c) {
-      double mu = 0;
-      for (const Image& p : parts) mu += double(p.rgb[c]);
-      mu /= n;
-      double ss = 0;
-      for (const Image& p : parts) ss += (double(p.rgb[c]) - mu) * (double(p.rgb[c]) - mu);
-      var += ss / (n - 1.0) / n;
-    }
-  }
-  const double ref_mse = var / (3.0 * double(m.pixels));
-  m.reference_rmse = std::sqrt(ref_mse);
-  m.rmse_net = std::sqrt(std::max(m.mse - ref_mse, 0.0));
-  return m;
-}
-
+// compare_images, leaving the compared pixels P in `in` (compare_with_parts estimates the
+// reference's noise over the same pixels).
 ImageMetrics compare_images(const Image& test, const Image& ref, const Image* mask,
                             const std::string& test_name, const std::string& ref_name,
-                            const std::string& mask_name) {
+                            const std::string& mask_name, std::vector<uint8_t>& in) {
   const auto size = size_text;
   if (test.width != ref.width || test.height != ref.height)
     throw input_error(test_name, "is " + size(test) + " but " + ref_name + " is " + size(ref),
@@ -193,7 +151,7 @@ ImageMetrics compare_images(const Image& test, const Image& ref, const Image* ma
   m.width = W;
   m.height = H;
 
-  const std::vector<uint8_t> in = compared_pixels(test, ref, mask, m);
+  in = compared_pixels(test, ref, mask, m);
   if (m.pixels == 0)
     throw input_error(mask ? mask_name : test_name,
                       mask ? "selects no pixel with finite values in both images"
@@ -260,6 +218,61 @@ ImageMetrics compare_images(const Image& test, const Image& ref, const Image* ma
   m.ssim_centres = count;
   return m;
 }
+
+}  // namespace
+
+Image mean_image(const std::vector<Image>& parts, const std::vector<std::string>& names) {
+  if (parts.empty()) throw input_error("", "no reference image", "give at least one");
+  const auto name = [&](size_t j) { return j < names.size() ? names[j] : "part " + std::to_string(j + 1); };
+  Image mean(parts[0].width, parts[0].height);
+  std::vector<double> sum(mean.rgb.size(), 0.0);
+  for (size_t j = 0; j < parts.size(); ++j) {
+    if (parts[j].width != mean.width || parts[j].height != mean.height)
+      throw input_error(name(j), "is " + size_text(parts[j]) + " but " + name(0) + " is " +
+                                     size_text(parts[0]),
+                        "the reference's parts must have the same size");
+    for (size_t i = 0; i < sum.size(); ++i) sum[i] += double(parts[j].rgb[i]);
+  }
+  for (size_t i = 0; i < sum.size(); ++i) mean.rgb[i] = float(sum[i] / double(parts.size()));
+  return mean;
+}
+
+ImageMetrics compare_with_parts(const Image& test, const std::vector<Image>& parts,
+                                const Image* mask, const std::string& test_name,
+                                const std::vector<std::string>& names,
+                                const std::string& mask_name) {
+  const Image mean = mean_image(parts, names);
+  std::vector<uint8_t> in;  // the compared pixels P
+  ImageMetrics m = compare_images(test, mean, mask, test_name,
+                                  names.empty() ? std::string("reference") : names[0], mask_name, in);
+  m.reference_parts = int(parts.size());
+  if (parts.size() < 2) return m;
+  const double n = double(parts.size());
+  double var = 0;  // Σ s²/n over the compared values (header: reference MSE)
+  for (size_t i = 0; i < in.size(); ++i) {
+    if (!in[i]) continue;
+    for (size_t c = 3 * i; c < 3 * i + 3; ++c) {
+      double mu = 0;
+      for (const Image& p : parts) mu += double(p.rgb[c]);
+      mu /= n;
+      double ss = 0;
+      for (const Image& p : parts) ss += (double(p.rgb[c]) - mu) * (double(p.rgb[c]) - mu);
+      var += ss / (n - 1.0) / n;
+    }
+  }
+  const double ref_mse = var / (3.0 * double(m.pixels));
+  m.reference_rmse = std::sqrt(ref_mse);
+  m.rmse_net = std::sqrt(std::max(m.mse - ref_mse, 0.0));
+  return m;
+}
+
+ImageMetrics compare_images(const Image& test, const Image& ref, const Image* mask,
+                            const std::string& test_name, const std::string& ref_name,
+                            const std::string& mask_name) {
+  std::vector<uint8_t> in;
+  return compare_images(test, ref, mask, test_name, ref_name, mask_name, in);
+}
+
 
 Image read_mask(const std::string& path) {
   require_regular_input(path);
