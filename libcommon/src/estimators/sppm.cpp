@@ -161,7 +161,7 @@ float parse_slab(const std::string& text, bool new_eye_pass) {
   check_slab(v);
   if (v != 0.f && !new_eye_pass)
     throw input_error("", "--slab applies to --estimator sppm and pppm",
-                      "ppm gathers in the sphere alone (the thesis's rule)");
+                      "ppm gathers in the sphere alone, the thesis's rule");
   return v;
 }
 

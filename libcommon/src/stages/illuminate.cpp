@@ -84,7 +84,7 @@ void check_alpha(float alpha) {
 void require_sphere(const PpmOptions& opt) {
   if (opt.slab != 0.f)
     throw input_error("", "--slab applies to --estimator sppm and pppm",
-                      "ppm gathers in the sphere alone (the thesis's rule)");
+                      "ppm gathers in the sphere alone, the thesis's rule");
 }
 
 void check_slab(float slab) {
