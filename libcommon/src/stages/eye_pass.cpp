@@ -163,7 +163,7 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
           if (m.type == PF_MAT_EMITTER && sh.front) emitted += T * Vec3(m.emission);
           if (is_diffuse(m)) {
             Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
-            pf_hitpoint hp{};
+            pf_hitpoint& hp = row_buf.emplace_back();  // zeroed in place (no copy of a temporary)
             sh.p.store(hp.position);
             n.store(hp.normal);
             normalize(ray.d).store(hp.dir);
@@ -173,7 +173,6 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
             hp.pixel_y = y;
             hp.mesh = sh.mesh;
             hp.material = sh.material;
-            row_buf.push_back(hp);
             if (opt.direct == DirectMode::ShadowRays)
               direct += T * direct_light(scene, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
                                          opt.shadow_samples, opt.seed, opt.pass, index);
