@@ -137,11 +137,11 @@ void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emi
     s.mesh = v.mesh;
     s.material = v.material;
   }
-  // L̄_d over k passes as a running mean: L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) / k.
-  const float k = float(state.passes + 1);
+  // L̄_d over k passes as a running mean: L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) · (1/k).
+  const float inv_k = 1.f / float(state.passes + 1);
   for (size_t j = 0; j < state.emitted.size(); ++j) {
-    state.emitted[j] += (eye.emitted[j] - state.emitted[j]) / k;
-    state.direct[j] += (eye.direct[j] - state.direct[j]) / k;
+    state.emitted[j] += (eye.emitted[j] - state.emitted[j]) * inv_k;
+    state.direct[j] += (eye.direct[j] - state.direct[j]) * inv_k;
   }
   state.passes += 1;
   state.photons_emitted += emitted;

@@ -130,8 +130,8 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
   res.width = W;
   res.height = H;
   res.radius = opt.radius > 0.f ? opt.radius : default_radius(scene);
-  res.emitted.assign(size_t(W) * H * 3, 0.f);
-  res.direct.assign(size_t(W) * H * 3, 0.f);
+  res.emitted.resize(size_t(W) * H * 3);  // every pixel writes its own below
+  res.direct.resize(size_t(W) * H * 3);
   const float eps = ray_epsilon(scene);
 
   // Each image row collects its hitpoints in (pixel, sample) order; the rows are concatenated in
