@@ -143,6 +143,9 @@ class DevicePpmState {
   ClBuffer sites_, states_;
   ClBuffer mats_;                // the scene's materials, written with the hitpoints
   ClBuffer weights_;             // SPPM: the pass's eye-path throughputs β, 3 per pixel
+  // SPPM: the pass's sites and β on the host (sppm_sites), kept from pass to pass.
+  std::vector<pf_hitpoint> sppm_sites_;
+  std::vector<float> sppm_beta_;
   bool host_current_ = true;     // h_.hitpoints holds the latest state
   bool device_current_ = false;  // hps_ holds it
   float rmax_ = 0.f;             // largest finite positive radius of the device's state

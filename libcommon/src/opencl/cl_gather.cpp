@@ -755,8 +755,8 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
   check_slab(o.slab);
   // The pass's sites: each pixel's visible point (mesh −1 where the eye path found none) and its
   // throughput β; the host copy of the state takes the visible points too (sppm_pass's fields).
-  std::vector<pf_hitpoint> sites;
-  std::vector<float> beta;
+  std::vector<pf_hitpoint>& sites = sppm_sites_;
+  std::vector<float>& beta = sppm_beta_;
   sppm_sites(h_, eye, sites, beta);
   upload();
   if (nh > 0) {
