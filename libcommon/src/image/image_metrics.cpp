@@ -252,9 +252,7 @@ ImageMetrics compare_with_parts(const Image& test, const std::vector<Image>& par
   for (size_t i = 0; i < in.size(); ++i) {
     if (!in[i]) continue;
     for (size_t c = 3 * i; c < 3 * i + 3; ++c) {
-      double mu = 0;
-      for (const Image& p : parts) mu += double(p.rgb[c]);
-      mu /= n;
+      const double mu = double(mean.rgb[c]);  // b, the reference compared with
       double ss = 0;
       for (const Image& p : parts) ss += (double(p.rgb[c]) - mu) * (double(p.rgb[c]) - mu);
       var += ss / (n - 1.0) / n;
