@@ -73,8 +73,8 @@ void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGr
 void check_alpha(float alpha);
 // InputError naming --slab unless slab is 0 or a finite positive number.
 void check_slab(float slab);
-// InputError unless opt.slab is 0: the PPM passes (ppm_pass, the device's) gather in the sphere.
-void require_sphere(const PpmOptions& opt);
+// InputError unless slab is 0: the PPM passes (ppm_pass, the device's) gather in the sphere.
+void require_sphere(float slab);
 
 // The slab of sppm and pppm when --slab is not given: measured on the diffuse box, it removes the
 // bias of photons from a block's top face gathered below its edge (docs/RESULTS.md section 6)

@@ -180,7 +180,7 @@ void check_options(const RenderOptions& opt) {
   require_positive("passes", opt.passes);
   require_in_unit_interval("alpha", opt.ppm.alpha);
   check_slab(opt.ppm.slab);
-  if (opt.estimator == Estimator::Ppm) require_sphere(opt.ppm);
+  if (opt.estimator == Estimator::Ppm) require_sphere(opt.ppm.slab);
   require_positive("max-bins", opt.ppm.max_bins);
   if (!opt.checkpoint.empty()) require_positive("checkpoint-every", opt.checkpoint_every);
   if (opt.snapshot_every < 0) throw input_error("", "--snapshot-every must be >= 0");

@@ -159,9 +159,7 @@ float parse_slab(const std::string& text, bool new_eye_pass) {
     throw input_error("", "--slab must be auto or a number, got '" + text + "'");
   }
   check_slab(v);
-  if (v != 0.f && !new_eye_pass)
-    throw input_error("", "--slab applies to --estimator sppm and pppm",
-                      "ppm gathers in the sphere alone, the thesis's rule");
+  if (!new_eye_pass) require_sphere(v);
   return v;
 }
 

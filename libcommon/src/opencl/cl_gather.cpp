@@ -539,7 +539,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   GatherTimes times;
   const size_t nh = h.hitpoints.size(), np = photons.size();
   check_pass(opt, nh, np);
-  require_sphere(opt);
+  require_sphere(opt.slab);
   check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
   const int mesh_count = int(scene.mesh_names.size());
   const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
@@ -719,7 +719,7 @@ GatherTimes DevicePpmState::hash_grid(const pf_photon* host, const ClBuffer* dev
   GatherTimes times;
   const size_t nh = h_.hitpoints.size();
   check_pass(opt, nh, np);
-  require_sphere(opt);
+  require_sphere(opt.slab);
   if (nh > 0 && np > 0) {
     upload();
     rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, nh, h_.direct_mode,

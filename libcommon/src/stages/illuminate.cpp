@@ -81,8 +81,8 @@ void check_alpha(float alpha) {
     throw input_error("", "alpha must be in (0, 1], got " + std::to_string(alpha));
 }
 
-void require_sphere(const PpmOptions& opt) {
-  if (opt.slab != 0.f)
+void require_sphere(float slab) {
+  if (slab != 0.f)
     throw input_error("", "--slab applies to --estimator sppm and pppm",
                       "ppm gathers in the sphere alone, the thesis's rule");
 }
@@ -173,7 +173,7 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
 void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGrid& grid,
                               uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
-  require_sphere(opt);
+  require_sphere(opt.slab);
   const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
   const float alpha = opt.alpha;
   const int64_t count = int64_t(h.hitpoints.size());
@@ -201,7 +201,7 @@ PhotonGridParams ppm_grid_params(const HitpointSet& h, const PpmOptions& opt) {
 void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
               uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
-  require_sphere(opt);
+  require_sphere(opt.slab);
   if (opt.method != GatherMethod::Grid && opt.method != GatherMethod::Flann)
     throw input_error("", std::string("--method ") + gather_method_name(opt.method) +
                               " runs on the OpenCL backend", "add --device opencl, or use --method grid or flann");
