@@ -1,5 +1,6 @@
 // scene.h — a baked scene: what scene-bake writes to scene.h5 and every later stage reads.
 #pragma once
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -13,9 +14,16 @@ namespace pf {
 constexpr const char* kSceneFormat = "photonflow.scene";
 constexpr int kSceneFormatVersion = 2;  // 2: names as fixed-length strings (1: variable-length, still read)
 
+// Unit geometric normal of a triangle; its front is the side from which v0, v1, v2 run
+// counter-clockwise.
+inline Vec3 face_normal(const pf_triangle& t) {
+  return normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+}
+
 struct Scene {
   std::vector<pf_triangle> triangles;
   std::vector<pf_hh_triangle> hh;  // Havel–Herout planes, one per triangle (thesis eq. 4.3)
+  std::vector<Vec3> normals;       // face_normal of every triangle, derived (not in scene.h5)
   std::vector<std::string> mesh_names;
   std::vector<pf_material> materials;
   std::vector<std::string> material_names;
@@ -27,8 +35,16 @@ struct Scene {
   std::string scene_id;            // SHA-256 of the baked content (see compute_scene_id)
   std::string source;              // path of the file it was baked from
 
-  // Precomputes hh[] from triangles[] (thesis eq. 4.3–4.7).
+  // Precomputes hh[] (thesis eq. 4.3–4.7) and normals[] from triangles[].
   void compute_hh();
+  // Recomputes normals[] from triangles[] (load_scene: the file holds hh[] but not these).
+  void compute_normals();
+  // face_normal of triangle `tri`: precomputed (every hit of every ray asks, and a square root
+  // and three divisions per hit are a tenth of an eye pass), or computed when triangles[] has
+  // changed size since (the same expression, so the same bits either way).
+  Vec3 normal_of(size_t tri) const {
+    return normals.size() == triangles.size() ? normals[tri] : face_normal(triangles[tri]);
+  }
   // Recomputes bounds from triangles.
   void compute_bounds();
   // Builds lights[] and light_cdf[] from emissive triangles (area lights) plus point lights
@@ -36,7 +52,21 @@ struct Scene {
   void compute_light_cdf();
   // Picks a light in proportion to power for a uniform u in [0, 1): the first i with
   // u < light_cdf[i]. Sets p_light to its probability. The scene must have lights.
-  size_t pick_light(float u, float& p_light) const;
+  size_t pick_light(float u, float& p_light) const {
+    // Every photon asks, and scenes have few lights: a linear scan (the same index as a binary
+    // search) up to 8 of them.
+    size_t i = 0;
+    const size_t n = light_cdf.size();
+    if (n <= 8) {
+      while (i < n && !(u < light_cdf[i])) ++i;
+    } else {
+      i = pick_light_search(u);
+    }
+    i = std::min(i, lights.size() - 1);
+    p_light = light_cdf[i] - (i ? light_cdf[i - 1] : 0.f);
+    return i;
+  }
+  size_t pick_light_search(float u) const;  // upper_bound over light_cdf
   // scene_id = SHA-256 over triangles, materials, lights and camera: two bakes of the same input
   // with the same options have the same id; any change of geometry, material, light or camera
   // changes it.

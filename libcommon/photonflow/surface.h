@@ -22,11 +22,11 @@ inline SurfaceHit surface_at(const Scene& s, const Ray& ray, const Hit& h) {
   const pf_triangle& t = s.triangles[size_t(h.tri)];
   SurfaceHit sh;
   sh.p = ray.o + ray.d * h.t;
-  sh.ng = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+  sh.ng = s.normal_of(size_t(h.tri));
   float w = 1.f - h.u - h.v;
   Vec3 ns = normalize(Vec3(t.n0) * w + Vec3(t.n1) * h.u + Vec3(t.n2) * h.v);
   sh.ns = dot(ns, sh.ng) < 0.f ? -ns : ns;
-  if (!finite(sh.ns) || length(sh.ns) < 0.5f) sh.ns = sh.ng;
+  if (!finite(sh.ns) || dot(sh.ns, sh.ns) < 0.25f) sh.ns = sh.ng;  // |ns| < 1/2: degenerate
   sh.front = dot(ray.d, sh.ng) < 0.f;
   sh.tri = h.tri;
   sh.mesh = t.mesh;

@@ -72,6 +72,8 @@ void check_visible_pixels(const EyePassResult& eye, int width, int height, bool 
     throw input_error("", "the eye pass is " + std::to_string(eye.width) + "x" +
                               std::to_string(eye.height) + ", the state " + std::to_string(width) +
                               "x" + std::to_string(height));
+  // The host's tracer lists them so by construction (EyePassResult::spp): nothing to read.
+  if (eye.spp == 1 || (eye.spp > 1 && !one_per_pixel)) return;
   size_t last = 0;
   for (size_t i = 0; i < eye.hitpoints.size(); ++i) {
     const pf_hitpoint& v = eye.hitpoints[i];
@@ -83,6 +85,38 @@ void check_visible_pixels(const EyePassResult& eye, int width, int height, bool 
                         "use --spp 1 (every pass traces a new sample)");
     last = px;
   }
+}
+
+// A pixel's hitpoint in the state takes the geometry of its pass's visible point (what the file
+// shows of the pass; the gather reads the visible point itself).
+inline void take_visible_point(pf_hitpoint& s, const pf_hitpoint& v) {
+  for (int c = 0; c < 3; ++c) {
+    s.position[c] = v.position[c];
+    s.normal[c] = v.normal[c];
+    s.dir[c] = v.dir[c];
+  }
+  s.mesh = v.mesh;
+  s.material = v.material;
+}
+
+// The emitted and direct layers take the pass's into their running mean over k passes,
+// L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) · (1/k) (each value on its own: any thread count gives the
+// same bits), and the pass is counted with its `emitted` photons.
+void average_layers(HitpointSet& state, const EyePassResult& eye, uint64_t emitted, int threads) {
+  const float inv_k = 1.f / float(state.passes + 1);
+  const int64_t n = int64_t(state.emitted.size());
+  float* const e = state.emitted.data();
+  float* const d = state.direct.data();
+  const float* const pe = eye.emitted.data();
+  const float* const pd = eye.direct.data();
+#pragma omp parallel for schedule(static) num_threads(worker_threads(threads))
+  for (int64_t j = 0; j < n; ++j) {
+    e[j] += (pe[j] - e[j]) * inv_k;
+    d[j] += (pd[j] - d[j]) * inv_k;
+  }
+  state.passes += 1;
+  state.photons_emitted += emitted;
+  state.estimator = "sppm";
 }
 
 }  // namespace
@@ -105,8 +139,9 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
     const int m = gather_site(scene, grid, v, s.radius, skip_direct, opt.slab, tau_m);
     for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
     pf_ppm_update(&s, m, tau_m, alpha);                  // thesis eq. 3.14, 3.16, 3.18
+    take_visible_point(s, v);
   }
-  sppm_finish_pass(state, eye, emitted);
+  average_layers(state, eye, emitted, opt.threads);
 }
 
 void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,
@@ -127,25 +162,9 @@ void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<
 }
 
 void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted) {
-  for (const pf_hitpoint& v : eye.hitpoints) {  // check_visible_pixels checked the pixels
-    pf_hitpoint& s = state.hitpoints[pixel_of(v, state.width)];
-    for (int c = 0; c < 3; ++c) {
-      s.position[c] = v.position[c];
-      s.normal[c] = v.normal[c];
-      s.dir[c] = v.dir[c];
-    }
-    s.mesh = v.mesh;
-    s.material = v.material;
-  }
-  // L̄_d over k passes as a running mean: L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) · (1/k).
-  const float inv_k = 1.f / float(state.passes + 1);
-  for (size_t j = 0; j < state.emitted.size(); ++j) {
-    state.emitted[j] += (eye.emitted[j] - state.emitted[j]) * inv_k;
-    state.direct[j] += (eye.direct[j] - state.direct[j]) * inv_k;
-  }
-  state.passes += 1;
-  state.photons_emitted += emitted;
-  state.estimator = "sppm";
+  for (const pf_hitpoint& v : eye.hitpoints)  // check_visible_pixels checked the pixels
+    take_visible_point(state.hitpoints[pixel_of(v, state.width)], v);
+  average_layers(state, eye, emitted, 0);
 }
 
 float parse_slab(const std::string& text, bool new_eye_pass) {

@@ -20,6 +20,12 @@ constexpr float kPi = 3.14159265358979323846f;
 void Scene::compute_hh() {
   hh.resize(triangles.size());
   for (size_t i = 0; i < triangles.size(); ++i) hh[i] = make_hh_triangle(triangles[i]);
+  compute_normals();
+}
+
+void Scene::compute_normals() {
+  normals.resize(triangles.size());
+  for (size_t i = 0; i < triangles.size(); ++i) normals[i] = face_normal(triangles[i]);
 }
 
 void Scene::compute_bounds() {
@@ -76,11 +82,8 @@ void Scene::compute_light_cdf() {
   derive_lights(triangles, materials, given, lights, light_cdf);
 }
 
-size_t Scene::pick_light(float u, float& p_light) const {
-  size_t i = size_t(std::upper_bound(light_cdf.begin(), light_cdf.end(), u) - light_cdf.begin());
-  i = std::min(i, lights.size() - 1);
-  p_light = light_cdf[i] - (i ? light_cdf[i - 1] : 0.f);
-  return i;
+size_t Scene::pick_light_search(float u) const {
+  return size_t(std::upper_bound(light_cdf.begin(), light_cdf.end(), u) - light_cdf.begin());
 }
 
 void Scene::compute_scene_id() {
@@ -498,6 +501,7 @@ Scene load_scene(const std::string& path) {
   std::string problem = validate_kdtree(s.kd, s.triangles.size());
   if (!problem.empty()) throw input_error(path, "invalid kd-tree: " + problem, hint);
   s.compute_bounds();
+  s.compute_normals();
   check_scene_values(s, v);
   s.kd.bounds.lo = Vec3(s.kd.nodes[0].lo);
   s.kd.bounds.hi = Vec3(s.kd.nodes[0].hi);

@@ -77,7 +77,7 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
     if (l.type == PF_LIGHT_AREA) {
       const pf_triangle& t = scene.triangles[size_t(l.triangle)];
       q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
-      Vec3 nl = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+      const Vec3 nl = scene.normal_of(size_t(l.triangle));
       Vec3 w = q - p;
       float d2 = dot(w, w);
       if (d2 <= 0.f) continue;
@@ -129,6 +129,7 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
   CameraFrame cam(scene.camera);
   res.width = W;
   res.height = H;
+  res.spp = 0;  // set once the visible points are in place
   res.radius = opt.radius > 0.f ? opt.radius : default_radius(scene);
   res.emitted.resize(size_t(W) * H * 3);  // every pixel writes its own below
   res.direct.resize(size_t(W) * H * 3);
@@ -195,6 +196,7 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
   for (int y = 0; y < H; ++y)
     std::copy(rows[size_t(y)].begin(), rows[size_t(y)].end(),
               res.hitpoints.begin() + long(offset[size_t(y)]));
+  res.spp = spp;
 }
 
 }  // namespace pf

@@ -60,7 +60,7 @@ class PathTracer {
       const pf_light& l = scene.lights[li];
       if (l.type != PF_LIGHT_AREA) continue;
       const pf_triangle& t = scene.triangles[size_t(l.triangle)];
-      light_normal_[li] = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+      light_normal_[li] = face_normal(t);
       tri_light_[size_t(l.triangle)] = int32_t(li);
     }
   }

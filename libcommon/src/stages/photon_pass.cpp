@@ -57,7 +57,7 @@ std::vector<LightInfo> light_info(const Scene& scene) {
     info[li].v0 = Vec3(t.v0);
     info[li].v1 = Vec3(t.v1);
     info[li].v2 = Vec3(t.v2);
-    info[li].n = normalize(cross(Vec3(t.v1) - Vec3(t.v0), Vec3(t.v2) - Vec3(t.v0)));
+    info[li].n = face_normal(t);
   }
   return info;
 }
