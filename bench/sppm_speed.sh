@@ -5,6 +5,9 @@
 # the rendering seconds between the two images of the run record (render --stats), so program
 # start, the scene load, PPM's one-off eye pass and the first pass's allocations are left out.
 # RUNS runs per estimator, interleaved (ppm, sppm, pppm, ppm, ...), medians printed.
+# BASE=DIR adds the PPM of another build (its bin/render; e.g. the commit before SPPM, b1c0a38,
+# whose PPM the issue's "today's PPM pass rate" measured) as a fourth, interleaved, estimator
+# "ppm@base", and prints each rate against it too.
 #
 #   bench/sppm_speed.sh [BUILD]        (PASSES=20 RUNS=5 THREADS=0 by default)
 set -euo pipefail
@@ -13,6 +16,7 @@ B=$BUILD/bin
 PASSES=${PASSES:-20}
 RUNS=${RUNS:-5}
 THREADS=${THREADS:-0}
+BASE=${BASE:-}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 $B/scene-bake data/cornell-box.dae -o "$T/box.h5" --width 512 --height 512 > /dev/null
@@ -23,12 +27,17 @@ for r in $(seq 1 "$RUNS"); do
       --snapshot-at 1 --snapshot "$T/$e-{pass}.exr" -o "$T/$e.exr" --stats "$T/$e-$r.json" \
       --threads "$THREADS" > /dev/null
   done
+  if [ -n "$BASE" ]; then  # the base build's render predates --estimator: PPM is its only one
+    "$BASE/bin/render" --scene "$T/box.h5" --passes $total --photons 262144 \
+      --snapshot-at 1 --snapshot "$T/base-{pass}.exr" -o "$T/base.exr" --stats "$T/ppm@base-$r.json" \
+      --threads "$THREADS" > /dev/null
+  fi
 done
-/usr/bin/python3 - "$T" "$RUNS" "$PASSES" <<'PY'
+/usr/bin/python3 - "$T" "$RUNS" "$PASSES" "$BASE" <<'PY'
 import json, statistics, sys
-d, runs, passes = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+d, runs, passes, base = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 rate = {}
-for e in ("ppm", "sppm", "pppm"):
+for e in ("ppm", "sppm", "pppm") + (("ppm@base",) if base else ()):
     r = []
     for k in range(1, runs + 1):
         im = json.load(open(f"{d}/{e}-{k}.json"))["images"]
@@ -37,5 +46,8 @@ for e in ("ppm", "sppm", "pppm"):
     print(f"{e:5s} passes/s: median {rate[e]:.3f}  runs " + " ".join(f"{x:.3f}" for x in r))
 for e in ("sppm", "pppm"):
     print(f"{e} / ppm pass rate: {rate[e] / rate['ppm']:.2f}")
+if base:
+    for e in ("ppm", "sppm", "pppm"):
+        print(f"{e} / ppm@base pass rate: {rate[e] / rate['ppm@base']:.2f}")
 PY
 cat /proc/loadavg

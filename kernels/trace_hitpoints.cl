@@ -132,7 +132,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int wi
       if (pf_is_diffuse(m)) {
         pf_hitpoint hp;
         float nd[3] = {d[0], d[1], d[2]};
-        pf_normalize3(nd);
+        if (depth > 0) pf_normalize3(nd); /* the camera ray's is unit already */
         for (int k = 0; k < 3; ++k) {
           hp.position[k] = sh.p[k];
           hp.normal[k] = n[k];

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "photonflow/camera.h"
 #include "photonflow/pixel_sampler.h"
 #include "photonflow/scene.h"
 
@@ -85,6 +86,28 @@ struct EyePassWork {
 // first. The same result as trace_hitpoints.
 void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePassResult& res,
                           EyePassWork& work);
+
+// One eye sample at a time, as trace_hitpoints_into traces them all: the camera ray of sample s
+// of pixel (x, y) in pass opt.pass, followed through mirrors and glass to its first diffuse
+// surface. sample() adds the emitted light the path sees (times its throughput and the box filter
+// weight 1/spp) to `emitted` and, with DirectMode::ShadowRays, the direct light at its visible
+// point to `direct`; it returns whether the path found a visible point, written to `hp` (radius
+// R0 = radius()). The estimators that gather as they trace (sppm_pass_traced) call it pixel by
+// pixel; the bits are those of trace_hitpoints_into.
+class EyeTracer {
+ public:
+  EyeTracer(const Scene& scene, const EyePassOptions& opt);
+  bool sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct) const;
+  float radius() const { return radius_; }
+  int spp() const { return spp_; }
+
+ private:
+  const Scene& scene_;
+  const EyePassOptions opt_;
+  int spp_, columns_;
+  float radius_, eps_;
+  CameraFrame cam_;
+};
 
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with
 // shadow rays (`samples` per call; rng streams of (seed, pass, index)). Exposed for tests.

@@ -86,6 +86,17 @@ struct PhotonGrid {
   std::vector<pf_photon> photons;       // sorted by (mesh, bin)
   std::vector<int32_t> order;           // input index of each sorted photon
   PhotonGridParams params;
+  // The sorted photons' positions once more, one array per axis, each with kPositionPad
+  // entries past the last photon: the CPU gather (gather_site) tests four photons at a time
+  // from these. Derived (index_positions; build_photon_grid_into and load_grids call it), never
+  // stored; a grid whose photons were set otherwise has none, and the gather then reads photons.
+  static constexpr size_t kPositionPad = 3;
+  std::vector<float> pos_x, pos_y, pos_z;
+  void index_positions(int threads = 0);
+  bool has_positions() const {
+    const size_t n = photons.size() + kPositionPad;
+    return pos_x.size() == n && pos_y.size() == n && pos_z.size() == n;
+  }
 
   // Calls f(i) for every sorted photon index i of `mesh` with
   // pf_ppm_in_radius(pf_ppm_dist2(q, photons[i].position), radius), in sorted order.

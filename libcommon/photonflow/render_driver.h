@@ -80,8 +80,6 @@ class ProgressiveRenderer {
   PhotonBuffers photon_chunks_;   // the pass's photons, per chunk as traced
   PhotonGrid grid_;               // their grid (GatherMethod::Grid), built straight from the chunks
   std::vector<pf_photon> photons_;  // their concatenation (GatherMethod::Flann)
-  EyePassResult eye_;             // sppm: the pass's eye pass, and its row buffers
-  EyePassWork eye_work_;
   // Clusters of a clustered device method, made once from the eye pass (or the checkpoint's
   // hitpoints, which have the same positions) when opt.ppm.clusters is not given.
   std::unique_ptr<ClusterSet> clusters_;
@@ -90,11 +88,15 @@ class ProgressiveRenderer {
   std::unique_ptr<DevicePpmState> device_state_;
 };
 
-// Traces the eye pass of pass `pass` (EyePassOptions::pass) and photon pass `pass` on the CPU,
-// and sorts the photons into `grid`: the per-pass work of sppm and pppm before their CPU gather
-// (on a device they trace and gather there: DevicePpmState::sppm_pass, pppm_gather_device).
-// Returns the photons emitted; `stored` gets the photons stored. Every buffer (eye, eye_work,
-// chunks, grid) keeps its storage from the last pass, so a pass allocates nothing new.
+// Traces photon pass `pass` on the CPU and sorts its photons into `grid` (bins at least radius0
+// wide): the photons of an sppm pass, before sppm_pass_traced traces the eye pass as it gathers.
+// Returns the photons emitted; `stored` gets the photons stored. The buffers (chunks, grid) keep
+// their storage from the last pass, so a pass allocates nothing new.
+uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
+                           float radius0, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored);
+// The eye pass of pass `pass` (EyePassOptions::pass) into `eye`, then trace_photon_pass: the
+// per-pass work of pppm before its CPU gather (on a device sppm and pppm trace and gather there:
+// DevicePpmState::sppm_pass, pppm_gather_device). The eye buffers (eye, eye_work) are reused too.
 uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
                     EyePassResult& eye, EyePassWork& eye_work, PhotonBuffers& chunks,
                     PhotonGrid& grid, size_t& stored);

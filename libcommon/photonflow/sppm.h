@@ -72,6 +72,13 @@ HitpointSet make_sppm_state(const Scene& scene, float radius0, DirectMode mode);
 void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
 
+// sppm_pass with eye pass p traced as it gathers, pixel by pixel (EyeTracer with `eye`, whose
+// pass must be state.passes and spp 1): no eye pass is kept, written or read back. The render
+// driver's CPU route; the same bits as trace_hitpoints_into + sppm_pass, which the staged route
+// (trace-hitpoints, then illuminate) runs.
+void sppm_pass_traced(const Scene& scene, HitpointSet& state, const EyePassOptions& eye,
+                      const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
+
 // The two halves of sppm_pass around the gather, for the device's SPPM pass (cl_gather.h,
 // DevicePpmState::sppm_pass), which gathers on the device in between:
 //   sppm_sites: one site per pixel of `state` — the pixel's visible point in `eye`, or a site

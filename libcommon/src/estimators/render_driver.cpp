@@ -31,12 +31,8 @@ HitpointSet fresh_state(const Scene& scene, const RenderOptions& opt) {
 }
 }  // namespace
 
-uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
-                    EyePassResult& eye, EyePassWork& eye_work, PhotonBuffers& chunks,
-                    PhotonGrid& grid, size_t& stored) {
-  EyePassOptions eo = opt.eye;
-  eo.pass = pass;
-  trace_hitpoints_into(scene, eo, eye, eye_work);
+uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
+                           float radius0, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored) {
   PhotonGridParams gp;
   gp.max_bins = opt.ppm.max_bins;
   gp.default_radius = radius0;  // the smallest bin size, as ppm_grid_params
@@ -46,6 +42,15 @@ uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
   build_photon_grid_into(grid, spans.data(), spans.size(), int(scene.mesh_names.size()), gp,
                          opt.ppm.threads);
   return emitted;
+}
+
+uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
+                    EyePassResult& eye, EyePassWork& eye_work, PhotonBuffers& chunks,
+                    PhotonGrid& grid, size_t& stored) {
+  EyePassOptions eo = opt.eye;
+  eo.pass = pass;
+  trace_hitpoints_into(scene, eo, eye, eye_work);
+  return trace_photon_pass(scene, opt, pass, radius0, chunks, grid, stored);
 }
 
 // Both constructors check the state's ids against the scene once; a pass never changes them, so
@@ -80,12 +85,15 @@ void ProgressiveRenderer::run_iteration() {
     device_state_->sppm_pass(eye, pass, opt_.ppm);
     return;
   }
-  if (opt_.estimator == Estimator::Sppm) {  // a new eye pass, then the pass's photons per pixel
+  if (opt_.estimator == Estimator::Sppm) {  // the pass's photons, then a new eye pass gathering
     size_t stored = 0;
-    const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(state_.passes), state_.radius0,
-                                        eye_, eye_work_, photon_chunks_, grid_, stored);
+    const uint32_t pass = uint32_t(state_.passes);
+    const uint64_t emitted =
+        trace_photon_pass(scene_, opt_, pass, state_.radius0, photon_chunks_, grid_, stored);
     photons_stored_ += stored;
-    sppm_pass(scene_, state_, eye_, grid_, emitted, opt_.ppm);
+    EyePassOptions eo = opt_.eye;
+    eo.pass = pass;
+    sppm_pass_traced(scene_, state_, eo, grid_, emitted, opt_.ppm);
     return;
   }
   if (opt_.device) {  // OpenCL backend: device photon tracing and opt.ppm.method's gather

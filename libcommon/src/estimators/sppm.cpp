@@ -102,6 +102,15 @@ inline void take_visible_point(pf_hitpoint& s, const pf_hitpoint& v) {
 // The emitted and direct layers take the pass's into their running mean over k passes,
 // L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) · (1/k) (each value on its own: any thread count gives the
 // same bits), and the pass is counted with its `emitted` photons.
+inline void running_mean(float& mean, float value, float inv_k) { mean += (value - mean) * inv_k; }
+
+// The pass is counted with its `emitted` photons.
+void count_pass(HitpointSet& state, uint64_t emitted) {
+  state.passes += 1;
+  state.photons_emitted += emitted;
+  state.estimator = "sppm";
+}
+
 void average_layers(HitpointSet& state, const EyePassResult& eye, uint64_t emitted, int threads) {
   const float inv_k = 1.f / float(state.passes + 1);
   const int64_t n = int64_t(state.emitted.size());
@@ -111,12 +120,21 @@ void average_layers(HitpointSet& state, const EyePassResult& eye, uint64_t emitt
   const float* const pd = eye.direct.data();
 #pragma omp parallel for schedule(static) num_threads(worker_threads(threads))
   for (int64_t j = 0; j < n; ++j) {
-    e[j] += (pe[j] - e[j]) * inv_k;
-    d[j] += (pd[j] - d[j]) * inv_k;
+    running_mean(e[j], pe[j], inv_k);
+    running_mean(d[j], pd[j], inv_k);
   }
-  state.passes += 1;
-  state.photons_emitted += emitted;
-  state.estimator = "sppm";
+  count_pass(state, emitted);
+}
+
+// One visible point v of pixel state s: the pass's photons around it, β-weighted into τ_M
+// (HJ09 eq. 11), then thesis eq. 3.14, 3.16, 3.18, and s takes v's geometry.
+inline void gather_visible_point(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& v,
+                                 pf_hitpoint& s, bool skip_direct, const PpmOptions& opt) {
+  float tau_m[3];
+  const int m = gather_site(scene, grid, v, s.radius, skip_direct, opt.slab, tau_m);
+  for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
+  pf_ppm_update(&s, m, tau_m, opt.alpha);              // thesis eq. 3.14, 3.16, 3.18
+  take_visible_point(s, v);
 }
 
 }  // namespace
@@ -129,19 +147,44 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
   if (state.hitpoints.size() != size_t(state.width) * size_t(state.height))
     throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
   const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
-  const float alpha = opt.alpha;
   const int64_t count = int64_t(eye.hitpoints.size());
 #pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
   for (int64_t i = 0; i < count; ++i) {
     const pf_hitpoint& v = eye.hitpoints[size_t(i)];
-    pf_hitpoint& s = state.hitpoints[pixel_of(v, state.width)];
-    float tau_m[3];
-    const int m = gather_site(scene, grid, v, s.radius, skip_direct, opt.slab, tau_m);
-    for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
-    pf_ppm_update(&s, m, tau_m, alpha);                  // thesis eq. 3.14, 3.16, 3.18
-    take_visible_point(s, v);
+    gather_visible_point(scene, grid, v, state.hitpoints[pixel_of(v, state.width)], skip_direct,
+                         opt);
   }
   average_layers(state, eye, emitted, opt.threads);
+}
+
+void sppm_pass_traced(const Scene& scene, HitpointSet& state, const EyePassOptions& eye,
+                      const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
+  check_alpha(opt.alpha);
+  check_slab(opt.slab);
+  const int W = state.width, H = state.height;
+  if (W != scene.camera.width || H != scene.camera.height || eye.spp != 1 ||
+      eye.pass != uint32_t(state.passes) || eye.direct != state.direct_mode)
+    throw std::invalid_argument("sppm_pass_traced: the eye pass does not fit the state");
+  if (state.hitpoints.size() != size_t(W) * size_t(H))
+    throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
+  const EyeTracer tracer(scene, eye);
+  const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
+  const float inv_k = 1.f / float(state.passes + 1);
+#pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(opt.threads))
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) {
+      const size_t px = size_t(y) * size_t(W) + size_t(x);
+      pf_hitpoint v;
+      Vec3 e, d;
+      if (tracer.sample(x, y, 0, v, e, d))
+        gather_visible_point(scene, grid, v, state.hitpoints[px], skip_direct, opt);
+      for (int c = 0; c < 3; ++c) {
+        running_mean(state.emitted[px * 3 + size_t(c)], e[c], inv_k);
+        running_mean(state.direct[px * 3 + size_t(c)], d[c], inv_k);
+      }
+    }
+  }
+  count_pass(state, emitted);
 }
 
 void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,

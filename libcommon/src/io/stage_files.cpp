@@ -580,6 +580,7 @@ GridSet load_grids(const std::string& path) {
                       " of mesh " + std::to_string(m) + ", whose cell_start range holds it");
         }
     }
+    grid.index_positions();
     g.grids.push_back(std::move(grid));
   }
   return g;

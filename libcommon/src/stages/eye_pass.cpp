@@ -122,18 +122,67 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
   return res;
 }
 
+EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
+    : scene_(scene),
+      opt_(opt),
+      spp_(std::max(1, opt.spp)),
+      columns_(eye_strata_columns(spp_)),
+      radius_(opt.radius > 0.f ? opt.radius : default_radius(scene)),
+      eps_(ray_epsilon(scene)),
+      cam_(scene.camera) {}
+
+bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct) const {
+  const size_t pix = size_t(y) * size_t(scene_.camera.width) + size_t(x);
+  const uint32_t index = uint32_t(pix * size_t(spp_) + size_t(s));
+  pf_rng rng = pf_rng_start(opt_.seed, kEyeStream + opt_.pass, index);
+  float jx, jy;
+  pf_eye_jitter(int(opt_.sampler), opt_.seed, opt_.pass, uint32_t(pix), s, spp_, columns_, &rng,
+                &jx, &jy);
+  Ray ray{cam_.eye(), cam_.direction(float(x) + jx, float(y) + jy)};
+  const float w = 1.f / float(spp_);
+  Vec3 T(w, w, w);  // throughput × box filter weight
+  for (int depth = 0; depth <= opt_.max_depth; ++depth) {
+    Hit h;
+    if (!intersect_closest(scene_, ray, h)) return false;
+    SurfaceHit sh = surface_at(scene_, ray, h);
+    const pf_material& m = scene_.materials[size_t(sh.material)];
+    if (m.type == PF_MAT_EMITTER && sh.front) emitted += T * Vec3(m.emission);
+    if (is_diffuse(m)) {
+      Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
+      hp = pf_hitpoint{};
+      sh.p.store(hp.position);
+      n.store(hp.normal);
+      (depth > 0 ? normalize(ray.d) : ray.d).store(hp.dir);  // camera rays are unit
+      T.store(hp.weight);
+      hp.radius = radius_;
+      hp.pixel_x = x;
+      hp.pixel_y = y;
+      hp.mesh = sh.mesh;
+      hp.material = sh.material;
+      if (opt_.direct == DirectMode::ShadowRays)
+        direct += T * direct_light(scene_, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
+                                   opt_.shadow_samples, opt_.seed, opt_.pass, index);
+      return true;
+    }
+    if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;  // black emitter
+    Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
+    if (luminance(T) <= 0.f) return false;
+    ray = Ray{offset_origin(sh, d, eps_), d};
+  }
+  return false;
+}
+
 void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePassResult& res,
                           EyePassWork& work) {
-  const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
-  const int columns = eye_strata_columns(spp);
-  CameraFrame cam(scene.camera);
+  const int W = scene.camera.width, H = scene.camera.height;
+  const EyeTracer tracer(scene, opt);
+  const int spp = tracer.spp();
   res.width = W;
   res.height = H;
   res.spp = 0;  // set once the visible points are in place
-  res.radius = opt.radius > 0.f ? opt.radius : default_radius(scene);
+  res.radius = tracer.radius();
   res.emitted.resize(size_t(W) * H * 3);  // every pixel writes its own below
   res.direct.resize(size_t(W) * H * 3);
-  const float eps = ray_epsilon(scene);
 
   // Each image row collects its hitpoints in (pixel, sample) order; the rows are concatenated in
   // order afterwards, so the result does not depend on the thread count.
@@ -146,45 +195,12 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
     std::vector<pf_hitpoint>& row_buf = rows[size_t(y)];  // kept from the last call (work)
     row_buf.clear();
     for (int x = 0; x < W; ++x) {
-      size_t pix = size_t(y) * W + x;
       Vec3 emitted, direct;
       for (int s = 0; s < spp; ++s) {
-        uint32_t index = uint32_t(pix * spp + s);
-        pf_rng rng = pf_rng_start(opt.seed, kEyeStream + opt.pass, index);
-        float jx, jy;
-        pf_eye_jitter(int(opt.sampler), opt.seed, opt.pass, uint32_t(pix), s, spp, columns, &rng,
-                      &jx, &jy);
-        Ray ray{cam.eye(), cam.direction(float(x) + jx, float(y) + jy)};
-        Vec3 T(1.f / spp, 1.f / spp, 1.f / spp);  // throughput × box filter weight
-        for (int depth = 0; depth <= opt.max_depth; ++depth) {
-          Hit h;
-          if (!intersect_closest(scene, ray, h)) break;
-          SurfaceHit sh = surface_at(scene, ray, h);
-          const pf_material& m = scene.materials[size_t(sh.material)];
-          if (m.type == PF_MAT_EMITTER && sh.front) emitted += T * Vec3(m.emission);
-          if (is_diffuse(m)) {
-            Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
-            pf_hitpoint& hp = row_buf.emplace_back();  // zeroed in place (no copy of a temporary)
-            sh.p.store(hp.position);
-            n.store(hp.normal);
-            normalize(ray.d).store(hp.dir);
-            T.store(hp.weight);
-            hp.radius = res.radius;
-            hp.pixel_x = x;
-            hp.pixel_y = y;
-            hp.mesh = sh.mesh;
-            hp.material = sh.material;
-            if (opt.direct == DirectMode::ShadowRays)
-              direct += T * direct_light(scene, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
-                                         opt.shadow_samples, opt.seed, opt.pass, index);
-            break;
-          }
-          if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) break;  // black emitter
-          Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
-          if (luminance(T) <= 0.f) break;
-          ray = Ray{offset_origin(sh, d, eps), d};
-        }
+        pf_hitpoint& hp = row_buf.emplace_back();  // written in place (no copy of a temporary)
+        if (!tracer.sample(x, y, s, hp, emitted, direct)) row_buf.pop_back();
       }
+      const size_t pix = size_t(y) * W + x;
       emitted.store(&res.emitted[pix * 3]);
       direct.store(&res.direct[pix * 3]);
     }

@@ -6,6 +6,10 @@
 #include <algorithm>
 #include <cmath>
 
+#ifdef __SSE2__
+#include <immintrin.h>
+#endif
+
 #include "photonflow/ppm.h"
 #include "photonflow/sampling.h"
 #include "photonflow/threads.h"
@@ -123,7 +127,32 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
     lo[a] = grid_coord(q[a] - pad, g.lo[a], g.bin_size, n[a]);
     hi3[a] = grid_coord(q[a] + pad, g.lo[a], g.bin_size, n[a]);
   }
+  // The rule after the sphere, for a photon inside it: its own mesh, not a direct photon when
+  // shadow rays give direct light, arriving at the front (photon_accepted), and with a slab
+  // (κ > 0) within κR of the tangent plane (pf_ppm_in_slab).
+  const auto accepted = [&](int32_t i) {
+    const pf_photon& p = photons[i];
+    if (p.mesh != mesh || (skip_direct && (p.flags & PF_PHOTON_DIRECT) != 0)) return false;
+    if (!(p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f)) return false;
+    return !(slab > 0.f) ||
+           pf_ppm_in_slab(q[0] - p.position[0], q[1] - p.position[1], q[2] - p.position[2],
+                          nrm[0], nrm[1], nrm[2], slab, radius) != 0;
+  };
   size_t m = 0;
+#ifdef __SSE2__
+  // Four photons per instruction from the grid's position arrays: the lanes evaluate
+  // pf_ppm_dist2's ((dx·dx + dy·dy) + dz·dz) and pf_ppm_in_radius's d² <= R·R with the same
+  // single-precision operations, so the photons inside are the same bits for bit; the few inside
+  // then take the rest of the rule one by one.
+  const bool four = grid.has_positions();
+  const float* const px = grid.pos_x.data();
+  const float* const py = grid.pos_y.data();
+  const float* const pz = grid.pos_z.data();
+  const __m128 qx = _mm_set1_ps(q[0]), qy = _mm_set1_ps(q[1]), qz = _mm_set1_ps(q[2]);
+  const __m128 r2 = _mm_set1_ps(radius * radius);
+#else
+  const bool four = false;
+#endif
   for (int z = lo[2]; z <= hi3[2]; ++z) {
     for (int y = lo[1]; y <= hi3[1]; ++y) {
       const int row = g.first_bin + (y + z * g.ny) * g.nx;
@@ -131,30 +160,41 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
       const int end = cell_start[row + hi3[0] + 1];  // bins lo..hi of a row are contiguous
       if (cand.size() < m + size_t(end - begin)) cand.resize(2 * (m + size_t(end - begin)));
       int32_t* out = cand.data();
+      if (four) {
+#ifdef __SSE2__
+        for (int i = begin; i < end; i += 4) {  // lanes past `end` read the padding, masked off
+          const __m128 dx = _mm_sub_ps(qx, _mm_loadu_ps(px + i));
+          const __m128 dy = _mm_sub_ps(qy, _mm_loadu_ps(py + i));
+          const __m128 dz = _mm_sub_ps(qz, _mm_loadu_ps(pz + i));
+          const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)),
+                                       _mm_mul_ps(dz, dz));
+          unsigned inside = unsigned(_mm_movemask_ps(_mm_cmple_ps(d2, r2)));
+          if (end - i < 4) inside &= (1u << (end - i)) - 1u;
+          for (; inside; inside &= inside - 1u) {
+            const int32_t j = i + int32_t(__builtin_ctz(inside));
+            _mm_prefetch(reinterpret_cast<const char*>(photons + j), _MM_HINT_T0);
+            out[m++] = j;
+          }
+        }
+#endif
+        continue;
+      }
       for (int i = begin; i < end; ++i) {
         const pf_photon& p = photons[i];
-        const bool inside =
-            pf_ppm_in_radius(pf_ppm_dist2(q[0], q[1], q[2], p.position[0], p.position[1],
-                                          p.position[2]),
-                             radius) != 0;
-        // photon_accepted, evaluated without branches.
-        const bool facing = p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
-        const bool ok = inside & (p.mesh == mesh) &
-                        !(skip_direct & ((p.flags & PF_PHOTON_DIRECT) != 0)) & facing;
         out[m] = i;
-        m += ok ? 1 : 0;
+        m += pf_ppm_in_radius(pf_ppm_dist2(q[0], q[1], q[2], p.position[0], p.position[1],
+                                           p.position[2]),
+                              radius) != 0 && accepted(i)
+                 ? 1
+                 : 0;
       }
     }
   }
-  if (slab > 0.f) {  // the slab (pf_ppm_in_slab) over the few accepted, in order
+  if (four) {  // the rest of the rule over the photons inside, whose lines are on their way
     size_t kept = 0;
     for (size_t j = 0; j < m; ++j) {
-      const pf_photon& p = photons[cand[j]];
       cand[kept] = cand[j];
-      kept += pf_ppm_in_slab(q[0] - p.position[0], q[1] - p.position[1], q[2] - p.position[2],
-                             nrm[0], nrm[1], nrm[2], slab, radius) != 0
-                  ? 1
-                  : 0;
+      kept += accepted(cand[j]) ? 1 : 0;
     }
     m = kept;
   }

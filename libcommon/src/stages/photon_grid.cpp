@@ -346,6 +346,26 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
       }
     }
   }
+  grid.index_positions(workers);
+}
+
+void PhotonGrid::index_positions(int threads) {
+  const size_t n = photons.size();
+  for (std::vector<float>* a : {&pos_x, &pos_y, &pos_z}) {
+    resize_for_overwrite(*a, n + kPositionPad);
+    std::fill(a->begin() + long(n), a->end(), 0.f);  // read past the end, never accepted
+  }
+  const pf_photon* p = photons.data();
+  float* x = pos_x.data();
+  float* y = pos_y.data();
+  float* z = pos_z.data();
+  const int64_t count = int64_t(n);
+#pragma omp parallel for schedule(static) num_threads(worker_threads(threads)) if (n >= kParallelMin)
+  for (int64_t i = 0; i < count; ++i) {
+    x[i] = p[i].position[0];
+    y[i] = p[i].position[1];
+    z[i] = p[i].position[2];
+  }
 }
 
 }  // namespace pf
