@@ -106,6 +106,7 @@ class EyeTracer {
   const EyePassOptions opt_;
   int spp_, columns_;
   float radius_, eps_;
+  pf_uint eye_key_, sobol_key_;  // the pass's eye stream key, the run's scrambling key
   CameraFrame cam_;
 };
 

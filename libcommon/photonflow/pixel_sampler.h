@@ -68,25 +68,30 @@ PF_INLINE pf_uint pf_owen_scramble(pf_uint x, pf_uint seed) {
   return pf_reverse_bits32(x);
 }
 
-/* Scrambling seeds of a pixel's two dimensions: a hash of (seed, pixel, dimension) with its own
- * pass slot (0x50B0000), distinct from every stream the renderer draws from. */
-PF_INLINE pf_uint pf_sobol_pixel_seed(pf_uint seed, pf_uint pixel, pf_uint dim) {
-  return pf_rng_bits(pf_rng_key(seed, 0x50B0000U), pixel, dim);
+/* Key of the scrambling seeds of a run (pass slot 0x50B0000, distinct from every stream the
+ * renderer draws from); the seeds of a pixel's two dimensions are hashes of (key, pixel, dim). */
+PF_INLINE pf_uint pf_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B0000U); }
+
+/* Sample i of pixel `pixel`'s scrambled (0,2)-sequence, in [0, 1)² with 24-bit resolution, under
+ * the run's key pf_sobol_key(seed) (computed once by callers that draw many). */
+PF_INLINE void pf_sobol_pixel_sample_keyed(pf_uint key, pf_uint pixel, pf_uint i, pf_float* jx,
+                                           pf_float* jy) {
+  *jx = pf_rng_unit(pf_owen_scramble(pf_sobol_dim0(i), pf_rng_bits(key, pixel, 0U)));
+  *jy = pf_rng_unit(pf_owen_scramble(pf_sobol_dim1(i), pf_rng_bits(key, pixel, 1U)));
 }
 
-/* Sample i of pixel `pixel`'s scrambled (0,2)-sequence, in [0, 1)² with 24-bit resolution. */
 PF_INLINE void pf_sobol_pixel_sample(pf_uint seed, pf_uint pixel, pf_uint i, pf_float* jx,
                                      pf_float* jy) {
-  *jx = pf_rng_unit(pf_owen_scramble(pf_sobol_dim0(i), pf_sobol_pixel_seed(seed, pixel, 0U)));
-  *jy = pf_rng_unit(pf_owen_scramble(pf_sobol_dim1(i), pf_sobol_pixel_seed(seed, pixel, 1U)));
+  pf_sobol_pixel_sample_keyed(pf_sobol_key(seed), pixel, i, jx, jy);
 }
 
 /* The sub-pixel position (jx, jy) in [0, 1)² of eye sample s (of spp) of pixel `pixel` in pass
- * `pass`, by `sampler`. `rng` is the sample's eye stream, started at dimension 0; it comes back
- * advanced past the draws the sampler made (none for STRATA with spp = 1, two otherwise). */
-PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint pixel, pf_int s,
-                             pf_int spp, pf_int columns, pf_rng* rng, pf_float* jx,
-                             pf_float* jy) {
+ * `pass`, by `sampler`, with sobol_key = pf_sobol_key(seed). `rng` is the sample's eye stream,
+ * started at dimension 0; it comes back advanced past the draws the sampler made (none for STRATA
+ * with spp = 1, two otherwise; SOBOL skips its two without computing them). */
+PF_INLINE void pf_eye_jitter_keyed(pf_int sampler, pf_uint sobol_key, pf_uint pass, pf_uint pixel,
+                                   pf_int s, pf_int spp, pf_int columns, pf_rng* rng, pf_float* jx,
+                                   pf_float* jy) {
   if (sampler == PF_SAMPLER_STRATA) {
     *jx = 0.5f;
     *jy = 0.5f;
@@ -96,14 +101,19 @@ PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint
     }
     return;
   }
-  const pf_float u0 = pf_rng_next(rng);
-  const pf_float u1 = pf_rng_next(rng);
   if (sampler == PF_SAMPLER_RANDOM) {
-    *jx = u0;
-    *jy = u1;
+    *jx = pf_rng_next(rng);
+    *jy = pf_rng_next(rng);
     return;
   }
-  pf_sobol_pixel_sample(seed, pixel, pass * (pf_uint)spp + (pf_uint)s, jx, jy);
+  rng->dim += 2U; /* dimensions 0 and 1, unused */
+  pf_sobol_pixel_sample_keyed(sobol_key, pixel, pass * (pf_uint)spp + (pf_uint)s, jx, jy);
+}
+
+PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint pixel, pf_int s,
+                             pf_int spp, pf_int columns, pf_rng* rng, pf_float* jx,
+                             pf_float* jy) {
+  pf_eye_jitter_keyed(sampler, pf_sobol_key(seed), pass, pixel, s, spp, columns, rng, jx, jy);
 }
 
 #endif /* PHOTONFLOW_PIXEL_SAMPLER_H */

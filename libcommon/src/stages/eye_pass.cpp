@@ -129,15 +129,17 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
       columns_(eye_strata_columns(spp_)),
       radius_(opt.radius > 0.f ? opt.radius : default_radius(scene)),
       eps_(ray_epsilon(scene)),
+      eye_key_(pf_rng_key(opt.seed, kEyeStream + opt.pass)),
+      sobol_key_(pf_sobol_key(opt.seed)),
       cam_(scene.camera) {}
 
 bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct) const {
   const size_t pix = size_t(y) * size_t(scene_.camera.width) + size_t(x);
   const uint32_t index = uint32_t(pix * size_t(spp_) + size_t(s));
-  pf_rng rng = pf_rng_start(opt_.seed, kEyeStream + opt_.pass, index);
+  pf_rng rng{eye_key_, index, 0};  // = pf_rng_start(seed, kEyeStream + pass, index)
   float jx, jy;
-  pf_eye_jitter(int(opt_.sampler), opt_.seed, opt_.pass, uint32_t(pix), s, spp_, columns_, &rng,
-                &jx, &jy);
+  pf_eye_jitter_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_, columns_,
+                      &rng, &jx, &jy);
   Ray ray{cam_.eye(), cam_.direction(float(x) + jx, float(y) + jy)};
   const float w = 1.f / float(spp_);
   Vec3 T(w, w, w);  // throughput × box filter weight
