@@ -143,7 +143,11 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
 
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (uint32_t c = 0; c < nchunks; ++c) {
-    std::vector<pf_photon>& out = parts[c];
+    // The chunk's buffer (with the capacity an earlier pass gave it) is filled through a local
+    // vector: the chunks' vector headers sit side by side in `parts`, and appending through them
+    // would make the threads write one cache line back and forth (false sharing).
+    std::vector<pf_photon> out;
+    out.swap(parts[c]);
     const uint32_t end = uint32_t(std::min<uint64_t>(opt.photons, uint64_t(c + 1) * kChunk));
     for (uint32_t i = c * kChunk; i < end; ++i) {
       pf_rng rng{key, i, 0};  // = pf_rng_start(opt.seed, pass, i), key computed once
@@ -192,6 +196,7 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
         ray = Ray{offset_origin(sh, d, eps), d};
       }
     }
+    parts[c].swap(out);
   }
   return opt.photons;
 }
