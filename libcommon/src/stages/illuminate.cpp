@@ -130,26 +130,35 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
   // The rule after the sphere, for a photon inside it: its own mesh, not a direct photon when
   // shadow rays give direct light, arriving at the front (photon_accepted), and with a slab
   // (κ > 0) within κR of the tangent plane (pf_ppm_in_slab).
-  const auto accepted = [&](int32_t i) {
+  const auto facing = [&](int32_t i) {  // the rule but the sphere and the slab
     const pf_photon& p = photons[i];
     if (p.mesh != mesh || (skip_direct && (p.flags & PF_PHOTON_DIRECT) != 0)) return false;
-    if (!(p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f)) return false;
-    return !(slab > 0.f) ||
-           pf_ppm_in_slab(q[0] - p.position[0], q[1] - p.position[1], q[2] - p.position[2],
-                          nrm[0], nrm[1], nrm[2], slab, radius) != 0;
+    return p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
+  };
+  const auto accepted = [&](int32_t i) {
+    const pf_photon& p = photons[i];
+    return facing(i) &&
+           (!(slab > 0.f) ||
+            pf_ppm_in_slab(q[0] - p.position[0], q[1] - p.position[1], q[2] - p.position[2],
+                           nrm[0], nrm[1], nrm[2], slab, radius) != 0);
   };
   size_t m = 0;
 #ifdef __SSE2__
   // Four photons per instruction from the grid's position arrays: the lanes evaluate
-  // pf_ppm_dist2's ((dx·dx + dy·dy) + dz·dz) and pf_ppm_in_radius's d² <= R·R with the same
-  // single-precision operations, so the photons inside are the same bits for bit; the few inside
-  // then take the rest of the rule one by one.
+  // pf_ppm_dist2's ((dx·dx + dy·dy) + dz·dz) and pf_ppm_in_radius's d² <= R·R, and with a slab
+  // pf_ppm_in_slab's |(dx·nx + dy·ny) + dz·nz| <= κ·R, with the same single-precision operations,
+  // so the photons inside are the same bit for bit; the few inside then take the rest of the
+  // rule one by one (facing), the only reads of their pf_photon before the sum.
   const bool four = grid.has_positions();
   const float* const px = grid.pos_x.data();
   const float* const py = grid.pos_y.data();
   const float* const pz = grid.pos_z.data();
   const __m128 qx = _mm_set1_ps(q[0]), qy = _mm_set1_ps(q[1]), qz = _mm_set1_ps(q[2]);
   const __m128 r2 = _mm_set1_ps(radius * radius);
+  const bool use_slab = slab > 0.f;
+  const __m128 nx = _mm_set1_ps(nrm[0]), ny = _mm_set1_ps(nrm[1]), nz = _mm_set1_ps(nrm[2]);
+  const __m128 half = _mm_set1_ps(slab * radius);
+  const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
 #else
   const bool four = false;
 #endif
@@ -168,7 +177,13 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
           const __m128 dz = _mm_sub_ps(qz, _mm_loadu_ps(pz + i));
           const __m128 d2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)),
                                        _mm_mul_ps(dz, dz));
-          unsigned inside = unsigned(_mm_movemask_ps(_mm_cmple_ps(d2, r2)));
+          __m128 in = _mm_cmple_ps(d2, r2);
+          if (use_slab) {
+            const __m128 h = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, nx), _mm_mul_ps(dy, ny)),
+                                        _mm_mul_ps(dz, nz));
+            in = _mm_and_ps(in, _mm_cmple_ps(_mm_and_ps(h, abs_mask), half));
+          }
+          unsigned inside = unsigned(_mm_movemask_ps(in));
           if (end - i < 4) inside &= (1u << (end - i)) - 1u;
           for (; inside; inside &= inside - 1u) {
             const int32_t j = i + int32_t(__builtin_ctz(inside));
@@ -194,7 +209,7 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
     size_t kept = 0;
     for (size_t j = 0; j < m; ++j) {
       cand[kept] = cand[j];
-      kept += accepted(cand[j]) ? 1 : 0;
+      kept += facing(cand[j]) ? 1 : 0;
     }
     m = kept;
   }
