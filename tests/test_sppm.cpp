@@ -772,3 +772,51 @@ TEST_CASE("gather_site: four photons at a time from the position arrays, or one 
   CHECK(sites > eye.hitpoints.size());  // most sites gathered something
   CHECK(photons > 10 * sites);
 }
+
+TEST_CASE("pppm_pass_traced: tracing as it gathers gives trace_hitpoints_into + pppm_pass, bit "
+          "for bit", "[sppm][pppm][eye]") {
+  // As for SPPM above; PPPM also takes several samples per pixel, whose β·τ_M a pixel's sum
+  // takes in sample order after its L_d.
+  const Scene s = test::room_scene(PF_MAT_GLASS, 32, 24);
+  const DirectMode mode = GENERATE(DirectMode::Photons, DirectMode::ShadowRays);
+  const int spp = GENERATE(1, 3);
+  const int threads = GENERATE(1, 2);
+  INFO(direct_mode_name(mode) << ", spp " << spp << ", " << threads << " threads");
+  PassSums staged = make_pass_sums(s.camera.width, s.camera.height, 0, default_radius(s), 0.7f,
+                                   mode, s.scene_id, {});
+  PassSums traced = staged;
+  PpmOptions ppm;
+  ppm.slab = kDefaultSlab;
+  ppm.threads = threads;
+  EyePassResult eye;
+  EyePassWork work;
+  for (uint32_t pass = 0; pass < 4; ++pass) {
+    EyePassOptions eo;
+    eo.pass = pass;
+    eo.spp = spp;
+    eo.sampler = PixelSampler::Sobol;
+    eo.direct = mode;
+    eo.max_depth = 3;
+    eo.threads = threads;
+    PhotonPassOptions po;
+    po.photons = pass == 2 ? 0 : 6000;  // a pass without photons adds L_d alone
+    const PhotonPassResult ph = trace_photons(s, pass, po);
+    PhotonGridParams gp;
+    gp.default_radius = staged.radius1;
+    const PhotonGrid grid = build_photon_grid(ph.photons, int(s.mesh_names.size()), gp);
+    trace_hitpoints_into(s, eo, eye, work);
+    pppm_pass(s, staged, eye, grid, ph.emitted, ppm);
+    pppm_pass_traced(s, traced, eo, grid, ph.emitted, ppm);
+  }
+  REQUIRE(traced.passes == 4);
+  CHECK(traced.photons_emitted == staged.photons_emitted);
+  CHECK(traced.sum == staged.sum);
+  double total = 0;
+  for (double v : traced.sum) total += v;
+  CHECK(total > 0);
+  EyePassOptions wrong;
+  wrong.pass = 2;  // the sums' next pass is 4
+  wrong.direct = mode;
+  PhotonGrid none;
+  CHECK_THROWS_AS(pppm_pass_traced(s, traced, wrong, none, 0, ppm), std::invalid_argument);
+}

@@ -89,17 +89,12 @@ class ProgressiveRenderer {
 };
 
 // Traces photon pass `pass` on the CPU and sorts its photons into `grid` (bins at least radius0
-// wide): the photons of an sppm pass, before sppm_pass_traced traces the eye pass as it gathers.
+// wide): the photons of an sppm or pppm pass, before sppm_pass_traced or pppm_pass_traced traces
+// the eye pass as it gathers.
 // Returns the photons emitted; `stored` gets the photons stored. The buffers (chunks, grid) keep
 // their storage from the last pass, so a pass allocates nothing new.
 uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
                            float radius0, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored);
-// The eye pass of pass `pass` (EyePassOptions::pass) into `eye`, then trace_photon_pass: the
-// per-pass work of pppm before its CPU gather (on a device sppm and pppm trace and gather there:
-// DevicePpmState::sppm_pass, pppm_gather_device). The eye buffers (eye, eye_work) are reused too.
-uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
-                    EyePassResult& eye, EyePassWork& eye_work, PhotonBuffers& chunks,
-                    PhotonGrid& grid, size_t& stored);
 
 // The pppm estimator: sums of the pass estimates over passes [first_pass, first_pass + passes).
 class PppmRenderer {
@@ -121,8 +116,7 @@ class PppmRenderer {
   RenderOptions opt_;
   PassSums sums_;
   uint64_t photons_stored_ = 0;
-  EyePassResult eye_;
-  EyePassWork eye_work_;
+  EyePassResult eye_;  // the device's eye pass
   PhotonBuffers photon_chunks_;
   PhotonGrid grid_;
 };

@@ -101,6 +101,11 @@ double pppm_radius(double r1, double alpha, int pass);
 // emitted.
 void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
                const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
+// pppm_pass with eye pass p traced as it gathers, pixel by pixel (EyeTracer with `eye`, whose
+// pass must be p): render's CPU route, the same bits as trace_hitpoints_into + pppm_pass (each
+// pixel's sum takes its L_d, then its samples' β·τ_M in sample order, as there).
+void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& eye,
+                      const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt);
 // The radius r_i of the pass pppm_pass applies next, as the float the gather uses.
 float pppm_pass_radius(const PassSums& sums);
 // pppm_pass after its gather: tau_beta holds β·τ_M (float products, 3 per visible point of `eye`,

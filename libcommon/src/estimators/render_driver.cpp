@@ -44,15 +44,6 @@ uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_
   return emitted;
 }
 
-uint64_t trace_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass, float radius0,
-                    EyePassResult& eye, EyePassWork& eye_work, PhotonBuffers& chunks,
-                    PhotonGrid& grid, size_t& stored) {
-  EyePassOptions eo = opt.eye;
-  eo.pass = pass;
-  trace_hitpoints_into(scene, eo, eye, eye_work);
-  return trace_photon_pass(scene, opt, pass, radius0, chunks, grid, stored);
-}
-
 // Both constructors check the state's ids against the scene once; a pass never changes them, so
 // the CPU grid gather of every pass skips that check (ppm_pass_grid_prechecked).
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
@@ -167,11 +158,14 @@ void PppmRenderer::run_iteration() {
                     pass.emitted);
     return;
   }
-  size_t stored = 0;
-  const uint64_t emitted = trace_pass(scene_, opt_, uint32_t(sums_.end_pass()), sums_.radius1,
-                                      eye_, eye_work_, photon_chunks_, grid_, stored);
+  size_t stored = 0;  // the pass's photons, then a new eye pass gathering
+  const uint32_t pass = uint32_t(sums_.end_pass());
+  const uint64_t emitted =
+      trace_photon_pass(scene_, opt_, pass, sums_.radius1, photon_chunks_, grid_, stored);
   photons_stored_ += stored;
-  pppm_pass(scene_, sums_, eye_, grid_, emitted, opt_.ppm);
+  EyePassOptions eo = opt_.eye;
+  eo.pass = pass;
+  pppm_pass_traced(scene_, sums_, eo, grid_, emitted, opt_.ppm);
 }
 
 void PppmRenderer::save_state(const std::string& path, const Provenance& prov) const {

@@ -259,6 +259,48 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
   pppm_accumulate(sums, eye, tau_beta, emitted);
 }
 
+void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& eye,
+                      const PhotonGrid& grid, uint64_t emitted, const PpmOptions& opt) {
+  check_alpha(sums.alpha);
+  check_slab(opt.slab);
+  const int W = sums.width, H = sums.height;
+  if (W != scene.camera.width || H != scene.camera.height ||
+      eye.pass != uint32_t(sums.end_pass()) || eye.direct != sums.direct_mode)
+    throw std::invalid_argument("pppm_pass_traced: the eye pass does not fit the sums");
+  const EyeTracer tracer(scene, eye);
+  const int spp = tracer.spp();
+  const float r = pppm_pass_radius(sums);
+  const bool skip = sums.direct_mode == DirectMode::ShadowRays;
+  // β Σ f_r Φ / (π r_i² N_p) of a visible point (pppm_accumulate's).
+  const double norm = emitted > 0 ? 1.0 / (double(kPi) * double(r) * double(r) * double(emitted))
+                                  : 0.0;
+#pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(opt.threads))
+  for (int y = 0; y < H; ++y) {
+    thread_local std::vector<float> tau_beta;  // β·τ_M of the pixel's visible samples, in order
+    tau_beta.resize(size_t(spp) * 3);
+    for (int x = 0; x < W; ++x) {
+      const size_t px = size_t(y) * size_t(W) + size_t(x);
+      Vec3 e, d;
+      int visible = 0;
+      for (int s = 0; s < spp; ++s) {
+        pf_hitpoint v;
+        if (!tracer.sample(x, y, s, v, e, d)) continue;
+        float tau_m[3] = {0.f, 0.f, 0.f};
+        if (emitted > 0) gather_site(scene, grid, v, r, skip, opt.slab, tau_m);
+        for (int c = 0; c < 3; ++c) tau_beta[size_t(visible) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
+        ++visible;
+      }
+      double* sum = &sums.sum[px * 3];
+      for (int c = 0; c < 3; ++c) sum[c] += double(e[c]) + double(d[c]);  // L_d,i
+      if (emitted == 0) continue;
+      for (int k = 0; k < visible; ++k)
+        for (int c = 0; c < 3; ++c) sum[c] += double(tau_beta[size_t(k) * 3 + size_t(c)]) * norm;
+    }
+  }
+  sums.passes += 1;
+  sums.photons_emitted += emitted;
+}
+
 void pppm_accumulate(PassSums& sums, const EyePassResult& eye, const std::vector<float>& tau_beta,
                      uint64_t emitted) {
   check_alpha(sums.alpha);
