@@ -36,18 +36,23 @@ done
 /usr/bin/python3 - "$T" "$RUNS" "$PASSES" "$BASE" <<'PY'
 import json, statistics, sys
 d, runs, passes, base = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
-rate = {}
+rate, runs_of = {}, {}
 for e in ("ppm", "sppm", "pppm") + (("ppm@base",) if base else ()):
     r = []
     for k in range(1, runs + 1):
         im = json.load(open(f"{d}/{e}-{k}.json"))["images"]
         r.append(passes / (im[-1]["seconds"] - im[0]["seconds"]))
-    rate[e] = statistics.median(r)
-    print(f"{e:5s} passes/s: median {rate[e]:.3f}  runs " + " ".join(f"{x:.3f}" for x in r))
+    rate[e], runs_of[e] = statistics.median(r), r
+    print(f"{e:8s} passes/s: median {rate[e]:.3f}  runs " + " ".join(f"{x:.3f}" for x in r))
+# Ratios of medians, and the median of the ratios within each round (a round's runs follow one
+# another within seconds, so a slow spell of the machine tends to slow both).
+def ratio(a, b):
+    paired = statistics.median(x / y for x, y in zip(runs_of[a], runs_of[b]))
+    print(f"{a} / {b} pass rate: {rate[a] / rate[b]:.2f} (median of round ratios {paired:.2f})")
 for e in ("sppm", "pppm"):
-    print(f"{e} / ppm pass rate: {rate[e] / rate['ppm']:.2f}")
+    ratio(e, "ppm")
 if base:
     for e in ("ppm", "sppm", "pppm"):
-        print(f"{e} / ppm@base pass rate: {rate[e] / rate['ppm@base']:.2f}")
+        ratio(e, "ppm@base")
 PY
 cat /proc/loadavg

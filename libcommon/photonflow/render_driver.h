@@ -8,7 +8,9 @@
 //
 // With the same scene, seed and options, pass p here traces exactly the photons that
 // `trace-photons --first-pass p` writes, and gathers them exactly as `illuminate` does, so both
-// routes give the same image.
+// routes give the same image. On the CPU, sppm and pppm trace each pass's photons first and then
+// the eye pass pixel by pixel as they gather (sppm_pass_traced, pppm_pass_traced: no eye pass is
+// kept), the same bits as the staged route's eye pass file read by illuminate.
 #pragma once
 #include <functional>
 #include <map>
@@ -57,7 +59,8 @@ class ProgressiveRenderer {
                       const std::string& path = "");
 
   // One photon pass (trace photons of pass `passes_done()`) and its gather: ppm into the fixed
-  // hitpoints; sppm after its eye pass `passes_done()` into the pixels (sppm_pass).
+  // hitpoints; sppm into the pixels at the visible points of eye pass `passes_done()`, traced as
+  // it gathers (sppm_pass_traced; on a device DevicePpmState::sppm_pass).
   void run_iteration();
   int passes_done() const { return state_.passes; }
   uint64_t photons_emitted() const { return state_.photons_emitted; }
