@@ -686,6 +686,35 @@ TEST_CASE("trace_hitpoints_into: reused buffers give trace_hitpoints' result, pa
   }
 }
 
+namespace {
+
+// One pass's inputs for the traced-versus-staged comparisons below: eye options of pass `pass`
+// (at most 3 specular bounces), that pass's photons and their grid.
+struct PassInputs {
+  EyePassOptions eye;
+  PhotonPassResult photons;
+  PhotonGrid grid;
+};
+PassInputs pass_inputs(const Scene& s, uint32_t pass, DirectMode mode, PixelSampler sampler,
+                       int spp, int threads, uint32_t photons, float radius0) {
+  PassInputs in;
+  in.eye.pass = pass;
+  in.eye.spp = spp;
+  in.eye.sampler = sampler;
+  in.eye.direct = mode;
+  in.eye.max_depth = 3;
+  in.eye.threads = threads;
+  PhotonPassOptions po;
+  po.photons = photons;
+  in.photons = trace_photons(s, pass, po);
+  PhotonGridParams gp;
+  gp.default_radius = radius0;
+  in.grid = build_photon_grid(in.photons.photons, int(s.mesh_names.size()), gp);
+  return in;
+}
+
+}  // namespace
+
 TEST_CASE("sppm_pass_traced: tracing as it gathers gives trace_hitpoints_into + sppm_pass, bit "
           "for bit", "[sppm][eye]") {
   // render's CPU route (sppm_pass_traced, no eye pass kept) against the staged route's two
@@ -706,21 +735,10 @@ TEST_CASE("sppm_pass_traced: tracing as it gathers gives trace_hitpoints_into + 
   EyePassResult eye;
   EyePassWork work;
   for (uint32_t pass = 0; pass < 4; ++pass) {
-    EyePassOptions eo;
-    eo.pass = pass;
-    eo.sampler = sampler;
-    eo.direct = mode;
-    eo.max_depth = 3;
-    eo.threads = threads;
-    PhotonPassOptions po;
-    po.photons = 6000;
-    const PhotonPassResult ph = trace_photons(s, pass, po);
-    PhotonGridParams gp;
-    gp.default_radius = staged.radius0;
-    const PhotonGrid grid = build_photon_grid(ph.photons, int(s.mesh_names.size()), gp);
-    trace_hitpoints_into(s, eo, eye, work);
-    sppm_pass(s, staged, eye, grid, ph.emitted, ppm);
-    sppm_pass_traced(s, traced, eo, grid, ph.emitted, ppm);
+    const PassInputs in = pass_inputs(s, pass, mode, sampler, 1, threads, 6000, staged.radius0);
+    trace_hitpoints_into(s, in.eye, eye, work);
+    sppm_pass(s, staged, eye, in.grid, in.photons.emitted, ppm);
+    sppm_pass_traced(s, traced, in.eye, in.grid, in.photons.emitted, ppm);
   }
   REQUIRE(traced.passes == 4);
   CHECK(traced.photons_emitted == staged.photons_emitted);
@@ -791,22 +809,12 @@ TEST_CASE("pppm_pass_traced: tracing as it gathers gives trace_hitpoints_into + 
   EyePassResult eye;
   EyePassWork work;
   for (uint32_t pass = 0; pass < 4; ++pass) {
-    EyePassOptions eo;
-    eo.pass = pass;
-    eo.spp = spp;
-    eo.sampler = PixelSampler::Sobol;
-    eo.direct = mode;
-    eo.max_depth = 3;
-    eo.threads = threads;
-    PhotonPassOptions po;
-    po.photons = pass == 2 ? 0 : 6000;  // a pass without photons adds L_d alone
-    const PhotonPassResult ph = trace_photons(s, pass, po);
-    PhotonGridParams gp;
-    gp.default_radius = staged.radius1;
-    const PhotonGrid grid = build_photon_grid(ph.photons, int(s.mesh_names.size()), gp);
-    trace_hitpoints_into(s, eo, eye, work);
-    pppm_pass(s, staged, eye, grid, ph.emitted, ppm);
-    pppm_pass_traced(s, traced, eo, grid, ph.emitted, ppm);
+    // Pass 2 has no photons: its pixels add their L_d alone.
+    const PassInputs in = pass_inputs(s, pass, mode, PixelSampler::Sobol, spp, threads,
+                                      pass == 2 ? 0 : 6000, staged.radius1);
+    trace_hitpoints_into(s, in.eye, eye, work);
+    pppm_pass(s, staged, eye, in.grid, in.photons.emitted, ppm);
+    pppm_pass_traced(s, traced, in.eye, in.grid, in.photons.emitted, ppm);
   }
   REQUIRE(traced.passes == 4);
   CHECK(traced.photons_emitted == staged.photons_emitted);
