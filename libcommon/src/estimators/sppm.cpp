@@ -99,9 +99,8 @@ inline void take_visible_point(pf_hitpoint& s, const pf_hitpoint& v) {
   s.material = v.material;
 }
 
-// The emitted and direct layers take the pass's into their running mean over k passes,
-// L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) · (1/k) (each value on its own: any thread count gives the
-// same bits), and the pass is counted with its `emitted` photons.
+// The running mean of a layer's value over k passes, L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) · (1/k),
+// value by value (any thread count gives the same bits).
 inline void running_mean(float& mean, float value, float inv_k) { mean += (value - mean) * inv_k; }
 
 // The pass is counted with its `emitted` photons.
@@ -111,6 +110,7 @@ void count_pass(HitpointSet& state, uint64_t emitted) {
   state.estimator = "sppm";
 }
 
+// The emitted and direct layers take the eye pass's into their running mean; count_pass.
 void average_layers(HitpointSet& state, const EyePassResult& eye, uint64_t emitted, int threads) {
   const float inv_k = 1.f / float(state.passes + 1);
   const int64_t n = int64_t(state.emitted.size());

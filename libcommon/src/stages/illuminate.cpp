@@ -127,10 +127,10 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
     lo[a] = grid_coord(q[a] - pad, g.lo[a], g.bin_size, n[a]);
     hi3[a] = grid_coord(q[a] + pad, g.lo[a], g.bin_size, n[a]);
   }
-  // The rule after the sphere, for a photon inside it: its own mesh, not a direct photon when
-  // shadow rays give direct light, arriving at the front (photon_accepted), and with a slab
-  // (κ > 0) within κR of the tangent plane (pf_ppm_in_slab).
-  const auto facing = [&](int32_t i) {  // the rule but the sphere and the slab
+  // The rest of the rule for a photon inside the sphere. facing: its own mesh, not a direct
+  // photon when shadow rays give direct light, arriving at the front (photon_accepted).
+  // accepted: facing and, with a slab (κ > 0), within κR of the tangent plane (pf_ppm_in_slab).
+  const auto facing = [&](int32_t i) {
     const pf_photon& p = photons[i];
     if (p.mesh != mesh || (skip_direct && (p.flags & PF_PHOTON_DIRECT) != 0)) return false;
     return p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;

@@ -353,7 +353,7 @@ void PhotonGrid::index_positions(int threads) {
   const size_t n = photons.size();
   for (std::vector<float>* a : {&pos_x, &pos_y, &pos_z}) {
     resize_for_overwrite(*a, n + kPositionPad);
-    std::fill(a->begin() + long(n), a->end(), 0.f);  // read past the end, never accepted
+    std::fill(a->begin() + long(n), a->end(), 0.f);  // loaded by masked-off lanes only
   }
   const pf_photon* p = photons.data();
   float* x = pos_x.data();
