@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <random>
 
 #include "photonflow/camera.h"
 #include "photonflow/cl_gather.h"
@@ -827,4 +828,82 @@ TEST_CASE("pppm_pass_traced: tracing as it gathers gives trace_hitpoints_into + 
   wrong.direct = mode;
   PhotonGrid none;
   CHECK_THROWS_AS(pppm_pass_traced(s, traced, wrong, none, 0, ppm), std::invalid_argument);
+}
+
+TEST_CASE("gather_site: τ_M is the sum in original photon order, also where the order of the "
+          "terms changes it", "[sppm][gather]") {
+  // gather_site sums in the candidates' order when that sum is exact in double (then every
+  // order gives it) and sorts by original photon index otherwise. Random fluxes spread over up
+  // to 70 binades must give the sum in original index order; and one site is built so that the
+  // order decides the float: terms 1, 2^-24 (half a float ulp of 1) and 512 × 2^-60 sum exactly
+  // to 1 + 2^-24 + 2^-51, which rounds up to 1 + 2^-23; taken big first (the grid's order here)
+  // the tiny terms vanish in double and 1 + 2^-24 ties down to 1. Checked to fail when the
+  // exactness test always passes.
+  Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 8);
+  // A diffuse colour whose f_r = colour / π is exactly 1/4 in float, so each term is flux / 4.
+  float c = 0.78f;
+  while (!(c * kInvPi >= 0.25f)) c = std::nextafter(c, 1.f);
+  REQUIRE(c * kInvPi == 0.25f);
+  s.materials[0].color[0] = s.materials[0].color[1] = s.materials[0].color[2] = c;
+  const Vec3 fr = Vec3(s.materials[0].color) * kInvPi;
+  auto photon = [](float x, float z, float flux) {
+    pf_photon p{};
+    p.position[0] = x;
+    p.position[2] = z;
+    p.dir[1] = -1.f;  // arriving from above
+    p.flux[0] = p.flux[1] = p.flux[2] = flux;
+    return p;
+  };
+  PhotonGridParams gp;
+  gp.default_radius = 0.01f;
+  pf_hitpoint site{};
+  site.normal[1] = 1.f;
+  site.mesh = 0;
+  site.material = 0;
+
+  SECTION("random fluxes") {
+    std::mt19937 rng(25);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    std::vector<pf_photon> photons;
+    for (int i = 0; i < 600; ++i)  // a 0.2 × 0.2 patch of the plane y = 0: many bins
+      photons.push_back(photon(0.2f * u(rng), 0.2f * u(rng),
+                               std::ldexp(0.5f + u(rng), -int(70.f * u(rng) * u(rng)))));
+    const PhotonGrid grid = build_photon_grid(photons, int(s.mesh_names.size()), gp);
+    size_t sites = 0;
+    for (int i = 0; i < 40; ++i) {
+      site.position[0] = 0.2f * u(rng);
+      site.position[2] = 0.2f * u(rng);
+      const float r = 0.02f + 0.08f * u(rng);
+      double ref = 0;
+      int inside = 0;
+      for (const pf_photon& p : photons) {  // original order
+        const float dx = site.position[0] - p.position[0], dz = site.position[2] - p.position[2];
+        if (!(dx * dx + 0.f * 0.f + dz * dz <= r * r)) continue;
+        ++inside;
+        ref += double(fr.x * p.flux[0]);
+      }
+      float tau[3];
+      REQUIRE(gather_site(s, grid, site, r, false, 0.f, tau) == inside);
+      CHECK(tau[0] == float(ref));
+      sites += inside > 0 ? 1 : 0;
+    }
+    CHECK(sites >= 30);
+  }
+  SECTION("a sum the order decides") {
+    std::vector<pf_photon> photons;
+    for (int i = 0; i < 512; ++i)  // first in original order, in a later bin than the big two
+      photons.push_back(photon(0.05f, 0.001f, 4.f * std::ldexp(1.f, -60)));
+    photons.push_back(photon(0.001f, 0.001f, 4.f * std::ldexp(1.f, -24)));
+    photons.push_back(photon(0.001f, 0.001f, 4.f));
+    const PhotonGrid grid = build_photon_grid(photons, int(s.mesh_names.size()), gp);
+    REQUIRE(grid.order.back() < 512);  // the grid lists the big two first
+    site.position[0] = 0.025f;
+    site.position[2] = 0.001f;
+    float tau[3];
+    REQUIRE(gather_site(s, grid, site, 0.04f, false, 0.f, tau) == 514);
+    const float up = std::nextafter(1.f, 2.f);  // 1 + 2^-23
+    CHECK(tau[0] == up);
+    CHECK(tau[1] == up);
+    CHECK(tau[2] == up);
+  }
 }

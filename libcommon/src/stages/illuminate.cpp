@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #ifdef __SSE2__
 #include <immintrin.h>
@@ -47,6 +48,39 @@ inline void sum_flux(const Vec3& fr, size_t m, PhotonAt&& photon, float tau_m[3]
   tau_m[0] = float(tau[0]);
   tau_m[1] = float(tau[1]);
   tau_m[2] = float(tau[2]);
+}
+
+// sum_flux's sum in the order given, when it is exact: then it equals the sum in every order,
+// sum_flux's included, bit for bit. Each term is a float, a multiple of its ulp 2^(e−23) where
+// 2^e is its binade; every partial sum of m terms is then a multiple of the smallest ulp and below
+// m · 2^(E+1) for the largest binade 2^E, so it is exact in double's 53 bits when
+// E − e_min + 24 + ⌈log2 m⌉ <= 53 (zero terms add nothing; the biased exponent field of a
+// subnormal counts as 1, as its ulp does). Returns false, tau_m unset, otherwise — for a channel
+// whose terms span more binades than that, or one that is not finite.
+template <class PhotonAt>
+inline bool sum_flux_if_exact(const Vec3& fr, size_t m, PhotonAt&& photon, float tau_m[3]) {
+  double tau[3] = {0, 0, 0};
+  uint32_t lo[3] = {255, 255, 255}, hi[3] = {0, 0, 0};
+  const float f[3] = {fr.x, fr.y, fr.z};
+  for (size_t k = 0; k < m; ++k) {
+    const pf_photon& p = photon(k);
+    for (int c = 0; c < 3; ++c) {
+      const float t = f[c] * p.flux[c];
+      tau[c] += double(t);
+      uint32_t bits;
+      std::memcpy(&bits, &t, 4);
+      const uint32_t e = std::max<uint32_t>((bits >> 23) & 0xffu, 1u);
+      if ((bits & 0x7fffffffu) == 0) continue;  // ±0
+      lo[c] = std::min(lo[c], e);
+      hi[c] = std::max(hi[c], e);
+    }
+  }
+  uint32_t log2m = 0;
+  while ((size_t(1) << log2m) < m) ++log2m;
+  for (int c = 0; c < 3; ++c)
+    if (hi[c] >= 255u || (hi[c] >= lo[c] && hi[c] - lo[c] + 24u + log2m > 53u)) return false;
+  for (int c = 0; c < 3; ++c) tau_m[c] = float(tau[c]);
+  return true;
 }
 
 // Eq. 3.17 (sum_flux), then eq. 3.14, 3.16, 3.18.
@@ -214,14 +248,20 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
     m = kept;
   }
   if (m == 0) return 0;
+  // Eq. 3.17 as sum_flux sums it, in the candidates' order first: when that sum is exact it is
+  // the sum in any order, so sum_flux's order (original photon index) gives the same bits and the
+  // sort is not needed.
+  const Vec3 fr = brdf(scene, site);
+  if (sum_flux_if_exact(fr, m, [&](size_t j) -> const pf_photon& { return photons[cand[j]]; },
+                        tau_m))
+    return int(m);
   // Sum order: original photon index. The candidates come as one ascending run per bin.
   if (keys.size() < m) keys.resize(2 * m);
   uint64_t* k = keys.data();
   for (size_t j = 0; j < m; ++j)
     k[j] = (uint64_t(uint32_t(order[cand[j]])) << 32) | uint32_t(cand[j]);
   sort_keys(k, m);
-  sum_flux(brdf(scene, site), m,
-           [&](size_t j) -> const pf_photon& { return photons[uint32_t(k[j])]; }, tau_m);
+  sum_flux(fr, m, [&](size_t j) -> const pf_photon& { return photons[uint32_t(k[j])]; }, tau_m);
   return int(m);
 }
 
