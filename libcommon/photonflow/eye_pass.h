@@ -13,6 +13,7 @@
 
 #include "photonflow/camera.h"
 #include "photonflow/pixel_sampler.h"
+#include "photonflow/raycast.h"
 #include "photonflow/scene.h"
 
 namespace pf {
@@ -108,6 +109,7 @@ class EyeTracer {
   float radius_, eps_;
   pf_uint eye_key_, sobol_key_;  // the pass's eye stream key, the run's scrambling key
   CameraFrame cam_;
+  RayCaster caster_;
 };
 
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with

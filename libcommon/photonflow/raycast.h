@@ -53,6 +53,20 @@ bool intersect_closest(const Scene& scene, const Ray& ray, Hit& hit,
 // intersect_closest, so a ray is occluded exactly when it has a closest hit).
 bool intersect_any(const Scene& scene, const Ray& ray, Traversal trav = Traversal::Stack);
 
+// Casts many rays through one scene with the default traversal (Stack), the scene's host copy
+// of the kd-tree looked up once (intersect_closest and intersect_any look it up per ray): the
+// renderer's tracers hold one. The same hits as intersect_closest / intersect_any with
+// Traversal::Stack. The scene must outlive it and not change meanwhile.
+class RayCaster {
+ public:
+  explicit RayCaster(const Scene& scene);
+  bool closest(const Ray& ray, Hit& hit) const;
+  bool any(const Ray& ray) const;
+
+ private:
+  const void* kd_;  // the scene's HostKd (raycast.cpp)
+};
+
 // Batches over all cores (threads = 0) or the given count; results do not depend on threads.
 void intersect_closest_batch(const Scene& scene, const std::vector<Ray>& rays,
                              std::vector<Hit>& hits, Traversal trav = Traversal::Stack,

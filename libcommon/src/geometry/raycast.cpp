@@ -380,7 +380,34 @@ bool cast(const Scene& scene, const Ray& ray, bool any_hit, Traversal trav, pf_r
   return false;
 }
 
+Hit to_hit(const pf_ray_hit& h) {
+  Hit hit;
+  hit.t = h.t;
+  hit.tri = h.tri;
+  hit.u = h.u;
+  hit.v = h.v;
+  return hit;
+}
+
 }  // namespace
+
+RayCaster::RayCaster(const Scene& scene) : kd_(&host_kd(scene)) {}
+
+bool RayCaster::closest(const Ray& ray, Hit& hit) const {
+  const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
+  const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
+  pf_ray_hit h{ray.tmax, -1, 0.f, 0.f};
+  const bool found = traverse_stack(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, false, h);
+  hit = found ? to_hit(h) : Hit{};
+  return found;
+}
+
+bool RayCaster::any(const Ray& ray) const {
+  const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
+  const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
+  pf_ray_hit h{ray.tmax, -1, 0.f, 0.f};
+  return traverse_stack(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, true, h);
+}
 
 const char* traversal_name(Traversal t) {
   switch (t) {
@@ -393,13 +420,9 @@ const char* traversal_name(Traversal t) {
 
 bool intersect_closest(const Scene& scene, const Ray& ray, Hit& hit, Traversal trav) {
   pf_ray_hit h;
-  hit = Hit{};
-  if (!cast(scene, ray, false, trav, h)) return false;
-  hit.t = h.t;
-  hit.tri = h.tri;
-  hit.u = h.u;
-  hit.v = h.v;
-  return true;
+  const bool found = cast(scene, ray, false, trav, h);
+  hit = found ? to_hit(h) : Hit{};
+  return found;
 }
 
 bool intersect_any(const Scene& scene, const Ray& ray, Traversal trav) {

@@ -131,7 +131,8 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
       eps_(ray_epsilon(scene)),
       eye_key_(pf_rng_key(opt.seed, kEyeStream + opt.pass)),
       sobol_key_(pf_sobol_key(opt.seed)),
-      cam_(scene.camera) {}
+      cam_(scene.camera),
+      caster_(scene) {}
 
 bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct) const {
   const size_t pix = size_t(y) * size_t(scene_.camera.width) + size_t(x);
@@ -145,7 +146,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
   Vec3 T(w, w, w);  // throughput × box filter weight
   for (int depth = 0; depth <= opt_.max_depth; ++depth) {
     Hit h;
-    if (!intersect_closest(scene_, ray, h)) return false;
+    if (!caster_.closest(ray, h)) return false;
     SurfaceHit sh = surface_at(scene_, ray, h);
     const pf_material& m = scene_.materials[size_t(sh.material)];
     if (m.type == PF_MAT_EMITTER && sh.front) emitted += T * Vec3(m.emission);

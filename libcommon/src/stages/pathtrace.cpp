@@ -53,7 +53,7 @@ float power_heuristic(float a, float b) {
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const PathTraceOptions& opt)
-      : scene_(scene), opt_(opt), eps_(ray_epsilon(scene)) {
+      : scene_(scene), opt_(opt), eps_(ray_epsilon(scene)), caster_(scene) {
     tri_light_.assign(scene.triangles.size(), -1);
     light_normal_.resize(scene.lights.size());
     for (size_t li = 0; li < scene.lights.size(); ++li) {
@@ -78,7 +78,7 @@ class PathTracer {
     for (int depth = 0;; ++depth) {
       Hit h;
       ++rays;
-      if (!intersect_closest(scene_, ray, h)) break;  // no environment light
+      if (!caster_.closest(ray, h)) break;  // no environment light
       const SurfaceHit sh = surface_at(scene_, ray, h);
       const pf_material& m = scene_.materials[size_t(sh.material)];
       const Vec3 d = normalize(ray.d);
@@ -192,13 +192,14 @@ class PathTracer {
     }
     const Vec3 o = p + ng * eps_;
     ++rays;
-    if (intersect_any(scene_, Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
+    if (caster_.any(Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
     return Vec3(l.radiance) * (g * w);
   }
 
   const Scene& scene_;
   const PathTraceOptions& opt_;
   const float eps_;
+  const RayCaster caster_;
   std::vector<int32_t> tri_light_;  // light index of an emissive triangle, −1 otherwise
   std::vector<Vec3> light_normal_;  // unit front normal of each area light
 };

@@ -140,6 +140,7 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
   const std::vector<LightInfo> info = light_info(scene);
   const int threads = worker_threads(opt.threads);
   const pf_uint key = pf_rng_key(opt.seed, pass);
+  const RayCaster caster(scene);
 
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (uint32_t c = 0; c < nchunks; ++c) {
@@ -158,7 +159,7 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
       bool first_hit = true;
       for (int bounce = 0; bounce <= opt.max_bounces; ++bounce) {
         Hit h;
-        if (!intersect_closest(scene, ray, h)) break;
+        if (!caster.closest(ray, h)) break;
         SurfaceHit sh = surface_at(scene, ray, h);
         const pf_material& m = scene.materials[size_t(sh.material)];
         Vec3 d = normalize(ray.d);
