@@ -88,7 +88,7 @@ struct PhotonGrid {
   PhotonGridParams params;
   // The sorted photons' positions once more, one array per axis, each with kPositionPad
   // entries past the last photon: the CPU gather (gather_site) tests four photons at a time
-  // from these. Derived (index_positions; build_photon_grid_into and load_grids call it), never
+  // from these. Derived (build_photon_grid_into fills them, load_grids calls index_positions), never
   // stored; a grid whose photons were set otherwise has none, and the gather then reads photons.
   static constexpr size_t kPositionPad = 3;
   std::vector<float> pos_x, pos_y, pos_z;

@@ -64,6 +64,15 @@ void resize_for_overwrite(std::vector<T>& v, size_t n) {
   v.resize(n);
 }
 
+// Sizes the grid's position arrays for its photons (PhotonGrid::pos_x/y/z), the padding zeroed.
+void size_positions(PhotonGrid& grid) {
+  const size_t n = grid.photons.size();
+  for (std::vector<float>* a : {&grid.pos_x, &grid.pos_y, &grid.pos_z}) {
+    resize_for_overwrite(*a, n + PhotonGrid::kPositionPad);
+    std::fill(a->begin() + long(n), a->end(), 0.f);  // loaded by masked-off lanes only
+  }
+}
+
 struct Block {
   const pf_photon* data;
   size_t size;
@@ -80,6 +89,7 @@ struct MeshAcc {
 struct Scratch {
   std::vector<Block> blocks;
   std::vector<int32_t> key;                    // global bin of each photon
+  std::vector<const pf_photon*> source;        // the photon each sorted slot takes
   std::vector<std::vector<MeshAcc>> acc;       // per worker
   std::vector<std::vector<int32_t>> hist;      // per worker: counts, then write cursors
   std::vector<size_t> first_bad;               // per worker: first invalid photon index
@@ -329,9 +339,13 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
       }
     }
   }
-  // 4. Stable scatter: every worker writes its photons, in order, from its cursors.
-  pf_photon* out = grid.photons.data();
+  // 4. Stable scatter: every worker writes its photons' slots, in order, from its cursors; then
+  // the photons are copied into their slots in slot order. Scattering 12 bytes (index and
+  // address) and gathering the 48-byte photons with sequential writes costs less than
+  // scattering the photons themselves: random writes must first read their cache lines.
+  resize_for_overwrite(sc.source, n);
   int32_t* order = grid.order.data();
+  const pf_photon** source = sc.source.data();
 #pragma omp parallel for schedule(static, 1) num_threads(workers)
   for (int w = 0; w < workers; ++w) {
     int32_t* cursor = sc.hist[size_t(w)].data();
@@ -341,20 +355,30 @@ void build_photon_grid_into(PhotonGrid& grid, const PhotonSpan* spans, size_t sp
       for (size_t j = 0; j < blk.size; ++j) {
         const size_t i = blk.base + j;
         const int32_t dst = cursor[key[i]]++;
-        std::memcpy(&out[dst], &blk.data[j], sizeof(pf_photon));
+        source[dst] = &blk.data[j];
         order[dst] = static_cast<int32_t>(i);
       }
     }
   }
-  grid.index_positions(workers);
+  // The copy also fills the position arrays (PhotonGrid::index_positions).
+  size_positions(grid);
+  pf_photon* out = grid.photons.data();
+  float* const px = grid.pos_x.data();
+  float* const py = grid.pos_y.data();
+  float* const pz = grid.pos_z.data();
+  const int64_t count = int64_t(n);
+#pragma omp parallel for schedule(static) num_threads(workers)
+  for (int64_t k = 0; k < count; ++k) {
+    std::memcpy(&out[k], source[k], sizeof(pf_photon));
+    px[k] = out[k].position[0];
+    py[k] = out[k].position[1];
+    pz[k] = out[k].position[2];
+  }
 }
 
 void PhotonGrid::index_positions(int threads) {
   const size_t n = photons.size();
-  for (std::vector<float>* a : {&pos_x, &pos_y, &pos_z}) {
-    resize_for_overwrite(*a, n + kPositionPad);
-    std::fill(a->begin() + long(n), a->end(), 0.f);  // loaded by masked-off lanes only
-  }
+  size_positions(*this);
   const pf_photon* p = photons.data();
   float* x = pos_x.data();
   float* y = pos_y.data();
