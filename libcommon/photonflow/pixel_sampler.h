@@ -19,7 +19,7 @@
  *                      property: the first 2^k samples of every pixel put one sample in each of the
  *                      2^k elementary intervals of every shape (2^a × 2^b cells, a + b = k), so a
  *                      pixel's edge error falls faster than with independent jitter. The eye
- *                      stream's dimensions 0 and 1 are drawn and left unused, so glass choices
+ *                      stream's dimensions 0 and 1 are skipped (not drawn), so glass choices
  *                      use the same dimensions under every pass-based sampler.
  * All integer arithmetic is 32-bit unsigned (exact and equal on both sides); the float of a sample
  * is its top 24 bits times 2^-24, as pf_rng_unit.

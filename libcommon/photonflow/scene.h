@@ -39,8 +39,8 @@ struct Scene {
   void compute_hh();
   // Recomputes normals[] from triangles[] (load_scene: the file holds hh[] but not these).
   void compute_normals();
-  // face_normal of triangle `tri`: precomputed (every hit of every ray asks, and a square root
-  // and three divisions per hit are a tenth of an eye pass), or computed when triangles[] has
+  // face_normal of triangle `tri`: precomputed (every hit of every ray asks; it saves a cross
+  // product, a square root and three divisions per hit), or computed when triangles[] has
   // changed size since (the same expression, so the same bits either way).
   Vec3 normal_of(size_t tri) const {
     return normals.size() == triangles.size() ? normals[tri] : face_normal(triangles[tri]);
