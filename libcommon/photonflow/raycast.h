@@ -3,7 +3,8 @@
 //   Ropes — stackless kd-tree traversal along ropes (Popov et al. 2007): the shared C routine of
 //           intersect_shared.h, the code the GPU kernels run;
 //   Stack — classic kd-tree traversal with an explicit stack over a host-only compact copy of the
-//           tree (8-byte nodes, triangle planes in leaf order, four triangles per SSE test), built
+//           tree (8-byte nodes, triangle planes in leaf order, four triangles per SSE test or
+//           eight per AVX test where the CPU has it: set_kd_leaf_avx), built
 //           on first use; the default on the CPU, 1.1–1.7× faster: it returns the same triangle,
 //           t and barycentrics as Ropes bit for bit on rays in general position (tested on random
 //           rays). A ray aimed exactly at a shared vertex or edge, where several triangles are hit
@@ -66,6 +67,14 @@ class RayCaster {
  private:
   const void* kd_;  // the scene's HostKd (raycast.cpp)
 };
+
+// The stack traversal's leaf test takes eight triangles per AVX operation where the CPU has AVX
+// (kd_leaf_avx_supported), four per SSE operation otherwise: the same hits bit for bit.
+// set_kd_leaf_avx(false) keeps to SSE (tests compare the two; benchmarks time both);
+// set_kd_leaf_avx(true) returns false, changing nothing, without AVX. Not for use while rays are
+// being cast.
+bool kd_leaf_avx_supported();
+bool set_kd_leaf_avx(bool on);
 
 // Batches over all cores (threads = 0) or the given count; results do not depend on threads.
 void intersect_closest_batch(const Scene& scene, const std::vector<Ray>& rays,

@@ -7,11 +7,13 @@
 // the kernels (kernels/trace_common.h), the host substitutes its leaf test (PF_KD_CLEAF_TEST) by
 // one that tests four triangles per SSE operation over a leaf-ordered copy of the planes: the same
 // operations in the same order per lane, so the same bits as pf_kd_leaf_intersect. The stack
-// traversal uses the same leaf test over the 8-byte nodes.
+// traversal uses the same leaf test over the 8-byte nodes, or where the CPU has AVX one that
+// tests eight triangles per operation (leaf_intersect_avx), with the same bits again.
 #include "photonflow/raycast.h"
 
 #include <omp.h>
 
+#include <atomic>
 #include <cstring>
 #include <memory>
 #ifdef __SSE2__
@@ -294,6 +296,98 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
 #endif
 }
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PF_HAVE_AVX_LEAF 1
+// leaf_intersect with eight triangles per AVX operation: packets p and p + 1 side by side in the
+// lanes (0–3 and 4–7, leaf order), the same expressions per lane as the SSE test (AVX rounds each
+// operation as SSE does; no FMA), the passing lanes finished one by one in leaf order against the
+// tmax of that moment, a last odd packet by the SSE test: the same hits bit for bit. Built for
+// the AVX target and called only where the CPU has it (kd_leaf_avx).
+__attribute__((target("avx"))) bool leaf_intersect_avx(const HHPacket* p, uint32_t count,
+                                                       const RayLanes& r, float tmin,
+                                                       bool any_hit, pf_ray_hit& best) {
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+  const __m256 minus_one = _mm256_set1_ps(-1.0f), sign = _mm256_set1_ps(-0.0f);
+  const __m256 eps = _mm256_set1_ps(PF_HH_EDGE_EPS);
+  const __m256 o0 = _mm256_set1_ps(r.o[0]), o1 = _mm256_set1_ps(r.o[1]), o2 = _mm256_set1_ps(r.o[2]);
+  const __m256 d0 = _mm256_set1_ps(r.d[0]), d1 = _mm256_set1_ps(r.d[1]), d2 = _mm256_set1_ps(r.d[2]);
+  uint32_t first = 0;
+  for (; first + 4 < count; first += 8, p += 2) {  // five or more left: two packets
+    const HHPacket* q = p + 1;
+#define both(a, b) _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(a)), _mm_load_ps(b), 1)
+    const __m256 n0 = both(p->n[0], q->n[0]), n1 = both(p->n[1], q->n[1]);
+    const __m256 n2 = both(p->n[2], q->n[2]), n3 = both(p->n[3], q->n[3]);
+    const __m256 det = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(d0, n0), _mm256_mul_ps(d1, n1)),
+                                     _mm256_mul_ps(d2, n2));
+    const __m256 tp = _mm256_xor_ps(
+        _mm256_add_ps(
+            _mm256_add_ps(_mm256_add_ps(n3, _mm256_mul_ps(o0, n0)), _mm256_mul_ps(o1, n1)),
+            _mm256_mul_ps(o2, n2)),
+        sign);
+    const __m256 neg = _mm256_cmp_ps(det, zero, _CMP_LT_OS);
+    const __m256 sgn = _mm256_or_ps(_mm256_and_ps(neg, minus_one), _mm256_andnot_ps(neg, one));
+    const __m256 adet = _mm256_mul_ps(det, sgn);
+    const __m256 st = _mm256_mul_ps(tp, sgn);
+    const __m256 px = _mm256_add_ps(_mm256_mul_ps(det, o0), _mm256_mul_ps(tp, d0));
+    const __m256 py = _mm256_add_ps(_mm256_mul_ps(det, o1), _mm256_mul_ps(tp, d1));
+    const __m256 pz = _mm256_add_ps(_mm256_mul_ps(det, o2), _mm256_mul_ps(tp, d2));
+    const __m256 su = _mm256_mul_ps(
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, both(p->n1[0], q->n1[0])),
+                                                  _mm256_mul_ps(py, both(p->n1[1], q->n1[1]))),
+                                    _mm256_mul_ps(pz, both(p->n1[2], q->n1[2]))),
+                      _mm256_mul_ps(det, both(p->n1[3], q->n1[3]))),
+        sgn);
+    const __m256 sv = _mm256_mul_ps(
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, both(p->n2[0], q->n2[0])),
+                                                  _mm256_mul_ps(py, both(p->n2[1], q->n2[1]))),
+                                    _mm256_mul_ps(pz, both(p->n2[2], q->n2[2]))),
+                      _mm256_mul_ps(det, both(p->n2[3], q->n2[3]))),
+        sgn);
+    const __m256 slack = _mm256_mul_ps(eps, adet);
+    const __m256 nslack = _mm256_xor_ps(slack, sign);
+    const __m256 tmax = _mm256_mul_ps(adet, _mm256_set1_ps(best.t));
+    __m256 in = _mm256_and_ps(_mm256_cmp_ps(st, zero, _CMP_GE_OS), _mm256_cmp_ps(st, tmax, _CMP_LE_OS));
+    in = _mm256_and_ps(in, _mm256_and_ps(_mm256_cmp_ps(su, nslack, _CMP_GE_OS),
+                                         _mm256_cmp_ps(sv, nslack, _CMP_GE_OS)));
+    in = _mm256_and_ps(in, _mm256_cmp_ps(_mm256_add_ps(su, sv), _mm256_add_ps(adet, slack),
+                                         _CMP_LE_OS));
+    in = _mm256_and_ps(in, _mm256_cmp_ps(adet, zero, _CMP_GT_OS));
+    int mask = _mm256_movemask_ps(in);
+    if (!mask) continue;
+    alignas(32) float a_st[8], a_adet[8], a_tp[8], a_det[8], a_su[8], a_sv[8];
+    _mm256_store_ps(a_st, st);
+    _mm256_store_ps(a_adet, adet);
+    _mm256_store_ps(a_tp, tp);
+    _mm256_store_ps(a_det, det);
+    _mm256_store_ps(a_su, su);
+    _mm256_store_ps(a_sv, sv);
+    for (; mask; mask &= mask - 1) {
+      const int l = __builtin_ctz(unsigned(mask));
+      if (!(a_st[l] <= a_adet[l] * best.t)) continue;  // tmax has shrunk within the packets
+      const float t = a_tp[l] / a_det[l];
+      if (!(t > tmin && t <= best.t)) continue;
+      const int32_t tri = l < 4 ? p->tri[l] : q->tri[l - 4];
+      if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
+      best = {t, tri, a_su[l] / a_adet[l], a_sv[l] / a_adet[l]};
+      if (any_hit) return true;
+    }
+  }
+#undef both
+  return first < count && leaf_intersect(p, count - first, r, tmin, any_hit, best);
+}
+#endif
+
+// Whether the stack traversal tests leaves eight triangles at a time (AVX): where the CPU has
+// AVX, unless set_kd_leaf_avx turned it off.
+std::atomic<bool>& kd_leaf_avx() {
+#ifdef PF_HAVE_AVX_LEAF
+  static std::atomic<bool> on{__builtin_cpu_supports("avx") != 0};
+#else
+  static std::atomic<bool> on{false};
+#endif
+  return on;
+}
+
 // The same for one leaf of the rope traversal (PF_KD_CLEAF_TEST).
 bool leaf_intersect_packets(const HHPacket* p, uint32_t count, const float* o, const float* d,
                             float tmin, bool any_hit, pf_ray_hit& best) {
@@ -320,6 +414,8 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
   const CompactNode* nodes = kd.nodes.data();
   pf_ray_hit best = hit;
   const RayLanes r(o, d);
+  const bool avx = kd_leaf_avx().load(std::memory_order_relaxed);
+  (void)avx;
   for (;;) {
     if (best.t < t0) break;  // closest hit lies before this node (stack intervals only grow)
     const CompactNode n = nodes[node];
@@ -343,8 +439,15 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
       }
       continue;
     }
-    // Leaf: pf_kd_leaf_intersect's loop, four triangles at a time.
-    if (leaf_intersect(kd.packets.data() + n.w0, n.w1 >> 2, r, tmin, any_hit, best)) {
+    // Leaf: pf_kd_leaf_intersect's loop, four (SSE) or eight (AVX) triangles at a time.
+    const HHPacket* const leaf = kd.packets.data() + n.w0;
+#ifdef PF_HAVE_AVX_LEAF
+    const bool hit_now = avx ? leaf_intersect_avx(leaf, n.w1 >> 2, r, tmin, any_hit, best)
+                             : leaf_intersect(leaf, n.w1 >> 2, r, tmin, any_hit, best);
+#else
+    const bool hit_now = leaf_intersect(leaf, n.w1 >> 2, r, tmin, any_hit, best);
+#endif
+    if (hit_now) {
       hit = best;
       return true;
     }
@@ -407,6 +510,20 @@ bool RayCaster::any(const Ray& ray) const {
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   pf_ray_hit h{ray.tmax, -1, 0.f, 0.f};
   return traverse_stack(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, true, h);
+}
+
+bool set_kd_leaf_avx(bool on) {
+  if (on && !kd_leaf_avx_supported()) return false;
+  kd_leaf_avx().store(on);
+  return true;
+}
+
+bool kd_leaf_avx_supported() {
+#ifdef PF_HAVE_AVX_LEAF
+  return __builtin_cpu_supports("avx") != 0;
+#else
+  return false;
+#endif
 }
 
 const char* traversal_name(Traversal t) {
