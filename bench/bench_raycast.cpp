@@ -362,6 +362,14 @@ void bench_rays(const BenchScene& b, const std::string& ray_set, const std::vect
       pf::intersect_closest_batch(b.scene, rs, out, tr, t);
     });
   }
+  if (pf::kd_leaf_avx_supported()) {  // the stack row above tests leaves with AVX; SSE beside it
+    std::vector<pf::Hit> out;
+    pf::set_kd_leaf_avx(false);
+    row("stack, SSE leaf test", rays, [&](const std::vector<pf::Ray>& rs, int t) {
+      pf::intersect_closest_batch(b.scene, rs, out, pf::Traversal::Stack, t);
+    });
+    pf::set_kd_leaf_avx(true);
+  }
   const std::vector<pf::Ray> sub(rays.begin(), rays.begin() + std::min(brute_rays, rays.size()));
   std::vector<pf::Hit> out;
   row("brute (" + std::to_string(sub.size()) + " rays)", sub,

@@ -442,8 +442,11 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
     // Leaf: pf_kd_leaf_intersect's loop, four (SSE) or eight (AVX) triangles at a time.
     const HHPacket* const leaf = kd.packets.data() + n.w0;
 #ifdef PF_HAVE_AVX_LEAF
-    const bool hit_now = avx ? leaf_intersect_avx(leaf, n.w1 >> 2, r, tmin, any_hit, best)
-                             : leaf_intersect(leaf, n.w1 >> 2, r, tmin, any_hit, best);
+    // A leaf of up to four triangles is one packet: the inlined SSE test, no call.
+    const uint32_t count = n.w1 >> 2;
+    const bool hit_now = avx && count > 4
+                             ? leaf_intersect_avx(leaf, count, r, tmin, any_hit, best)
+                             : leaf_intersect(leaf, count, r, tmin, any_hit, best);
 #else
     const bool hit_now = leaf_intersect(leaf, n.w1 >> 2, r, tmin, any_hit, best);
 #endif
