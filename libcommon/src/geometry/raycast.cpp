@@ -209,6 +209,31 @@ struct RayLanes {
   }
 };
 
+// A packet test's lane values (st, |det|, tp, det, su, sv of pf_hh_intersect, scaled by det's
+// sign), stored lane by lane.
+struct Lanes {
+  const float *st, *adet, *tp, *det, *su, *sv;
+};
+
+// The lanes of `mask` that passed a packet test, finished one by one in leaf order, each against
+// the tmax of that moment (pf_hh_intersect's last steps; tri_of(l) is lane l's triangle).
+// Returns true at the first hit with any_hit.
+template <class TriOf>
+inline bool finish_lanes(int mask, const Lanes& a, TriOf&& tri_of, float tmin, bool any_hit,
+                         pf_ray_hit& best) {
+  for (; mask; mask &= mask - 1) {
+    const int l = __builtin_ctz(unsigned(mask));
+    if (!(a.st[l] <= a.adet[l] * best.t)) continue;  // tmax has shrunk within the packet
+    const float t = a.tp[l] / a.det[l];
+    if (!(t > tmin && t <= best.t)) continue;
+    const int32_t tri = tri_of(l);
+    if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
+    best = {t, tri, a.su[l] / a.adet[l], a.sv[l] / a.adet[l]};
+    if (any_hit) return true;
+  }
+  return false;
+}
+
 // Tests the `count` triangles of a leaf stored from `p` on, keeping the closest hit in `best`
 // (best.t is the current tmax); with any_hit returns true at the first hit. Bit for bit the result
 // of pf_kd_leaf_intersect over the same triangles in the same order: every lane evaluates
@@ -264,16 +289,9 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
     _mm_store_ps(a_det, det);
     _mm_store_ps(a_su, su);
     _mm_store_ps(a_sv, sv);
-    for (; mask; mask &= mask - 1) {
-      const int l = __builtin_ctz(unsigned(mask));
-      if (!(a_st[l] <= a_adet[l] * best.t)) continue;  // tmax has shrunk within the packet
-      const float t = a_tp[l] / a_det[l];
-      if (!(t > tmin && t <= best.t)) continue;
-      const int32_t tri = p->tri[l];
-      if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
-      best = {t, tri, a_su[l] / a_adet[l], a_sv[l] / a_adet[l]};
-      if (any_hit) return true;
-    }
+    const Lanes lanes{a_st, a_adet, a_tp, a_det, a_su, a_sv};
+    if (finish_lanes(mask, lanes, [p](int l) { return p->tri[l]; }, tmin, any_hit, best))
+      return true;
   }
   return false;
 #else
@@ -361,16 +379,10 @@ __attribute__((target("avx"))) bool leaf_intersect_avx(const HHPacket* p, uint32
     _mm256_store_ps(a_det, det);
     _mm256_store_ps(a_su, su);
     _mm256_store_ps(a_sv, sv);
-    for (; mask; mask &= mask - 1) {
-      const int l = __builtin_ctz(unsigned(mask));
-      if (!(a_st[l] <= a_adet[l] * best.t)) continue;  // tmax has shrunk within the packets
-      const float t = a_tp[l] / a_det[l];
-      if (!(t > tmin && t <= best.t)) continue;
-      const int32_t tri = l < 4 ? p->tri[l] : q->tri[l - 4];
-      if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
-      best = {t, tri, a_su[l] / a_adet[l], a_sv[l] / a_adet[l]};
-      if (any_hit) return true;
-    }
+    const Lanes lanes{a_st, a_adet, a_tp, a_det, a_su, a_sv};
+    if (finish_lanes(mask, lanes, [p, q](int l) { return l < 4 ? p->tri[l] : q->tri[l - 4]; },
+                     tmin, any_hit, best))
+      return true;
   }
 #undef both
   return first < count && leaf_intersect(p, count - first, r, tmin, any_hit, best);
