@@ -55,10 +55,6 @@ struct EyePassResult {
   std::vector<float> direct;           // width × height × 3 (zero unless ShadowRays)
   float radius = 0.f;                  // R0 used
   int width = 0, height = 0;
-  // Eye samples per pixel when the host's tracer made it (trace_hitpoints_into), which lists the
-  // visible points in pixel order, at most `spp` per pixel, all inside the image; 0 otherwise
-  // (read from a file, or the device's): the estimators then check the order themselves.
-  int spp = 0;
 };
 
 // Columns of the eye pass's stratification grid for `spp` samples per pixel (both backends): the

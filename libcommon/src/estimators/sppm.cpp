@@ -72,8 +72,6 @@ void check_visible_pixels(const EyePassResult& eye, int width, int height, bool 
     throw input_error("", "the eye pass is " + std::to_string(eye.width) + "x" +
                               std::to_string(eye.height) + ", the state " + std::to_string(width) +
                               "x" + std::to_string(height));
-  // The host's tracer lists them so by construction (EyePassResult::spp): nothing to read.
-  if (eye.spp == 1 || (eye.spp > 1 && !one_per_pixel)) return;
   size_t last = 0;
   for (size_t i = 0; i < eye.hitpoints.size(); ++i) {
     const pf_hitpoint& v = eye.hitpoints[i];

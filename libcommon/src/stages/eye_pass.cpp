@@ -182,7 +182,6 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
   const int spp = tracer.spp();
   res.width = W;
   res.height = H;
-  res.spp = 0;  // set once the visible points are in place
   res.radius = tracer.radius();
   res.emitted.resize(size_t(W) * H * 3);  // every pixel writes its own below
   res.direct.resize(size_t(W) * H * 3);
@@ -215,7 +214,6 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
   for (int y = 0; y < H; ++y)
     std::copy(rows[size_t(y)].begin(), rows[size_t(y)].end(),
               res.hitpoints.begin() + long(offset[size_t(y)]));
-  res.spp = spp;
 }
 
 }  // namespace pf
