@@ -206,7 +206,16 @@ TEST_CASE("datasets and attributes round-trip with named fields", "[h5io]") {
   REQUIRE(back.size() == photons.size());
   CHECK(std::memcmp(back.data(), photons.data(), photons.size() * sizeof(pf_photon)) == 0);
   CHECK(r.shape("/data/matrix") == std::vector<size_t>{2, 3});
-  CHECK(r.read<float>("/data/matrix") == numbers);
+  CHECK(r.read<float>("/data/matrix", {2, 3}) == numbers);
+  // Another shape of the same element count, another rank, or another element type is refused,
+  // never reinterpreted or converted.
+  CHECK_THROWS_WITH(r.read<float>("/data/matrix"), Catch::Contains("has shape 2×3, not one dimension"));
+  CHECK_THROWS_WITH(r.read<float>("/data/matrix", {3, 2}), Catch::Contains("has shape 2×3, not 3×2"));
+  CHECK_THROWS_WITH(r.read<float>("/data/matrix", std::vector<size_t>{6}), Catch::Contains("not 6"));
+  CHECK_THROWS_WITH(r.read<double>("/data/matrix", {2, 3}),
+                    Catch::Contains("is stored as float32, not float64"));
+  CHECK_THROWS_WITH(r.read<int32_t>("/data/matrix", {2, 3}),
+                    Catch::Contains("is stored as float32, not int32"));
   CHECK(r.read_strings("/names") == std::vector<std::string>{"floor", "", "ceiling light"});
   CHECK(r.attr_double("/data", "pi") == 3.25);
   CHECK(r.attr_int("/data", "count") == -7);

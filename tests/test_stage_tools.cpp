@@ -10,6 +10,7 @@
 #include <fstream>
 #include <thread>
 
+#include "photonflow/validate.h"
 #include "photonflow/h5io.h"
 #include "photonflow/illuminate.h"
 #include "photonflow/image.h"
@@ -100,7 +101,7 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
   }
   SECTION("radius or alpha out of range") {
     check_refused(run_tool("trace-hitpoints", "--scene " + box + " -o " + out + " --radius -1", tmp),
-                  out, "--radius must be 0 (automatic) or a positive length");
+                  out, "--radius must be 0 (automatic) or a length in [1e-15, 1e+12], got -1");
     for (const char* a : {"0", "1.5", "-0.2"})
       check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
                                                ph + " -o " + out + " --alpha " + a, tmp),
@@ -146,6 +147,7 @@ TEST_CASE("indices out of the scene's range are refused by every stage, never a 
   auto bad_hitpoints = [&](const std::string& name, auto change) {
     HitpointSet b = h;
     change(b.hitpoints[b.hitpoints.size() / 2]);
+    const UncheckedWritesForTests damaged;  // the writer itself refuses these
     save_hitpoints(b, tmp / name, prov);
     return tmp / name;
   };
@@ -499,7 +501,10 @@ TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are r
     h.radius0 = r0;
     const std::string bad = tmp / "hp-r0.h5";
     std::filesystem::remove(bad);
-    save_hitpoints(h, bad, prov);
+    {
+      const UncheckedWritesForTests damaged;  // the writer itself refuses an R0 of 0
+      save_hitpoints(h, bad, prov);
+    }
     const test::ToolRun r = run_tool("build-grid", "--scene " + box + " --photons " + ph +
                                                        " --hitpoints " + bad + " -o " + out, tmp);
     check_refused(r, out, bad + ": attribute radius0 = ");
@@ -516,7 +521,10 @@ TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are r
     h.hitpoints[7].position[0] = x;
     const std::string far = tmp / "hp-far.h5";
     std::filesystem::remove(far);
-    save_hitpoints(h, far, prov);
+    {
+      const UncheckedWritesForTests damaged;  // the writer itself refuses a position of 1e20
+      save_hitpoints(h, far, prov);
+    }
     const std::string where = x > 1e12f ? far + ": hitpoints[7].position[0] = 1.00000002e+20 is outside"
                                         : far + ": /hitpoints[7]: position 1e+09,";
     check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + far + " --photons " +

@@ -151,16 +151,26 @@ class Reader : public FileBase {
   // Reads a compound dataset; fields are matched by name (HDF5 converts), so a file whose
   // compound lacks a field of `type` is refused.
   void read(const std::string& path, const Compound& type, void* out, size_t n) const;
+  // The dataset must be one-dimensional (a list of records).
   template <class S> std::vector<S> read(const std::string& path, const Compound& type) const {
+    require_shape(path, {});
     std::vector<S> v(count(path));
     read(path, type, v.data(), v.size());
     return v;
   }
-  template <class T> std::vector<T> read(const std::string& path) const {
+  // Reads a numeric dataset stored as exactly T (class, size and sign: a dataset a script retyped,
+  // float32 for float64 or int64 for float64, is refused, never converted) of exactly `shape`
+  // (rank and every dimension; an empty shape: one-dimensional, any length). A dataset of the
+  // right element count but another shape (3×64×64 for 64×64×3) is refused.
+  template <class T>
+  std::vector<T> read(const std::string& path, const std::vector<size_t>& shape = {}) const {
+    require_shape(path, shape);
     std::vector<T> v(count(path));
     read_raw(path, native_type<T>(), v.data());
     return v;
   }
+  // InputError unless dataset `path` has exactly `shape` (empty: rank 1, any length).
+  void require_shape(const std::string& path, const std::vector<size_t>& shape) const;
   std::vector<std::string> read_strings(const std::string& path) const;
 
   // Throws InputError unless this file and `other` were made from the same scene.

@@ -1,5 +1,6 @@
 // options.h — parsing and checking of stage options shared by the tools.
 #pragma once
+#include <cstdint>
 #include <string>
 
 #include "photonflow/error.h"
@@ -17,6 +18,11 @@ std::string default_text(int value);
 
 // Range checks with one-line InputErrors naming the option.
 void require_positive(const std::string& option, double value);
+// Whole-number options: the refusal echoes the integer ("got 0", not "got 0.000000").
+void require_positive(const std::string& option, int64_t value);
+inline void require_positive(const std::string& option, int value) {
+  require_positive(option, int64_t(value));
+}
 void require_in_unit_interval(const std::string& option, double value);  // (0, 1]
 void require_choice(const std::string& option, const std::string& value,
                     std::initializer_list<const char*> choices);

@@ -51,10 +51,16 @@ Image synthesize(const PassSums& s);
 // Atomic write with provenance (tool, parameters, inputs); `parameters` go into the provenance's
 // parameters as "state.<name>", where load_pass_sums reads them back.
 void save_pass_sums(const PassSums& s, const std::string& path, const Provenance& prov);
-// Reads and checks a sums file: image size, pass range (first_pass >= 0, passes >= 0, the end an
-// int), one finite sum per pixel channel, radius1 > 0 and finite, alpha in (0, 1], every
-// "state.*" parameter. InputError naming the file and what is wrong.
+// Reads and checks a sums file: its datasets' shapes and types (h5io.h), then validate_pass_sums.
+// InputError naming the file and what is wrong.
 PassSums load_pass_sums(const std::string& path);
+// The checks of a sums file's values, which save_pass_sums and merge also apply to what they
+// write (validate.h written_check): image size, pass range (first_pass >= 0, passes >= 0,
+// first_pass + passes <= 2^31 − 1), photons_emitted a count of `passes` passes (validate.h
+// kMaxPhotonsPerPass), one sum in [0, kMaxValue · passes] per pixel channel, radius1 in
+// [kMinRadius, kMaxRadius], alpha in (0, 1], the "state.*" parameters recorded. InputError naming
+// `path`.
+void validate_pass_sums(const PassSums& s, const std::string& path);
 // The provenance group of a sums file (the render driver checks a checkpoint's with it).
 Provenance load_pass_sums_provenance(const std::string& path);
 

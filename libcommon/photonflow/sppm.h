@@ -92,8 +92,11 @@ void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<
 void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted);
 
 // r_i of pass p (0-based; i = p + 1) for initial radius r1: r_i² = r1² · Π_{j=1..i−1} (j + α)/(j + 1)
-// (KZ11 eq. 19 unrolled), evaluated in double in that order so that every machine gets the same
-// radius for the same pass.
+// (KZ11 eq. 19 unrolled), evaluated in double in that order up to pass kPppmLoopPasses, so every
+// machine gets the same radius for the same pass; past it, the rest of the product in closed form
+// (a ratio of Gamma functions, by Stirling's series), so that any pass up to 2^31 − 1 costs at most
+// kPppmLoopPasses multiplications. Relative error against the exact product below 1e-12.
+constexpr int kPppmLoopPasses = 1 << 16;
 double pppm_radius(double r1, double alpha, int pass);
 
 // One PPPM pass p = sums.first_pass + sums.passes: adds L_p (above) of every pixel to sums.sum

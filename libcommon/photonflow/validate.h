@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,13 @@ constexpr float kMinRadius = 1e-15f;
 constexpr float kMaxRadius = kMaxCoordinate;
 // Relative tolerance of a unit vector's length (shading normals, directions).
 constexpr float kUnitTolerance = 1e-3f;
+// Most photons one pass emits (--photons is a uint32). Every pass emits 1 … kMaxPhotonsPerPass,
+// so a count of photons emitted is at most passes × kMaxPhotonsPerPass: with at most 2^31 − 1
+// passes that stays below 2^63, and no sum of counts (a merge, a resumed run) can wrap an int64.
+constexpr uint64_t kMaxPhotonsPerPass = 0xffffffffu;
+// Largest end of a pass range (pass sums, pppm runs): passes [first, end) with end <= 2^31 − 1,
+// so that the end itself is an int32.
+constexpr int64_t kMaxPassEnd = 2147483647;
 
 // The value as the messages print it: `digits` significant digits (9: a float's exact text),
 // "nan", "inf", "-inf".
@@ -86,8 +94,22 @@ class Validator {
   void in_range(const Name& what, double v, double lo, double hi) const {
     if (!(v >= lo && v <= hi)) fail_value(what, -1, v, lo, hi, true);
   }
+  // A float64 of a file that the program keeps as a float: both v and float(v) lie in [lo, hi]
+  // (NaN fails), so a value that narrowing turns into 0 or inf (1e-300, 1e300) is refused with the
+  // file's name rather than failing later, nameless, where the float is used. Returns float(v).
+  float to_float(const Name& what, double v, double lo, double hi) const {
+    in_range(what, v, lo, hi);
+    const float f = float(v);
+    if (!(double(f) >= lo && double(f) <= hi))
+      fail(what.str() + " = " + value_text(v) + " is " + value_text(double(f), 6) +
+           " as a float, outside [" + value_text(lo, 6) + ", " + value_text(hi, 6) + "]");
+    return f;
+  }
   // An integer in [lo, hi].
   void int_in_range(const Name& what, int64_t v, int64_t lo, int64_t hi) const;
+  // A count of photons emitted by `passes` passes (each emits 1 … kMaxPhotonsPerPass): in
+  // [passes, passes × kMaxPhotonsPerPass], and 0 exactly when passes is 0.
+  void photons_emitted(const Name& what, uint64_t emitted, int64_t passes) const;
   // A world position: finite, |each coordinate| <= kMaxCoordinate.
   void position(const Name& what, const float* v, int n = 3) const {
     in_range(what, v, n, -double(kMaxCoordinate), double(kMaxCoordinate));
@@ -114,6 +136,22 @@ class Validator {
   [[noreturn]] void fail_value(const Name& what, int k, double v, double lo, double hi,
                                bool range) const;
   std::string file_, hint_;
+};
+
+// Every writer checks what it is about to write with the checks its readers apply (the readers'
+// validate_* functions): a file a stage writes is one the next stage accepts. `check` throws
+// InputError when the data would be refused; written_check turns that into an internal error
+// (std::logic_error, exit 1, caught by the tests), since the data came from this program and
+// not from an input: "internal error: about to write what its readers refuse: <file>: ...".
+void written_check(const std::function<void()>& check);
+// Within this scope (on this thread) written_check checks nothing: the one way to make a damaged
+// file with a stage's own writer, for the tests of the readers' refusals. Nothing else uses it.
+class UncheckedWritesForTests {
+ public:
+  UncheckedWritesForTests();
+  ~UncheckedWritesForTests();
+  UncheckedWritesForTests(const UncheckedWritesForTests&) = delete;
+  UncheckedWritesForTests& operator=(const UncheckedWritesForTests&) = delete;
 };
 
 // True when a and b agree within rel·(|a| + |b|) + abs (NaN never agrees).

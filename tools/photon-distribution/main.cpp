@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
     const int64_t emit = a["emit"].as<int64_t>();
     pf::require_positive("passes", passes);
     pf::require_positive("max-bins", max_bins);
-    pf::require_positive("emit", double(emit));
+    pf::require_positive("emit", int64_t(emit));
     if (emit > int64_t(UINT32_MAX)) throw pf::input_error("", "--emit must be below 2^32");
     if (first < 0) throw pf::input_error("", "--first-pass must be >= 0");
 

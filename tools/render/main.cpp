@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
       opt.passes = std::numeric_limits<int>::max() - std::max(0, opt.first_pass);
     const std::string sampler = a["pixel-sampler"].as<std::string>();
     int64_t photons = a["photons"].as<int64_t>();
-    pf::require_positive("photons", double(photons));
+    pf::require_positive("photons", int64_t(photons));
     if (photons > int64_t(UINT32_MAX)) throw pf::input_error("", "--photons must be below 2^32");
     std::string direct = a["direct"].as<std::string>();
     pf::require_choice("direct", direct, {"photons", "shadow-rays"});

@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
     pf::check_output_options(a, {"scene"}, {"output"});
     int64_t photons = a["photons"].as<int64_t>();
     int passes = a["passes"].as<int>(), first = a["first-pass"].as<int>();
-    pf::require_positive("photons", double(photons));
+    pf::require_positive("photons", int64_t(photons));
     if (photons > int64_t(UINT32_MAX))
       throw pf::input_error("", "--photons must be below 2^32 per pass");
     pf::require_positive("passes", passes);

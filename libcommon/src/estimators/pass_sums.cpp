@@ -19,7 +19,7 @@ constexpr int kPassSumsVersion = 1;
 constexpr const char* kStatePrefix = "state.";
 const char* const kHint = "the file is damaged; remake it with render --estimator pppm --sums";
 
-std::string range_text(int first, int end) {
+std::string range_text(int64_t first, int64_t end) {
   return "[" + std::to_string(first) + ", " + std::to_string(end) + ")";
 }
 }  // namespace
@@ -51,7 +51,39 @@ Image synthesize(const PassSums& s) {
   return img;
 }
 
+void validate_pass_sums(const PassSums& s, const std::string& path) {
+  const Validator v(path, kHint);
+  v.int_in_range("attribute width", s.width, 1, kMaxImageSide);
+  v.int_in_range("attribute height", s.height, 1, kMaxImageSide);
+  v.int_in_range("attribute first_pass", s.first_pass, 0, kMaxPassEnd);
+  v.int_in_range("attribute passes", s.passes, 0, kMaxPassEnd);
+  if (int64_t(s.first_pass) + int64_t(s.passes) > kMaxPassEnd)
+    v.fail("its passes " + range_text(s.first_pass, int64_t(s.first_pass) + s.passes) +
+           " end past 2^31-1");
+  v.photons_emitted("attribute photons_emitted", s.photons_emitted, s.passes);
+  v.in_range("attribute radius1", s.radius1, double(kMinRadius), double(kMaxRadius));
+  // α of KZ11 eq. 19 in (0, 1]: the smallest float above 0 is the lower bound.
+  v.in_range("attribute alpha", s.alpha, double(std::numeric_limits<float>::denorm_min()), 1.0);
+  if (s.direct_mode != DirectMode::Photons && s.direct_mode != DirectMode::ShadowRays)
+    v.fail("attribute direct_mode is no direct mode");
+  if (s.sum.size() != size_t(s.width) * size_t(s.height) * 3)
+    v.fail("dataset /sum does not hold width × height × 3 values");
+  // Radiance is never negative, and each pass's estimate stays within the loaders' value bound
+  // (validate.h kMaxValue), so a sum lies in [0, kMaxValue · passes].
+  const double max_sum = double(kMaxValue) * double(std::max(s.passes, 1));
+  for (size_t j = 0; j < s.sum.size(); ++j)
+    if (!(s.sum[j] >= 0.0 && s.sum[j] <= max_sum))
+      v.fail("dataset /sum[" + std::to_string(j / 3) + "] (pixel " +
+             std::to_string(j / 3 % size_t(s.width)) + ", " +
+             std::to_string(j / 3 / size_t(s.width)) + ") = " + value_text(s.sum[j]) +
+             " is not a sum of radiances");
+  if (s.passes == 0 && std::any_of(s.sum.begin(), s.sum.end(), [](double x) { return x != 0; }))
+    v.fail("holds sums but no pass");
+  if (s.parameters.empty()) v.fail("records none of the options its passes were made with");
+}
+
 void save_pass_sums(const PassSums& s, const std::string& path, const Provenance& prov) {
+  written_check([&] { validate_pass_sums(s, path); });
   h5::Writer w(path, kPassSumsFormat, kPassSumsVersion);
   w.attr("/", "scene_id", s.scene_id);
   w.write("/sum", s.sum, {size_t(s.height), size_t(s.width), 3});
@@ -78,62 +110,34 @@ Provenance load_pass_sums_provenance(const std::string& path) {
 
 PassSums load_pass_sums(const std::string& path) {
   h5::Reader r(path, kPassSumsFormat, kPassSumsVersion);
+  const Validator v(path, kHint);
   PassSums s;
   s.scene_id = r.scene_id();
+  // Integers are range-checked as int64 before they become ints; then validate_pass_sums.
   auto int_in = [&](const char* name, int64_t lo, int64_t hi) {
-    const int64_t v = r.attr_int("/", name);
-    if (v < lo || v > hi)
-      throw input_error(path, std::string("attribute ") + name + " = " + std::to_string(v) +
-                                  " is outside [" + std::to_string(lo) + ", " +
-                                  std::to_string(hi) + "]",
-                        kHint);
-    return v;
+    const int64_t x = r.attr_int("/", name);
+    v.int_in_range(std::string("attribute ") + name, x, lo, hi);
+    return x;
   };
-  const int64_t int_max = std::numeric_limits<int32_t>::max();
   s.width = int(int_in("width", 1, kMaxImageSide));
   s.height = int(int_in("height", 1, kMaxImageSide));
-  s.first_pass = int(int_in("first_pass", 0, int_max));
-  s.passes = int(int_in("passes", 0, int_max));
-  if (!pass_indices_fit(s.first_pass, s.passes))
-    throw input_error(path, "its passes " + range_text(s.first_pass, s.first_pass + s.passes) +
-                                " run past 2^31-1", kHint);
+  s.first_pass = int(int_in("first_pass", 0, kMaxPassEnd));
+  s.passes = int(int_in("passes", 0, kMaxPassEnd));
   s.photons_emitted = uint64_t(int_in("photons_emitted", 0, std::numeric_limits<int64_t>::max()));
-  const double r1 = r.attr_double("/", "radius1"), alpha = r.attr_double("/", "alpha");
-  if (!(r1 > 0.0 && std::isfinite(r1) && r1 <= double(std::numeric_limits<float>::max())))
-    throw input_error(path, "attribute radius1 must be a positive length", kHint);
-  if (!(alpha > 0.0 && alpha <= 1.0))
-    throw input_error(path, "attribute alpha must be in (0, 1]", kHint);
-  s.radius1 = float(r1);
-  s.alpha = float(alpha);
+  // Kept as floats: refused when narrowing takes them out of range (1e-300 → 0).
+  s.radius1 = v.to_float("attribute radius1", r.attr_double("/", "radius1"), double(kMinRadius),
+                         double(kMaxRadius));
+  s.alpha = v.to_float("attribute alpha", r.attr_double("/", "alpha"),
+                       double(std::numeric_limits<float>::denorm_min()), 1.0);
   const std::string direct = r.attr_string("/", "direct_mode");
   if (direct != "photons" && direct != "shadow-rays")
-    throw input_error(path, "unknown direct mode '" + direct + "'", kHint);
+    v.fail("unknown direct mode '" + direct + "'");
   s.direct_mode = direct == "photons" ? DirectMode::Photons : DirectMode::ShadowRays;
-  s.sum = r.read<double>("/sum");
-  if (s.sum.size() != size_t(s.width) * size_t(s.height) * 3)
-    throw input_error(path, "dataset /sum does not hold width × height × 3 values", kHint);
-  // Radiance is never negative, and each pass's estimate stays within the loaders' value bound
-  // (validate.h kMaxValue), so a sum lies in [0, kMaxValue · passes].
-  const double max_sum = double(kMaxValue) * double(std::max(s.passes, 1));
-  for (size_t j = 0; j < s.sum.size(); ++j)
-    if (!(s.sum[j] >= 0.0 && s.sum[j] <= max_sum))
-      throw input_error(path, "dataset /sum[" + std::to_string(j / 3) + "] (pixel " +
-                                  std::to_string(j / 3 % size_t(s.width)) + ", " +
-                                  std::to_string(j / 3 / size_t(s.width)) + ") = " +
-                                  std::to_string(s.sum[j]) + " is not a sum of radiances",
-                        kHint);
-  if (s.photons_emitted < uint64_t(s.passes))
-    throw input_error(path, "its " + std::to_string(s.passes) + " passes emitted " +
-                                std::to_string(s.photons_emitted) + " photons (every pass emits)",
-                      kHint);
-  if (s.passes == 0 && (s.photons_emitted != 0 ||
-                        std::any_of(s.sum.begin(), s.sum.end(), [](double v) { return v != 0; })))
-    throw input_error(path, "holds sums but no pass", kHint);
+  s.sum = r.read<double>("/sum", {size_t(s.height), size_t(s.width), 3});
   const Provenance prov = read_provenance(r);
   for (const auto& [name, value] : prov.parameters)
     if (name.rfind(kStatePrefix, 0) == 0) s.parameters[name.substr(6)] = value;
-  if (s.parameters.empty())
-    throw input_error(path, "records none of the options its passes were made with", kHint);
+  validate_pass_sums(s, path);
   return s;
 }
 
@@ -179,6 +183,8 @@ void PassSumsMerger::add(const PassSums& part, const std::string& path) {
     throw input_error(path, "starts at pass " + std::to_string(part.first_pass) + ", but passes " +
                                 range_text(out_.end_pass(), part.first_pass) + " are in no part",
                       "render the missing passes first");
+  // Both parts passed validate_pass_sums: their ranges end at most at 2^31 − 1 and each holds at
+  // most passes × kMaxPhotonsPerPass photons, so neither sum below can wrap.
   for (size_t j = 0; j < out_.sum.size(); ++j) out_.sum[j] += part.sum[j];
   out_.passes += part.passes;
   out_.photons_emitted += part.photons_emitted;
@@ -188,6 +194,8 @@ void PassSumsMerger::add(const PassSums& part, const std::string& path) {
 
 PassSums PassSumsMerger::finish(int want_first, int want_end) const {
   if (parts_ == 0) throw input_error("", "no parts to merge");
+  // The merged range is what merge writes: checked as its readers will check it.
+  written_check([&] { validate_pass_sums(out_, last_path_); });
   if (want_first >= 0 && (out_.first_pass != want_first || out_.end_pass() != want_end))
     throw input_error("", "the parts cover passes " + range_text(out_.first_pass, out_.end_pass()) +
                               ", not " + range_text(want_first, want_end),

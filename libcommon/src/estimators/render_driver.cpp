@@ -12,6 +12,7 @@
 #include "photonflow/cl_backend.h"
 #include "photonflow/options.h"
 #include "photonflow/text_file.h"
+#include "photonflow/validate.h"
 
 namespace pf {
 
@@ -49,6 +50,10 @@ uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
     : scene_(scene), opt_(opt), state_(fresh_state(scene, opt)) {
   check_against_scene("", state_, scene_);
+  if (opt.estimator == Estimator::Ppm && state_.hitpoints.empty())
+    throw input_error("", "the eye pass found no hitpoint: no eye path reached a diffuse "
+                          "surface, so photons would light nothing",
+                      "check the camera and the scene's materials, or use --estimator sppm");
 }
 
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt,
@@ -194,6 +199,11 @@ void check_options(const RenderOptions& opt) {
                       "continue a ppm or sppm run with --checkpoint and --resume");
   if (!pass_indices_fit(opt.first_pass, opt.passes))
     throw input_error("", "--first-pass + --passes runs past pass 2^31-1");
+  // A pppm range [first, end) is written with its end, which must be an int32 (pass_sums.h).
+  if (opt.estimator == Estimator::Pppm && int64_t(opt.first_pass) + opt.passes > kMaxPassEnd)
+    throw input_error("", "--first-pass " + std::to_string(opt.first_pass) + " + --passes " +
+                              std::to_string(opt.passes) + " ends past 2^31-1",
+                      "a pppm range ends at most at pass 2147483647");
   if (opt.estimator == Estimator::Sppm && opt.eye.spp != 1)
     throw input_error("", "--estimator sppm takes one eye sample per pixel and pass",
                       "drop --spp: every pass traces a new sample in each pixel");
@@ -261,6 +271,24 @@ std::map<std::string, std::string> staged_state_parameters(
 }
 
 namespace {
+
+// Refuses a checkpoint whose own attributes disagree with this run's options: its direct mode
+// (a state of shadow-ray direct light gathering photons that carry direct light would count it
+// twice), its initial radius and, for pass sums, α. require_same_state compares the options the
+// checkpoint's provenance records; these are the values the state itself holds.
+void require_state_agrees(const std::string& checkpoint, const RenderOptions& opt, DirectMode mode,
+                          float radius, float radius_run, const char* radius_name) {
+  if (mode != opt.eye.direct)
+    throw input_error(checkpoint,
+                      std::string("holds a state of direct mode ") + direct_mode_name(mode) +
+                          ", this run has --direct " + direct_mode_name(opt.eye.direct),
+                      "use the checkpoint's --direct or start without --resume");
+  if (radius != radius_run)
+    throw input_error(checkpoint,
+                      std::string("holds a state of ") + radius_name + " " + default_text(radius) +
+                          ", this run starts from " + default_text(radius_run),
+                      "use the checkpoint's --radius or start without --resume");
+}
 
 // Refuses a checkpoint whose recorded state options differ from this run's (state_parameters).
 void require_same_state(const std::string& checkpoint, const RenderOptions& opt) {
@@ -413,6 +441,8 @@ HitpointSet render_progressive(
                         "use the checkpoint's estimator or start without --resume");
     require_passes_left(opt, state.passes);
     require_same_state(opt.checkpoint, opt);
+    require_state_agrees(opt.checkpoint, opt, state.direct_mode, state.radius0,
+                         initial_radius(scene, opt.eye), "radius0");
   }
   return drive<ProgressiveRenderer, HitpointSet>(
       opt, std::move(r), [&] { return std::make_unique<ProgressiveRenderer>(scene, opt); },
@@ -438,6 +468,13 @@ PassSums render_pppm(const Scene& scene, const RenderOptions& opt, bool resume,
                         "use the checkpoint's --first-pass or start without --resume");
     require_passes_left(opt, loaded.passes);
     require_same_state(opt.checkpoint, opt);
+    require_state_agrees(opt.checkpoint, opt, loaded.direct_mode, loaded.radius1,
+                         initial_radius(scene, opt.eye), "radius1");
+    if (loaded.alpha != opt.ppm.alpha)
+      throw input_error(opt.checkpoint,
+                        "holds sums of alpha " + default_text(loaded.alpha) + ", this run has " +
+                            "--alpha " + default_text(opt.ppm.alpha),
+                        "use the checkpoint's --alpha or start without --resume");
     r = std::make_unique<PppmRenderer>(scene, opt, std::move(loaded), opt.checkpoint);
   }
   return drive<PppmRenderer, PassSums>(

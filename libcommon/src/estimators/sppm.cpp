@@ -3,6 +3,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -223,9 +224,33 @@ float parse_slab(const std::string& text, bool new_eye_pass) {
   return v;
 }
 
+namespace {
+// g(n) = ln Γ(n + α) − ln Γ(n + 1) by Stirling's series (ln Γ(z) = (z − ½) ln z − z + ½ ln 2π
+// + 1/(12z) − 1/(360z³) + 1/(1260z⁵) − …, Abramowitz & Stegun 6.1.41), with the two large
+// (z − ½) ln z terms combined before they are evaluated: (n + α − ½) ln(n + α) − (n + ½) ln(n + 1)
+// = (n + α − ½)·log1p((α − 1)/(n + 1)) + (α − 1)·ln(n + 1), so nothing of order n ln n cancels.
+// For n >= kPppmLoopPasses the series' remainder is below 1e-26 and g is good to a few ulps.
+double log_gamma_ratio(double n, double alpha) {
+  const double a = n + alpha, b = n + 1.0;
+  const double series = (1.0 / a - 1.0 / b) / 12.0 - (1.0 / (a * a * a) - 1.0 / (b * b * b)) / 360.0 +
+                        (1.0 / (a * a * a * a * a) - 1.0 / (b * b * b * b * b)) / 1260.0;
+  return (a - 0.5) * std::log1p((alpha - 1.0) / b) + (alpha - 1.0) * std::log(b) - (alpha - 1.0) +
+         series;
+}
+}  // namespace
+
 double pppm_radius(double r1, double alpha, int pass) {
+  // r_i² = r1² Π_{j=1}^{i−1} (j + α)/(j + 1) (KZ11 eq. 19 unrolled), i = pass + 1. Up to pass
+  // kPppmLoopPasses the product itself, multiplied in this order (the bits every earlier file
+  // was made with); beyond, the product up to there times the rest in closed form,
+  // Π_{j=K+1}^{i−1} (j + α)/(j + 1) = Γ(i + α) Γ(K + 2) / (Γ(K + 1 + α) Γ(i + 1))
+  // = exp(g(i) − g(K + 1)): a pass near 2^31 costs what pass K does, not 2^31 multiplications.
+  const int loop = std::min(pass, kPppmLoopPasses);
   double r2 = r1 * r1;
-  for (int j = 1; j <= pass; ++j) r2 *= (double(j) + alpha) / (double(j) + 1.0);  // KZ11 eq. 19
+  for (int j = 1; j <= loop; ++j) r2 *= (double(j) + alpha) / (double(j) + 1.0);
+  if (pass > loop)
+    r2 *= std::exp(log_gamma_ratio(double(pass) + 1.0, alpha) -
+                   log_gamma_ratio(double(loop) + 1.0, alpha));
   return std::sqrt(r2);
 }
 

@@ -33,14 +33,31 @@ std::string default_text(float value) {
 
 std::string default_text(int value) { return std::to_string(value); }
 
+namespace {
+// The value as the user wrote it: whole numbers without a fraction ("0", "-1"), others in the
+// shortest form that reads back ("1e-300", "0.5"), "nan" and "inf" as such.
+std::string option_value_text(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  char buf[40];
+  auto r = std::to_chars(buf, buf + sizeof buf, value);
+  return std::string(buf, r.ptr);
+}
+}  // namespace
+
 void require_positive(const std::string& option, double value) {
   if (!(value > 0.0))
+    throw input_error("", "--" + option + " must be positive, got " + option_value_text(value));
+}
+
+void require_positive(const std::string& option, int64_t value) {
+  if (!(value > 0))
     throw input_error("", "--" + option + " must be positive, got " + std::to_string(value));
 }
 
 void require_in_unit_interval(const std::string& option, double value) {
   if (!(value > 0.0 && value <= 1.0))
-    throw input_error("", "--" + option + " must be in (0, 1], got " + std::to_string(value));
+    throw input_error("", "--" + option + " must be in (0, 1], got " + option_value_text(value));
 }
 
 void require_choice(const std::string& option, const std::string& value,

@@ -454,12 +454,46 @@ void Reader::read(const std::string& path, const Compound& type, void* out, size
   verify(path, d.get(), type.id(), out, n);
 }
 
+namespace {
+// "float32", "int64", "uint8", ... of a numeric type; "a compound" etc. otherwise.
+std::string type_name(hid_t t) {
+  const H5T_class_t c = H5Tget_class(t);
+  const std::string bits = std::to_string(8 * H5Tget_size(t));
+  if (c == H5T_FLOAT) return "float" + bits;
+  if (c == H5T_INTEGER) return (H5Tget_sign(t) == H5T_SGN_NONE ? "uint" : "int") + bits;
+  if (c == H5T_COMPOUND) return "a compound";
+  if (c == H5T_STRING) return "strings";
+  return "a non-numeric type";
+}
+
+std::string shape_text(const std::vector<size_t>& shape) {
+  std::string s;
+  for (size_t d : shape) s += (s.empty() ? "" : "×") + std::to_string(d);
+  return s.empty() ? "a scalar" : s;
+}
+}  // namespace
+
+void Reader::require_shape(const std::string& path, const std::vector<size_t>& want) const {
+  const std::vector<size_t> have = shape(path);
+  if (want.empty() ? have.size() == 1 : have == want) return;
+  throw input_error(path_, "dataset " + path + " has shape " + shape_text(have) + ", not " +
+                               (want.empty() ? std::string("one dimension") : shape_text(want)),
+                    "the file is damaged or was edited; remake it with the stage that wrote it");
+}
+
 void Reader::read_raw(const std::string& path, hid_t type, void* out) const {
   Handle d = open_dataset(path);
   Handle ft(H5Dget_type(d.get()));
   H5T_class_t c = H5Tget_class(ft.get());
   if (c != H5T_INTEGER && c != H5T_FLOAT)
     throw input_error(path_, "dataset " + path + " is not numeric");
+  // Stored as exactly the type asked for: HDF5 would convert another one (float64 into float32
+  // rounds, int64 into float64 drops bits) and the values would no longer be what was written.
+  if (c != H5Tget_class(type) || H5Tget_size(ft.get()) != H5Tget_size(type) ||
+      (c == H5T_INTEGER && H5Tget_sign(ft.get()) != H5Tget_sign(type)))
+    throw input_error(path_, "dataset " + path + " is stored as " + type_name(ft.get()) +
+                                 ", not " + type_name(type),
+                      "the file is damaged or was edited; remake it with the stage that wrote it");
   const size_t n = count(path);
   if (n > 0 && H5Dread(d.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out) < 0)
     throw input_error(path_, "cannot read dataset " + path + " (truncated or damaged)");

@@ -112,8 +112,12 @@ void check_state_counts(const HitpointSet& h, const Validator& v) {
     v.fail(counts + ": a classic estimate has exactly 1 pass");
   if (h.estimator == "ppm" && h.passes < 1)
     v.fail(counts + ": a PPM state (estimator \"ppm\") has at least 1 pass");
-  if (h.photons_emitted < uint64_t(h.passes) || (h.passes == 0) != (h.photons_emitted == 0))
-    v.fail(counts + " disagree: every pass emits at least one photon");
+  v.photons_emitted("attribute photons_emitted", h.photons_emitted, h.passes);
+  // A state photons were applied to gathers at its hitpoints: without any, nothing would ever
+  // be lit (the eye pass found no diffuse surface); render and illuminate refuse to start one.
+  if ((h.estimator == "ppm" || h.estimator == "classic") && h.hitpoints.empty())
+    v.fail("a " + std::string(h.estimator == "ppm" ? "PPM state" : "classic estimate") +
+           " holds no hitpoints (no eye path found a diffuse surface to gather at)");
 }
 
 // One hitpoint's values (validate.h): directions, weight in [0, 1] (the specular chain's
@@ -134,14 +138,15 @@ void check_hitpoint_values(const HitpointSet& h, size_t i, bool no_surface, cons
   v.in_range(Name(H, i, "weight"), hp.weight, 3, 0.0, 1.0 + 1e-5);
   v.in_range(Name(H, i, "n_photons"), &hp.n_photons, 1, 0.0, kMaxValue);
   v.in_range(Name(H, i, "flux"), hp.flux, 3, 0.0, kMaxValue);
+  // Every pixel's R, reached or not, is a gather radius: R0 until its first visible point, and the
+  // one it then gathers with (R² must stay a normal float, validate.h kMinRadius).
+  v.in_range(Name(H, i, "radius"), &hp.radius, 1, kMinRadius, kMaxRadius);
   if (no_surface) {
-    v.in_range(Name(H, i, "radius"), &hp.radius, 1, 0.0, kMaxRadius);
     if (hp.n_photons != 0.f || hp.flux[0] != 0.f || hp.flux[1] != 0.f || hp.flux[2] != 0.f)
       v.fail(Validator::element(H, i) + " has no surface (mesh and material -1) but N or tau "
              "is not 0");
     return;
   }
-  v.in_range(Name(H, i, "radius"), &hp.radius, 1, kMinRadius, kMaxRadius);
   if (h.estimator == "none" &&
       (hp.radius != h.radius0 || hp.n_photons != 0.f || hp.flux[0] != 0.f || hp.flux[1] != 0.f ||
        hp.flux[2] != 0.f))
@@ -187,19 +192,13 @@ void check_photon_values(const std::string& dataset, const std::vector<pf_photon
   }
 }
 
-// pass_emitted of a photons or grid file: every pass emitted 1 … 2^62 photons and their sum
-// stays below 2^63 (the hitpoints' photons_emitted is int64), so counts never wrap.
+// pass_emitted of a photons or grid file: every pass emitted 1 … kMaxPhotonsPerPass photons
+// (validate.h), the bound every count of photons emitted shares, so sums of them never wrap.
 void check_pass_emitted(const std::vector<uint64_t>& emitted, const Validator& v) {
-  constexpr uint64_t kMaxPass = uint64_t(1) << 62;
-  uint64_t total = 0;
-  for (size_t k = 0; k < emitted.size(); ++k) {
-    const std::string at = Validator::element("pass_emitted", k);
-    if (emitted[k] < 1 || emitted[k] > kMaxPass)
-      v.fail(at + " = " + std::to_string(emitted[k]) + " is outside [1, 2^62]");
-    total += emitted[k];
-    if (total > uint64_t(std::numeric_limits<int64_t>::max()))
-      v.fail(at + ": the photons emitted up to this pass exceed 2^63-1");
-  }
+  for (size_t k = 0; k < emitted.size(); ++k)
+    if (emitted[k] < 1 || emitted[k] > kMaxPhotonsPerPass)
+      v.fail(Validator::element("pass_emitted", k) + " = " + std::to_string(emitted[k]) +
+             " is outside [1, " + std::to_string(kMaxPhotonsPerPass) + "]");
 }
 }  // namespace
 
@@ -310,6 +309,7 @@ HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::s
 }
 
 void save_hitpoints(const HitpointSet& h, const std::string& path, const Provenance& prov) {
+  written_check([&] { validate_hitpoints(h, path); });
   h5::Writer w(path, kHitpointsFormat, kHitpointsVersion);
   w.attr("/", "scene_id", h.scene_id);
   w.write("/hitpoints", h5_type_hitpoint(), h.hitpoints);
@@ -331,6 +331,13 @@ void save_hitpoints(const HitpointSet& h, const std::string& path, const Provena
   w.attr("/", "eye_pass", int64_t(h.eye_pass));
   write_provenance(w, prov);
   w.commit();
+}
+
+void require_hitpoints(const std::string& path, const HitpointSet& h) {
+  if (h.hitpoints.empty())
+    throw input_error(path, "holds no hitpoints: no eye path found a diffuse surface, so photons "
+                            "would light nothing",
+                      "check the camera and the scene's materials, or use --estimator sppm");
 }
 
 float hitpoints_radius0(const std::string& path, const HitpointSet& h) {
@@ -357,23 +364,36 @@ HitpointSet load_hitpoints(const std::string& path) {
   h.width = int(attr_in(r, path, "/", "width", 1, kMaxImageSide, hint));
   h.height = int(attr_in(r, path, "/", "height", 1, kMaxImageSide, hint));
   h.direct_mode = parse_direct(r.attr_string("/", "direct_mode"), path);
-  const double radius0 = r.attr_double("/", "radius0");
-  v.in_range("attribute radius0", radius0, kMinRadius, kMaxRadius);
-  h.radius0 = float(radius0);
+  h.radius0 = v.to_float("attribute radius0", r.attr_double("/", "radius0"), kMinRadius, kMaxRadius);
   h.estimator = r.attr_string("/", "estimator");
-  if (h.estimator != "none" && h.estimator != "ppm" && h.estimator != "classic" &&
-      h.estimator != "sppm")
-    v.fail("attribute estimator '" + h.estimator +
-           "' is none of \"none\", \"ppm\", \"classic\" and \"sppm\"");
   h.photons_emitted = uint64_t(attr_in(r, path, "/", "photons_emitted", 0,
                                        std::numeric_limits<int64_t>::max(), hint));
   h.passes = int(attr_in(r, path, "/", "passes", 0, kIntMax, hint));
   // Files written before the estimators with a new eye pass every pass hold eye pass 0.
   if (r.has_attr("/", "eye_pass")) h.eye_pass = int(attr_in(r, path, "/", "eye_pass", 0, kIntMax, hint));
-  check_state_counts(h, v);
   h.hitpoints = r.read<pf_hitpoint>("/hitpoints", h5_type_hitpoint());
-  h.emitted = r.read<float>("/image/emitted");
-  h.direct = r.read<float>("/image/direct");
+  const std::vector<size_t> layer{size_t(h.height), size_t(h.width), 3};
+  h.emitted = r.read<float>("/image/emitted", layer);
+  h.direct = r.read<float>("/image/direct", layer);
+  validate_hitpoints(h, path);
+  return h;
+}
+
+void validate_hitpoints(const HitpointSet& h, const std::string& path) {
+  const std::string hint = "the file is damaged; remake it with trace-hitpoints";
+  const Validator v(path, hint);
+  v.int_in_range("attribute width", h.width, 1, kMaxImageSide);
+  v.int_in_range("attribute height", h.height, 1, kMaxImageSide);
+  if (h.direct_mode != DirectMode::Photons && h.direct_mode != DirectMode::ShadowRays)
+    v.fail("attribute direct_mode is no direct mode");
+  v.in_range("attribute radius0", h.radius0, kMinRadius, kMaxRadius);
+  if (h.estimator != "none" && h.estimator != "ppm" && h.estimator != "classic" &&
+      h.estimator != "sppm")
+    v.fail("attribute estimator '" + h.estimator +
+           "' is none of \"none\", \"ppm\", \"classic\" and \"sppm\"");
+  v.int_in_range("attribute passes", h.passes, 0, kIntMax);
+  v.int_in_range("attribute eye_pass", h.eye_pass, 0, kIntMax);
+  check_state_counts(h, v);
   check_image(path, h.emitted, h.width, h.height, "emitted");
   check_image(path, h.direct, h.width, h.height, "direct");
   v.image_in_range("image/emitted", h.emitted, h.width, 0.0, kMaxValue);
@@ -395,7 +415,6 @@ HitpointSet load_hitpoints(const std::string& path) {
     check_hitpoint_values(h, i, no_surface, v);
   }
   if (h.estimator == "sppm") check_one_per_pixel(h, v);
-  return h;
 }
 
 // ---- photons.h5 -----------------------------------------------------------------------------

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 namespace pf {
 
@@ -42,6 +43,30 @@ void Validator::int_in_range(const Name& what, int64_t v, int64_t lo, int64_t hi
   if (v < lo || v > hi)
     fail(what.str() + " = " + std::to_string(v) + " is outside [" + std::to_string(lo) + ", " +
          std::to_string(hi) + "]");
+}
+
+void Validator::photons_emitted(const Name& what, uint64_t emitted, int64_t passes) const {
+  const uint64_t most = uint64_t(passes < 0 ? 0 : passes) * kMaxPhotonsPerPass;
+  if (emitted > most || emitted < uint64_t(passes < 0 ? 0 : passes))
+    fail(what.str() + " = " + std::to_string(emitted) + " is not the count of " +
+         std::to_string(passes) + " passes of 1 to " + std::to_string(kMaxPhotonsPerPass) +
+         " photons each (at most " + std::to_string(most) + ")");
+}
+
+namespace {
+thread_local int unchecked_writes = 0;
+}  // namespace
+
+UncheckedWritesForTests::UncheckedWritesForTests() { ++unchecked_writes; }
+UncheckedWritesForTests::~UncheckedWritesForTests() { --unchecked_writes; }
+
+void written_check(const std::function<void()>& check) {
+  if (unchecked_writes > 0) return;
+  try {
+    check();
+  } catch (const InputError& e) {
+    throw std::logic_error(std::string("about to write what its readers refuse: ") + e.what());
+  }
 }
 
 void Validator::unit(const Name& what, const float* v) const {

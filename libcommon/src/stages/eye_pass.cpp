@@ -1,5 +1,6 @@
 // Eye pass: see eye_pass.h.
 #include "photonflow/eye_pass.h"
+#include "photonflow/validate.h"
 
 #include <omp.h>
 
@@ -110,8 +111,12 @@ void check_options(const EyePassOptions& opt) {
   require_positive("spp", opt.spp);
   require_positive("max-depth", opt.max_depth);
   require_positive("shadow-samples", opt.shadow_samples);
-  if (!(opt.radius >= 0.f) || !std::isfinite(opt.radius))
-    throw input_error("", "--radius must be 0 (automatic) or a positive length");
+  // R0² must stay a normal float (validate.h kMinRadius): 1e-23 squared is 0 in float, and
+  // every radiance of eq. 3.19 would divide by it.
+  if (!(opt.radius == 0.f || (opt.radius >= kMinRadius && opt.radius <= kMaxRadius)))
+    throw input_error("", "--radius must be 0 (automatic) or a length in [" +
+                              value_text(kMinRadius, 6) + ", " + value_text(kMaxRadius, 6) +
+                              "], got " + value_text(opt.radius));
   require_threads(opt.threads);
 }
 

@@ -100,7 +100,7 @@ void PhotonBuffers::concatenate(std::vector<pf_photon>& out) const {
 }
 
 void check_options(const PhotonPassOptions& opt) {
-  require_positive("photons", double(opt.photons));
+  require_positive("photons", int64_t(opt.photons));
   require_positive("max-bounces", opt.max_bounces);
   require_threads(opt.threads);
 }
