@@ -18,8 +18,16 @@
 //               inside its cluster's sphere (what the clustered gathers rely on)
 //   checkpoint  accepted for the scene, synthesis, one more PPM pass, synthesis (render --resume,
 //               synthesize)
-//   sppm        an SPPM checkpoint (estimator "sppm", sppm.h): accepted, synthesis, one more SPPM
-//               pass (a new eye pass and a photon pass), synthesis (render --resume, synthesize)
+//   sppm        an SPPM checkpoint (estimator "sppm", sppm.h, written by render_progressive):
+//               accepted, synthesis, then render --resume through the render driver for one more
+//               pass with a checkpoint, which must load again (synthesize, render --resume)
+//   sums        a PPPM checkpoint (pass sums of render_pppm): synthesis, render --resume for one
+//               more pass with a checkpoint, which must load again (synthesize --sums, render)
+//   merge2/3    a pass-sums part merged with one (2 parts) or two (3 parts) valid neighbours; the
+//               merged sums are saved, loaded again and synthesized (merge)
+// Besides values, a dataset may be rewritten with another element type (float32, float64, int64)
+// or another shape of the same element count (its dimensions reversed, or flattened), which the
+// readers must refuse (h5io.h: exact shape and type), never reinterpret.
 // Every run must end in exit 0 with every output value finite, or in a refusal: one line naming
 // the file (InputError, exit code 2). Every PF_FUZZ_TOOL_EVERY-th mutation (default 40) also runs
 // the real tool on the file (no clusters tool reads them without a device): exit 0 with finite
@@ -56,6 +64,7 @@
 #include "photonflow/sppm.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/synthesize.h"
+#include "photonflow/validate.h"
 #include "support.h"
 
 using namespace pf;
@@ -139,39 +148,28 @@ Outcome isolated(const std::function<std::string()>& body, unsigned seconds) {
 
 // ---- the fixture ------------------------------------------------------------------------------
 
-// The next SPPM pass of `st` (sppm.h, as the render driver runs it): a new eye pass, then the
-// photons of that pass gathered per pixel.
-void sppm_next(const Scene& s, HitpointSet& st, const std::vector<pf_photon>& photons,
-               uint64_t emitted) {
-  PpmOptions ppm;
-  ppm.threads = 1;
-  EyePassOptions eo;
-  eo.threads = 1;
-  eo.direct = st.direct_mode;
-  eo.pass = uint32_t(st.passes);
-  const EyePassResult eye = trace_hitpoints(s, eo);
-  const PhotonGrid grid =
-      build_photon_grid(photons, int(s.mesh_names.size()), ppm_grid_params(st, ppm));
-  sppm_pass(s, st, eye, grid, emitted, ppm);
-}
 
 
-// The probabilistic-PPM run of the pass-sums fixture (2 passes) and of its continuation.
-RenderOptions pppm_options() {
+// The render runs of the SPPM and pass-sums fixtures (2 passes) and of their continuations: the
+// options `render --estimator sppm|pppm --photons 1500 --threads 1` uses (render_cli below).
+RenderOptions render_options(Estimator e) {
   RenderOptions o;
-  o.estimator = Estimator::Pppm;
+  o.estimator = e;
   o.passes = 2;
   o.photons.photons = 1500;
   o.photons.threads = o.eye.threads = o.ppm.threads = 1;
   o.eye.sampler = PixelSampler::Sobol;
+  o.ppm.slab = kDefaultSlab;
   return o;
 }
+RenderOptions pppm_options() { return render_options(Estimator::Pppm); }
 
 struct Fixture {
   TempDir tmp{"semfuzz"};
   std::string scene = tmp / "scene.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5",
               grid = tmp / "grid.h5", clusters = tmp / "clusters.h5", ckpt = tmp / "ckpt.h5",
-              sppm = tmp / "sppm.h5", sums = tmp / "sums.h5";
+              sppm = tmp / "sppm.h5", sums = tmp / "sums.h5", part2 = tmp / "part2.h5",
+              part3 = tmp / "part3.h5";
   Fixture() {
     const Outcome o = isolated(
         [this] {
@@ -201,12 +199,19 @@ struct Fixture {
                                                 ppm_grid_params(h, ppm)));
           save_grids(g, grid, prov());
           save_clusters(cluster_kmeans(h, 8, 3, 1), clusters, prov());
-          HitpointSet st = make_sppm_state(s, h.radius0, eo.direct);
           for (int k = 0; k < 2; ++k) ppm_pass(s, h, p.pass(k), p.pass_emitted[size_t(k)], ppm);
           save_hitpoints(h, ckpt, prov());
-          for (int k = 0; k < 2; ++k) sppm_next(s, st, p.pass(k), p.pass_emitted[size_t(k)]);
-          save_hitpoints(st, sppm, prov());
+          RenderOptions so = render_options(Estimator::Sppm);
+          so.checkpoint = sppm;  // the checkpoint render writes, with its state options
+          render_progressive(s, so, false, prov());
           save_pass_sums(render_pppm(s, pppm_options(), false, prov()), sums, prov());
+          // The neighbours of a merge: passes [2, 3) and [3, 4) of the same run.
+          for (int k = 0; k < 2; ++k) {
+            RenderOptions po = pppm_options();
+            po.first_pass = 2 + k;
+            po.passes = 1;
+            save_pass_sums(render_pppm(s, po, false, prov()), k == 0 ? part2 : part3, prov());
+          }
           return std::string();
         },
         120);
@@ -265,7 +270,19 @@ std::string check_state(const HitpointSet& h) {
 
 // ---- the stages -------------------------------------------------------------------------------
 
-enum class Kind { Scene, Hitpoints, Photons, Grid, Clusters, Checkpoint, Sppm, PassSums };
+enum class Kind { Scene, Hitpoints, Photons, Grid, Clusters, Checkpoint, Sppm, PassSums, Merge2,
+                  Merge3 };
+
+// A file a run wrote is one the next run reads (validate.h written_check): "" or what refused it.
+template <class Load>
+std::string reloads(const std::string& path, Load&& load) {
+  try {
+    load(path);
+    return "";
+  } catch (const InputError& e) {
+    return std::string("the file the run wrote is refused: ") + e.what();
+  }
+}
 
 PpmOptions ppm_options() {
   PpmOptions o;
@@ -341,26 +358,43 @@ std::string run_stage(Kind kind, const std::string& file) {
     bad = check_state(c);
     return bad.empty() ? "" : "classic: " + bad;
   }
+  if (kind == Kind::Merge2 || kind == Kind::Merge3) {  // merge: the part between valid ones
+    const std::vector<std::string> parts =
+        kind == Kind::Merge2 ? std::vector<std::string>{file, fx.part2}
+                             : std::vector<std::string>{fx.sums, file, fx.part3};
+    const PassSums merged = merge_pass_sum_files(parts);
+    std::string bad = non_finite(synthesize(merged));
+    if (!bad.empty()) return "merged: " + bad;
+    const std::string out = fx.tmp / "merged.h5";
+    std::filesystem::remove(out);
+    save_pass_sums(merged, out, prov());
+    return reloads(out, [](const std::string& f) { load_pass_sums(f); });
+  }
   if (kind == Kind::PassSums) {  // synthesize --sums, and render --resume: one more pass
     PassSums sums = load_pass_sums(file);
     require_scene(file, sums.scene_id, s.scene_id, fx.scene);
     std::string bad = non_finite(synthesize(sums));
     if (!bad.empty()) return "synthesize: " + bad;
     RenderOptions o = pppm_options();
-    o.passes = sums.passes + 1;
-    PppmRenderer r(s, o, std::move(sums), file);
-    r.run_iteration();
-    bad = non_finite(synthesize(r.state()));
-    return bad.empty() ? "" : "one more pass: " + bad;
+    o.first_pass = sums.first_pass;
+    o.passes = int(std::min<int64_t>(int64_t(sums.passes) + 1, kMaxPassEnd - sums.first_pass));
+    o.checkpoint = file;  // the run continues the file itself and writes its checkpoint there
+    const PassSums next = render_pppm(s, o, true, p);
+    bad = non_finite(synthesize(next));
+    if (!bad.empty()) return "one more pass: " + bad;
+    return reloads(o.checkpoint, [](const std::string& f) { load_pass_sums(f); });
   }
   if (kind == Kind::Sppm) {  // render --resume of an SPPM checkpoint: one more pass
     HitpointSet h = load_hitpoints(file);
     accept_input(p, "hitpoints", file, h, s, fx.scene);
     std::string bad = check_state(h);
     if (!bad.empty()) return "loaded state: " + bad;
-    const PhotonSet ph = load_photons(fx.ph);
-    sppm_next(s, h, ph.pass(1), ph.pass_emitted[1]);
-    return check_state(h);
+    RenderOptions o = render_options(Estimator::Sppm);
+    o.passes = int(std::min<int64_t>(int64_t(h.passes) + 1, INT32_MAX));
+    o.checkpoint = file;
+    bad = check_state(render_progressive(s, o, true, p));
+    if (!bad.empty()) return "one more pass: " + bad;
+    return reloads(o.checkpoint, [](const std::string& f) { load_hitpoints(f); });
   }
   // Hitpoints and checkpoints: a PPM pass with the fixture's photons (one more pass of a
   // checkpoint: what render --resume does) and the image.
@@ -506,7 +540,60 @@ std::string mutate_dataset(hid_t f, const std::string& name, Rng& rng) {
   const size_t n = size_t(H5Sget_simple_extent_npoints(space.get()));
   std::vector<unsigned char> bytes(n * size);
   if (n) REQUIRE(H5Dread(d.get(), ntype.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()) >= 0);
-  const size_t op = pick(rng, 10);
+  const size_t op = pick(rng, 12);
+  if (op >= 10) {  // the same values under another element type or another shape
+    h5::Handle fspace(H5Dget_space(d.get()));
+    std::vector<hsize_t> dims(size_t(std::max(0, H5Sget_simple_extent_ndims(fspace.get()))));
+    if (!dims.empty()) H5Sget_simple_extent_dims(fspace.get(), dims.data(), nullptr);
+    const bool numeric = ls.size() == 1 && H5Tget_class(ntype.get()) != H5T_COMPOUND;
+    hid_t stored = ftype.get();
+    std::string what;
+    std::vector<unsigned char> values = bytes;
+    hid_t mem = ntype.get();
+    std::vector<double> as_double;
+    if (op == 10 && numeric) {  // retyped: float64 ↔ float32, or int64
+      as_double.resize(n);
+      if (n) REQUIRE(H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, as_double.data()) >= 0);
+      const hid_t types[] = {H5T_IEEE_F32LE, H5T_IEEE_F64LE, H5T_STD_I64LE};
+      stored = types[pick(rng, 3)];
+      if (H5Tequal(stored, ftype.get()) > 0) stored = H5T_STD_I64LE;
+      mem = H5T_NATIVE_DOUBLE;
+      what = name + " retyped";
+    } else {  // reshaped: dimensions reversed (1-D: split in two), or flattened
+      const hsize_t total = hsize_t(n);
+      if (dims.size() > 1 && pick(rng, 2) == 0) {
+        dims = {total};
+      } else if (dims.size() > 1) {
+        std::reverse(dims.begin(), dims.end());
+        if (std::adjacent_find(dims.begin(), dims.end(), std::not_equal_to<>()) == dims.end())
+          dims.push_back(1);  // all equal: reversing changes nothing; add a dimension
+      } else {
+        dims = total % 2 == 0 && total > 0 ? std::vector<hsize_t>{2, total / 2}
+                                           : std::vector<hsize_t>{total, 1};
+      }
+      what = name + " reshaped";
+    }
+    d = h5::Handle();
+    {
+      REQUIRE(H5Ldelete(f, name.c_str(), H5P_DEFAULT) >= 0);
+      h5::Handle space(H5Screate_simple(int(dims.size()), dims.data(), nullptr));
+      h5::Handle nd(H5Dcreate2(f, name.c_str(), stored, space.get(), H5P_DEFAULT, H5P_DEFAULT,
+                               H5P_DEFAULT));
+      REQUIRE(nd.valid());
+      const void* src = mem == H5T_NATIVE_DOUBLE ? static_cast<const void*>(as_double.data())
+                                                 : static_cast<const void*>(values.data());
+      if (n) REQUIRE(H5Dwrite(nd.get(), mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, src) >= 0);
+      // A consistent edit: the checksum of the new bytes, as a script would leave it.
+      std::vector<unsigned char> raw;
+      REQUIRE(h5::read_stored_bytes(nd.get(), raw));
+      const int64_t sum = int64_t(checksum64(raw.data(), raw.size()));
+      h5::Handle s1(H5Screate(H5S_SCALAR));
+      h5::Handle a(H5Acreate2(nd.get(), "checksum64", H5T_NATIVE_INT64, s1.get(), H5P_DEFAULT,
+                              H5P_DEFAULT));
+      REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &sum) >= 0);
+    }
+    return what;
+  }
   if (op < 7 && n > 0) {
     const size_t e = pick(rng, n);
     const Leaf& l = ls[pick(rng, ls.size())];
@@ -618,9 +705,10 @@ std::string mutate(const std::string& file, Rng& rng, bool scene) {
 // ---- the tools (a sample) ---------------------------------------------------------------------
 
 // The stage's tool on `file`: exit 0 with finite outputs, or 2 with one line and no output.
-void run_tool_on(Kind kind, const std::string& file, const std::string& what) {
+void run_tool_on(Kind kind, const std::string& file, const std::string& what, bool resume_tool) {
   const Fixture& fx = fixture();
-  const bool image = kind == Kind::Checkpoint || kind == Kind::Sppm || kind == Kind::PassSums;
+  const bool image = kind == Kind::Checkpoint || kind == Kind::Sppm || kind == Kind::PassSums ||
+                     kind == Kind::Merge2 || kind == Kind::Merge3;
   const std::string out = fx.tmp / (image ? "tool-out.exr" : "tool-out.h5");
   std::filesystem::remove(out);
   std::string tool, args;
@@ -641,7 +729,17 @@ void run_tool_on(Kind kind, const std::string& file, const std::string& what) {
     case Kind::Checkpoint:
     case Kind::Sppm: tool = "synthesize"; args = "--hitpoints " + file + " --png none"; break;
     case Kind::PassSums: tool = "synthesize"; args = "--sums " + file + " --png none"; break;
+    case Kind::Merge2: tool = "merge"; args = file + " " + fx.part2; break;
+    case Kind::Merge3: tool = "merge"; args = fx.sums + " " + file + " " + fx.part3; break;
     case Kind::Clusters: return;
+  }
+  if ((kind == Kind::Sppm || kind == Kind::PassSums) && resume_tool) {
+    const std::string ck = fx.tmp / "tool-resume.h5";
+    std::filesystem::remove(ck);
+    std::filesystem::copy_file(file, ck);
+    tool = "render";
+    args = "--scene " + fx.scene + " --estimator " + (kind == Kind::Sppm ? "sppm" : "pppm") +
+           " --photons 1500 --threads 1 --passes 3 --checkpoint " + ck + " --resume";
   }
   args += " -o " + out + (image ? "" : " --threads 1");
   const std::string so = fx.tmp / ".tool-stdout", se = fx.tmp / ".tool-stderr";
@@ -686,9 +784,11 @@ void fuzz(Kind kind, const std::string& src, const char* label, uint64_t salt) {
   const uint64_t seed = uint64_t(env_long("PF_FUZZ_SEED", 26));
   const std::string file = fx.tmp / (std::string("m-") + label + ".h5");
   long accepted = 0, refused = 0;
-  // The valid file passes.
+  // The valid file passes (a copy: the resumes write their checkpoint over the file they read).
   {
-    const Outcome o = isolated([&] { return run_stage(kind, src); }, 60);
+    std::filesystem::remove(file);
+    std::filesystem::copy_file(src, file);
+    const Outcome o = isolated([&] { return run_stage(kind, file); }, 60);
     INFO(label << ": " << o.text);
     REQUIRE(o.kind == Outcome::Ok);
   }
@@ -705,14 +805,29 @@ void fuzz(Kind kind, const std::string& src, const char* label, uint64_t salt) {
     CHECK(o.kind != Outcome::Hang);
     CHECK(o.kind != Outcome::Internal);
     CHECK(o.kind != Outcome::NonFinite);
+    // A dataset of another element type or shape is refused, never read as if it were the one
+    // written (in the files whose every dataset their readers read).
+    const bool all_read = kind == Kind::Hitpoints || kind == Kind::Checkpoint ||
+                          kind == Kind::Sppm || kind == Kind::PassSums || kind == Kind::Merge2 ||
+                          kind == Kind::Merge3;
+    if (all_read && (what.find(" retyped") != std::string::npos ||
+                     what.find(" reshaped") != std::string::npos))
+      CHECK(o.kind == Outcome::Refused);
     if (o.kind == Outcome::Refused) {
       ++refused;
       CHECK(o.text.find('\n') == std::string::npos);
-      CHECK(o.text.find(file) != std::string::npos);
+      // A merge's refusal may name the part beside the edited one (a gap, an overlap is a
+      // relation between parts): any part of the merge, but a file of the merge.
+      const bool merge = kind == Kind::Merge2 || kind == Kind::Merge3;
+      CHECK((o.text.find(file) != std::string::npos ||
+             (merge && (o.text.find(fx.part2) != std::string::npos ||
+                        o.text.find(fx.part3) != std::string::npos ||
+                        o.text.find(fx.sums) != std::string::npos))));
     } else if (o.kind == Outcome::Ok) {
       ++accepted;
     }
-    if (tool_every > 0 && run % tool_every == 0) run_tool_on(kind, file, what);
+    if (tool_every > 0 && run % tool_every == 0)
+      run_tool_on(kind, file, what, (run / tool_every) % 2 == 1);
   }
   std::cout << "semantic fuzz " << label << ": " << runs << " mutations (seed " << seed << "), "
             << accepted << " accepted with finite outputs, " << refused << " refused\n";
@@ -743,4 +858,10 @@ TEST_CASE("semantic fuzz: SPPM checkpoint (one hitpoint per pixel)", "[fuzz][sem
 }
 TEST_CASE("semantic fuzz: pass sums (probabilistic PPM)", "[fuzz][semantic]") {
   fuzz(Kind::PassSums, fixture().sums, "sums", 8);
+}
+TEST_CASE("semantic fuzz: merge of 2 pass-sums parts", "[fuzz][semantic][merge]") {
+  fuzz(Kind::Merge2, fixture().sums, "merge2", 9);
+}
+TEST_CASE("semantic fuzz: merge of 3 pass-sums parts", "[fuzz][semantic][merge]") {
+  fuzz(Kind::Merge3, fixture().part2, "merge3", 10);
 }
