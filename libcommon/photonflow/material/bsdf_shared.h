@@ -377,7 +377,10 @@ PF_INLINE void pf_bsdf_eval(const pf_bsdf_params* m, const float* wo, const floa
     const float oh = pf_dot3(o, h), ih = pf_dot3(i, h);
     const float den = c.eta_o * oh + c.eta_i * ih;
     if (!(den * den > 0.0f)) return;
-    const float fr = pf_fresnel_schlick_dielectric(oh, c.eta_o, c.eta_i, c.f0);
+    /* Schlick at the cosine on the lower-index side: for a refracted pair that is |o·h| or |i·h|
+     * directly (the same value whichever of the two is given, so f stays reciprocal in float) */
+    const float c_ext = pf_bsdf_clamp01(PF_S_FABS(c.eta_o <= c.eta_i ? oh : ih));
+    const float fr = c.f0 + (1.0f - c.f0) * pf_pow5(1.0f - c_ext);
     const float eta_num = mode == PF_TRANSPORT_IMPORTANCE ? c.eta_i : c.eta_o;
     const float bt = PF_S_FABS(oh * ih) * (eta_num * eta_num) * (1.0f - fr) * 4.0f *
                      pf_ggx_v(o[2], i[2], c.alpha) * pf_ggx_d(h[2], c.alpha) / (den * den);
