@@ -8,7 +8,8 @@ mutation must make at least one test case fail: the script exits 1 if one surviv
 
 Run from the repository root with a configured build folder (default build/):
     python3 tests/mutate_material.py [build-dir]
-It builds only test_bsdf, test_texture_shared and test_lens (-j2). Takes about 4 minutes.
+It builds only test_bsdf, test_texture_shared, test_lens and test_material_shared_cl (-j2);
+about 2 minutes. MUTATE_ONLY=<text> runs only the mutations whose name contains <text>.
 """
 import re
 import subprocess
@@ -72,7 +73,14 @@ MUTATIONS = [
     ("lens_shared.h", "test_lens", "lens sample: square instead of disc",
      "pf_sample_concentric_disc(u1, u2, &x, &y);\n  const float t",
      "x = 2.0f * u1 - 1.0f;\n  y = 2.0f * u2 - 1.0f;\n  const float t"),
+    ("texture_shared.h", "test_material_shared_cl", "device only: floor -> ceil",
+     "#define PF_T_FLOOR(x) floor(x)", "#define PF_T_FLOOR(x) ceil(x)"),
+    ("bsdf_shared.h", "test_material_shared_cl", "a C++ reference in the shared code",
+     "PF_INLINE float pf_pow5(float x) {\n  const float x2 = x * x;",
+     "PF_INLINE float pf_pow5(float x) {\n  const float& xr = x;\n  const float x2 = xr * x;"),
 ]
+ONLY = __import__("os").environ.get("MUTATE_ONLY", "")  # run only mutations whose name has this
+MUTATIONS = [m for m in MUTATIONS if ONLY in m[2]]
 
 
 def run(cmd):
@@ -105,6 +113,7 @@ try:
 finally:
     for path, src in originals.items():
         open(path, "w").write(src)
-    run(f"nice cmake --build {BUILD} -j2 --target test_bsdf test_texture_shared test_lens")
+    run(f"nice cmake --build {BUILD} -j2 --target test_bsdf test_texture_shared test_lens "
+        "test_material_shared_cl")
 print(f"{len(MUTATIONS) - survivors} of {len(MUTATIONS)} mutations caught")
 sys.exit(1 if survivors else 0)
