@@ -19,6 +19,10 @@
  *   | transmission  | [0,1]    | share of the dielectric's base that is the rough BTDF          |
  *   | ior           | > 1      | KHR_materials_ior, default 1.5 (F0 = ((ior−1)/(ior+1))² = 0.04)|
  *
+ * ior = 1 with transmission is index-matched: light passes straight through whatever the
+ * roughness, a delta this code does not represent (its transmission samples are lost, f = 0);
+ * scene-bake should treat such a surface as invisible or refuse it.
+ *
  * Model (glTF 2.0 specification, appendix B "BRDF implementation"; KHR_materials_transmission):
  *   D(h)   = α² χ⁺(n·h) / (π ((n·h)²(α² − 1) + 1)²)                       (GGX / Trowbridge-Reitz)
  *   V      = 1 / (2 (|n·l| √((n·v)²(1 − α²) + α²) + |n·v| √((n·l)²(1 − α²) + α²)))
