@@ -1,7 +1,7 @@
 # embed_kernels.cmake — run at build time (cmake -P) to embed the OpenCL kernels in the binaries.
 #
-# For every kernels/*.cl it inlines the quoted includes ("photonflow/x.h" from libcommon/, or a file
-# beside the including one), recursively and each file once, into one self-contained OpenCL C
+# For every kernels/*.cl it inlines the quoted includes ("photonflow/x.h" or
+# "photonflow/material/x.h" from libcommon/, or a file beside the including one), recursively and each file once, into one self-contained OpenCL C
 # source, and writes OUT: a C++ file defining pf::embedded_kernel(name) over raw string literals.
 # Angle includes (<cmath>) are left alone: they only sit in the headers' host branches.
 #
