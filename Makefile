@@ -1,7 +1,7 @@
 # photonflow — top-level entry points.
 #
-#   make render   install missing Debian packages, build (Release), render the default scene
-#   make test     install missing Debian packages, build (Release), run the test suite (ctest)
+#   make render   install missing Debian packages, build the tools (Release), render the default scene
+#   make test     install missing Debian packages, build everything (Release), run the tests (ctest)
 #   make test-sanitize  the test suite under AddressSanitizer + UBSan (build-sanitize/; slow build)
 #   make test-tsan      the test suite under ThreadSanitizer, Clang + libomp + Archer (build-tsan/)
 #   make bench    build and run the benchmarks (long; results go to docs/BENCHMARKS.md by hand)
@@ -18,7 +18,7 @@ OUT   ?= out
 BIN   := $(abspath $(BUILD))/bin
 include pipelines/scene.mk
 
-.PHONY: all deps configure build render test test-sanitize test-tsan bench ch6 accuracy clean help
+.PHONY: all deps configure build build-tools render test test-sanitize test-tsan bench ch6 accuracy clean help
 all: build
 
 help:
@@ -32,10 +32,15 @@ configure: deps
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release > $(BUILD)/configure.log 2>&1 \
 	  || { cat $(BUILD)/configure.log; exit 1; }
 
+# `make render` builds the library and the tools only (CMake target `tools`); `make test`, `make
+# bench` and the experiments build everything (the tests and benchmarks too).
 build: configure
 	@cmake --build $(BUILD) -j$(JOBS)
 
-render: build
+build-tools: configure
+	@cmake --build $(BUILD) -j$(JOBS) --target tools
+
+render: build-tools
 	@$(MAKE) --no-print-directory -f pipelines/render.mk BIN=$(BIN) SCENE=$(SCENE) OUT=$(OUT)
 
 test: build
@@ -127,7 +132,7 @@ SLURM_SUBMIT = pipelines/slurm/submit.sh --scene $(OUT)/$(SCENE_NAME)/scene.h5 -
 slurm-help:
 	@sed -n '/^# On a Slurm cluster/,/^RUN /p' Makefile | sed '$$d; s/^# \{0,1\}//'
 
-slurm-scene: build
+slurm-scene: build-tools
 	@$(MAKE) --no-print-directory -f pipelines/render.mk BIN=$(BIN) SCENE=$(SCENE) OUT=$(OUT) \
 	  $(OUT)/$(SCENE_NAME)/scene.h5
 
