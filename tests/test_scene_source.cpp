@@ -185,3 +185,39 @@ TEST_CASE("render: bad scene sources and misplaced bake options give one line, e
     CHECK(files_except(tmp, {"scene.h5", "garbage.obj", "folder.glb"}).empty());
   }
 }
+
+// `make render SCENE=path`: any scene file, its intermediates under OUT/<file stem>/, and the image
+// the same as render's of that source with the same options; a SCENE that is neither a file nor a
+// name in data/ stops make before any stage, with one message.
+TEST_CASE("make render SCENE=path renders any scene file into OUT/<stem>/", "[scene_source][dag]") {
+  test::TempDir tmp("scene-source-make");
+  fs::create_directories(tmp.dir / "models");
+  const std::string model = tmp / "models/my-box.dae";
+  fs::copy_file(src("data/cornell-box.dae"), model);
+  const std::string opts = "WIDTH=32 HEIGHT=24 PASSES=2 PHOTONS=2000 ESTIMATOR=sppm SPP=1 "
+                           "DIRECT=photons RADIUS=0 SEED=1 ALPHA=0.7 MAX_BINS=64";
+  const std::string make = "make -s --no-print-directory -C " + q(test::source_dir()) +
+                           " -f pipelines/render.mk BIN=" + q(test::bin_dir()) + " OUT=" +
+                           q(tmp / "out") + " " + opts;
+  const std::string log = tmp / "make.log";
+  REQUIRE(std::system((make + " SCENE=" + q(model) + " render >" + log + " 2>&1").c_str()) == 0);
+  INFO(test::file_bytes(log));
+  REQUIRE(fs::exists(tmp / "out/my-box/render.exr"));
+  CHECK(fs::exists(tmp / "out/my-box/scene.h5"));
+  CHECK(load_scene(tmp / "out/my-box/scene.h5").source == model);
+  const auto r = test::run_tool(
+      "render", "--scene " + q(model) + " --width 32 --height 24 --passes 2 --photons 2000 "
+                "--estimator sppm --spp 1 --direct photons --radius 0 --seed 1 --alpha 0.7 "
+                "--max-bins 64 -o " + q(tmp / "direct.exr"),
+      tmp);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(test::file_bytes(tmp / "direct.exr") == test::file_bytes(tmp / "out/my-box/render.exr"));
+
+  // Neither a file nor a name in data/.
+  const int bad = std::system((make + " SCENE=" + q(tmp / "models/none.glb") + " render >" + log +
+                               " 2>&1").c_str());
+  CHECK(bad != 0);
+  CHECK(test::file_bytes(log).find("no file '" + tmp / "models/none.glb") != std::string::npos);
+  CHECK_FALSE(fs::exists(tmp / "out/none"));
+}
