@@ -172,6 +172,10 @@ TEST_CASE("render: bad scene sources and misplaced bake options give one line, e
        "nomesh.ply"},
       {"--scene " + q(src("data/cornell-box.dae")) + " --keep-scene " + q(tmp / "nodir/kept.h5"),
        "nodir"},
+      // Refused after the bake, by render's own checks: the kept scene is not written either.
+      {"--scene " + q(src("data/cornell-box.dae")) + " --keep-scene " + q(tmp / "kept.h5") +
+           " --estimator sppm --method flann",
+       "--method flann"},
   };
   for (const Bad& c : cases) {
     INFO(c.args);

@@ -170,17 +170,20 @@ int main(int argc, char** argv) {
     if (opened.baked_here) {
       for (const std::string& w : pf::bake_warnings(bake, opened.report))
         std::cerr << "render: " << w << "\n";
-      if (!keep_scene.empty()) {
-        pf::Provenance kept = pf::bake_provenance(a, bake, keep_scene,
-                                                  pf::join_command_line(argc, argv));
-        kept.wall_time_s = clock.seconds();
-        pf::save_scene(scene, keep_scene, kept);
-      }
       std::cout << "render: baked " << scene_path << " (" << scene.triangles.size()
                 << " triangles, " << scene.camera.width << "x" << scene.camera.height << ", "
-                << clock.seconds() << " s)" << (keep_scene.empty() ? "" : " -> " + keep_scene)
-                << "\n";
+                << clock.seconds() << " s)\n";
     }
+    // --keep-scene is written with the run's other outputs (after every check, also the
+    // render's own), like them atomically.
+    const double bake_seconds = clock.seconds();
+    auto keep = [&] {
+      if (keep_scene.empty()) return;
+      pf::Provenance kept =
+          pf::bake_provenance(a, bake, keep_scene, pf::join_command_line(argc, argv));
+      kept.wall_time_s = bake_seconds;
+      pf::save_scene(scene, keep_scene, kept);
+    };
     pf::Provenance prov;
     prov.tool = "render";
     prov.seed = seed;
@@ -247,6 +250,7 @@ int main(int argc, char** argv) {
     prov.wall_time_s = clock.seconds();
     if (status.stopped) {
       progress.end_line();
+      keep();
       // The run record still lists what the run wrote (its snapshots).
       if (!stats.empty()) pf::write_render_record(stats, prov, written);
       std::cerr << "render: interrupted after " << status.passes << " of " << opt.passes
@@ -263,6 +267,7 @@ int main(int argc, char** argv) {
       if (!sums.empty()) pf::save_pass_sums(range, sums, prov);
       img = pf::synthesize(range);
     }
+    keep();
     if (!out.empty()) {
       pf::write_exr(img, out);
       written.push_back({out, status});
