@@ -28,8 +28,8 @@ int main(int argc, char** argv) {
     cxxopts::Options o("render", "Progressive photon mapping render driver.");
     o.add_options()
       ("scene", "the scene: a baked scene.h5 (from scene-bake), or a scene source (any file "
-       "scene-bake reads: .dae, .obj, .gltf, .glb, .ply, ...), baked here with the options of "
-       "the \"Scene source\" group", cxxopts::value<std::string>())
+       "scene-bake reads: .dae, .obj, .gltf, .glb, .ply, ...), baked here with scene-bake's "
+       "options (\"Scene source options\" below)", cxxopts::value<std::string>())
       ("keep-scene", "with a scene source: also write the baked scene here (scene.h5, as "
        "scene-bake writes it)", cxxopts::value<std::string>()->default_value(""))
       ("o,output", "output OpenEXR image; a PNG preview goes beside it",
@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
     pf::add_device_options(o);
     // scene-bake's options, the same names and checks (bake_options.h); --threads is the kd-tree
     // build's too.
-    pf::add_bake_options(o, "Scene source (--scene not a baked scene.h5; scene-bake's options)");
+    pf::add_bake_options(o, "Scene source");
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
