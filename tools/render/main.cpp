@@ -6,7 +6,8 @@
 // (atomic) and --resume to continue a killed run; a wall-clock budget (--time); snapshots of the
 // image every --snapshot-every passes and a JSON run record (--stats) for convergence charts.
 // Same stage functions as trace-hitpoints → trace-photons → illuminate → synthesize, so both
-// routes give one image.
+// routes give one image. --scene is a baked scene.h5 or a scene source, baked here by scene-bake's
+// function with scene-bake's options (scene_source.h, bake_options.h; --keep-scene keeps it).
 #include <algorithm>
 #include <filesystem>
 #include <limits>
