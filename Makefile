@@ -1,26 +1,28 @@
 # photonflow — top-level entry points.
 #
-#   make render   install missing Debian packages, build (Release), render the default scene
-#   make test     install missing Debian packages, build (Release), run the test suite (ctest)
+#   make render   install missing Debian packages, build the tools (Release), render the default scene
+#   make test     install missing Debian packages, build everything (Release), run the tests (ctest)
 #   make test-sanitize  the test suite under AddressSanitizer + UBSan (build-sanitize/; slow build)
 #   make test-tsan      the test suite under ThreadSanitizer, Clang + libomp + Archer (build-tsan/)
 #   make bench    build and run the benchmarks (long; results go to docs/BENCHMARKS.md by hand)
 #   make ch6      the thesis's ch. 6 experiments: tables and charts into docs/results/
 #   make accuracy speed against accuracy: error vs time and passes, charts into docs/results/
 #
-# Variables: SCENE (a name in data/, default cornell-box), OUT (default out), BUILD (default build),
+# Variables: SCENE (a name in data/, default cornell-box, or a path to any scene file scene-bake
+# reads, e.g. SCENE=models/ship.glb: intermediates under OUT/ship/), OUT (default out), BUILD (default build),
 # JOBS (default: all cores), SAN_BUILD (default build-sanitize), TSAN_BUILD (default build-tsan).
 BUILD ?= build
 JOBS  ?= $(shell nproc)
 SCENE ?= cornell-box
 OUT   ?= out
 BIN   := $(abspath $(BUILD))/bin
+include pipelines/scene.mk
 
-.PHONY: all deps configure build render test test-sanitize test-tsan bench ch6 accuracy clean help
+.PHONY: all deps configure build build-tools render test test-sanitize test-tsan bench ch6 accuracy clean help
 all: build
 
 help:
-	@sed -n '2,12p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,13p' Makefile | sed 's/^# \{0,1\}//'
 
 deps:
 	@tools/setup/install-deps.sh
@@ -30,10 +32,15 @@ configure: deps
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release > $(BUILD)/configure.log 2>&1 \
 	  || { cat $(BUILD)/configure.log; exit 1; }
 
+# `make render` builds the library and the tools only (CMake target `tools`); `make test`, `make
+# bench` and the experiments build everything (the tests and benchmarks too).
 build: configure
 	@cmake --build $(BUILD) -j$(JOBS)
 
-render: build
+build-tools: configure
+	@cmake --build $(BUILD) -j$(JOBS) --target tools
+
+render: build-tools
 	@$(MAKE) --no-print-directory -f pipelines/render.mk BIN=$(BIN) SCENE=$(SCENE) OUT=$(OUT)
 
 test: build
@@ -104,7 +111,7 @@ clean:
 # CPUS_PER_TASK (1), PARTITION, TIME_LIMIT (per task, e.g. 30:00), MEM (per task, e.g. 2G),
 # FANIN (parts merged at once, default 64; more are merged as a tree), and for the scene SCENE,
 # WIDTH, HEIGHT, BAKE_FLAGS as for `make render`. The build (BUILD) must be on the shared file system.
-RUN             ?= $(OUT)/slurm-$(SCENE)
+RUN             ?= $(OUT)/slurm-$(SCENE_NAME)
 TASKS           ?= 4
 PASSES_PER_TASK ?= 16
 PHOTONS         ?= 100000
@@ -116,7 +123,7 @@ PARTITION       ?=
 TIME_LIMIT      ?=
 MEM             ?=
 FANIN           ?= 64
-SLURM_SUBMIT = pipelines/slurm/submit.sh --scene $(OUT)/$(SCENE)/scene.h5 --out $(RUN) \
+SLURM_SUBMIT = pipelines/slurm/submit.sh --scene $(OUT)/$(SCENE_NAME)/scene.h5 --out $(RUN) \
   --bin $(BIN) --tasks $(TASKS) --passes-per-task $(PASSES_PER_TASK) --photons $(PHOTONS) \
   --seed $(SEED) --alpha $(ALPHA) --radius $(RADIUS) --cpus-per-task $(CPUS_PER_TASK) \
   --fanin $(FANIN) $(if $(PARTITION),--partition $(PARTITION)) \
@@ -125,9 +132,9 @@ SLURM_SUBMIT = pipelines/slurm/submit.sh --scene $(OUT)/$(SCENE)/scene.h5 --out 
 slurm-help:
 	@sed -n '/^# On a Slurm cluster/,/^RUN /p' Makefile | sed '$$d; s/^# \{0,1\}//'
 
-slurm-scene: build
+slurm-scene: build-tools
 	@$(MAKE) --no-print-directory -f pipelines/render.mk BIN=$(BIN) SCENE=$(SCENE) OUT=$(OUT) \
-	  $(OUT)/$(SCENE)/scene.h5
+	  $(OUT)/$(SCENE_NAME)/scene.h5
 
 slurm-render: slurm-scene
 	@$(SLURM_SUBMIT)

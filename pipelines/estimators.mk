@@ -15,7 +15,7 @@
 #                      the parts estimates its own error (its noise; a bias common to all parts is
 #                      not seen), and the report prints it beside the figures it is compared with.
 #                      More parts cost REF_TIME each and keep the parts already rendered.
-#   pt, ppm, ppm-spp4, sppm, pppm   TIME seconds of rendering each (pathtrace --time-limit,
+#   pt, ppm, ppm-spp4, sppm, pppm   TIME seconds of rendering each (pathtrace --time,
 #                      render --time; program start and file writes excluded by both), seed SEED.
 #   sppm-passes        SPPM for CURVE_PASSES passes with snapshots: error against passes.
 #   ppm-passes         the same for PPM's fixed eye pass, whose outline pixels never converge: the
@@ -83,7 +83,7 @@ $(foreach i,$(shell seq 2 $(call ref_parts,$(1))),$(eval $(call REF_PART_RULE,$(
 
 $(DIR)/$(1)/pt.exr: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1)/.pt,$(TIME) $(SEED) $(THREADS))
 	$(LOAD) $(DIR)/$(1)/runs.load
-	$(BIN)/pathtrace --scene $$< -o $$@ --png none --spp 1000000 --time-limit $(TIME) --seed $(SEED) \
+	$(BIN)/pathtrace --scene $$< -o $$@ --png none --spp 1000000 --time $(TIME) --seed $(SEED) \
 	  --stats $(DIR)/$(1)/pt.json $(T) | tail -1
 	$(LOAD) $(DIR)/$(1)/runs.load
 $(DIR)/$(1)/ppm.exr: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1)/.ppm,$(TIME) $(SEED) $(THREADS) $(PHOTONS))
@@ -123,7 +123,7 @@ endef
 define REF_RECIPE
 	$(LOAD) $(DIR)/$(1)/ref.load
 	$(if $(filter pt,$(REF_KIND_$(1))),$(BIN)/pathtrace --scene $(DIR)/$(1)/scene.h5 -o $(2) --png none \
-	  --spp 100000000 --time-limit $(REF_TIME) --seed $(3) $(T) | tail -1,$(BIN)/render \
+	  --spp 100000000 --time $(REF_TIME) --seed $(3) $(T) | tail -1,$(BIN)/render \
 	  --scene $(DIR)/$(1)/scene.h5 -o $(2) --estimator sppm --time $(REF_TIME) \
 	  --photons $(PHOTONS) --seed $(3) $(T) | tail -1)
 	$(LOAD) $(DIR)/$(1)/ref.load

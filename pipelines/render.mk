@@ -1,4 +1,5 @@
-# render.mk — the default render's stage DAG; intermediates under $(OUT)/$(SCENE)/.
+# render.mk — the default render's stage DAG; intermediates under $(OUT)/$(SCENE_NAME)/: SCENE is
+# a name in data/ or a path to any scene file scene-bake reads (pipelines/scene.mk).
 #
 # ESTIMATOR=sppm (the default) or pppm: a new eye pass every pass (sppm.h), so light outlines,
 # edges and glass converge. Their state is per pixel and their passes are short, so the DAG is
@@ -22,7 +23,7 @@
 # one process, with a checkpoint every CHECKPOINT_EVERY passes; interrupting `make render` and
 # running it again resumes from the checkpoint.
 #
-# Variables (defaults below): SCENE, OUT, BIN, WIDTH, HEIGHT, PASSES, PHOTONS, ALPHA, SEED, SPP,
+# Variables (defaults below): SCENE (a name in data/ or a path; pipelines/scene.mk), OUT, BIN, WIDTH, HEIGHT, PASSES, PHOTONS, ALPHA, SEED, SPP,
 # DIRECT (photons | shadow-rays), RADIUS (0 = automatic), METHOD (grid | flann on DEVICE=cpu; an
 # OpenCL gather of gather_method.h, e.g. grid-kmeans, with DEVICE=opencl), DEVICE (cpu | opencl |
 # auto), MAX_BINS, WG (work-group size of the clusters), EXPOSURE, BAKE_FLAGS (extra scene-bake
@@ -49,14 +50,13 @@ BAKE_FLAGS ?=
 THREADS    ?= 0
 STAGED_MAX_PASSES ?= 32
 CHECKPOINT_EVERY  ?= 10
-SCENE_FILE ?= $(firstword $(wildcard data/$(SCENE).dae data/$(SCENE).obj data/$(SCENE).gltf \
-                                     data/$(SCENE).glb data/$(SCENE).ply))
-DIR := $(OUT)/$(SCENE)
+include pipelines/scene.mk
+DIR := $(OUT)/$(SCENE_NAME)
 
 include pipelines/stamp.mk
 
 ifeq ($(SCENE_FILE),)
-$(error no scene named '$(SCENE)' in data/ (looked for .dae .obj .gltf .glb .ply))
+$(error no file '$(SCENE)' and no scene named '$(SCENE)' in data/ (looked for .dae .obj .gltf .glb .ply); give SCENE=path/to/file or a name in data/)
 endif
 
 BAKE_P  := --width $(WIDTH) --height $(HEIGHT) $(BAKE_FLAGS)

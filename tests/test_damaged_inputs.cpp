@@ -225,7 +225,7 @@ TEST_CASE("damaged scene sources (COLLADA, OBJ, PLY): refused or baked, never a 
   const std::string insert = box_scene + " --insert {in} -o {out} --width 16 --height 12 "
                                          "--import-seconds 1";
   const std::string box = c.tmp / "box.obj";
-  REQUIRE(run_tool("gen-mesh", "--shape box --out " + box, c.tmp).exit_code == 0);
+  REQUIRE(run_tool("gen-mesh", "--shape box -o " + box, c.tmp).exit_code == 0);
   fuzz(c, box, "scene-bake", insert, "o.h5", "/geometry/triangles", 10, Accepted::any_output);
   fuzz(c, std::string(PF_SOURCE_DIR) + "/tests/data/tetra-binary.ply", "scene-bake", insert,
        "o.h5", "/geometry/triangles", 13, Accepted::any_output);

@@ -594,7 +594,7 @@ TEST_CASE("pathtrace: tool refuses bad input with one line, exit 2 and no output
   };
   refused_with_scene("--spp 0", "--spp must be positive");
   refused_with_scene("--mis maybe", "--mis must be one of");
-  refused_with_scene("--time-limit -3", "--time-limit");
+  refused_with_scene("--time -3", "--time must be >= 0");
   refused_with_scene("--snapshot-every 1 --snapshot " + (tmp / "nodir/s-{spp}.exr"),
                      "directory does not exist");
   // A text file where the scene belongs.
@@ -606,7 +606,7 @@ TEST_CASE("pathtrace: tool refuses bad input with one line, exit 2 and no output
   auto help = test::run_tool("pathtrace", "--help", tmp);
   CHECK(help.exit_code == 0);
   for (const char* opt : {"--spp", "--max-depth", "--rr-depth", "--mis", "--seed",
-                          "--snapshot-every", "--snapshot", "--time-limit", "--stats", "--threads",
+                          "--snapshot-every", "--snapshot", "--time", "--stats", "--threads",
                           "--png", "--exposure"})
     CHECK(help.out.find(opt) != std::string::npos);
 }

@@ -394,7 +394,7 @@ TEST_CASE("outputs: a full disk is one line and exit code 2, and leaves no outpu
        "--scene " + c.scene + " -o " + exr + " --photons 2000 --passes 2 --checkpoint " + h5 +
            " --checkpoint-every 1",
        "is the disk full?", {exr, png, h5}},
-      {"gen-mesh", "--out " + (tmp / "o.obj"), "is the disk full?", {tmp / "o.obj"}},
+      {"gen-mesh", "-o " + (tmp / "o.obj"), "is the disk full?", {tmp / "o.obj"}},
   };
   for (const Case& k : cases) {
     test::ToolRun r;

@@ -86,11 +86,69 @@ inline int run_tool(const char* tool, const std::function<int()>& body) {
   }
 }
 
+// An option's old spelling, still accepted for one release (issue 34: one vocabulary across the
+// tools): parse_options reads `--old_name V` (or `--old_name=V`) as `--new_name V`, says so in one
+// line on stderr ("pathtrace: --time-limit is deprecated, use --time (accepted until the next
+// release)"), and lists the old spelling in --help under "Deprecated". Provenance and run records
+// carry the new name only; the command line as typed is kept in command_line.
+struct DeprecatedOption {
+  const char* old_name;
+  const char* new_name;
+};
+
+// The deprecation notice for `d` given to `program` (one line, no newline).
+inline std::string deprecation_notice(const std::string& program, const DeprecatedOption& d) {
+  return program + ": --" + d.old_name + " is deprecated, use --" + d.new_name +
+         " (accepted until the next release)";
+}
+
+// argv with every deprecated spelling replaced by its new one; a notice on stderr for each old
+// spelling used. Both spellings of one option on one command line are refused (the run would
+// read only one of them).
+inline std::vector<std::string> rewrite_deprecated(const std::string& program, int argc,
+                                                   char** argv,
+                                                   std::initializer_list<DeprecatedOption> deprecated) {
+  std::vector<std::string> args(argv, argv + argc);
+  for (const DeprecatedOption& d : deprecated) {
+    const std::string old_flag = std::string("--") + d.old_name;
+    const std::string new_flag = std::string("--") + d.new_name;
+    bool used_old = false, used_new = false;
+    for (int i = 1; i < argc; ++i) {
+      std::string& a = args[size_t(i)];
+      if (a == "--") break;  // the rest are positional
+      auto spelled = [&](const std::string& flag) {
+        return a == flag || a.compare(0, flag.size() + 1, flag + "=") == 0;
+      };
+      if (spelled(new_flag)) used_new = true;
+      if (spelled(old_flag)) {
+        used_old = true;
+        a = new_flag + a.substr(old_flag.size());
+      }
+    }
+    if (used_old && used_new)
+      throw input_error("", old_flag + " is the deprecated spelling of " + new_flag +
+                                " and both were given", "give " + new_flag + " only");
+    if (used_old) std::cerr << deprecation_notice(program, d) << "\n";
+  }
+  return args;
+}
+
 // Parses the command line and refuses what it does not take: a stray argument (also the value
 // "2" left over by "-o --spp 2", where --spp became the output's name) and a --threads option out
-// of 0..kMaxThreads.
-inline cxxopts::ParseResult parse_options(cxxopts::Options& options, int argc, char** argv) {
-  cxxopts::ParseResult r = options.parse(argc, argv);
+// of 0..kMaxThreads. `deprecated`: the tool's old option spellings (DeprecatedOption).
+inline cxxopts::ParseResult parse_options(cxxopts::Options& options, int argc, char** argv,
+                                          std::initializer_list<DeprecatedOption> deprecated = {}) {
+  if (deprecated.size() > 0) {
+    auto add = options.add_options("Deprecated (accepted until the next release)");
+    for (const DeprecatedOption& d : deprecated)
+      add(d.old_name, std::string("old spelling of --") + d.new_name,
+          cxxopts::value<std::string>());
+  }
+  const std::vector<std::string> args = rewrite_deprecated(options.program(), argc, argv, deprecated);
+  std::vector<const char*> ptrs;
+  for (const std::string& a : args) ptrs.push_back(a.c_str());
+  ptrs.push_back(nullptr);
+  cxxopts::ParseResult r = options.parse(argc, ptrs.data());
   if (!r.unmatched().empty())
     throw input_error("", "unexpected argument '" + r.unmatched().front() + "'",
                       "see " + options.program() + " --help");

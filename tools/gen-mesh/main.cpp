@@ -1,6 +1,6 @@
 // gen-mesh — writes a procedural test mesh (procedural.h) as a Wavefront OBJ file.
 //
-//   gen-mesh --shape blob --triangles 120000 --out out/data/blob.obj [--seed 1]
+//   gen-mesh --shape blob --triangles 120000 -o out/data/blob.obj [--seed 1]
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -25,16 +25,16 @@ int main(int argc, char** argv) {
        cxxopts::value<float>()->default_value("0.25"))
       ("seed", "random seed of blob, heightfield and soup",
        cxxopts::value<uint64_t>()->default_value("1"))
-      ("out", "output OBJ path (required; missing directories are created; written atomically)",
+      ("o,output", "output OBJ path (required; missing directories are created; written atomically)",
        cxxopts::value<std::string>())
       ("h,help", "print this help");
     // clang-format on
-    const auto args = pf::parse_options(opts, argc, argv);
+    const auto args = pf::parse_options(opts, argc, argv, {{"out", "output"}});
     if (args.count("help")) {
       std::cout << opts.help() << "\nAll meshes are centred at the origin, outward-facing.\n";
       return 0;
     }
-    pf::require_options(opts, args, {"out"});
+    pf::require_options(opts, args, {"output"});
     const std::string shape = args["shape"].as<std::string>();
     const size_t n = args["triangles"].as<size_t>();
     const float r = args["radius"].as<float>();
@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
       throw pf::input_error("", "unknown --shape '" + shape + "'",
                             "use sphere, blob, heightfield, soup or box");
     }
-    const std::string out = args["out"].as<std::string>();
+    const std::string out = args["output"].as<std::string>();
     const std::filesystem::path dir = std::filesystem::path(out).parent_path();
     std::error_code ec;
     if (!dir.empty()) std::filesystem::create_directories(dir, ec);  // check_outputs reports it

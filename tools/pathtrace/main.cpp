@@ -54,8 +54,8 @@ int main(int argc, char** argv) {
       ("snapshot", "snapshot file pattern; {spp} becomes the samples so far (zero-padded); "
        "default: the output's name with -{spp}spp before the extension",
        cxxopts::value<std::string>()->default_value(""))
-      ("time-limit", "stop at the end of the pass in which this many seconds of wall time have "
-       "passed, with fewer than --spp samples; 0 = no limit",
+      ("time", "wall-clock budget in seconds: stop at the end of the pass in which this many "
+       "seconds have passed, with fewer than --spp samples; 0 = none",
        cxxopts::value<double>()->default_value("0"))
       ("stats", "also write a JSON record of the run here: parameters, input scene and its "
        "SHA-256, and samples, seconds and rays of every image written",
@@ -64,10 +64,10 @@ int main(int argc, char** argv) {
        cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
     // clang-format on
-    auto a = pf::parse_options(o, argc, argv);
+    auto a = pf::parse_options(o, argc, argv, {{"time-limit", "time"}});
     if (a.count("help")) {
       std::cout << o.help() << "\nThe image after N samples is the same for any --threads, "
-                               "--snapshot-every and --time-limit.\n";
+                               "--snapshot-every and --time.\n";
       return 0;
     }
     pf::require_options(o, a, {"scene", "output"});
@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     opt.seed = a["seed"].as<uint32_t>();
     opt.threads = a["threads"].as<int>();
     opt.snapshot_every = a["snapshot-every"].as<int>();
-    opt.time_limit_s = a["time-limit"].as<double>();
+    opt.time_limit_s = a["time"].as<double>();
     const std::string mis = a["mis"].as<std::string>();
     pf::require_choice("mis", mis, {"power", "off"});
     opt.mis = mis == "off" ? pf::MisMode::Off : pf::MisMode::Power;
@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
     if (opt.max_depth < 0) throw pf::input_error("", "--max-depth must be >= 0");
     if (opt.rr_depth < 0) throw pf::input_error("", "--rr-depth must be >= 0");
     if (opt.snapshot_every < 0) throw pf::input_error("", "--snapshot-every must be >= 0");
-    if (!(opt.time_limit_s >= 0.0)) throw pf::input_error("", "--time-limit must be >= 0");
+    if (!(opt.time_limit_s >= 0.0)) throw pf::input_error("", "--time must be >= 0");
 
     const std::string out = a["output"].as<std::string>();
     const std::filesystem::path out_path(out);
@@ -133,7 +133,7 @@ int main(int argc, char** argv) {
     prov.wall_time_s = clock.seconds();
     if (!stats.empty()) pf::write_pathtrace_record(stats, prov, written);
     std::cout << "pathtrace: " << out << " (" << img.width << "x" << img.height << ", "
-              << status.samples << " spp" << (status.timed_out ? " (time limit)" : "") << ", "
+              << status.samples << " spp" << (status.timed_out ? " (--time reached)" : "") << ", "
               << status.rays << " rays, " << clock.seconds() << " s)\n";
     if (status.nonfinite > 0)
       std::cerr << "pathtrace: warning: " << status.nonfinite

@@ -6,18 +6,21 @@
 // (atomic) and --resume to continue a killed run; a wall-clock budget (--time); snapshots of the
 // image every --snapshot-every passes and a JSON run record (--stats) for convergence charts.
 // Same stage functions as trace-hitpoints → trace-photons → illuminate → synthesize, so both
-// routes give one image.
+// routes give one image. --scene is a baked scene.h5 or a scene source, baked here by scene-bake's
+// function with scene-bake's options (scene_source.h, bake_options.h; --keep-scene keeps it).
 #include <algorithm>
 #include <filesystem>
 #include <limits>
 #include <iostream>
 #include <vector>
 
+#include "photonflow/bake_options.h"
 #include "photonflow/cl_backend.h"
 #include "photonflow/device_options.h"
 #include "photonflow/options.h"
 #include "photonflow/progress.h"
 #include "photonflow/render_driver.h"
+#include "photonflow/scene_source.h"
 #include "photonflow/synthesize.h"
 #include "photonflow/tool_main.h"
 
@@ -25,7 +28,11 @@ int main(int argc, char** argv) {
   return pf::run_tool("render", [&] {
     cxxopts::Options o("render", "Progressive photon mapping render driver.");
     o.add_options()
-      ("scene", "baked scene (scene.h5)", cxxopts::value<std::string>())
+      ("scene", "the scene: a baked scene.h5 (from scene-bake), or a scene source (any file "
+       "scene-bake reads: .dae, .obj, .gltf, .glb, .ply, ...), baked here with scene-bake's "
+       "options (\"Scene source options\" below)", cxxopts::value<std::string>())
+      ("keep-scene", "with a scene source: also write the baked scene here (scene.h5, as "
+       "scene-bake writes it)", cxxopts::value<std::string>()->default_value(""))
       ("o,output", "output OpenEXR image; a PNG preview goes beside it",
        cxxopts::value<std::string>())
       ("estimator", "ppm (one fixed eye pass) | sppm (new eye pass every pass, per-pixel "
@@ -77,6 +84,9 @@ int main(int argc, char** argv) {
       ("h,help", "print this help");
     pf::add_method_option(o);
     pf::add_device_options(o);
+    // scene-bake's options, the same names and checks (bake_options.h); --threads is the kd-tree
+    // build's too.
+    pf::add_bake_options(o, "Scene source");
     auto a = pf::parse_options(o, argc, argv);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
@@ -103,6 +113,9 @@ int main(int argc, char** argv) {
     std::string direct = a["direct"].as<std::string>();
     pf::require_choice("direct", direct, {"photons", "shadow-rays"});
     int threads = a["threads"].as<int>();
+    const std::string scene_path = pf::path_option(a, "scene");
+    const pf::BakeOptions bake = pf::bake_options(a, scene_path, threads);
+    const std::string keep_scene = a["keep-scene"].as<std::string>();
     uint32_t seed = a["seed"].as<uint32_t>();
     opt.eye.spp = a["spp"].as<int>();
     opt.eye.max_depth = a["max-depth"].as<int>();
@@ -143,13 +156,35 @@ int main(int argc, char** argv) {
     const bool snapshots = opt.snapshot_every > 0 || !opt.snapshot_at.empty();
     // The last snapshot's name stands for all of them (same directory); the checkpoint is read
     // back by --resume, an output all the same.
-    pf::check_outputs({pf::path_option(a, "scene")},
-                      {out, png, stats, opt.checkpoint, sums,
+    std::vector<std::string> inputs = {scene_path};
+    for (const pf::MeshInsert& ins : bake.inserts) inputs.push_back(ins.path);
+    pf::check_outputs(inputs,
+                      {out, png, stats, opt.checkpoint, sums, keep_scene,
                        snapshots ? pf::render_snapshot_name(pattern, opt.passes, opt.passes) : ""});
+    if (!keep_scene.empty() && pf::is_baked_scene(scene_path))
+      throw pf::input_error(scene_path, "is a baked scene already; --keep-scene keeps the scene "
+                                        "baked from a scene source", "drop --keep-scene");
 
     pf::Stopwatch clock;
-    std::string scene_path = a["scene"].as<std::string>();
-    pf::Scene scene = pf::load_scene(scene_path);
+    pf::OpenedScene opened = pf::open_scene(scene_path, bake, pf::given_bake_options(a));
+    const pf::Scene& scene = opened.scene;
+    if (opened.baked_here) {
+      for (const std::string& w : pf::bake_warnings(bake, opened.report))
+        std::cerr << "render: " << w << "\n";
+      std::cout << "render: baked " << scene_path << " (" << scene.triangles.size()
+                << " triangles, " << scene.camera.width << "x" << scene.camera.height << ", "
+                << clock.seconds() << " s)\n";
+    }
+    // --keep-scene is written with the run's other outputs (after every check, also the
+    // render's own), like them atomically.
+    const double bake_seconds = clock.seconds();
+    auto keep = [&] {
+      if (keep_scene.empty()) return;
+      pf::Provenance kept =
+          pf::bake_provenance(a, bake, keep_scene, pf::join_command_line(argc, argv));
+      kept.wall_time_s = bake_seconds;
+      pf::save_scene(scene, keep_scene, kept);
+    };
     pf::Provenance prov;
     prov.tool = "render";
     prov.seed = seed;
@@ -170,7 +205,7 @@ int main(int argc, char** argv) {
     prov.parameters["method"] = pf::gather_method_name(opt.ppm.method);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
-    prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
+    pf::record_scene(prov, a, scene_path, opened, bake);
 
     prov.wall_time_s = clock.seconds();  // so far; checkpoints add the run's (render_driver.cpp)
     pf::Progress progress("pass", opt.passes, "photons");
@@ -216,6 +251,7 @@ int main(int argc, char** argv) {
     prov.wall_time_s = clock.seconds();
     if (status.stopped) {
       progress.end_line();
+      keep();
       // The run record still lists what the run wrote (its snapshots).
       if (!stats.empty()) pf::write_render_record(stats, prov, written);
       std::cerr << "render: interrupted after " << status.passes << " of " << opt.passes
@@ -232,6 +268,7 @@ int main(int argc, char** argv) {
       if (!sums.empty()) pf::save_pass_sums(range, sums, prov);
       img = pf::synthesize(range);
     }
+    keep();
     if (!out.empty()) {
       pf::write_exr(img, out);
       written.push_back({out, status});

@@ -214,7 +214,7 @@ void check_options(const PathTraceOptions& opt) {
     throw input_error("", "--snapshot-every must be >= 0, got " +
                               std::to_string(opt.snapshot_every));
   if (!(opt.time_limit_s >= 0.0))
-    throw input_error("", "--time-limit must be >= 0, got " + std::to_string(opt.time_limit_s));
+    throw input_error("", "--time must be >= 0, got " + std::to_string(opt.time_limit_s));
 }
 
 }  // namespace
