@@ -253,7 +253,7 @@ TEST_CASE("render driver: checkpoints every K passes and at the end", "[render][
 // A pass callback that returns false (render's Ctrl-C, interrupt.h) ends the run after that
 // pass: the checkpoint is saved then, also between regular checkpoints, and --resume from it
 // gives the uninterrupted run's state.
-TEST_CASE("render driver: a stop after a pass saves the checkpoint; resuming gives the whole run",
+TEST_CASE("render driver: a stop after a pass saves the checkpoint, resuming gives the whole run",
           "[render][resume]") {
   const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
   TempDir tmp("stop");
@@ -280,7 +280,7 @@ TEST_CASE("render driver: a stop after a pass saves the checkpoint; resuming giv
   CHECK(test::same_hitpoints(resumed.hitpoints, whole.hitpoints));
   // A stop at the last pass is no stop; a stop without a checkpoint keeps nothing on disk.
   RenderStatus at_end;
-  render_progressive(s, small_run(2), false, prov, [](int, double) { return false; }, {}, &at_end);
+  render_progressive(s, small_run(1), false, prov, [](int, double) { return false; }, {}, &at_end);
   CHECK_FALSE(at_end.stopped);
   RenderOptions bare = small_run(3);
   RenderStatus no_ck;

@@ -183,7 +183,6 @@ int main(int argc, char** argv) {
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
     pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
-    pf::require_hitpoints(hp_path, h);
     if (estimator == "ppm" && h.estimator == "classic")
       throw pf::input_error(hp_path, "holds a classic estimate; PPM continues only a PPM state",
                             "start from trace-hitpoints' output");
