@@ -3,9 +3,10 @@
 // One place defines them: render, trace-photons and pipelines/render.mk (which passes "auto")
 // take them from here, so a run without flags gets the same numbers by either route.
 //
-//   estimator   sppm (a new eye pass every pass; RESULTS.md section 6: 0.0047 against ppm's
-//               0.0644 RMSE on the diffuse box at 512×512 in 30 s, 14× less; pppm 0.0042 there
-//               but sppm on the caustic pool, and pppm is the mergeable variant, not the default)
+//   estimator   sppm (a new eye pass every pass; RESULTS.md section 6, 512×512, 30 s: 7.9–14.6×
+//               less RMSE than ppm on the three scenes of data/; pppm was 9–11 % below sppm on two
+//               of them and 5 % above on the third, with direct light from photons; the shadow-ray
+//               gain below was measured with sppm only, so sppm until pppm is measured with it)
 //   direct      shadow-rays (issue 34's side-by-side runs with sppm, 512×512, 30 s, 262,144
 //               photons: diffuse box 0.0080 → 0.0066 RMSE over all pixels, 0.0076 → 0.0056 away
 //               from the lights; 200k-triangle box 0.0132 → 0.0123 and 0.0120 → 0.0096)
@@ -47,10 +48,10 @@ constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
 // estimator and direct light) costs as much time as this many photons (each emitted, traced and
 // sorted into the pass's grid). Measured with
 //   bench/photon_balance.sh build        (WIDTH=512 HEIGHT=512 PASSES=12 FEW=16384 MANY=524288)
-// on the three scenes of data/, 2026-12-02, the 2-core machine at load 4 from other jobs: the eye
-// pass of a pixel cost 0.712 photons on cornell-box (eye pass 0.123 s, 0.66 µs a photon), 0.540
-// on cornell-spheres (0.156 s, 1.10 µs), 2.357 on sds-pool (0.222 s, 0.36 µs); the median,
-// rounded (docs/RESULTS.md "Defaults").
+// on the three scenes of data/, 2026-12-02, the 2-core machine at load 3.5–4 from other jobs: the
+// eye pass of a pixel cost 0.712 / 0.722 photons on cornell-box (two runs; eye pass 0.123 / 0.178
+// s, 0.66 / 0.94 µs a photon), 0.540 / 0.498 on cornell-spheres, 2.357 / 0.930 on sds-pool; the
+// median over the scenes, 0.712 / 0.722, rounded (docs/RESULTS.md section 7).
 constexpr double kEyePixelCostInPhotons = 0.7;
 // The automatic count spends this share of a pass's time tracing photons (the rest on the eye
 // pass): photons = share / (1 − share) · kEyePixelCostInPhotons · pixels. An even split bounds
