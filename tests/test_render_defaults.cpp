@@ -227,3 +227,56 @@ TEST_CASE("trace-photons takes render's automatic photon count from the same pla
   CHECK(given.parameters.at("photons") == "500");
   CHECK(given.parameters.at("photons_auto") == "false");
 }
+
+TEST_CASE("make render, the staged route and render without options give one image: the "
+          "defaults come from one place",
+          "[render_defaults][dag]") {
+  test::TempDir tmp("render-defaults-routes");
+  // make render with no estimator, direct light or photon count: render.mk passes render's
+  // defaults (ESTIMATOR=sppm, DIRECT=shadow-rays, PHOTONS=auto, RADIUS=0).
+  const std::string make = "make -s --no-print-directory -C " + test::source_dir() +
+                           " -f pipelines/render.mk BIN=" + test::bin_dir() + " OUT=" +
+                           tmp.dir.string() + " WIDTH=40 HEIGHT=30 PASSES=2 render > " +
+                           (tmp / "make.log") + " 2>&1";
+  REQUIRE(std::system(make.c_str()) == 0);
+  const std::string dir = tmp / "cornell-box";
+  const std::string scene = dir + "/scene.h5";
+  // render with nothing but the scene, the passes and the output.
+  const auto r = test::run_tool("render", "--scene " + q(scene) + " --passes 2 -o " +
+                                              q(tmp / "plain.exr") + " --stats " +
+                                              q(tmp / "plain.json"),
+                                tmp);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(record_parameters(tmp / "plain.json").at("photons") == std::to_string(kMinAutoPhotons));
+  const Image made = read_exr(dir + "/render.exr"), plain = read_exr(tmp / "plain.exr");
+  CHECK(made.rgb == plain.rgb);
+  // The staged route, SPPM named (trace-hitpoints and illuminate keep ppm as their default) and
+  // trace-photons with its default count.
+  std::string state;
+  for (int p = 0; p < 2; ++p) {
+    const std::string eye = tmp / ("eye" + std::to_string(p) + ".h5");
+    const std::string ph = tmp / ("ph" + std::to_string(p) + ".h5");
+    const std::string next = tmp / ("sppm" + std::to_string(p) + ".h5");
+    REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) + " --estimator sppm --pass " +
+                                                  std::to_string(p) +
+                                                  " --direct shadow-rays -o " + q(eye),
+                           tmp)
+                .exit_code == 0);
+    REQUIRE(test::run_tool("trace-photons", "--scene " + q(scene) + " --first-pass " +
+                                                std::to_string(p) + " -o " + q(ph),
+                           tmp)
+                .exit_code == 0);
+    REQUIRE(test::run_tool("illuminate", "--scene " + q(scene) + " --estimator sppm --hitpoints " +
+                                             q(eye) + " --photons " + q(ph) +
+                                             (state.empty() ? "" : " --state " + q(state)) +
+                                             " -o " + q(next),
+                           tmp)
+                .exit_code == 0);
+    state = next;
+  }
+  REQUIRE(test::run_tool("synthesize", "--hitpoints " + q(state) + " -o " + q(tmp / "staged.exr"),
+                         tmp)
+              .exit_code == 0);
+  CHECK(read_exr(tmp / "staged.exr").rgb == plain.rgb);
+}
