@@ -378,7 +378,9 @@ TEST_CASE("render tool: snapshots and run record", "[render][snapshots][tools]")
   REQUIRE(run_tool("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o " +
                                      (tmp / "s.h5") + " --width 24 --height 24", tmp)
               .exit_code == 0);
-  const std::string base = "--scene " + (tmp / "s.h5") + " --photons 3000 --passes 4 ";
+  // ppm with direct light from photons, as written before sppm became render's default.
+  const std::string base = "--scene " + (tmp / "s.h5") +
+                           " --estimator ppm --direct photons --photons 3000 --passes 4 ";
   auto r = run_tool("render", base + "-o " + (tmp / "r.exr") +
                                   " --snapshot-every 2 --snapshot-at 1 --stats " + (tmp / "r.json"),
                     tmp);
