@@ -105,7 +105,7 @@ TEST_CASE("choose_defaults: sppm with shadow rays, photons from the image, radiu
   CHECK(choose_defaults(big).photons == b.photons);
 }
 
-TEST_CASE("render: --help, the run record and the summary say the defaults used; every one "
+TEST_CASE("render: --help, the run record and the summary say the defaults used, every one "
           "is overridable",
           "[render_defaults]") {
   test::TempDir tmp("render-defaults");
