@@ -196,6 +196,7 @@ TEST_CASE("hitpoints, photons and grid files round-trip every dataset", "[format
 
 TEST_CASE("damaged stage files are refused with one line", "[formats][stages]") {
   TempDir tmp("formats");
+  const UncheckedWritesForTests damaged;  // files the writers themselves would refuse to write
   SECTION("a pass table that does not match the photons") {
     PhotonSet p;
     p.photons.resize(10);
@@ -204,7 +205,6 @@ TEST_CASE("damaged stage files are refused with one line", "[formats][stages]") 
     save_photons(p, tmp / "ph.h5", prov_for("ph"));
     CHECK_THROWS_WITH(load_photons(tmp / "ph.h5"), Catch::Contains("pass table"));
   }
-  const UncheckedWritesForTests damaged;  // files the writers themselves would refuse to write
   SECTION("a hitpoint outside the image") {
     HitpointSet h;
     h.width = 2;

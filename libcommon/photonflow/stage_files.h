@@ -96,10 +96,17 @@ float hitpoints_radius0(const std::string& path, const HitpointSet& h);
 // The provenance group of a hitpoints file (the render driver checks a checkpoint's with it).
 Provenance load_hitpoints_provenance(const std::string& path);
 Provenance load_photons_provenance(const std::string& path);
+// The writers check what they write with the readers' checks (validate.h written_check).
 void save_photons(const PhotonSet& p, const std::string& path, const Provenance& prov);
 PhotonSet load_photons(const std::string& path);
 void save_grids(const GridSet& g, const std::string& path, const Provenance& prov);
 GridSet load_grids(const std::string& path);
+// The checks of load_photons and load_grids on what they read (and of save_photons and save_grids
+// on what they write): the pass table, pass indices, pass_emitted (validate.h
+// kMaxPhotonsPerPass), every photon's values; for grids also the layout build_photon_grid makes
+// (eq. 7.1 headers, cell_start, order, each photon in its bin). InputError naming `path`.
+void validate_photons(const PhotonSet& p, const std::string& path);
+void validate_grids(const GridSet& g, const std::string& path);
 
 // The loaders check everything a file holds on its own: array lengths, the pass table, every
 // index into the file's own arrays (pixels, bins, cell_start, order), finite positions, and

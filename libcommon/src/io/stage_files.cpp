@@ -410,6 +410,7 @@ void validate_hitpoints(const HitpointSet& h, const std::string& path) {
 // ---- photons.h5 -----------------------------------------------------------------------------
 
 void save_photons(const PhotonSet& p, const std::string& path, const Provenance& prov) {
+  written_check([&] { validate_photons(p, path); });
   h5::Writer w(path, kPhotonsFormat, kPhotonsVersion);
   w.attr("/", "scene_id", p.scene_id);
   w.attr("/", "first_pass", int64_t(p.first_pass));
@@ -444,11 +445,19 @@ PhotonSet load_photons(const std::string& path) {
   p.photons = r.read<pf_photon>("/photons", h5_type_photon());
   p.pass_begin = r.read<uint64_t>("/pass_begin");
   p.pass_emitted = r.read<uint64_t>("/pass_emitted");
+  p.first_pass = check_first_pass(r, path, p.pass_emitted.size(), hint);
+  validate_photons(p, path);
+  return p;
+}
+
+void validate_photons(const PhotonSet& p, const std::string& path) {
+  const std::string hint = "the file is damaged; remake it with trace-photons";
+  if (p.first_pass < 0 || !pass_indices_fit(p.first_pass, int64_t(p.pass_emitted.size())))
+    throw input_error(path, "its passes run past 2^31-1", hint);
   bool ok = p.pass_begin.size() == p.pass_emitted.size() + 1 && !p.pass_begin.empty() &&
             p.pass_begin.front() == 0 && p.pass_begin.back() == p.photons.size();
   for (size_t i = 1; ok && i < p.pass_begin.size(); ++i) ok = p.pass_begin[i - 1] <= p.pass_begin[i];
   if (!ok) throw input_error(path, "pass table does not match the photons", hint);
-  p.first_pass = check_first_pass(r, path, p.pass_emitted.size(), hint);
   // Every photon: mesh id not negative (its upper bound is the scene's: check_against_scene),
   // finite position, and the pass index of the pass it is stored in.
   for (size_t k = 0; k < p.pass_emitted.size(); ++k)
@@ -464,12 +473,12 @@ PhotonSet load_photons(const std::string& path) {
   const Validator v(path, hint);
   check_pass_emitted(p.pass_emitted, v);
   check_photon_values("photons", p.photons, 0, p.photons.size(), v);
-  return p;
 }
 
 // ---- grid.h5 --------------------------------------------------------------------------------
 
 void save_grids(const GridSet& g, const std::string& path, const Provenance& prov) {
+  written_check([&] { validate_grids(g, path); });
   h5::Writer w(path, kGridFormat, kGridVersion);
   w.attr("/", "scene_id", g.scene_id);
   w.attr("/", "first_pass", int64_t(g.first_pass));
@@ -523,6 +532,28 @@ GridSet load_grids(const std::string& path) {
     const double radius = r.attr_double(p, "default_radius");
     v.in_range("attribute " + p + "/default_radius", radius, kMinRadius, kMaxRadius);
     grid.params.default_radius = float(radius);
+    g.grids.push_back(std::move(grid));
+  }
+  validate_grids(g, path);
+  for (PhotonGrid& grid : g.grids) grid.index_positions();
+  return g;
+}
+
+void validate_grids(const GridSet& g, const std::string& path) {
+  const std::string hint = "the file is damaged; remake it with build-grid";
+  const Validator v(path, hint);
+  if (g.first_pass < 0 || !pass_indices_fit(g.first_pass, int64_t(g.pass_emitted.size())))
+    v.fail("its passes run past 2^31-1");
+  check_pass_emitted(g.pass_emitted, v);
+  if (g.grids.size() != g.pass_emitted.size())
+    v.fail("the file has " + std::to_string(g.grids.size()) + " /pass<k> groups but pass_emitted has " +
+           std::to_string(g.pass_emitted.size()) + " entries");
+  for (size_t k = 0; k < g.grids.size(); ++k) {
+    const std::string p = "/pass" + std::to_string(g.first_pass + int(k));
+    const PhotonGrid& grid = g.grids[k];
+    v.int_in_range("attribute " + p + "/max_bins", grid.params.max_bins, 1, kMaxBinsPerAxis);
+    v.in_range("attribute " + p + "/default_radius", grid.params.default_radius, kMinRadius,
+               kMaxRadius);
     auto bad = [&](const std::string& what) {
       return input_error(path, p + ": " + what, hint);
     };
@@ -589,10 +620,7 @@ GridSet load_grids(const std::string& path) {
                       " of mesh " + std::to_string(m) + ", whose cell_start range holds it");
         }
     }
-    grid.index_positions();
-    g.grids.push_back(std::move(grid));
   }
-  return g;
 }
 
 }  // namespace pf
