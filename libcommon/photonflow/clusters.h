@@ -136,5 +136,9 @@ void save_clusters(const ClusterSet& c, const std::string& path, const Provenanc
 // Loads clusters.h5 and refuses (InputError, one line) a file made for another scene or other
 // hitpoints than `h`, or one that is not a valid clustering of `h`.
 ClusterSet load_clusters(const std::string& path, const HitpointSet& h);
+// The checks of a clusters file that need no hitpoints (wg_size, method, finite centres, radii),
+// which load_clusters applies after check_clusters and save_clusters to what it writes
+// (validate.h written_check). InputError naming `path`.
+void validate_cluster_values(const ClusterSet& c, const std::string& path);
 
 }  // namespace pf

@@ -82,6 +82,10 @@ class DistributionSums {
 void save_photon_distribution(const PhotonDistribution& d, const std::string& path,
                               const Provenance& prov);
 PhotonDistribution load_photon_distribution(const std::string& path);
+// The checks load_photon_distribution applies to what it read and save_photon_distribution to
+// what it writes (validate.h written_check): pass range, photons emitted a count of `passes`
+// passes, grid headers and contiguous bins, counts that sum to each mesh's photon_count.
+void validate_photon_distribution(const PhotonDistribution& d, const std::string& path);
 
 // Refuses (InputError naming `path`, one line) a map that does not belong to these hitpoints: other
 // scene, or bins made with another lower bound than the hitpoints' R0 (the gather's grids would

@@ -531,6 +531,9 @@ const h5::Compound& h5_type_cluster() {
 
 void save_clusters(const ClusterSet& c, const std::string& path, const Provenance& prov,
                    const std::function<void(h5::Writer&)>& extra) {
+  // The checks that need no hitpoints (the writer has none; load_clusters also checks the
+  // clustering against them, check_clusters).
+  written_check([&] { validate_cluster_values(c, path); });
   h5::Writer w(path, kClustersFormat, kClustersVersion);
   w.attr("/", "scene_id", c.scene_id);
   w.attr("/", "wg_size", int64_t(c.wg_size));
@@ -578,6 +581,15 @@ ClusterSet load_clusters(const std::string& path, const HitpointSet& h) {
   std::string bad = check_clusters(c, h);
   if (!bad.empty())
     throw input_error(path, "is not a valid clustering: " + bad, "the file is damaged; remake it with cluster");
+  validate_cluster_values(c, path);
+  return c;
+}
+
+void validate_cluster_values(const ClusterSet& c, const std::string& path) {
+  const Validator v(path, "the file is damaged; remake it with cluster");
+  v.int_in_range("attribute wg_size", c.wg_size, 1, kMaxWorkGroupSize);
+  if (c.method != "kmeans" && c.method != "grid" && c.method != "ga")
+    v.fail("attribute method '" + c.method + "' is none of \"kmeans\", \"grid\" and \"ga\"");
   // Centres and radii: the clustered gathers read the bins of the sphere (centre, R), so a
   // non-finite centre would make them miss the photons every other method gathers. R is
   // refreshed from the hitpoints before use (update_cluster_radii) but must be a length.
@@ -586,7 +598,6 @@ ClusterSet load_clusters(const std::string& path, const HitpointSet& h) {
     v.in_range(Name("clusters", k, "radius"), &c.clusters[k].radius, 1, 0.0,
                4.0 * kMaxCoordinate);
   }
-  return c;
 }
 
 }  // namespace pf

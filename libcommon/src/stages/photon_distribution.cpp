@@ -120,6 +120,7 @@ uint64_t DistributionSums::photons(int mesh, const int lo[3], const int hi[3]) c
 
 void save_photon_distribution(const PhotonDistribution& d, const std::string& path,
                               const Provenance& prov) {
+  written_check([&] { validate_photon_distribution(d, path); });
   h5::Writer w(path, kPhotonDistributionFormat, kDistributionVersion);
   w.attr("/", "scene_id", d.scene_id);
   w.attr("/", "passes", int64_t(d.passes));
@@ -157,7 +158,7 @@ PhotonDistribution load_photon_distribution(const std::string& path) {
   v.int_in_range("attribute first_pass", first_pass, 0, INT32_MAX - (passes - 1));
   d.first_pass = int(first_pass);
   const int64_t emitted = r.attr_int("/", "photons_emitted");
-  v.int_in_range("attribute photons_emitted", emitted, passes, INT64_MAX);
+  v.int_in_range("attribute photons_emitted", emitted, 0, INT64_MAX);
   d.emitted = uint64_t(emitted);
   const int64_t max_bins = r.attr_int("/", "max_bins");
   v.int_in_range("attribute max_bins", max_bins, 1, kMaxBinsPerAxis);
@@ -167,6 +168,17 @@ PhotonDistribution load_photon_distribution(const std::string& path) {
   d.params.default_radius = float(radius);
   d.mesh_grid = r.read<pf_mesh_grid>("/mesh_grid", h5_type_mesh_grid());
   d.counts = r.read<uint64_t>("/photon_count");
+  validate_photon_distribution(d, path);
+  return d;
+}
+
+void validate_photon_distribution(const PhotonDistribution& d, const std::string& path) {
+  const Validator v(path, "remake it with photon-distribution");
+  v.int_in_range("attribute passes", d.passes, 1, INT32_MAX);
+  v.int_in_range("attribute first_pass", d.first_pass, 0, INT32_MAX - (int64_t(d.passes) - 1));
+  v.photons_emitted("attribute photons_emitted", d.emitted, d.passes);
+  v.int_in_range("attribute max_bins", d.params.max_bins, 1, kMaxBinsPerAxis);
+  v.in_range("attribute default_radius", d.params.default_radius, kMinRadius, kMaxRadius);
   // Consistency: every mesh's bins lie inside /photon_count, contiguous, sizes sane.
   size_t next = 0;
   for (size_t m = 0; m < d.mesh_grid.size(); ++m) {
@@ -201,7 +213,6 @@ PhotonDistribution load_photon_distribution(const std::string& path) {
              std::to_string(sum));
     if (bins_of(g) > 0) v.position(Name("mesh_grid", m, "lo"), g.lo);
   }
-  return d;
 }
 
 void require_distribution_for(const PhotonDistribution& d, const std::string& path,
