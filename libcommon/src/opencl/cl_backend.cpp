@@ -98,9 +98,24 @@ std::vector<float> camera_frame(const pf_camera& c) {
 
 }  // namespace
 
+// The device tracers (trace_hitpoints.cl, trace_photons.cl) shade with the materials' colour
+// factors only: a scene with base-colour textures is refused with one line (docs/MATERIALS.md)
+// rather than rendered without its textures. The device gathers need no such check: they take
+// the texture's value in the hitpoints' weights from the CPU eye pass.
+static void refuse_textured(const Scene& scene) {
+  size_t textured = 0;
+  for (size_t m = 0; m < scene.materials.size(); ++m) textured += scene.texture_of(int(m)) >= 0;
+  if (textured)
+    throw input_error(scene.source, "has " + std::to_string(textured) +
+                                        " textured material(s); the OpenCL tracers do not "
+                                        "shade textures yet",
+                      "use --device cpu");
+}
+
 // ---- eye pass ----------------------------------------------------------------------------------
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClContext& dev) {
+  refuse_textured(scene);
   const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
   const int columns = eye_strata_columns(spp);  // the CPU eye pass's grid
   EyePassResult res;
@@ -185,6 +200,7 @@ void trace_photon_batch(const Scene& scene, uint32_t pass, const PhotonPassOptio
 
 PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
                                ClContext& dev) {
+  refuse_textured(scene);
   PhotonPassResult res;
   res.emitted = opt.photons;
   if (!photon_pass_work(scene, pass, opt)) return res;
@@ -212,6 +228,7 @@ PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPa
 
 DevicePhotons trace_photons_device(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
                                    ClContext& dev) {
+  refuse_textured(scene);
   DevicePhotons out;
   out.emitted = opt.photons;
   out.photons = &dev.scratch("photon.compact", sizeof(pf_photon));
