@@ -65,6 +65,17 @@ std::string floor_obj(const std::string& mtl) {
          "o floor\nusemtl floor\nf 1/1 4/4 3/3\nf 1/1 3/3 2/2\n"
          "o ceiling\nusemtl light\nf 5 6 7\nf 5 7 8\n";
 }
+// The same ceiling over a 20×20 m floor (UVs 0 … 10: the texture repeats), so that much of the
+// light the floor reflects comes back to it from the ceiling.
+std::string big_floor_obj(const std::string& mtl) {
+  return "mtllib " + mtl +
+         "\n"
+         "v -10 0 -10\nv 10 0 -10\nv 10 0 10\nv -10 0 10\n"
+         "v -10 3 -10\nv 10 3 -10\nv 10 3 10\nv -10 3 10\n"
+         "vt 0 10\nvt 10 10\nvt 10 0\nvt 0 0\n"
+         "o floor\nusemtl floor\nf 1/1 4/4 3/3\nf 1/1 3/3 2/2\n"
+         "o ceiling\nusemtl light\nf 5 6 7\nf 5 7 8\n";
+}
 std::string light_mtl(const std::string& ceiling_kd = "0 0 0") {
   return "newmtl light\nKd " + ceiling_kd + "\nKe 1 1 1\n";
 }
@@ -233,8 +244,10 @@ TEST_CASE("a JPEG texture is decoded by libjpeg-turbo; a cut one is refused", "[
   CHECK(texel(24, 8) == Approx(pf_srgb8_to_linear(kDark)).epsilon(0.15));
   CHECK(texel(8, 24) == Approx(pf_srgb8_to_linear(kDark)).epsilon(0.15));
   CHECK(s.texels[3] == 1.f);
-  // Cut after 60 % of its bytes: libjpeg's "premature end" warning is a refusal here.
-  write_text(tmp / "checker.jpg", jpeg.substr(0, jpeg.size() * 6 / 10));
+  // Cut inside its image data (the headers whole): libjpeg's "premature end" warning, after which
+  // it would fill the rest with grey, is a refusal here.
+  REQUIRE(jpeg.size() > 400);
+  write_text(tmp / "checker.jpg", jpeg.substr(0, jpeg.size() - 40));
   BakeReport report;
   try {
     bake(floor_options(tmp / "j.obj", 16), report);
@@ -316,8 +329,9 @@ TEST_CASE("a textured floor under uniform light reproduces the checker's pattern
 TEST_CASE("photon bounces, the path tracer's bounces and SPPM's gather use the textured albedo",
           "[textures]") {
   // A uniform texture (sRGB 255, 60, 60) with factor 1 against the same albedo as a colour: the
-  // images agree. The ceiling reflects (albedo 0.5), so the floor's light is partly indirect, and
-  // a bounce that took the factor alone (white) would make the green channel far brighter.
+  // images agree. The ceiling reflects (albedo 0.5) and the floor is as large as the ceiling, so
+  // about a third of the floor's red light is indirect; a bounce that took the factor alone
+  // (white) would make the green channel about a third brighter.
   test::TempDir tmp("tex-bounce");
   write_text(tmp / "red.png", png_bytes(8, 8, [](int, int) {
                return std::array<uint8_t, 3>{255, 60, 60};
@@ -327,8 +341,8 @@ TEST_CASE("photon bounces, the path tracer's bounces and SPPM's gather use the t
   std::snprintf(kd, sizeof kd, "%.9g %.9g %.9g", double(r), double(g), double(g));
   write_text(tmp / "tex.mtl", "newmtl floor\nKd 1 1 1\nmap_Kd red.png\n" + light_mtl("0.5 0.5 0.5"));
   write_text(tmp / "col.mtl", "newmtl floor\nKd " + std::string(kd) + "\n" + light_mtl("0.5 0.5 0.5"));
-  write_text(tmp / "tex.obj", floor_obj("tex.mtl"));
-  write_text(tmp / "col.obj", floor_obj("col.mtl"));
+  write_text(tmp / "tex.obj", big_floor_obj("tex.mtl"));
+  write_text(tmp / "col.obj", big_floor_obj("col.mtl"));
   const int size = 24;
   const Scene tex = bake(floor_options(tmp / "tex.obj", size));
   const Scene col = bake(floor_options(tmp / "col.obj", size));
