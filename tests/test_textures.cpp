@@ -424,6 +424,101 @@ TEST_CASE("a glb with an embedded texture: texCoord, sampler wrap modes and filt
         Approx(pf_srgb8_to_linear(kBright) / pf_srgb8_to_linear(kDark)).epsilon(0.05));
 }
 
+TEST_CASE("a COLLADA <diffuse><texture>: the image through its sampler and surface, v flipped",
+          "[textures]") {
+  test::TempDir tmp("tex-dae");
+  write_text(tmp / "checker.png", checker_png());
+  write_text(tmp / "floor.dae", R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="meter" meter="1"/><up_axis>Y_UP</up_axis></asset>
+  <library_images><image id="checker-img"><init_from>checker.png</init_from></image></library_images>
+  <library_effects>
+    <effect id="floor-fx"><profile_COMMON>
+      <newparam sid="checker-surface"><surface type="2D"><init_from>checker-img</init_from></surface></newparam>
+      <newparam sid="checker-sampler"><sampler2D><source>checker-surface</source></sampler2D></newparam>
+      <technique sid="common"><lambert><diffuse><texture texture="checker-sampler" texcoord="UVMap"/></diffuse></lambert></technique>
+    </profile_COMMON></effect>
+    <effect id="light-fx"><profile_COMMON><technique sid="common"><lambert>
+      <emission><color>1 1 1 1</color></emission><diffuse><color>0 0 0 1</color></diffuse>
+    </lambert></technique></profile_COMMON></effect>
+  </library_effects>
+  <library_materials>
+    <material id="floor" name="floor"><instance_effect url="#floor-fx"/></material>
+    <material id="light" name="light"><instance_effect url="#light-fx"/></material>
+  </library_materials>
+  <library_geometries>
+    <geometry id="floor-g" name="floor"><mesh>
+      <source id="fp"><float_array id="fp-a" count="12">-1 0 -1 1 0 -1 1 0 1 -1 0 1</float_array>
+        <technique_common><accessor source="#fp-a" count="4" stride="3">
+          <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+        </accessor></technique_common></source>
+      <source id="fuv"><float_array id="fuv-a" count="8">0 1 1 1 1 0 0 0</float_array>
+        <technique_common><accessor source="#fuv-a" count="4" stride="2">
+          <param name="S" type="float"/><param name="T" type="float"/>
+        </accessor></technique_common></source>
+      <vertices id="fv"><input semantic="POSITION" source="#fp"/></vertices>
+      <triangles material="surface" count="2">
+        <input semantic="VERTEX" source="#fv" offset="0"/>
+        <input semantic="TEXCOORD" source="#fuv" offset="1" set="0"/>
+        <p>0 0 3 3 2 2 0 0 2 2 1 1</p></triangles>
+    </mesh></geometry>
+    <geometry id="ceiling-g" name="ceiling"><mesh>
+      <source id="cp"><float_array id="cp-a" count="12">-10 3 -10 10 3 -10 10 3 10 -10 3 10</float_array>
+        <technique_common><accessor source="#cp-a" count="4" stride="3">
+          <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+        </accessor></technique_common></source>
+      <vertices id="cv"><input semantic="POSITION" source="#cp"/></vertices>
+      <triangles material="surface" count="2"><input semantic="VERTEX" source="#cv" offset="0"/>
+        <p>0 1 2 0 2 3</p></triangles>
+    </mesh></geometry>
+  </library_geometries>
+  <library_visual_scenes><visual_scene id="scene" name="scene">
+    <node id="floor-n" name="floor-n"><instance_geometry url="#floor-g"><bind_material><technique_common>
+      <instance_material symbol="surface" target="#floor"><bind_vertex_input semantic="UVMap" input_semantic="TEXCOORD" input_set="0"/></instance_material>
+    </technique_common></bind_material></instance_geometry></node>
+    <node id="ceiling-n" name="ceiling-n"><instance_geometry url="#ceiling-g"><bind_material><technique_common>
+      <instance_material symbol="surface" target="#light"/></technique_common></bind_material></instance_geometry></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+)");
+  const int size = 32;
+  BakeReport report;
+  const Scene s = bake(floor_options(tmp / "floor.dae", size), report);
+  CHECK(report.warnings.empty());
+  REQUIRE(s.textures.size() == 1);
+  CHECK(s.texture_names[0] == tmp / "checker.png");
+  size_t floor_mat = 0;
+  while (floor_mat < s.material_names.size() && s.material_names[floor_mat] != "floor") ++floor_mat;
+  REQUIRE(floor_mat < s.materials.size());
+  CHECK(s.texture_of(int(floor_mat)) == 0);
+  // <diffuse> is the texture alone: assimp gives it the colour 1, kept below 1 (no warning).
+  CHECK(s.materials[floor_mat].color[0] == 0.99f);
+  REQUIRE(s.uvs.size() == s.triangles.size());
+  for (size_t i = 0; i < s.triangles.size(); ++i) {
+    if (s.triangles[i].material != int(floor_mat)) continue;
+    const float* vs[3] = {s.triangles[i].v0, s.triangles[i].v1, s.triangles[i].v2};
+    for (int k = 0; k < 3; ++k) {
+      CHECK(s.uvs[i].uv[2 * k] == Approx(0.5f * (vs[k][0] + 1.f)));
+      CHECK(s.uvs[i].uv[2 * k + 1] == Approx(0.5f * (vs[k][2] + 1.f)));
+    }
+  }
+  const Image img = pathtrace_image(s, 8);
+  double sb = 0, sd = 0;
+  int nb = 0, nd = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      int i, j;
+      if (!pixel_square(x, y, size, i, j)) continue;
+      (bright_square(i, j) ? sb : sd) += img.get(x, y).x;
+      (bright_square(i, j) ? nb : nd) += 1;
+    }
+  REQUIRE(nb > 0);
+  REQUIRE(nd > 0);
+  CHECK((sb / nb) / (sd / nd) ==
+        Approx(pf_srgb8_to_linear(kBright) / pf_srgb8_to_linear(kDark)).epsilon(0.05));
+}
+
 TEST_CASE("one image used by two materials is stored once; other wrap modes share its texels",
           "[textures]") {
   test::TempDir tmp("tex-shared");

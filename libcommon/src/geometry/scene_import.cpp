@@ -253,12 +253,11 @@ float get_float(const aiMaterial& m, const char* key, unsigned type, unsigned id
 // Converts one assimp material by the rules at the top of this file.
 // `textured`: the material has a base-colour texture (then Kd is its colour factor; a factor of
 // up to 1, glTF's default, becomes kMaxAlbedo without a warning: texels reach 1 and the product
-// must stay below 1). A COLLADA <diffuse> is a colour or a texture, never both: with a texture
-// the factor is 1.
+// must stay below 1). A COLLADA <diffuse> is a colour or a texture, never both: assimp 5.2.5
+// gives a textured one the colour 1 (test_textures checks it).
 pf_material convert_material(const aiMaterial& am, const std::string& name,
                              const std::string& file, BakeReport& report, bool textured) {
-  Vec3 kd = get_color(am, AI_MATKEY_COLOR_DIFFUSE, Vec3(0, 0, 0));
-  if (textured && lower_extension(file) == ".dae") kd = Vec3(1, 1, 1);
+  const Vec3 kd = get_color(am, AI_MATKEY_COLOR_DIFFUSE, Vec3(0, 0, 0));
   const Vec3 ks = get_color(am, AI_MATKEY_COLOR_SPECULAR, Vec3(0, 0, 0));
   const Vec3 ke = get_color(am, AI_MATKEY_COLOR_EMISSIVE, Vec3(0, 0, 0));
   const Vec3 kr = get_color(am, AI_MATKEY_COLOR_REFLECTIVE, Vec3(0, 0, 0)) *
