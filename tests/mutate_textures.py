@@ -5,7 +5,7 @@ Applies one small mutation at a time to the texture code of the bake, the scene 
 shading (a texture left out of the eye pass, the photon bounce or the path tracer, no sRGB
 decode, no v flip, the texCoord or the wrap modes ignored, an image stored twice, the scene id
 or the loader's checks weakened, the missing-texture warning dropped, damaged JPEGs or oversized
-images accepted, the OpenCL refusal removed), rebuilds test_textures and the tools it runs, runs
+images accepted, the OpenCL tracers without the texture), rebuilds test_textures and the tools it runs, runs
 it, and reports which test cases fail; the source is restored afterwards, whatever happens.
 Every mutation must make at least one test case fail: the script exits 1 if one survives.
 
@@ -65,8 +65,13 @@ MUTATIONS = [
      "w > uint64_t(max_side) + 1 || h > uint64_t(max_side)"),
     (S + "image/texture_image.cpp", "size limit: texel budget unchecked",
      "|| w * h > max_texels)", ")"),
-    (S + "opencl/cl_backend.cpp", "OpenCL: textured scenes traced",
-     "  if (textured)\n    throw input_error(scene.source,", "  if (false)\n    throw input_error(scene.source,"),
+    ("kernels/trace_hitpoints.cl", "OpenCL eye pass: texture not in the weight",
+     "for (int k = 0; k < 3; ++k) T[k] = T[k] * tf[k];", "for (int k = 0; k < 3; ++k) T[k] = T[k];"),
+    ("kernels/trace_photons.cl", "OpenCL photon bounce: colour factor alone",
+     "for (int k = 0; k < 3; ++k) c[k] = c[k] * tf[k];", "for (int k = 0; k < 3; ++k) c[k] = c[k];"),
+    ("kernels/trace_common.h", "OpenCL: UV interpolated with u and v swapped",
+     "const float s = w * uv[0] + h->u * uv[2] + h->v * uv[4];",
+     "const float s = w * uv[0] + h->v * uv[2] + h->u * uv[4];"),
 ]
 ONLY = os.environ.get("MUTATE_ONLY", "")
 MUTATIONS = [m for m in MUTATIONS if ONLY in m[1]]
