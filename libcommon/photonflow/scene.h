@@ -130,20 +130,15 @@ Scene load_scene(const std::string& path);
 
 // The diffuse colour of material m (index `material`) at a hit on triangle `tri` with barycentrics
 // (u, v): m.color, times the base-colour texture's value there when the material has one (glTF's
-// baseColorFactor × baseColorTexture). Every place that shades a diffuse surface on the CPU asks
-// this (eye pass, photon bounces, shadow rays through the hitpoint weight, the path tracer); a
+// baseColorFactor × baseColorTexture). The photon bounces and the path tracer ask this; the eye
+// pass multiplies the texture's value alone (texture_value) into the hitpoint's weight, so that
+// the gathers' f_r = color/π times the weight, and the shadow-ray direct light, are textured. A
 // material without texture costs one table look-up more than reading m.color.
 inline Vec3 diffuse_color(const Scene& s, const pf_material& m, int material, int tri, float u,
                           float v) {
   const int t = s.texture_of(material);
   if (t < 0) return Vec3(m.color);
   return Vec3(m.color) * s.texture_value(t, size_t(tri), u, v);
-}
-// The texture factor alone (1, 1, 1 without texture): what the eye pass folds into a hitpoint's
-// weight, so that the gathers' f_r = color/π times the weight is the textured f_r.
-inline Vec3 texture_factor(const Scene& s, int material, int tri, float u, float v) {
-  const int t = s.texture_of(material);
-  return t < 0 ? Vec3(1.f, 1.f, 1.f) : s.texture_value(t, size_t(tri), u, v);
 }
 
 // HDF5 compound types of the shared structs (named fields for h5dump/h5py).
