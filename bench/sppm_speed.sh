@@ -23,7 +23,7 @@ $B/scene-bake data/cornell-box.dae -o "$T/box.h5" --width 512 --height 512 > /de
 total=$((PASSES + 1))
 for r in $(seq 1 "$RUNS"); do
   for e in ppm sppm pppm; do
-    $B/render --scene "$T/box.h5" --estimator "$e" --passes $total --photons 262144 \
+    $B/render --scene "$T/box.h5" --estimator "$e" --direct photons --passes $total --photons 262144 \
       --snapshot-at 1 --snapshot "$T/$e-{pass}.exr" -o "$T/$e.exr" --stats "$T/$e-$r.json" \
       --threads "$THREADS" > /dev/null
   done

@@ -127,7 +127,7 @@ ifeq ($(REF_KIND_$(1)),pt)
 	$(BIN)/pathtrace --scene $$< -o $$@ --spp $(REF_SPP) --seed $(REF_SEED) \
 	  --stats $(DIR)/$(1)/ref.json $(TR) | tail -1
 else
-	$(BIN)/render --scene $$< -o $$@ --passes $(REF_PASSES) --photons $(REF_PHOTONS) \
+	$(BIN)/render --scene $$< -o $$@ --estimator ppm --direct photons --passes $(REF_PASSES) --photons $(REF_PHOTONS) \
 	  --spp $(REF_EYE_SPP) --seed $(REF_SEED) --stats $(DIR)/$(1)/ref.json $(TR) | tail -1
 endif
 	$(LOAD) $(DIR)/$(1)/ref.load
@@ -181,7 +181,7 @@ $(DIR)/$(1)/$(2).tsv: $(DIR)/$(1)/scene.h5 $(DIR)/$(1)/ref.exr $(DIR)/$(1)/mask.
     $(call param_stamp,$(DIR)/$(1)/.$(2),$(3) $(PASSES) $(PHOTONS) $(4) $(SEED) $(THREADS))
 	@rm -rf $(DIR)/$(1)/$(2) && mkdir -p $(DIR)/$(1)/$(2)
 	$(LOAD) $(DIR)/$(1)/$(2).load
-	$(BIN)/render --scene $$< -o $(DIR)/$(1)/$(2)/final.exr --alpha $(3) --method grid \
+	$(BIN)/render --scene $$< -o $(DIR)/$(1)/$(2)/final.exr --estimator ppm --direct photons --alpha $(3) --method grid \
 	  --passes $(PASSES) --photons $(PHOTONS) --spp $(4) --seed $(SEED) \
 	  --snapshot-at $(call snaps,$(PASSES)) --snapshot '$(DIR)/$(1)/$(2)/{pass}.exr' \
 	  --stats $(DIR)/$(1)/$(2).json $(T) | tail -1
@@ -197,7 +197,7 @@ $(DIR)/$(1)/$(2).tsv: $(DIR)/$(1)/scene.h5 $(DIR)/$(1)/ref.exr $(DIR)/$(1)/mask.
     $(call param_stamp,$(DIR)/$(1)/.$(2),$(PASSES) $(PHOTONS) $(SEED) $(THREADS))
 	@rm -rf $(DIR)/$(1)/$(2) && mkdir -p $(DIR)/$(1)/$(2)
 	$(LOAD) $(DIR)/$(1)/$(2).load
-	$(BIN)/render --scene $$< -o $(DIR)/$(1)/$(2)/final.exr --estimator $(2) \
+	$(BIN)/render --scene $$< -o $(DIR)/$(1)/$(2)/final.exr --estimator $(2) --direct photons \
 	  --passes $(PASSES) --photons $(PHOTONS) --seed $(SEED) \
 	  --snapshot-at $(call snaps,$(PASSES)) --snapshot '$(DIR)/$(1)/$(2)/{pass}.exr' \
 	  --stats $(DIR)/$(1)/$(2).json $(T) | tail -1
@@ -215,10 +215,10 @@ define CL_RULE
 $(DIR)/$(1)/cl-$(2).tsv: $(DIR)/$(1)/scene.h5 $(DIR)/$(1)/ref.exr $(DIR)/$(1)/mask.exr \
     $(call param_stamp,$(DIR)/$(1)/.cl-$(2),$(CL_PASSES) $(PHOTONS) $(EYE_SPP_$(1)) $(SEED) $(THREADS))
 	@rm -rf $(DIR)/$(1)/cl-$(2) && mkdir -p $(DIR)/$(1)/cl-$(2)
-	$(POCL) $(BIN)/render --scene $$< -o $(DIR)/$(1)/cl-$(2)/warmup.exr --device opencl --method $(2) \
+	$(POCL) $(BIN)/render --scene $$< -o $(DIR)/$(1)/cl-$(2)/warmup.exr --estimator ppm --direct photons --device opencl --method $(2) \
 	  --passes 1 --photons $(PHOTONS) --spp $(EYE_SPP_$(1)) $(T) > /dev/null 2>&1
 	$(LOAD) $(DIR)/$(1)/cl-$(2).load
-	$(POCL) $(BIN)/render --scene $$< -o $(DIR)/$(1)/cl-$(2)/final.exr --device opencl --method $(2) \
+	$(POCL) $(BIN)/render --scene $$< -o $(DIR)/$(1)/cl-$(2)/final.exr --estimator ppm --direct photons --device opencl --method $(2) \
 	  --passes $(CL_PASSES) --photons $(PHOTONS) --spp $(EYE_SPP_$(1)) --seed $(SEED) \
 	  --snapshot-at $(call snaps,$(CL_PASSES)) --snapshot '$(DIR)/$(1)/cl-$(2)/{pass}.exr' \
 	  --stats $(DIR)/$(1)/cl-$(2).json $(T) 2>&1 | tail -1
@@ -240,7 +240,7 @@ $(REFCHECK): $(DIR)/cornell-box/scene.h5 $(DIR)/cornell-box/ref.exr $(DIR)/corne
     $(call param_stamp,$(DIR)/cornell-box/.refcheck,$(REF_SEED) $(REF_PHOTONS) $(REF_PASSES) $(REF_EYE_SPP))
 	@rm -rf $(DIR)/cornell-box/refcheck && mkdir -p $(DIR)/cornell-box/refcheck
 	$(LOAD) $(DIR)/cornell-box/refcheck.load
-	$(BIN)/render --scene $< -o $(DIR)/cornell-box/refcheck/final.exr --passes $(REF_PASSES) \
+	$(BIN)/render --scene $< -o $(DIR)/cornell-box/refcheck/final.exr --estimator ppm --direct photons --passes $(REF_PASSES) \
 	  --photons $(REF_PHOTONS) --spp $(REF_EYE_SPP) --seed $(REF_SEED) \
 	  --snapshot-at $(call snaps,$(REF_PASSES)) --snapshot '$(DIR)/cornell-box/refcheck/{pass}.exr' \
 	  --stats $(DIR)/cornell-box/refcheck.json $(TR) | tail -1

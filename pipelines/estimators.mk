@@ -107,7 +107,7 @@ endef
 define CURVE_RULE
 $(DIR)/$(1)/$(2)-passes.json: $(DIR)/$(1)/scene.h5 $(call param_stamp,$(DIR)/$(1)/.curve-$(2),$(CURVE_PASSES) $(SEED) $(THREADS) $(PHOTONS))
 	@rm -rf $(DIR)/$(1)/$(2)-passes && mkdir -p $(DIR)/$(1)/$(2)-passes
-	$(BIN)/render --scene $$< -o $(DIR)/$(1)/$(2)-passes/final.exr --estimator $(2) \
+	$(BIN)/render --scene $$< -o $(DIR)/$(1)/$(2)-passes/final.exr --estimator $(2) --direct photons \
 	  --passes $(CURVE_PASSES) --photons $(PHOTONS) --seed $(SEED) \
 	  --snapshot-at $(call snaps,$(CURVE_PASSES)) --snapshot '$(DIR)/$(1)/$(2)-passes/{pass}.exr' \
 	  --stats $$@ $(T) | tail -1
@@ -124,7 +124,7 @@ define REF_RECIPE
 	$(LOAD) $(DIR)/$(1)/ref.load
 	$(if $(filter pt,$(REF_KIND_$(1))),$(BIN)/pathtrace --scene $(DIR)/$(1)/scene.h5 -o $(2) --png none \
 	  --spp 100000000 --time $(REF_TIME) --seed $(3) $(T) | tail -1,$(BIN)/render \
-	  --scene $(DIR)/$(1)/scene.h5 -o $(2) --estimator sppm --time $(REF_TIME) \
+	  --scene $(DIR)/$(1)/scene.h5 -o $(2) --estimator sppm --direct photons --time $(REF_TIME) \
 	  --photons $(PHOTONS) --seed $(3) $(T) | tail -1)
 	$(LOAD) $(DIR)/$(1)/ref.load
 endef
@@ -132,7 +132,7 @@ endef
 # $(1) = scene, $(2) = run name, $(3) = render options
 define RENDER_RECIPE
 	$(LOAD) $(DIR)/$(1)/runs.load
-	$(BIN)/render --scene $(DIR)/$(1)/scene.h5 -o $(DIR)/$(1)/$(2).exr $(3) --time $(TIME) \
+	$(BIN)/render --scene $(DIR)/$(1)/scene.h5 -o $(DIR)/$(1)/$(2).exr $(3) --direct photons --time $(TIME) \
 	  --photons $(PHOTONS) --seed $(SEED) --stats $(DIR)/$(1)/$(2).json $(T) | tail -1
 	$(LOAD) $(DIR)/$(1)/runs.load
 endef

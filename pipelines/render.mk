@@ -33,13 +33,16 @@ SCENE      ?= cornell-box
 OUT        ?= out
 WIDTH      ?= 512
 HEIGHT     ?= 512
+# ESTIMATOR, DIRECT, PHOTONS and RADIUS default to render's own defaults (render_defaults.h, chosen
+# by measurement: docs/RESULTS.md "Defaults"): sppm, shadow-rays, and the photons per pass and
+# initial radius chosen from the scene (auto, 0), by render and trace-photons alike.
 ESTIMATOR  ?= sppm
 PASSES     ?= $(if $(filter ppm,$(ESTIMATOR)),16,200)
-PHOTONS    ?= 100000
+PHOTONS    ?= auto
 ALPHA      ?= 0.7
 SEED       ?= 1
 SPP        ?= 1
-DIRECT     ?= photons
+DIRECT     ?= shadow-rays
 RADIUS     ?= 0
 DEVICE     ?= cpu
 METHOD     ?= $(if $(filter cpu,$(DEVICE)),grid,hash-grid)

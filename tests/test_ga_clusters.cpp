@@ -492,7 +492,7 @@ TEST_CASE("evolution: deterministic per seed, independent of the thread count", 
   CHECK_FALSE(same_clusters(a.clusters, d.clusters));
 }
 
-TEST_CASE("evolution: elitist, never worse than its start; it improves on k-means",
+TEST_CASE("evolution: elitist, never worse than its start, it improves on k-means",
           "[ga][evolve]") {
   const Fixture& f = fixture();
   for (GaFitness fit : kCpuFitness) {

@@ -471,7 +471,7 @@ TEST_CASE("written files carry checksums: a damaged value or header is refused, 
   CHECK(refused([&] { h5::Reader(l, "photonflow.test", 1).attr_string("/values", "label"); }));
 }
 
-TEST_CASE("names are fixed-length strings; variable-length ones (older files) still read",
+TEST_CASE("names are fixed-length strings, variable-length ones (older files) still read",
           "[h5io]") {
   // Variable-length strings live in HDF5's global heap, whose reader (H5HG_read, HDF5 1.10)
   // copied past its buffer on a damaged scene.h5; fixed-length ones are stored in the dataset.

@@ -78,7 +78,8 @@ TEST_CASE("OpenCL tools: staged route and render driver on the device", "[opencl
 
   // The render driver on the device: the staged device route's image.
   ToolRun r = run_tool("render", "--scene " + sc + " -o " + (tmp / "render.exr") +
-                                     " --photons 3000 --passes 3 --seed 4 --device auto --work-group 32",
+                                     " --estimator ppm --direct photons --photons 3000 --passes 3 --seed 4 --device auto"
+                                     " --work-group 32",
                        tmp);
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.find("render: device: ") != std::string::npos);

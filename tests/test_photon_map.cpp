@@ -87,7 +87,7 @@ TEST_CASE("photon map: k nearest equal brute force (eq. 3.10 query)", "[photon_m
   CHECK(std::is_sorted(d2.begin(), d2.end()));
 }
 
-TEST_CASE("photon map: radius search equals brute force; eps gives a subset", "[photon_map]") {
+TEST_CASE("photon map: radius search equals brute force, eps gives a subset", "[photon_map]") {
   std::vector<pf_photon> ph = random_photons(20000, 3, 6);
   PhotonMap map(ph);
   std::vector<int32_t> got, approx;

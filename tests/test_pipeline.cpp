@@ -162,7 +162,7 @@ TEST_CASE("grid gather equals FLANN gather", "[pipeline][gather]") {
   CHECK(test::same_hitpoints(g.hitpoints, f.hitpoints));
 }
 
-TEST_CASE("alpha = 1 keeps every radius; alpha < 1 shrinks radii where photons arrive",
+TEST_CASE("alpha = 1 keeps every radius, alpha < 1 shrinks radii where photons arrive",
           "[pipeline][ppm]") {
   Scene s = test::room_scene(PF_MAT_DIFFUSE, 16, 16);
   HitpointSet a = eye_state(s, EyePassOptions{}), b = a;

@@ -239,7 +239,7 @@ TEST_CASE("batches do not depend on the thread count", "[raycast]") {
   CHECK(differ == 0);
 }
 
-TEST_CASE("hits are accepted for t in (tmin, tmax] only", "[raycast]") {
+TEST_CASE("hits are accepted for t in (tmin, tmax) and at tmax only", "[raycast]") {
   // The floor of the room at y = 0, seen from y = 0.5 straight down: t = 0.5.
   pf::Ray r;
   r.o = {0.3f, 0.5f, 0.2f};

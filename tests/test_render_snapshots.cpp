@@ -253,7 +253,7 @@ TEST_CASE("render driver: checkpoints every K passes and at the end", "[render][
 // A pass callback that returns false (render's Ctrl-C, interrupt.h) ends the run after that
 // pass: the checkpoint is saved then, also between regular checkpoints, and --resume from it
 // gives the uninterrupted run's state.
-TEST_CASE("render driver: a stop after a pass saves the checkpoint; resuming gives the whole run",
+TEST_CASE("render driver: a stop after a pass saves the checkpoint, resuming gives the whole run",
           "[render][resume]") {
   const Scene s = test::room_scene(PF_MAT_DIFFUSE, 8, 6);
   TempDir tmp("stop");
@@ -280,7 +280,7 @@ TEST_CASE("render driver: a stop after a pass saves the checkpoint; resuming giv
   CHECK(test::same_hitpoints(resumed.hitpoints, whole.hitpoints));
   // A stop at the last pass is no stop; a stop without a checkpoint keeps nothing on disk.
   RenderStatus at_end;
-  render_progressive(s, small_run(2), false, prov, [](int, double) { return false; }, {}, &at_end);
+  render_progressive(s, small_run(1), false, prov, [](int, double) { return false; }, {}, &at_end);
   CHECK_FALSE(at_end.stopped);
   RenderOptions bare = small_run(3);
   RenderStatus no_ck;
@@ -378,7 +378,9 @@ TEST_CASE("render tool: snapshots and run record", "[render][snapshots][tools]")
   REQUIRE(run_tool("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o " +
                                      (tmp / "s.h5") + " --width 24 --height 24", tmp)
               .exit_code == 0);
-  const std::string base = "--scene " + (tmp / "s.h5") + " --photons 3000 --passes 4 ";
+  // ppm with direct light from photons, as written before sppm became render's default.
+  const std::string base = "--scene " + (tmp / "s.h5") +
+                           " --estimator ppm --direct photons --photons 3000 --passes 4 ";
   auto r = run_tool("render", base + "-o " + (tmp / "r.exr") +
                                   " --snapshot-every 2 --snapshot-at 1 --stats " + (tmp / "r.json"),
                     tmp);

@@ -72,7 +72,7 @@ TEST_CASE("rng: a sample depends only on (seed, pass, index, dim)", "[rng]") {
   CHECK(pf_rng_float(kSeed, 1, 2, 4) != base);
 }
 
-TEST_CASE("rng: floats lie in [0, 1) with 24-bit resolution", "[rng]") {
+TEST_CASE("rng: floats lie in 0 <= u < 1 with 24-bit resolution", "[rng]") {
   CHECK(pf_rng_unit(0u) == 0.0f);
   CHECK(pf_rng_unit(0xFFFFFFFFu) < 1.0f);
   CHECK(pf_rng_unit(0xFFFFFFFFu) == 1.0f - 1.0f / 16777216.0f);

@@ -178,8 +178,8 @@ TEST_CASE("indices out of the scene's range are refused by every stage, never a 
                 out, ph + ": photon");
   // A render checkpoint with a bad material, resumed.
   const std::string ck = bad_hitpoints("ck.h5", [](pf_hitpoint& x) { x.material = 100000000; });
-  check_refused(run_tool("render", S + " --photons 1000 --passes 2 -o " + (tmp / "r.exr") +
-                                       " --checkpoint " + ck + " --resume", tmp),
+  check_refused(run_tool("render", S + " --estimator ppm --direct photons --photons 1000 --passes 2 -o " +
+                                       (tmp / "r.exr") + " --checkpoint " + ck + " --resume", tmp),
                 tmp / "r.exr", ck + ": hitpoint");
 }
 
@@ -259,7 +259,7 @@ TEST_CASE("the staged route gives the render driver's image", "[tools][staged]")
       CHECK(il.err.empty());
     }
     REQUIRE(run_tool("synthesize", "--hitpoints " + (tmp / "s3.h5") + " -o " + (tmp / "staged.exr"), tmp).exit_code == 0);
-    REQUIRE(run_tool("render", "--scene " + scene + " -o " + (tmp / "driver.exr") + " --spp 2 --photons 5000 --passes 3 --seed 7 --method " + gather, tmp).exit_code == 0);
+    REQUIRE(run_tool("render", "--scene " + scene + " -o " + (tmp / "driver.exr") + " --estimator ppm --direct photons --spp 2 --photons 5000 --passes 3 --seed 7 --method " + gather, tmp).exit_code == 0);
     Image staged = read_exr(tmp / "staged.exr"), driver = read_exr(tmp / "driver.exr");
     INFO("gather " << gather);
     CHECK(same_pixels(staged, driver));
@@ -325,7 +325,7 @@ TEST_CASE("a killed render resumes to the uninterrupted image", "[tools][resume]
   TempDir tmp("resume");
   bake(tmp, "cornell-box.dae", "scene.h5");
   std::string scene = tmp / "scene.h5";
-  const std::string common = "--scene " + scene + " --photons 20000 --passes 12";
+  const std::string common = "--scene " + scene + " --estimator ppm --direct photons --photons 20000 --passes 12";
   REQUIRE(run_tool("render", common + " -o " + (tmp / "full.exr"), tmp).exit_code == 0);
   // Interrupted after a few passes (a real SIGKILL at some point after the first checkpoint).
   std::string ck = tmp / "ck.h5";
@@ -341,7 +341,7 @@ TEST_CASE("a killed render resumes to the uninterrupted image", "[tools][resume]
   // checkpoint of a finished 5-pass run is the state after pass 5 of the 12-pass run (passes are
   // not a state option), which --resume must continue at pass 6, not 1.
   const std::string ck5 = tmp / "ck5.h5";
-  REQUIRE(run_tool("render", "--scene " + scene + " --photons 20000 --passes 5 -o " +
+  REQUIRE(run_tool("render", "--scene " + scene + " --estimator ppm --direct photons --photons 20000 --passes 5 -o " +
                                  (tmp / "five.exr") + " --checkpoint " + ck5, tmp).exit_code == 0);
   REQUIRE(load_hitpoints(ck5).passes == 5);
   REQUIRE(run_tool("render", common + " -o " + (tmp / "resumed5.exr") + " --checkpoint " + ck5 +
@@ -356,7 +356,7 @@ TEST_CASE("a killed render resumes to the uninterrupted image", "[tools][resume]
     CHECK(p.wall_time_s > 0.0);
   }
   // Resuming a finished run with fewer passes than it has is refused.
-  auto r = run_tool("render", "--scene " + scene + " --photons 20000 --passes 5 -o " +
+  auto r = run_tool("render", "--scene " + scene + " --estimator ppm --direct photons --photons 20000 --passes 5 -o " +
                                   (tmp / "y.exr") + " --checkpoint " + ck + " --resume", tmp);
   CHECK(r.exit_code == 2);
 }
@@ -370,7 +370,7 @@ TEST_CASE("render writes its checkpoint every --checkpoint-every passes, mid-run
   bake(tmp, "cornell-box.dae", "scene.h5");
   const std::string ck = tmp / "ck.h5", pidfile = tmp / "pid";
   const std::string cmd = test::bin_dir() + "/render --scene " + (tmp / "scene.h5") +
-                          " --photons 20000 --passes 100000 -o " + (tmp / "x.exr") +
+                          " --estimator ppm --direct photons --photons 20000 --passes 100000 -o " + (tmp / "x.exr") +
                           " --checkpoint " + ck + " --checkpoint-every 7 --snapshot-at 8" +
                           " --snapshot " + (tmp / "snap-{pass}.exr") +
                           " >/dev/null 2>&1 & echo $! > " + pidfile;
@@ -458,9 +458,12 @@ TEST_CASE("the Make DAG's render driver restarts after a state option changed, r
   make_ok("ESTIMATOR=ppm PASSES=3 ALPHA=0.7");
   REQUIRE(std::filesystem::exists(dir + "/render-checkpoint.h5"));
   make_ok("ESTIMATOR=ppm PASSES=3 ALPHA=0.5");
-  CHECK(same_pixels(read_exr(dir + "/render.exr"), fresh("--passes 3 --alpha 0.5", "a.exr")));
+  // render.mk's DIRECT defaults to render's (shadow-rays) for ppm too.
+  CHECK(same_pixels(read_exr(dir + "/render.exr"),
+                    fresh("--estimator ppm --direct shadow-rays --passes 3 --alpha 0.5", "a.exr")));
   make_ok("ESTIMATOR=ppm PASSES=5 ALPHA=0.5");
-  CHECK(same_pixels(read_exr(dir + "/render.exr"), fresh("--passes 5 --alpha 0.5", "b.exr")));
+  CHECK(same_pixels(read_exr(dir + "/render.exr"),
+                    fresh("--estimator ppm --direct shadow-rays --passes 5 --alpha 0.5", "b.exr")));
   // The default estimator, SPPM: the driver at any pass count, restarted after the estimator
   // changed, resumed after more passes.
   make_ok("PASSES=3 ALPHA=0.5");

@@ -176,7 +176,7 @@ TEST_CASE("parse_vec3: three finite numbers, anything else an InputError naming 
   }
 }
 
-TEST_CASE("option checks: positive, (0, 1], one of a list; defaults read back", "[options]") {
+TEST_CASE("option checks: positive, in (0, 1) or 1, one of a list, defaults read back", "[options]") {
   CHECK_NOTHROW(require_positive("photons", 1e-300));
   CHECK_NOTHROW(require_positive("photons", 5));
   for (double bad : {0.0, -0.0, -1.0, std::nan("")}) {

@@ -233,7 +233,7 @@ std::string checker_jpeg() {
 
 }  // namespace
 
-TEST_CASE("a JPEG texture is decoded by libjpeg-turbo; a cut one is refused", "[textures]") {
+TEST_CASE("a JPEG texture is decoded by libjpeg-turbo, a cut one is refused", "[textures]") {
   test::TempDir tmp("tex-jpeg");
   const std::string jpeg = checker_jpeg();
   write_text(tmp / "checker.jpg", jpeg);
@@ -523,7 +523,7 @@ TEST_CASE("a COLLADA <diffuse><texture>: the image through its sampler and surfa
         Approx(pf_srgb8_to_linear(kBright) / pf_srgb8_to_linear(kDark)).epsilon(0.05));
 }
 
-TEST_CASE("one image used by two materials is stored once; other wrap modes share its texels",
+TEST_CASE("one image used by two materials is stored once, other wrap modes share its texels",
           "[textures]") {
   test::TempDir tmp("tex-shared");
   write_text(tmp / "checker.png", checker_png());
@@ -559,7 +559,7 @@ TEST_CASE("one image used by two materials is stored once; other wrap modes shar
   CHECK(r.textures.size() == 2);
 }
 
-TEST_CASE("scene.h5 keeps textures, texels, materials' textures and UVs; edits are refused",
+TEST_CASE("scene.h5 keeps textures, texels, materials' textures and UVs, edits are refused",
           "[textures]") {
   test::TempDir tmp("tex-h5");
   write_text(tmp / "checker.png", checker_png());
@@ -691,7 +691,7 @@ TEST_CASE("scene.h5 keeps textures, texels, materials' textures and UVs; edits a
   }
 }
 
-TEST_CASE("a missing texture is one warning naming the file and the material; the factor is used",
+TEST_CASE("a missing texture is one warning naming the file and the material, the factor is used",
           "[textures]") {
   test::TempDir tmp("tex-missing");
   write_text(tmp / "m.mtl", "newmtl floor\nKd 0.5 0.25 0.5\nmap_Kd nowhere.png\n" + light_mtl());

@@ -201,7 +201,7 @@ TEST_CASE("eye pass: emitters are one-sided, as the photons' emission", "[transp
   }
 }
 
-TEST_CASE("eye pass: max_depth specular bounces are followed; the hitpoint weight is their tint",
+TEST_CASE("eye pass: max_depth specular bounces are followed, the hitpoint weight is their tint",
           "[transport][eye]") {
   // A periscope: the camera's central ray (along −z) meets mirror 1 (normal (0,1,1)/√2), goes up
   // (+y) to mirror 2 (normal (0,−1,1)/√2), then +z to a diffuse wall at z = 2 facing −z. Two

@@ -70,7 +70,12 @@ float default_radius(const Scene& scene);
 
 // InputError naming the option (--spp, --max-depth, --shadow-samples, --radius, --threads) when
 // one is out of range; trace-hitpoints and render check their options with it.
+constexpr int kMaxShadowSamples = 1024;  // --shadow-samples, per visible point and pass
 void check_options(const EyePassOptions& opt);
+// InputError naming --spp when width × height × spp eye samples exceed the 2^32 sample streams
+// of a pass (a sample's stream index is a uint32: (seed, pass, pixel · spp + sample)). Every eye
+// pass (EyeTracer, the device's) checks it.
+void check_eye_samples(const Scene& scene, const EyePassOptions& opt);
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt);
 

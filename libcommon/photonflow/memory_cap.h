@@ -24,6 +24,8 @@ namespace pf {
 
 // Bytes of address space the process has mapped now (VmSize); 0 if /proc cannot be read.
 uint64_t address_space_bytes();
+// Bytes of physical memory of this machine (sysconf); 0 if unknown.
+uint64_t physical_memory_bytes();
 
 class AddressSpaceCap {
  public:

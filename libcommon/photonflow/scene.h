@@ -127,6 +127,12 @@ pf_hh_triangle make_hh_triangle(const pf_triangle& t);
 void save_scene(const Scene& scene, const std::string& path, const Provenance& prov);
 // Reads and checks scene.h5 (format, version, array consistency, kd-tree structure).
 Scene load_scene(const std::string& path);
+// The checks load_scene applies to a scene's tables and values (validate.h): table lengths, every
+// index into them, material and light types, the camera's image size, the kd-tree, every value in
+// range. `s` must have its bounds and face normals computed. save_scene applies them to what it
+// writes (written_check) and bake_scene to what it baked (InputError naming the source: a
+// coordinate or camera option beyond kMaxCoordinate). InputError naming `path`.
+void validate_scene(const Scene& s, const std::string& path);
 
 // The diffuse colour of material m (index `material`) at a hit on triangle `tri` with barycentrics
 // (u, v): m.color, times the base-colour texture's value there when the material has one (glTF's

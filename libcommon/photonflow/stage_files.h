@@ -86,14 +86,9 @@ void save_hitpoints(const HitpointSet& h, const std::string& path, const Provena
 HitpointSet load_hitpoints(const std::string& path);
 // The checks of a hitpoint set's values that load_hitpoints and save_hitpoints apply (below, and
 // docs/FORMATS.md): attributes in range, counts that agree with the estimator (photons_emitted a
-// count of `passes` passes, validate.h kMaxPhotonsPerPass; a PPM state or classic estimate with
-// at least one hitpoint), image layers, every hitpoint's values (R in [kMinRadius, kMaxRadius]
+// count of `passes` passes, validate.h kMaxPhotonsPerPass), image layers, every hitpoint's values (R in [kMinRadius, kMaxRadius]
 // for every pixel of an SPPM state too), one hitpoint per pixel for SPPM. InputError naming path.
 void validate_hitpoints(const HitpointSet& h, const std::string& path);
-// InputError naming `path` when a set that photons are to be gathered into (PPM, a classic
-// estimate) holds no hitpoint: no eye path found a diffuse surface, photons would light nothing,
-// and the state written would be one that validate_hitpoints refuses.
-void require_hitpoints(const std::string& path, const HitpointSet& h);
 // The initial radius R0 of a hitpoints file (attribute radius0) as a length other stages take
 // (build-grid's default radius): InputError naming `path` and the attribute unless it is positive
 // and finite.

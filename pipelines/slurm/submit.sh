@@ -12,7 +12,8 @@
 #   --out RUN            the run folder, on a file system the nodes share; must not hold a run yet
 #   --tasks K            tasks of the job array (default 4)
 #   --passes-per-task P  passes each task renders (default 16)
-#   --photons N          photons per pass (default 100000)
+#   --photons N          photons per pass, or auto: render's count from the image size
+#                        (render_defaults.h; default auto)
 #   --seed S             random seed (default 1)
 #   --alpha A            PPM's alpha (default 0.7)
 #   --radius R           initial radius, 0 = automatic (default 0)
@@ -31,7 +32,7 @@ set -euo pipefail
 PF_SCRIPT=submit.sh
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-scene="" RUN="" TASKS=4 PPT=16 PHOTONS=100000 SEED=1 ALPHA=0.7 RADIUS=0 CPUS_PER_TASK=1
+scene="" RUN="" TASKS=4 PPT=16 PHOTONS=auto SEED=1 ALPHA=0.7 RADIUS=0 CPUS_PER_TASK=1
 PARTITION="" TIME_LIMIT="" MEM="" FANIN=64 BIN=build/bin prepare_only=0
 while [[ $# -gt 0 ]]; do
   opt=$1
@@ -62,7 +63,7 @@ is_count() { [[ $1 =~ ^[1-9][0-9]*$ ]] && (($1 <= 1000000)); }
 is_count "$TASKS" || pf_die "--tasks must be a whole number from 1 to 1000000, not '$TASKS'"
 is_count "$PPT" || pf_die "--passes-per-task must be a whole number from 1 to 1000000, not '$PPT'"
 is_count "$CPUS_PER_TASK" || pf_die "--cpus-per-task must be a whole number >= 1, not '$CPUS_PER_TASK'"
-[[ $PHOTONS =~ ^[1-9][0-9]*$ ]] || pf_die "--photons must be a whole number >= 1, not '$PHOTONS'"
+[[ $PHOTONS == auto || $PHOTONS =~ ^[1-9][0-9]*$ ]] || pf_die "--photons must be a whole number >= 1 or auto, not '$PHOTONS'"
 [[ $SEED =~ ^[0-9]+$ ]] || pf_die "--seed must be a whole number >= 0, not '$SEED'"
 is_real() { [[ $1 =~ ^[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?$ ]]; }
 is_real "$ALPHA" || pf_die "--alpha must be a number in (0, 1], not '$ALPHA'"

@@ -18,6 +18,7 @@
 #include "photonflow/options.h"
 #include "photonflow/pass_sums.h"
 #include "photonflow/progress.h"
+#include "photonflow/render_defaults.h"
 #include "photonflow/render_driver.h"
 #include "photonflow/sppm.h"
 #include "photonflow/tool_main.h"
@@ -33,7 +34,9 @@ int main(int argc, char** argv) {
       ("grid", "prebuilt photon grids (from build-grid; PPM with --method grid; instead of "
        "--photons)", cxxopts::value<std::string>())
       ("o,output", "output hitpoint state (.h5)", cxxopts::value<std::string>())
-      ("estimator", "ppm | classic | sppm | pppm", cxxopts::value<std::string>()->default_value("ppm"))
+      ("estimator", "ppm | classic | sppm | pppm (render's default is " +
+       std::string(pf::estimator_name(pf::kDefaultEstimator)) + ", render_defaults.h)",
+       cxxopts::value<std::string>()->default_value("ppm"))
       ("state", "sppm: the SPPM state, pppm: the pass sums, after the passes before this one "
        "(an earlier illuminate's output); none for the first pass", cxxopts::value<std::string>())
       ("alpha", "PPM: fraction of new photons kept, in (0, 1] (eq. 3.14)",
@@ -183,7 +186,6 @@ int main(int argc, char** argv) {
     pf::Provenance prov;
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
     pf::accept_input(prov, "hitpoints", hp_path, h, scene, scene_path);
-    pf::require_hitpoints(hp_path, h);
     if (estimator == "ppm" && h.estimator == "classic")
       throw pf::input_error(hp_path, "holds a classic estimate; PPM continues only a PPM state",
                             "start from trace-hitpoints' output");

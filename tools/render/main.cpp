@@ -19,6 +19,7 @@
 #include "photonflow/device_options.h"
 #include "photonflow/options.h"
 #include "photonflow/progress.h"
+#include "photonflow/render_defaults.h"
 #include "photonflow/render_driver.h"
 #include "photonflow/scene_source.h"
 #include "photonflow/synthesize.h"
@@ -36,8 +37,9 @@ int main(int argc, char** argv) {
       ("o,output", "output OpenEXR image; a PNG preview goes beside it",
        cxxopts::value<std::string>())
       ("estimator", "ppm (one fixed eye pass) | sppm (new eye pass every pass, per-pixel "
-       "statistics) | pppm (independent passes, global radius; mergeable)",
-       cxxopts::value<std::string>()->default_value("ppm"))
+       "statistics) | pppm (independent passes, global radius; mergeable); the default measures "
+       "best (render_defaults.h)",
+       cxxopts::value<std::string>()->default_value(pf::estimator_name(pf::kDefaultEstimator)))
       ("passes", "photon passes in total (pppm: from --first-pass); with --time the most passes",
        cxxopts::value<int>()->default_value("16"))
       ("time", "rendering budget in seconds: stop after the pass that reaches it, then write the "
@@ -48,7 +50,8 @@ int main(int argc, char** argv) {
        cxxopts::value<std::string>()->default_value(""))
       ("pixel-sampler", "where eye samples go in their pixel: auto (strata for ppm, sobol "
        "otherwise) | strata | random | sobol", cxxopts::value<std::string>()->default_value("auto"))
-      ("photons", "photons emitted per pass", cxxopts::value<int64_t>()->default_value("100000"))
+      ("photons", "photons emitted per pass, or " + pf::auto_photons_rule(),
+       cxxopts::value<std::string>()->default_value("auto"))
       ("alpha", "fraction of new photons kept, in (0, 1] (eq. 3.14)",
        cxxopts::value<float>()->default_value("0.7"))
       ("slab", "sppm, pppm: count only photons within SLAB x R of the visible point's tangent "
@@ -59,11 +62,13 @@ int main(int argc, char** argv) {
        cxxopts::value<int>()->default_value("1"))
       ("max-depth", "specular bounces of eye paths", cxxopts::value<int>()->default_value("16"))
       ("max-bounces", "bounces of photon paths", cxxopts::value<int>()->default_value("16"))
-      ("direct", "photons | shadow-rays", cxxopts::value<std::string>()->default_value("photons"))
+      ("direct", "direct light: photons | shadow-rays (light sampling at the visible points; "
+       "photons then carry the rest, nothing counted twice)",
+       cxxopts::value<std::string>()->default_value(pf::direct_mode_name(pf::kDefaultDirect)))
       ("shadow-samples", "light samples per hitpoint with --direct shadow-rays",
        cxxopts::value<int>()->default_value("4"))
-      ("radius", "initial radius R0 in world units; 0 = automatic",
-       cxxopts::value<float>()->default_value("0"))
+      ("radius", "initial radius R0 in world units, or " + pf::auto_radius_rule() + " (0 is "
+       "auto too)", cxxopts::value<std::string>()->default_value("auto"))
       ("seed", "random seed", cxxopts::value<uint32_t>()->default_value("1"))
       ("checkpoint", "hitpoint-state file written every --checkpoint-every passes",
        cxxopts::value<std::string>()->default_value(""))
@@ -107,9 +112,8 @@ int main(int argc, char** argv) {
     if (opt.time_budget > 0 && a.count("passes") == 0)  // the budget alone ends the run
       opt.passes = std::numeric_limits<int>::max() - std::max(0, opt.first_pass);
     const std::string sampler = a["pixel-sampler"].as<std::string>();
-    int64_t photons = a["photons"].as<int64_t>();
-    pf::require_positive("photons", int64_t(photons));
-    if (photons > int64_t(UINT32_MAX)) throw pf::input_error("", "--photons must be below 2^32");
+    // 0: automatic, chosen from the scene once it is read (render_defaults.h).
+    const uint32_t photons = pf::parse_photons_option(a["photons"].as<std::string>());
     std::string direct = a["direct"].as<std::string>();
     pf::require_choice("direct", direct, {"photons", "shadow-rays"});
     int threads = a["threads"].as<int>();
@@ -121,14 +125,14 @@ int main(int argc, char** argv) {
     opt.eye.max_depth = a["max-depth"].as<int>();
     opt.eye.direct = direct == "photons" ? pf::DirectMode::Photons : pf::DirectMode::ShadowRays;
     opt.eye.shadow_samples = a["shadow-samples"].as<int>();
-    opt.eye.radius = a["radius"].as<float>();
+    opt.eye.radius = pf::parse_radius_option(a["radius"].as<std::string>());
     opt.eye.seed = seed;
     opt.eye.threads = threads;
     opt.eye.sampler = sampler == "auto" ? (opt.estimator == pf::Estimator::Ppm
                                                ? pf::PixelSampler::Strata
                                                : pf::PixelSampler::Sobol)
                                         : pf::parse_pixel_sampler(sampler);
-    opt.photons.photons = uint32_t(photons);
+    opt.photons.photons = photons > 0 ? photons : pf::kMinAutoPhotons;  // auto: set below
     opt.photons.seed = seed;
     opt.photons.max_bounces = a["max-bounces"].as<int>();
     opt.photons.threads = threads;
@@ -168,6 +172,18 @@ int main(int argc, char** argv) {
     pf::Stopwatch clock;
     pf::OpenedScene opened = pf::open_scene(scene_path, bake, pf::given_bake_options(a));
     const pf::Scene& scene = opened.scene;
+    // The automatic choices, from the scene (render_defaults.h): every one overridable.
+    const pf::RenderDefaults defaults = pf::choose_defaults(scene);
+    pf::RenderChoices chosen;
+    chosen.estimator = opt.estimator;
+    chosen.estimator_auto = a.count("estimator") == 0;
+    chosen.direct = opt.eye.direct;
+    chosen.direct_auto = a.count("direct") == 0;
+    chosen.photons_auto = photons == 0;
+    chosen.photons = chosen.photons_auto ? defaults.photons : photons;
+    chosen.radius_auto = !(opt.eye.radius > 0.f);
+    chosen.radius = chosen.radius_auto ? defaults.radius : opt.eye.radius;
+    opt.photons.photons = chosen.photons;
     if (opened.baked_here) {
       for (const std::string& w : pf::bake_warnings(bake, opened.report))
         std::cerr << "render: " << w << "\n";
@@ -189,6 +205,7 @@ int main(int argc, char** argv) {
     prov.tool = "render";
     prov.seed = seed;
     pf::record_options(prov, a);
+    pf::record_choices(prov.parameters, chosen);
     // OpenCL backend: device eye pass, photon passes, --method gather and synthesis.
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "render");
     opt.device = dev.get();
@@ -277,7 +294,7 @@ int main(int argc, char** argv) {
     prov.wall_time_s = clock.seconds();
     if (!stats.empty()) pf::write_render_record(stats, prov, written);
     std::cout << "render: " << (out.empty() ? sums : out) << " (" << scene.camera.width << "x"
-              << scene.camera.height << ", " << pf::estimator_name(opt.estimator) << ", "
+              << scene.camera.height << ", " << pf::describe_choices(chosen) << ", "
               << status.passes << " passes" << (status.budget_reached ? " (--time reached)" : "")
               << ", " << status.photons_emitted << " photons, " << clock.seconds() << " s)\n";
     return 0;

@@ -8,6 +8,7 @@
 #include "photonflow/device_options.h"
 #include "photonflow/eye_pass.h"
 #include "photonflow/options.h"
+#include "photonflow/render_defaults.h"
 #include "photonflow/sppm.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/tool_main.h"
@@ -25,7 +26,8 @@ int main(int argc, char** argv) {
       ("max-depth", "specular bounces before an eye path is dropped",
        cxxopts::value<int>()->default_value("16"))
       ("direct", "direct light: photons (all light from photons) | shadow-rays (area-light "
-       "sampling; photons then carry indirect light only)",
+       "sampling; photons then carry indirect light only); render's default is " +
+       std::string(pf::direct_mode_name(pf::kDefaultDirect)) + " (render_defaults.h)",
        cxxopts::value<std::string>()->default_value("photons"))
       ("shadow-samples", "light samples per hitpoint with --direct shadow-rays",
        cxxopts::value<int>()->default_value("4"))
@@ -33,7 +35,8 @@ int main(int argc, char** argv) {
        "4 pixel footprints at the look-at distance)",
        cxxopts::value<float>()->default_value("0"))
       ("estimator", "the estimator the hitpoints are for: ppm (one eye pass, pass 0) | sppm | "
-       "pppm (eye pass --pass of a run that traces one every pass)",
+       "pppm (eye pass --pass of a run that traces one every pass); render's default is " +
+       std::string(pf::estimator_name(pf::kDefaultEstimator)),
        cxxopts::value<std::string>()->default_value("ppm"))
       ("pass", "sppm/pppm: which eye pass (0-based; the photon pass it meets has the same index)",
        cxxopts::value<int>()->default_value("0"))

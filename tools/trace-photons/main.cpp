@@ -9,6 +9,7 @@
 #include "photonflow/options.h"
 #include "photonflow/photon_pass.h"
 #include "photonflow/progress.h"
+#include "photonflow/render_defaults.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/tool_main.h"
 
@@ -19,7 +20,8 @@ int main(int argc, char** argv) {
     o.add_options()
       ("scene", "baked scene (scene.h5 from scene-bake)", cxxopts::value<std::string>())
       ("o,output", "output photons file (.h5)", cxxopts::value<std::string>())
-      ("photons", "photons emitted per pass", cxxopts::value<int64_t>()->default_value("100000"))
+      ("photons", "photons emitted per pass, or " + pf::auto_photons_rule() + " (render's "
+       "default, render_defaults.h)", cxxopts::value<std::string>()->default_value("auto"))
       ("passes", "number of passes in this file", cxxopts::value<int>()->default_value("1"))
       ("first-pass", "index of the first pass (passes are numbered from 0 over a whole run; the "
        "random streams depend on it)", cxxopts::value<int>()->default_value("0"))
@@ -35,15 +37,13 @@ int main(int argc, char** argv) {
     if (pf::list_devices_requested(a)) return 0;
     pf::require_options(o, a, {"scene", "output"});
     pf::check_output_options(a, {"scene"}, {"output"});
-    int64_t photons = a["photons"].as<int64_t>();
+    // 0: automatic, chosen from the scene once it is read (render_defaults.h).
+    const uint32_t given = pf::parse_photons_option(a["photons"].as<std::string>());
     int passes = a["passes"].as<int>(), first = a["first-pass"].as<int>();
-    pf::require_positive("photons", int64_t(photons));
-    if (photons > int64_t(UINT32_MAX))
-      throw pf::input_error("", "--photons must be below 2^32 per pass");
     pf::require_positive("passes", passes);
     pf::check_pass_range(first, passes);  // >= 0, and int32 pass indices in the files
     pf::PhotonPassOptions opt;
-    opt.photons = uint32_t(photons);
+    opt.photons = given > 0 ? given : pf::kMinAutoPhotons;  // auto: set once the scene is read
     opt.seed = a["seed"].as<uint32_t>();
     opt.max_bounces = a["max-bounces"].as<int>();
     opt.threads = a["threads"].as<int>();
@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
+    if (given == 0) opt.photons = pf::choose_defaults(scene).photons;
+    const uint32_t photons = opt.photons;
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "trace-photons");
     pf::PhotonSet set;
     set.first_pass = first;
@@ -68,6 +70,10 @@ int main(int argc, char** argv) {
     prov.tool = "trace-photons";
     prov.seed = opt.seed;
     pf::record_options(prov, a);
+    // The count used (render's state parameters and the pppm merge read it back), and whether it
+    // was automatic.
+    prov.parameters["photons"] = std::to_string(photons);
+    prov.parameters["photons_auto"] = given == 0 ? "true" : "false";
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);

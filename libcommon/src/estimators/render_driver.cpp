@@ -50,10 +50,6 @@ uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
     : scene_(scene), opt_(opt), state_(fresh_state(scene, opt)) {
   check_against_scene("", state_, scene_);
-  if (opt.estimator == Estimator::Ppm && state_.hitpoints.empty())
-    throw input_error("", "the eye pass found no hitpoint: no eye path reached a diffuse "
-                          "surface, so photons would light nothing",
-                      "check the camera and the scene's materials, or use --estimator sppm");
 }
 
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt,

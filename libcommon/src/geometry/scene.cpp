@@ -414,7 +414,8 @@ void check_scene_values(const Scene& s, const Validator& v) {
 
 // The textures of a scene (format version 3, docs/FORMATS.md): the table against the pool and the
 // limits, the texels' values, the materials' texture ids, and the UVs where a material has a
-// texture. load_scene runs it on what it read, save_scene (written_check) on what it writes.
+// texture. Part of validate_scene: load_scene runs it on what it read, save_scene (written_check)
+// on what it writes, bake_scene on what it baked.
 void check_scene_textures(const Scene& s, const Validator& v) {
   if (s.texture_names.size() != s.textures.size())
     v.fail("textures/names holds " + std::to_string(s.texture_names.size()) +
@@ -462,6 +463,13 @@ void check_scene_textures(const Scene& s, const Validator& v) {
 
 
 void save_scene(const Scene& s, const std::string& path, const Provenance& prov) {
+  // What load_scene will check (on a copy whose bounds and normals are recomputed as it does).
+  written_check([&] {
+    Scene c = s;
+    c.compute_bounds();
+    c.compute_normals();
+    validate_scene(c, path);
+  });
   h5::Writer w(path, kSceneFormat, kSceneFormatVersion);
   w.attr("/", "scene_id", s.scene_id);
   w.attr("/", "source", s.source);
@@ -482,11 +490,7 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
   w.write_strings("/materials/names", s.material_names);
 
   // Format version 3: the materials' textures always (−1 = none), the texture datasets and the
-  // UVs only where there are textures.
-  {
-    const Validator v(path, "internal error");
-    written_check([&] { check_scene_textures(s, v); });
-  }
+  // UVs only where there are textures (written_check above covers them: validate_scene).
   std::vector<int32_t> material_texture = s.material_texture;
   material_texture.resize(s.materials.size(), -1);
   w.write("/materials/texture", material_texture);
@@ -534,47 +538,7 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
   w.commit();
 }
 
-Scene load_scene(const std::string& path) {
-  h5::Reader r(path, kSceneFormat, kSceneFormatVersion);
-  Scene s;
-  s.scene_id = r.scene_id();
-  s.source = r.attr_string("/", "source");
-  s.triangles = r.read<pf_triangle>("/geometry/triangles", h5_type_triangle());
-  s.hh = r.read<pf_hh_triangle>("/geometry/hh", h5_type_hh_triangle());
-  s.mesh_names = r.read_strings("/geometry/mesh_names");
-  s.materials = r.read<pf_material>("/materials/materials", h5_type_material());
-  s.material_names = r.read_strings("/materials/names");
-  s.lights = r.read<pf_light>("/lights/lights", h5_type_light());
-  s.light_cdf = r.read<float>("/lights/cdf");
-  if (r.count("/camera") != 1) throw input_error(path, "/camera must hold exactly one camera");
-  r.read("/camera", h5_type_camera(), &s.camera, 1);
-  s.kd.nodes = r.read<pf_kd_node>("/kdtree/nodes", h5_type_kd_node());
-  s.kd.leaf_tris = r.read<int32_t>("/kdtree/leaf_tris");
-  s.kd.params.cost_traversal = float(r.attr_double("/kdtree", "cost_traversal"));
-  s.kd.params.cost_intersect = float(r.attr_double("/kdtree", "cost_intersect"));
-  s.kd.params.empty_bonus = float(r.attr_double("/kdtree", "empty_bonus"));
-  s.kd.params.max_depth = int(r.attr_int("/kdtree", "max_depth"));
-  s.kd.params.max_leaf_size = int(r.attr_int("/kdtree", "max_leaf_size"));
-  s.kd.depth = int(r.attr_int("/kdtree", "depth"));
-  s.kd.build_seconds = r.attr_double("/kdtree", "build_seconds");
-  if (r.version() >= 3) {  // textures (versions 1 and 2 have none)
-    s.material_texture = r.read<int32_t>("/materials/texture");
-    const std::vector<std::string> root = r.children("/");
-    if (std::find(root.begin(), root.end(), "textures") != root.end()) {
-      s.textures = r.read<pf_texture>("/textures/textures", h5_type_texture());
-      s.texture_names = r.read_strings("/textures/names");
-      const std::vector<size_t> shape = r.shape("/textures/texels");
-      s.texels = r.read<float>("/textures/texels", {shape.empty() ? 0 : shape[0], 4});
-    }
-    const std::vector<std::string> geometry = r.children("/geometry");
-    if (std::find(geometry.begin(), geometry.end(), "uvs") != geometry.end()) {
-      const std::vector<size_t> shape = r.shape("/geometry/uvs");
-      const std::vector<float> uv = r.read<float>("/geometry/uvs", {shape.empty() ? 0 : shape[0], 6});
-      s.uvs.resize(uv.size() / 6);
-      for (size_t i = 0; i < s.uvs.size(); ++i) std::copy(&uv[6 * i], &uv[6 * i] + 6, s.uvs[i].uv);
-    }
-  }
-
+void validate_scene(const Scene& s, const std::string& path) {
   // Consistency: a file that passes these checks cannot make a later stage index out of range,
   // nor compute a non-finite value (validate.h).
   const std::string hint = "the file is damaged; rebake it with scene-bake";
@@ -617,17 +581,64 @@ Scene load_scene(const std::string& path) {
                       hint);
   std::string problem = validate_kdtree(s.kd, s.triangles.size());
   if (!problem.empty()) throw input_error(path, "invalid kd-tree: " + problem, hint);
-  s.compute_bounds();
-  s.compute_normals();
   check_scene_values(s, v);
   check_scene_textures(s, v);
+}
+
+Scene load_scene(const std::string& path) {
+  h5::Reader r(path, kSceneFormat, kSceneFormatVersion);
+  Scene s;
+  s.scene_id = r.scene_id();
+  s.source = r.attr_string("/", "source");
+  s.triangles = r.read<pf_triangle>("/geometry/triangles", h5_type_triangle());
+  s.hh = r.read<pf_hh_triangle>("/geometry/hh", h5_type_hh_triangle());
+  s.mesh_names = r.read_strings("/geometry/mesh_names");
+  s.materials = r.read<pf_material>("/materials/materials", h5_type_material());
+  s.material_names = r.read_strings("/materials/names");
+  s.lights = r.read<pf_light>("/lights/lights", h5_type_light());
+  s.light_cdf = r.read<float>("/lights/cdf");
+  if (r.count("/camera") != 1) throw input_error(path, "/camera must hold exactly one camera");
+  r.read("/camera", h5_type_camera(), &s.camera, 1);
+  s.kd.nodes = r.read<pf_kd_node>("/kdtree/nodes", h5_type_kd_node());
+  s.kd.leaf_tris = r.read<int32_t>("/kdtree/leaf_tris");
+  s.kd.params.cost_traversal = float(r.attr_double("/kdtree", "cost_traversal"));
+  s.kd.params.cost_intersect = float(r.attr_double("/kdtree", "cost_intersect"));
+  s.kd.params.empty_bonus = float(r.attr_double("/kdtree", "empty_bonus"));
+  s.kd.params.max_depth = int(r.attr_int("/kdtree", "max_depth"));
+  s.kd.params.max_leaf_size = int(r.attr_int("/kdtree", "max_leaf_size"));
+  s.kd.depth = int(r.attr_int("/kdtree", "depth"));
+  s.kd.build_seconds = r.attr_double("/kdtree", "build_seconds");
+  if (r.version() >= 3) {  // textures (versions 1 and 2 have none)
+    s.material_texture = r.read<int32_t>("/materials/texture");
+    const std::vector<std::string> root = r.children("/");
+    if (std::find(root.begin(), root.end(), "textures") != root.end()) {
+      s.textures = r.read<pf_texture>("/textures/textures", h5_type_texture());
+      s.texture_names = r.read_strings("/textures/names");
+      const std::vector<size_t> shape = r.shape("/textures/texels");
+      s.texels = r.read<float>("/textures/texels", {shape.empty() ? 0 : shape[0], 4});
+    }
+    const std::vector<std::string> geometry = r.children("/geometry");
+    if (std::find(geometry.begin(), geometry.end(), "uvs") != geometry.end()) {
+      const std::vector<size_t> shape = r.shape("/geometry/uvs");
+      const std::vector<float> uv = r.read<float>("/geometry/uvs", {shape.empty() ? 0 : shape[0], 6});
+      s.uvs.resize(uv.size() / 6);
+      for (size_t i = 0; i < s.uvs.size(); ++i) std::copy(&uv[6 * i], &uv[6 * i] + 6, s.uvs[i].uv);
+    }
+  }
+
+  // Bounds and face normals first (plain arithmetic on any values), then the checks, which
+  // read them (validate_scene).
+  s.compute_bounds();
+  s.compute_normals();
+  validate_scene(s, path);
   s.kd.bounds.lo = Vec3(s.kd.nodes[0].lo);
   s.kd.bounds.hi = Vec3(s.kd.nodes[0].hi);
   // The id names the content: a file edited after baking (or damaged) no longer matches it.
   std::string stored = s.scene_id;
   s.compute_scene_id();
   if (stored != s.scene_id)
-    throw input_error(path, "scene_id does not match the scene's content", hint);
+    throw input_error(path, "scene_id does not match the scene's content",
+                      "the file is damaged; rebake it with scene-bake");
   return s;
 }
 

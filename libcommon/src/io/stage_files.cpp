@@ -113,11 +113,8 @@ void check_state_counts(const HitpointSet& h, const Validator& v) {
   if (h.estimator == "ppm" && h.passes < 1)
     v.fail(counts + ": a PPM state (estimator \"ppm\") has at least 1 pass");
   v.photons_emitted("attribute photons_emitted", h.photons_emitted, h.passes);
-  // A state photons were applied to gathers at its hitpoints: without any, nothing would ever
-  // be lit (the eye pass found no diffuse surface); render and illuminate refuse to start one.
-  if ((h.estimator == "ppm" || h.estimator == "classic") && h.hitpoints.empty())
-    v.fail("a " + std::string(h.estimator == "ppm" ? "PPM state" : "classic estimate") +
-           " holds no hitpoints (no eye path found a diffuse surface to gather at)");
+  // A PPM state without hitpoints is legitimate: a camera that sees only emitters and the
+  // background finds no diffuse surface, and its image is the emitted and direct layers.
 }
 
 // One hitpoint's values (validate.h): directions, weight in [0, 1] (the specular chain's
@@ -331,13 +328,6 @@ void save_hitpoints(const HitpointSet& h, const std::string& path, const Provena
   w.attr("/", "eye_pass", int64_t(h.eye_pass));
   write_provenance(w, prov);
   w.commit();
-}
-
-void require_hitpoints(const std::string& path, const HitpointSet& h) {
-  if (h.hitpoints.empty())
-    throw input_error(path, "holds no hitpoints: no eye path found a diffuse surface, so photons "
-                            "would light nothing",
-                      "check the camera and the scene's materials, or use --estimator sppm");
 }
 
 float hitpoints_radius0(const std::string& path, const HitpointSet& h) {

@@ -119,6 +119,7 @@ std::vector<float> camera_frame(const pf_camera& c) {
 // ---- eye pass ----------------------------------------------------------------------------------
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClContext& dev) {
+  check_eye_samples(scene, opt);
   const int W = scene.camera.width, H = scene.camera.height, spp = std::max(1, opt.spp);
   const int columns = eye_strata_columns(spp);  // the CPU eye pass's grid
   EyePassResult res;

@@ -111,6 +111,12 @@ void check_options(const EyePassOptions& opt) {
   require_positive("spp", opt.spp);
   require_positive("max-depth", opt.max_depth);
   require_positive("shadow-samples", opt.shadow_samples);
+  // Light samples per visible point and pass: more than kMaxShadowSamples converge no faster than
+  // as many more passes, and 2^31 of them would keep one pass busy for days.
+  if (opt.shadow_samples > kMaxShadowSamples)
+    throw input_error("", "--shadow-samples must be at most " + std::to_string(kMaxShadowSamples) +
+                              ", got " + std::to_string(opt.shadow_samples),
+                      "run more passes instead");
   // R0² must stay a normal float (validate.h kMinRadius): 1e-23 squared is 0 in float, and
   // every radiance of eq. 3.19 would divide by it.
   if (!(opt.radius == 0.f || (opt.radius >= kMinRadius && opt.radius <= kMaxRadius)))
@@ -127,6 +133,17 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
   return res;
 }
 
+void check_eye_samples(const Scene& scene, const EyePassOptions& opt) {
+  const uint64_t samples = uint64_t(scene.camera.width) * uint64_t(scene.camera.height) *
+                           uint64_t(std::max(1, opt.spp));
+  if (samples > uint64_t(UINT32_MAX) + 1)
+    throw input_error("", "--spp " + std::to_string(opt.spp) + " gives " + std::to_string(samples) +
+                              " eye samples for the " + std::to_string(scene.camera.width) + "x" +
+                              std::to_string(scene.camera.height) +
+                              " image, more than the 2^32 sample streams of a pass",
+                      "lower --spp, or run more passes");
+}
+
 EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
     : scene_(scene),
       opt_(opt),
@@ -137,7 +154,9 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
       eye_key_(pf_rng_key(opt.seed, kEyeStream + opt.pass)),
       sobol_key_(pf_sobol_key(opt.seed)),
       cam_(scene.camera),
-      caster_(scene) {}
+      caster_(scene) {
+  check_eye_samples(scene, opt);
+}
 
 bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct) const {
   const size_t pix = size_t(y) * size_t(scene_.camera.width) + size_t(x);

@@ -1,5 +1,6 @@
 // Photon tracing: see photon_pass.h.
 #include "photonflow/photon_pass.h"
+#include "photonflow/memory_cap.h"
 
 #include <omp.h>
 
@@ -101,6 +102,15 @@ void PhotonBuffers::concatenate(std::vector<pf_photon>& out) const {
 
 void check_options(const PhotonPassOptions& opt) {
   require_positive("photons", int64_t(opt.photons));
+  // A pass holds its stored photons (and their grid) at once: at one stored photon per emitted
+  // photon (paths in a closed scene store several) a count whose photons exceed this machine's
+  // memory cannot run; refused before any work rather than swapping or killed for memory.
+  const uint64_t need = uint64_t(opt.photons) * sizeof(pf_photon), have = physical_memory_bytes();
+  if (have > 0 && need > have)
+    throw input_error("", "--photons " + std::to_string(opt.photons) + " stores at least " +
+                              std::to_string(need >> 30) + " GiB of photons per pass, more than " +
+                              "this machine's " + std::to_string(have >> 30) + " GiB of memory",
+                      "lower --photons and run more passes");
   require_positive("max-bounces", opt.max_bounces);
   require_threads(opt.threads);
 }

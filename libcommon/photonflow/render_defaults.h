@@ -1,0 +1,112 @@
+// render_defaults.h — the defaults of render and of the staged route, chosen by measurement (issue
+// 34 item 1; docs/RESULTS.md "Defaults" has the scene set, the measurements and the commands).
+// One place defines them: render, trace-photons and pipelines/render.mk (which passes "auto")
+// take them from here, so a run without flags gets the same numbers by either route.
+//
+//   estimator   sppm (a new eye pass every pass; RESULTS.md section 6, 512×512, 30 s: 7.9–14.6×
+//               less RMSE than ppm on the three scenes of data/; pppm was 9–11 % below sppm on two
+//               of them and 5 % above on the third, with direct light from photons; the shadow-ray
+//               gain below was measured with sppm only, so sppm until pppm is measured with it)
+//   direct      shadow-rays (issue 34's side-by-side runs with sppm, 512×512, 30 s, 262,144
+//               photons: diffuse box 0.0080 → 0.0066 RMSE over all pixels, 0.0076 → 0.0056 away
+//               from the lights; 200k-triangle box 0.0132 → 0.0123 and 0.0120 → 0.0096)
+//   photons     automatic, from the image size: the photons per pass at which tracing them costs
+//               as long as the pass's eye paths (kEyePixelCostInPhotons, measured; auto_photons)
+//   radius      automatic, from the pixel footprint and the scene extent (default_radius,
+//               eye_pass.h): R0 = max(scene diagonal / 200, 4 · pixel angle · look-at distance)
+//
+// No double counting with direct light by shadow rays (thesis eq. 3.7: L = L_e + L_direct +
+// L_specular + L_caustic + L_indirect; Hachisuka & Jensen 2009, section 4, SPPM's direct light
+// by ray tracing): the paths are split between the three estimates by their first diffuse vertex
+// seen from the eye, so no weights (MIS) are needed:
+//   - emitted light seen from the eye directly or through mirrors and glass (L S* E) is added by
+//     the eye path once, on the emitter it hits (EyeTracer::sample, `emitted`); the eye path ends
+//     at its first diffuse surface, so no emitter behind one is ever added by it;
+//   - light arriving straight from an emitter at that first diffuse surface (L D S* E) is the
+//     shadow rays' (direct_light, `direct`); a shadow ray blocked by anything, glass included,
+//     adds nothing, so light through glass or off a mirror (L S+ D) is left to the photons;
+//   - every photon is stored with PF_PHOTON_DIRECT when its diffuse hit is the first surface it
+//     meets after leaving the light (photon_pass.cpp: first_hit), and with shadow-rays the gather
+//     skips exactly those (illuminate.cpp gather_site, photon_accepted; sppm.cpp skip_direct; the
+//     OpenCL kernels' skip_direct): the photons carry L (S|D)+ D paths only.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "photonflow/eye_pass.h"
+#include "photonflow/scene.h"
+#include "photonflow/sppm.h"
+
+namespace pf {
+
+// The estimator and direct light of a run that does not name them (render --estimator, --direct).
+constexpr Estimator kDefaultEstimator = Estimator::Sppm;
+constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
+
+// The eye pass of one pixel (one eye sample, its shadow rays and its gather: render's default
+// estimator and direct light) costs as much time as this many photons (each emitted, traced and
+// sorted into the pass's grid). Measured with
+//   bench/photon_balance.sh build        (WIDTH=512 HEIGHT=512 PASSES=12 FEW=16384 MANY=524288)
+// on the three scenes of data/, 2026-12-02, the 2-core machine at load 3.5–4 from other jobs: the
+// eye pass of a pixel cost 0.712 / 0.722 photons on cornell-box (two runs; eye pass 0.123 / 0.178
+// s, 0.66 / 0.94 µs a photon), 0.540 / 0.498 on cornell-spheres, 2.357 / 0.930 on sds-pool; the
+// median over the scenes, 0.712 / 0.722, rounded (docs/RESULTS.md section 7).
+constexpr double kEyePixelCostInPhotons = 0.7;
+// The automatic count spends this share of a pass's time tracing photons (the rest on the eye
+// pass): photons = share / (1 − share) · kEyePixelCostInPhotons · pixels. An even split bounds
+// what a wrong ratio costs: the part that is too large for its scene at most doubles the pass
+// (issue 34 measured 100,000 against 262,144 photons at 512×512 changing the error by 10–15 %,
+// better or worse by scene: the optimum is flat and scene-dependent, so the rule aims at the
+// middle of the measured ratios rather than at one scene).
+constexpr double kAutoPhotonShare = 0.5;
+// The automatic count is a multiple of kAutoPhotonsStep within [kMinAutoPhotons, kMaxAutoPhotons].
+constexpr uint32_t kAutoPhotonsStep = 1024;
+constexpr uint32_t kMinAutoPhotons = 16384;
+constexpr uint32_t kMaxAutoPhotons = 1u << 24;
+
+// The automatic photon count per pass for a width × height image (one eye sample per pixel and
+// pass): round(kAutoPhotonShare / (1 − kAutoPhotonShare) · kEyePixelCostInPhotons · width ·
+// height) to a multiple of kAutoPhotonsStep, clamped to [kMinAutoPhotons, kMaxAutoPhotons].
+// Deterministic (no timing at run time): the same scene always gets the same count.
+uint32_t auto_photons(int width, int height);
+// The rule in words, for --help ("auto: ...").
+std::string auto_photons_rule();
+// The rule of the automatic radius in words, for --help.
+std::string auto_radius_rule();
+
+// Everything automatic a run without options gets for `scene`.
+struct RenderDefaults {
+  Estimator estimator = kDefaultEstimator;
+  DirectMode direct = kDefaultDirect;
+  uint32_t photons = 0;  // per pass, auto_photons(camera width, height)
+  float radius = 0.f;    // R0, default_radius(scene)
+};
+RenderDefaults choose_defaults(const Scene& scene);
+
+// --photons of render and trace-photons: "auto" (returns 0: choose_defaults decides once the
+// scene is read) or a count in [1, 2^32); InputError naming --photons otherwise.
+uint32_t parse_photons_option(const std::string& text);
+// --radius of render: "auto" or 0 (returns 0: default_radius) or a length (its range is
+// check_options' of eye_pass.h); InputError naming --radius for what is not a number.
+float parse_radius_option(const std::string& text);
+
+// The choices a run made, each with whether it was automatic (the option not given).
+struct RenderChoices {
+  Estimator estimator = kDefaultEstimator;
+  bool estimator_auto = true;
+  DirectMode direct = kDefaultDirect;
+  bool direct_auto = true;
+  uint32_t photons = 0;
+  bool photons_auto = true;
+  float radius = 0.f;  // the R0 used
+  bool radius_auto = true;
+};
+// "sppm (default), direct shadow-rays (default), 262144 photons/pass (auto), R0 0.0123 (auto)":
+// render's summary line.
+std::string describe_choices(const RenderChoices& c);
+// Writes the choices into a run record's parameters (provenance.h): the values used, and
+// "<name>_auto": "true" | "false" for estimator, direct, photons and radius.
+void record_choices(std::map<std::string, std::string>& parameters, const RenderChoices& c);
+
+}  // namespace pf

@@ -1,0 +1,95 @@
+// render's defaults: see render_defaults.h.
+#include "photonflow/render_defaults.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "photonflow/error.h"
+#include "photonflow/options.h"
+
+namespace pf {
+
+uint32_t auto_photons(int width, int height) {
+  const double pixels = double(std::max(width, 0)) * double(std::max(height, 0));
+  const double want =
+      kAutoPhotonShare / (1.0 - kAutoPhotonShare) * kEyePixelCostInPhotons * pixels;
+  const double steps = std::round(want / double(kAutoPhotonsStep));
+  const double n = std::clamp(steps * double(kAutoPhotonsStep), double(kMinAutoPhotons),
+                              double(kMaxAutoPhotons));
+  return uint32_t(n);
+}
+
+std::string auto_photons_rule() {
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "auto: %g x width x height (photon tracing about %g%% of a pass), a multiple of "
+                "%u in [%u, %u]; %u at 512x512",
+                kAutoPhotonShare / (1.0 - kAutoPhotonShare) * kEyePixelCostInPhotons,
+                100.0 * kAutoPhotonShare, kAutoPhotonsStep, kMinAutoPhotons, kMaxAutoPhotons,
+                auto_photons(512, 512));
+  return buf;
+}
+
+std::string auto_radius_rule() {
+  return "auto: max(scene diagonal / 200, 4 pixel footprints at the look-at distance)";
+}
+
+RenderDefaults choose_defaults(const Scene& scene) {
+  RenderDefaults d;
+  d.photons = auto_photons(scene.camera.width, scene.camera.height);
+  d.radius = default_radius(scene);
+  return d;
+}
+
+uint32_t parse_photons_option(const std::string& text) {
+  if (text == "auto") return 0;
+  size_t used = 0;
+  long long n = 0;
+  try {
+    n = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size())
+    throw input_error("", "--photons must be a count or auto, got '" + text + "'");
+  require_positive("photons", int64_t(n));
+  if (n > int64_t(UINT32_MAX)) throw input_error("", "--photons must be below 2^32 per pass");
+  return uint32_t(n);
+}
+
+float parse_radius_option(const std::string& text) {
+  if (text == "auto") return 0.f;
+  size_t used = 0;
+  float r = 0.f;
+  try {
+    r = std::stof(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size())
+    throw input_error("", "--radius must be a length in world units or auto, got '" + text + "'");
+  return r;
+}
+
+std::string describe_choices(const RenderChoices& c) {
+  auto how = [](bool automatic) { return std::string(automatic ? " (auto)" : ""); };
+  return std::string(estimator_name(c.estimator)) + how(c.estimator_auto) + ", direct " +
+         direct_mode_name(c.direct) + how(c.direct_auto) + ", " + std::to_string(c.photons) +
+         " photons/pass" + how(c.photons_auto) + ", R0 " + default_text(c.radius) +
+         how(c.radius_auto);
+}
+
+void record_choices(std::map<std::string, std::string>& p, const RenderChoices& c) {
+  auto flag = [](bool b) { return std::string(b ? "true" : "false"); };
+  p["estimator"] = estimator_name(c.estimator);
+  p["estimator_auto"] = flag(c.estimator_auto);
+  p["direct"] = direct_mode_name(c.direct);
+  p["direct_auto"] = flag(c.direct_auto);
+  p["photons"] = std::to_string(c.photons);
+  p["photons_auto"] = flag(c.photons_auto);
+  p["radius"] = default_text(c.radius);
+  p["radius_auto"] = flag(c.radius_auto);
+}
+
+}  // namespace pf
