@@ -13,6 +13,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 
 #include "photonflow/shared_types.h"
+#include "photonflow/material/texture_shared.h"
 
 /* The rope traversal's leaf test, vectorised: intersect_shared.h's pf_kd_leaf_intersect runs one
  * Havel–Herout test per triangle through the leaf's index list; this one reads a leaf-ordered copy
@@ -183,6 +184,34 @@ static inline void pf_surface_at(const pf_scene_view* s, const float* o, const f
   sh->front = pf_dot3(d, sh->ng) < 0.0f;
   sh->mesh = t->mesh;
   sh->material = t->material;
+}
+
+/* Base-colour textures (scene.h, texture_shared.h): the kernel parameters of the tracing kernels
+ * that shade, after PF_SCENE_PARAMS. mat_tex[m] is material m's texture (−1 none), uvs six floats
+ * per triangle (u0 v0 u1 v1 u2 v2), texels the linear RGBA pool. */
+#define PF_TEXTURE_PARAMS                                                                 \
+  __global const pf_texture *textures, __global const float *texels,                      \
+      __global const pf_int *mat_tex, __global const float *uvs
+
+/* The texture factor of a diffuse colour at hit h (Scene::texture_value: the UV interpolated by
+ * the barycentrics in the host's order, then pf_tex_sample): 1 and f = the texel value when
+ * `material` has a texture, else 0 and f untouched. */
+static inline int pf_texture_factor(__global const pf_texture* textures, __global const float* texels,
+                                    __global const pf_int* mat_tex, __global const float* uvs,
+                                    int material, const pf_ray_hit* h, float* f) {
+  const int ti = mat_tex[material];
+  if (ti < 0) return 0;
+  __global const float* uv = uvs + 6 * (size_t)h->tri;
+  const float w = 1.0f - h->u - h->v;
+  const float s = w * uv[0] + h->u * uv[2] + h->v * uv[4];
+  const float r = w * uv[1] + h->u * uv[3] + h->v * uv[5];
+  const pf_texture t = textures[ti];
+  float rgba[4];
+  pf_tex_sample(&t, texels, s, r, rgba);
+  f[0] = rgba[0];
+  f[1] = rgba[1];
+  f[2] = rgba[2];
+  return 1;
 }
 
 /* Origin of a ray leaving the surface along d: pushed off on d's side (surface.h). */

@@ -86,7 +86,8 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
 /* cam: eye[3], forward[3], right[3], up[3], tan_half_x, tan_half_y (camera.h's CameraFrame).
  * Pixels pixel_offset .. pixel_offset + pixel_count − 1 (row-major) form this batch; outputs are
  * indexed from the batch's start. */
-__kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int width, int height,
+__kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const float* cam,
+                              int width, int height,
                               int spp, int columns, int max_depth, int shadow_rays,
                               int shadow_samples, float radius, uint seed, uint pass,
                               int sampler, float eps,
@@ -130,6 +131,10 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, __global const float* cam, int wi
       float n[3];
       for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
       if (pf_is_diffuse(m)) {
+        /* The texture's value joins the weight (eye_pass.cpp): the gathers' f_r = color/π. */
+        float tf[3];
+        if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf))
+          for (int k = 0; k < 3; ++k) T[k] = T[k] * tf[k];
         pf_hitpoint hp;
         float nd[3] = {d[0], d[1], d[2]};
         if (depth > 0) pf_normalize3(nd); /* the camera ray's is unit already */

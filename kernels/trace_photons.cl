@@ -18,7 +18,7 @@
 #include "trace_common.h"
 
 /* Photons first .. first + count − 1 of the pass form this batch; outputs indexed from 0. */
-__kernel void trace_photons(PF_SCENE_PARAMS, uint seed, uint pass, int max_bounces, float eps,
+__kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, uint seed, uint pass, int max_bounces, float eps,
                             uint first, int count, __global pf_photon* slots,
                             __global int* stored) {
   const int local_i = (int)get_global_id(0);
@@ -82,8 +82,11 @@ __kernel void trace_photons(PF_SCENE_PARAMS, uint seed, uint pass, int max_bounc
     pf_normalize3(d);
     float n[3];
     for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
-    const float c[3] = {m->color[0], m->color[1], m->color[2]};
+    float c[3] = {m->color[0], m->color[1], m->color[2]};
     if (pf_is_diffuse(m)) {
+      float tf[3]; /* the textured albedo (photon_pass.cpp's diffuse_color) */
+      if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf))
+        for (int k = 0; k < 3; ++k) c[k] = c[k] * tf[k];
       pf_photon ph;
       for (int k = 0; k < 3; ++k) {
         ph.position[k] = sh.p[k];

@@ -82,7 +82,8 @@ inline void set_double_attr(const std::string& file, const std::string& obj,
   write_attr(file, obj, name, H5T_NATIVE_DOUBLE, &value);
 }
 
-// Recomputes the scene_id of a scene.h5 from its triangles, materials, lights and camera
+// Recomputes the scene_id of a scene.h5 from its triangles, materials, lights and camera (and its
+// textures, texels, materials' textures and UVs where it has textures)
 // (docs/FORMATS.md; Scene::compute_scene_id). Where a field cannot be read (an edit removed it),
 // the id is left as it is.
 inline void refresh_scene_id(const std::string& file) {
@@ -107,6 +108,18 @@ inline void refresh_scene_id(const std::string& file) {
         !read("/camera", h5_type_camera().id(), cam) || cam.size() != 1)
       return;
     s.camera = cam[0];
+    // Format version 3: the textures, where the file has them (compute_scene_id covers them then).
+    std::vector<float> uv;
+    if (H5Lexists(f.get(), "/textures", H5P_DEFAULT) > 0 &&
+        read("/textures/textures", h5_type_texture().id(), s.textures)) {
+      read("/textures/texels", H5T_NATIVE_FLOAT, s.texels);
+      read("/materials/texture", H5T_NATIVE_INT32, s.material_texture);
+      if (H5Lexists(f.get(), "/geometry/uvs", H5P_DEFAULT) > 0 &&
+          read("/geometry/uvs", H5T_NATIVE_FLOAT, uv)) {
+        s.uvs.resize(uv.size() / 6);
+        if (!s.uvs.empty()) std::memcpy(s.uvs.data(), uv.data(), s.uvs.size() * sizeof(TriangleUV));
+      }
+    }
   }
   s.compute_scene_id();
   set_string_attr(file, "/", "scene_id", s.scene_id);

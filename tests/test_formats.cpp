@@ -55,11 +55,14 @@ TEST_CASE("scene.h5 round-trips every dataset", "[formats][scene]") {
   CHECK(r.source == "in-memory");
   CHECK(read_provenance(h5::Reader(tmp / "scene.h5", kSceneFormat, kSceneFormatVersion))
             .parameters.at("answer") == "42");
-  // Version 1 (variable-length names, h5io.cpp reads both kinds) is still read.
-  CHECK(kSceneFormatVersion == 2);
+  // Versions 1 (variable-length names, h5io.cpp reads both kinds) and 2 (no textures) are still
+  // read; a later version is refused by its number.
+  CHECK(kSceneFormatVersion == 3);
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 1);
   CHECK(load_scene(tmp / "scene.h5").mesh_names == s.mesh_names);
-  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 3);
+  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 2);
+  CHECK(load_scene(tmp / "scene.h5").mesh_names == s.mesh_names);
+  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 4);
   CHECK_THROWS_AS(load_scene(tmp / "scene.h5"), InputError);
 }
 

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "photonflow/kdtree.h"
+#include "photonflow/material/texture_shared.h"
 #include "photonflow/provenance.h"
 #include "photonflow/shared_types.h"
 #include "photonflow/vec.h"
@@ -12,7 +13,24 @@
 namespace pf {
 
 constexpr const char* kSceneFormat = "photonflow.scene";
-constexpr int kSceneFormatVersion = 2;  // 2: names as fixed-length strings (1: variable-length, still read)
+// 3: base-colour textures (textures/*, materials/texture, geometry/uvs); 2: names as fixed-length
+// strings; 1: variable-length names. Versions 1 and 2 are still read (no textures).
+constexpr int kSceneFormatVersion = 3;
+
+// Largest side of a texture, and most texels of all of a scene's textures together (each texel is
+// 4 floats: 2^26 texels are 1 GiB in memory and in scene.h5). scene-bake refuses a larger image,
+// load_scene a larger table.
+constexpr int kMaxTextureSide = 16384;
+constexpr uint64_t kMaxTextureTexels = uint64_t(1) << 26;
+// Largest magnitude of a texture coordinate (repeat and mirror keep any value in the texture;
+// this keeps a float's fraction meaningful).
+constexpr float kMaxUV = 1e6f;
+
+// Texture coordinates of a triangle's three corners in the glTF convention (texture_shared.h:
+// (0, 0) the top-left of the image, v down), in the order v0, v1, v2 of its pf_triangle.
+struct TriangleUV {
+  float uv[6];  // u0, v0, u1, v1, u2, v2
+};
 
 // Unit geometric normal of a triangle; its front is the side from which v0, v1, v2 run
 // counter-clockwise.
@@ -32,6 +50,14 @@ struct Scene {
   pf_camera camera{};
   KdTree kd;
   Bounds bounds;                   // of all triangles
+  // Base-colour textures (format version 3): headers over one pool of linear RGBA texels (4 floats
+  // each; a texture used by several materials is stored once), each material's texture (−1 none;
+  // empty = none for every material) and, when some material has one, every triangle's UVs.
+  std::vector<pf_texture> textures;
+  std::vector<float> texels;
+  std::vector<std::string> texture_names;  // the image file, or "<scene>#<n>" for embedded ones
+  std::vector<int32_t> material_texture;
+  std::vector<TriangleUV> uvs;
   std::string scene_id;            // SHA-256 of the baked content (see compute_scene_id)
   std::string source;              // path of the file it was baked from
 
@@ -67,9 +93,18 @@ struct Scene {
     return i;
   }
   size_t pick_light_search(float u) const;  // upper_bound over light_cdf
+  // Base-colour texture of material `material`, −1 for none.
+  int texture_of(int material) const {
+    return size_t(material) < material_texture.size() ? material_texture[size_t(material)] : -1;
+  }
+  // The texture factor of a diffuse colour at barycentrics (u, v) (weights of v1 and v2, as Hit
+  // gives them) of triangle `tri`, whose material's texture is `texture` (≥ 0): the bilinear texel
+  // value (texture_shared.h) at the interpolated UV, RGB. Needs uvs (load_scene ensures it).
+  Vec3 texture_value(int texture, size_t tri, float u, float v) const;
   // scene_id = SHA-256 over triangles, materials, lights and camera: two bakes of the same input
   // with the same options have the same id; any change of geometry, material, light or camera
-  // changes it.
+  // changes it. With textures, also over the texture table, texels, the materials' textures and
+  // the UVs (a scene without textures keeps the id of format version 2).
   void compute_scene_id();
 };
 
@@ -99,6 +134,19 @@ Scene load_scene(const std::string& path);
 // coordinate or camera option beyond kMaxCoordinate). InputError naming `path`.
 void validate_scene(const Scene& s, const std::string& path);
 
+// The diffuse colour of material m (index `material`) at a hit on triangle `tri` with barycentrics
+// (u, v): m.color, times the base-colour texture's value there when the material has one (glTF's
+// baseColorFactor × baseColorTexture). The photon bounces and the path tracer ask this; the eye
+// pass multiplies the texture's value alone (texture_value) into the hitpoint's weight, so that
+// the gathers' f_r = color/π times the weight, and the shadow-ray direct light, are textured. A
+// material without texture costs one table look-up more than reading m.color.
+inline Vec3 diffuse_color(const Scene& s, const pf_material& m, int material, int tri, float u,
+                          float v) {
+  const int t = s.texture_of(material);
+  if (t < 0) return Vec3(m.color);
+  return Vec3(m.color) * s.texture_value(t, size_t(tri), u, v);
+}
+
 // HDF5 compound types of the shared structs (named fields for h5dump/h5py).
 namespace h5 { class Compound; }
 const h5::Compound& h5_type_triangle();
@@ -109,5 +157,6 @@ const h5::Compound& h5_type_camera();
 const h5::Compound& h5_type_kd_node();
 const h5::Compound& h5_type_hitpoint();
 const h5::Compound& h5_type_photon();
+const h5::Compound& h5_type_texture();
 
 }  // namespace pf

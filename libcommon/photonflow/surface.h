@@ -16,6 +16,7 @@ struct SurfaceHit {
   int tri;
   int mesh;
   int material;
+  float u, v;    // barycentrics of the hit (weights of v1 and v2), for the texture look-up
 };
 
 inline SurfaceHit surface_at(const Scene& s, const Ray& ray, const Hit& h) {
@@ -31,7 +32,14 @@ inline SurfaceHit surface_at(const Scene& s, const Ray& ray, const Hit& h) {
   sh.tri = h.tri;
   sh.mesh = t.mesh;
   sh.material = t.material;
+  sh.u = h.u;
+  sh.v = h.v;
   return sh;
+}
+
+// The diffuse colour at a hit (scene.h diffuse_color: m.color × the base-colour texture there).
+inline Vec3 diffuse_color(const Scene& s, const pf_material& m, const SurfaceHit& sh) {
+  return diffuse_color(s, m, sh.material, sh.tri, sh.u, sh.v);
 }
 
 // Offset of new ray origins from a surface, relative to the scene size, to avoid self-hits.

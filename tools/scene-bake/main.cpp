@@ -47,6 +47,13 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
   std::printf("  meshes     %zu\n", s.mesh_names.size());
   std::printf("  materials  %zu:", s.materials.size());
   for (int t = 0; t < 4; ++t) std::printf(" %d %s", by_type[t], material_type_name(t));
+  if (!s.textures.empty()) {
+    size_t textured = 0;
+    for (size_t m = 0; m < s.materials.size(); ++m) textured += s.texture_of(int(m)) >= 0;
+    std::printf("\n  textures   %zu (%zu texels, %.1f MiB), %zu textured materials",
+                s.textures.size(), s.texels.size() / 4,
+                double(s.texels.size() * sizeof(float)) / double(1 << 20), textured);
+  }
   std::printf("\n  lights     %zu (%d area, %d point), power %.4g W (luminance)\n",
               s.lights.size(), area, point, power);
   std::printf("  camera     eye %g,%g,%g look-at %g,%g,%g up %g,%g,%g fov %.4g deg %dx%d (%s)\n",

@@ -97,7 +97,25 @@ void Scene::compute_scene_id() {
   feed(materials);
   feed(lights);
   h.update(&camera, sizeof camera);
+  // Textures (format version 3): only where there are some, so that a scene without textures
+  // keeps its version-2 id (its materials/texture is all −1 and it has no UVs: nothing to cover).
+  if (!textures.empty()) {
+    feed(textures);
+    feed(texels);
+    feed(material_texture);
+    feed(uvs);
+  }
   scene_id = h.hex();
+}
+
+Vec3 Scene::texture_value(int texture, size_t tri, float u, float v) const {
+  const TriangleUV& t = uvs[tri];
+  const float w = 1.f - u - v;
+  const float s = w * t.uv[0] + u * t.uv[2] + v * t.uv[4];
+  const float r = w * t.uv[1] + u * t.uv[3] + v * t.uv[5];
+  float rgba[4];
+  pf_tex_sample(&textures[size_t(texture)], texels.data(), s, r, rgba);
+  return {rgba[0], rgba[1], rgba[2]};
 }
 
 void finish_scene(Scene& s, const KdBuildParams& kd) {
@@ -196,6 +214,16 @@ const h5::Compound& h5_type_photon() {
     h5::Compound c(sizeof(pf_photon));
     c.PF_F32(pf_photon, position, 3).PF_F32(pf_photon, dir, 3).PF_F32(pf_photon, flux, 3);
     c.PF_I32(pf_photon, mesh).PF_I32(pf_photon, pass).PF_I32(pf_photon, flags);
+    return c;
+  }();
+  return t;
+}
+
+const h5::Compound& h5_type_texture() {
+  static const h5::Compound t = [] {
+    h5::Compound c(sizeof(pf_texture));
+    c.PF_I32(pf_texture, width).PF_I32(pf_texture, height).PF_I32(pf_texture, offset);
+    c.PF_I32(pf_texture, wrap_s).PF_I32(pf_texture, wrap_t).PF_I32(pf_texture, filter);
     return c;
   }();
   return t;
@@ -384,6 +412,53 @@ void check_scene_values(const Scene& s, const Validator& v) {
   }
 }
 
+// The textures of a scene (format version 3, docs/FORMATS.md): the table against the pool and the
+// limits, the texels' values, the materials' texture ids, and the UVs where a material has a
+// texture. Part of validate_scene: load_scene runs it on what it read, save_scene (written_check)
+// on what it writes, bake_scene on what it baked.
+void check_scene_textures(const Scene& s, const Validator& v) {
+  if (s.texture_names.size() != s.textures.size())
+    v.fail("textures/names holds " + std::to_string(s.texture_names.size()) +
+           " names for " + std::to_string(s.textures.size()) + " textures");
+  if (s.texels.size() % 4 != 0) v.fail("textures/texels is not a list of RGBA texels");
+  const uint64_t pool = s.texels.size() / 4;
+  if (pool > kMaxTextureTexels)
+    v.fail("textures/texels holds " + std::to_string(pool) + " texels, more than the " +
+           std::to_string(kMaxTextureTexels) + " a scene may have");
+  const std::string X = "textures/textures";
+  for (size_t i = 0; i < s.textures.size(); ++i) {
+    const pf_texture& t = s.textures[i];
+    v.int_in_range(Name(X, i, "width"), t.width, 1, kMaxTextureSide);
+    v.int_in_range(Name(X, i, "height"), t.height, 1, kMaxTextureSide);
+    v.int_in_range(Name(X, i, "offset"), t.offset, 0, int64_t(pool));
+    if (uint64_t(t.offset) + uint64_t(t.width) * uint64_t(t.height) > pool)
+      v.fail(Validator::element(X, i) + ": its " + std::to_string(t.width) + "x" +
+             std::to_string(t.height) + " texels from offset " + std::to_string(t.offset) +
+             " run past the " + std::to_string(pool) + " texels of textures/texels");
+    v.int_in_range(Name(X, i, "wrap_s"), t.wrap_s, PF_TEX_WRAP_REPEAT, PF_TEX_WRAP_MIRROR);
+    v.int_in_range(Name(X, i, "wrap_t"), t.wrap_t, PF_TEX_WRAP_REPEAT, PF_TEX_WRAP_MIRROR);
+    v.int_in_range(Name(X, i, "filter"), t.filter, PF_TEX_FILTER_BILINEAR, PF_TEX_FILTER_NEAREST);
+  }
+  const std::string P = "textures/texels";
+  for (size_t i = 0; i < pool; ++i) v.in_range(Name(P, i), &s.texels[4 * i], 4, 0.0, 1.0);
+  bool textured = false;
+  if (!s.material_texture.empty() && s.material_texture.size() != s.materials.size())
+    v.fail("materials/texture holds " + std::to_string(s.material_texture.size()) +
+           " entries for " + std::to_string(s.materials.size()) + " materials");
+  const std::string M = "materials/texture";
+  for (size_t i = 0; i < s.material_texture.size(); ++i) {
+    v.int_in_range(Name(M, i), s.material_texture[i], -1, int64_t(s.textures.size()) - 1);
+    textured = textured || s.material_texture[i] >= 0;
+  }
+  const std::string U = "geometry/uvs";
+  if (!textured && !s.uvs.empty())
+    v.fail(U + " is present but no material has a texture");
+  if (textured && s.uvs.size() != s.triangles.size())
+    v.fail(U + " holds " + std::to_string(s.uvs.size()) + " rows for " +
+           std::to_string(s.triangles.size()) + " triangles (a material has a texture)");
+  for (size_t i = 0; i < s.uvs.size(); ++i) v.in_range(Name(U, i), s.uvs[i].uv, 6, -kMaxUV, kMaxUV);
+}
+
 }  // namespace
 
 
@@ -413,6 +488,28 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
   w.describe("/materials/materials", "color: 1, emission: W/(sr m^2)",
              "type 0 diffuse, 1 mirror, 2 glass, 3 emitter");
   w.write_strings("/materials/names", s.material_names);
+
+  // Format version 3: the materials' textures always (−1 = none), the texture datasets and the
+  // UVs only where there are textures (written_check above covers them: validate_scene).
+  std::vector<int32_t> material_texture = s.material_texture;
+  material_texture.resize(s.materials.size(), -1);
+  w.write("/materials/texture", material_texture);
+  w.describe("/materials/texture", "", "base-colour texture of each material (textures/textures), -1 = none");
+  if (!s.textures.empty()) {
+    w.write("/textures/textures", h5_type_texture(), s.textures);
+    w.describe("/textures/textures", "texels",
+               "width, height, offset (texels into textures/texels), wrap_s, wrap_t (0 repeat, 1 "
+               "clamp, 2 mirror), filter (0 bilinear, 1 nearest)");
+    w.write_strings("/textures/names", s.texture_names);
+    w.write("/textures/texels", s.texels, {s.texels.size() / 4, 4});
+    w.describe("/textures/texels", "1", "linear RGBA texels of every texture, row-major, row 0 = top");
+  }
+  if (!s.uvs.empty()) {
+    std::vector<float> uv(s.uvs.size() * 6);
+    for (size_t i = 0; i < s.uvs.size(); ++i) std::copy(s.uvs[i].uv, s.uvs[i].uv + 6, &uv[6 * i]);
+    w.write("/geometry/uvs", uv, {s.uvs.size(), 6});
+    w.describe("/geometry/uvs", "1", "u0,v0,u1,v1,u2,v2 per triangle (glTF convention: v down)");
+  }
 
   w.write("/lights/lights", h5_type_light(), s.lights);
   w.describe("/lights/lights", "area: m^2, power: W (luminance), radiance: W/(sr m^2) or W/sr",
@@ -485,6 +582,7 @@ void validate_scene(const Scene& s, const std::string& path) {
   std::string problem = validate_kdtree(s.kd, s.triangles.size());
   if (!problem.empty()) throw input_error(path, "invalid kd-tree: " + problem, hint);
   check_scene_values(s, v);
+  check_scene_textures(s, v);
 }
 
 Scene load_scene(const std::string& path) {
@@ -510,6 +608,23 @@ Scene load_scene(const std::string& path) {
   s.kd.params.max_leaf_size = int(r.attr_int("/kdtree", "max_leaf_size"));
   s.kd.depth = int(r.attr_int("/kdtree", "depth"));
   s.kd.build_seconds = r.attr_double("/kdtree", "build_seconds");
+  if (r.version() >= 3) {  // textures (versions 1 and 2 have none)
+    s.material_texture = r.read<int32_t>("/materials/texture");
+    const std::vector<std::string> root = r.children("/");
+    if (std::find(root.begin(), root.end(), "textures") != root.end()) {
+      s.textures = r.read<pf_texture>("/textures/textures", h5_type_texture());
+      s.texture_names = r.read_strings("/textures/names");
+      const std::vector<size_t> shape = r.shape("/textures/texels");
+      s.texels = r.read<float>("/textures/texels", {shape.empty() ? 0 : shape[0], 4});
+    }
+    const std::vector<std::string> geometry = r.children("/geometry");
+    if (std::find(geometry.begin(), geometry.end(), "uvs") != geometry.end()) {
+      const std::vector<size_t> shape = r.shape("/geometry/uvs");
+      const std::vector<float> uv = r.read<float>("/geometry/uvs", {shape.empty() ? 0 : shape[0], 6});
+      s.uvs.resize(uv.size() / 6);
+      for (size_t i = 0; i < s.uvs.size(); ++i) std::copy(&uv[6 * i], &uv[6 * i] + 6, s.uvs[i].uv);
+    }
+  }
 
   // Bounds and face normals first (plain arithmetic on any values), then the checks, which
   // read them (validate_scene).

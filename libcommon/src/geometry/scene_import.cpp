@@ -54,6 +54,7 @@
 #include "photonflow/scene_import.h"
 
 #include <assimp/DefaultIOSystem.h>
+#include <assimp/GltfMaterial.h>
 #include <assimp/IOStream.hpp>
 #include <assimp/ObjMaterial.h>
 #include <assimp/postprocess.h>
@@ -66,18 +67,23 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <functional>
+#include <map>
 #include <memory>
 #include <new>
 #include <set>
 #include <sstream>
+#include <tuple>
 #include <type_traits>
 
 #include "photonflow/camera.h"
 #include "photonflow/error.h"
 #include "photonflow/isolate.h"
+#include "photonflow/material/texture_shared.h"
 #include "photonflow/memory_cap.h"
 #include "photonflow/provenance.h"
+#include "photonflow/texture_image.h"
 
 namespace pf {
 
@@ -245,8 +251,12 @@ float get_float(const aiMaterial& m, const char* key, unsigned type, unsigned id
 }
 
 // Converts one assimp material by the rules at the top of this file.
+// `textured`: the material has a base-colour texture (then Kd is its colour factor; a factor of
+// up to 1, glTF's default, becomes kMaxAlbedo without a warning: texels reach 1 and the product
+// must stay below 1). A COLLADA <diffuse> is a colour or a texture, never both: assimp 5.2.5
+// gives a textured one the colour 1 (test_textures checks it).
 pf_material convert_material(const aiMaterial& am, const std::string& name,
-                             const std::string& file, BakeReport& report) {
+                             const std::string& file, BakeReport& report, bool textured) {
   const Vec3 kd = get_color(am, AI_MATKEY_COLOR_DIFFUSE, Vec3(0, 0, 0));
   const Vec3 ks = get_color(am, AI_MATKEY_COLOR_SPECULAR, Vec3(0, 0, 0));
   const Vec3 ke = get_color(am, AI_MATKEY_COLOR_EMISSIVE, Vec3(0, 0, 0));
@@ -267,7 +277,8 @@ pf_material convert_material(const aiMaterial& am, const std::string& name,
 
   auto albedo = [&](const Vec3& c) {
     Vec3 a = clamp3(c, kMaxAlbedo);
-    if (max3(c) > kMaxAlbedo || c.x < 0 || c.y < 0 || c.z < 0)
+    const bool quiet = textured && max3(c) <= 1.f;
+    if (!quiet && (max3(c) > kMaxAlbedo || c.x < 0 || c.y < 0 || c.z < 0))
       report.warnings.push_back(file + ": material '" + name + "': albedo " + fmt_vec(c) +
                                 " clamped to " + fmt_vec(a) + " (albedo must be < 1)");
     return a;
@@ -297,20 +308,184 @@ pf_material convert_material(const aiMaterial& am, const std::string& name,
   return out;
 }
 
+// The base-colour texture a material names: glTF's baseColorTexture (assimp 5.2 gives it as
+// aiTextureType_BASE_COLOR and as DIFFUSE), OBJ's map_Kd and COLLADA's diffuse <texture> (DIFFUSE).
+struct TextureRef {
+  std::string path;          // as the file gives it: a file name, or "*N" / a name for embedded ones
+  unsigned uv_channel = 0;   // glTF texCoord (AI_MATKEY_UVWSRC)
+  int wrap_s = PF_TEX_WRAP_REPEAT, wrap_t = PF_TEX_WRAP_REPEAT;
+  int filter = PF_TEX_FILTER_BILINEAR;
+};
+
+int wrap_mode(aiTextureMapMode m) {
+  if (m == aiTextureMapMode_Clamp) return PF_TEX_WRAP_CLAMP;
+  if (m == aiTextureMapMode_Mirror) return PF_TEX_WRAP_MIRROR;
+  return PF_TEX_WRAP_REPEAT;  // wrap, decal (not modelled) or absent
+}
+
+std::optional<TextureRef> base_color_texture(const aiMaterial& am) {
+  for (aiTextureType type : {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE}) {
+    if (am.GetTextureCount(type) == 0) continue;
+    aiString path;
+    aiTextureMapping mapping = aiTextureMapping_UV;
+    unsigned uv = 0;
+    aiTextureMapMode modes[3] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap,
+                                 aiTextureMapMode_Wrap};
+    if (am.GetTexture(type, 0, &path, &mapping, &uv, nullptr, nullptr, modes) != aiReturn_SUCCESS)
+      continue;
+    if (path.length == 0) continue;
+    TextureRef r;
+    r.path = path.C_Str();
+    r.uv_channel = uv;
+    r.wrap_s = wrap_mode(modes[0]);
+    r.wrap_t = wrap_mode(modes[1]);
+    int mag = 0;
+    if (am.Get(AI_MATKEY_GLTF_MAPPINGFILTER_MAG(type, 0), mag) == aiReturn_SUCCESS && mag == 9728)
+      r.filter = PF_TEX_FILTER_NEAREST;  // GL NEAREST
+    return r;
+  }
+  return std::nullopt;
+}
+
+// Linear value of each 8-bit sRGB code (texture_shared.h's EOTF).
+const float* srgb8_table() {
+  static const auto table = [] {
+    std::vector<float> t(256);
+    for (int i = 0; i < 256; ++i) t[size_t(i)] = pf_srgb8_to_linear(i);
+    return t;
+  }();
+  return table.data();
+}
+
+// Largest texture file read (a PNG of the largest allowed image compresses to less).
+constexpr uint64_t kMaxTextureFileBytes = uint64_t(1) << 30;
+
+// The textures of one bake: image files and embedded images decoded once each into the scene's
+// texel pool, one pf_texture header per (image, wrap modes, filter).
+class TextureLoader {
+ public:
+  TextureLoader(Scene& scene, BakeReport& report) : scene_(scene), report_(report) {}
+
+  // Texture index for `ref` of material `material` in scene file `file`, or −1 (with one warning
+  // line) when its file is missing. InputError for a damaged or oversized image.
+  int load(const aiScene& ai, const std::string& file, const std::string& material,
+           const TextureRef& ref) {
+    std::string key, name, bytes;
+    const aiTexture* embedded = ai.GetEmbeddedTexture(ref.path.c_str());
+    if (embedded) {
+      const int index = ai.GetEmbeddedTextureAndIndex(ref.path.c_str()).second;
+      key = "embedded:" + file + "#" + std::to_string(index);
+      name = file + "#" + std::to_string(index);
+    } else {
+      std::string rel = ref.path;
+      std::replace(rel.begin(), rel.end(), '\\', '/');  // Windows exporters
+      const size_t slash = file.find_last_of('/');
+      key = name = (rel.empty() || rel[0] == '/' || slash == std::string::npos)
+                       ? rel
+                       : file.substr(0, slash + 1) + rel;
+    }
+    // Refusals name the image and the material that uses it.
+    const std::string label = name + " (texture of material '" + material + "')";
+    auto image = images_.find(key);
+    if (image == images_.end()) {
+      const uint64_t pool = scene_.texels.size() / 4;
+      const uint64_t left = kMaxTextureTexels - pool;
+      DecodedImage img;
+      if (embedded && embedded->mHeight != 0) {  // raw BGRA8 texels
+        const uint64_t w = embedded->mWidth, h = embedded->mHeight;
+        if (w > uint64_t(kMaxTextureSide) || h > uint64_t(kMaxTextureSide) || w * h > left)
+          throw input_error(label, "embedded texture of " + std::to_string(w) + "x" +
+                                      std::to_string(h) + " texels is larger than the limit",
+                            "scale the image down");
+        img.width = int(w);
+        img.height = int(h);
+        img.rgba8.resize(size_t(w * h * 4));
+        for (size_t i = 0; i < size_t(w * h); ++i) {
+          const aiTexel& t = embedded->pcData[i];
+          img.rgba8[4 * i] = t.r;
+          img.rgba8[4 * i + 1] = t.g;
+          img.rgba8[4 * i + 2] = t.b;
+          img.rgba8[4 * i + 3] = t.a;
+        }
+      } else {
+        if (embedded) {
+          bytes.assign(reinterpret_cast<const char*>(embedded->pcData), embedded->mWidth);
+        } else {
+          struct stat st {};
+          if (stat(name.c_str(), &st) != 0 || !S_ISREG(st.st_mode) ||
+              access(name.c_str(), R_OK) != 0) {
+            report_.warnings.push_back(file + ": material '" + material + "': texture '" + name +
+                                       "' not found, using the colour factor alone");
+            return -1;
+          }
+          if (uint64_t(st.st_size) > kMaxTextureFileBytes)
+            throw input_error(label, "texture file of " + std::to_string(st.st_size) +
+                                        " bytes is larger than the limit of " +
+                                        std::to_string(kMaxTextureFileBytes),
+                              "scale the image down");
+          std::ifstream in(name, std::ios::binary);
+          bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+          if (!in.good() && !in.eof())
+            throw input_error(label, "cannot read the texture file", "check its permissions");
+        }
+        img = decode_texture_image(bytes, label, kMaxTextureSide, left);
+      }
+      // Colour map: sRGB-encoded RGB to linear, alpha as stored.
+      const float* lut = srgb8_table();
+      const size_t n = size_t(img.width) * size_t(img.height);
+      scene_.texels.reserve(scene_.texels.size() + 4 * n);
+      for (size_t i = 0; i < n; ++i) {
+        scene_.texels.push_back(lut[img.rgba8[4 * i]]);
+        scene_.texels.push_back(lut[img.rgba8[4 * i + 1]]);
+        scene_.texels.push_back(lut[img.rgba8[4 * i + 2]]);
+        scene_.texels.push_back(float(img.rgba8[4 * i + 3]) / 255.f);
+      }
+      pf_texture t{};
+      t.width = img.width;
+      t.height = img.height;
+      t.offset = int32_t(pool);
+      image = images_.emplace(key, std::make_pair(t, name)).first;
+    }
+    pf_texture t = image->second.first;
+    t.wrap_s = ref.wrap_s;
+    t.wrap_t = ref.wrap_t;
+    t.filter = ref.filter;
+    const auto header = std::make_tuple(key, t.wrap_s, t.wrap_t, t.filter);
+    auto found = headers_.find(header);
+    if (found != headers_.end()) return found->second;
+    const int index = int(scene_.textures.size());
+    scene_.textures.push_back(t);
+    scene_.texture_names.push_back(image->second.second);
+    headers_.emplace(header, index);
+    return index;
+  }
+
+ private:
+  Scene& scene_;
+  BakeReport& report_;
+  std::map<std::string, std::pair<pf_texture, std::string>> images_;  // key → pool part, name
+  std::map<std::tuple<std::string, int, int, int>, int> headers_;
+};
+
 // Appends the triangles of one assimp scene to a triangle list, adding mesh names and (lazily, in
 // order of first use) materials to the Scene.
 class Flattener {
  public:
-  Flattener(const aiScene& ai, const std::string& file, Scene& scene, BakeReport& report)
-      : ai_(ai), file_(file), scene_(scene), report_(report),
-        material_map_(ai.mNumMaterials, -1), checked_(ai.mNumMeshes, false) {}
+  Flattener(const aiScene& ai, const std::string& file, Scene& scene, BakeReport& report,
+            TextureLoader& textures)
+      : ai_(ai), file_(file), scene_(scene), report_(report), textures_(textures),
+        material_map_(ai.mNumMaterials, -1), uv_channel_(ai.mNumMaterials, 0),
+        checked_(ai.mNumMeshes, false) {}
 
-  // Flattens the whole node graph into `out`. Mesh names get `prefix` in front; material ≥ 0
-  // replaces the file's materials.
-  void run(const std::string& prefix, int material, std::vector<pf_triangle>& out) {
+  // Flattens the whole node graph into `out`, each triangle's texture coordinates into `uvs`
+  // (zero where the mesh has none). Mesh names get `prefix` in front; material ≥ 0 replaces the
+  // file's materials (the meshes' first UV channel is used then).
+  void run(const std::string& prefix, int material, std::vector<pf_triangle>& out,
+           std::vector<TriangleUV>& uvs) {
     prefix_ = prefix;
     material_override_ = material;
     out_ = &out;
+    uvs_ = &uvs;
     visit(*ai_.mRootNode, aiMatrix4x4());
   }
 
@@ -321,8 +496,17 @@ class Flattener {
       std::string name = am.GetName().C_Str();
       if (name.empty()) name = "material" + std::to_string(i);
       material_map_[i] = int(scene_.materials.size());
-      scene_.materials.push_back(convert_material(am, name, file_, report_));
+      const std::optional<TextureRef> ref = base_color_texture(am);
+      const pf_material m = convert_material(am, name, file_, report_, ref.has_value());
+      int texture = -1;
+      if (ref && (m.type == PF_MAT_DIFFUSE || m.type == PF_MAT_EMITTER)) {
+        texture = textures_.load(ai_, file_, name, *ref);
+        uv_channel_[i] = ref->uv_channel;
+      }
+      scene_.materials.push_back(m);
       scene_.material_names.push_back(name);
+      scene_.material_texture.resize(scene_.materials.size(), -1);
+      scene_.material_texture.back() = texture;
     }
     return material_map_[i];
   }
@@ -375,6 +559,10 @@ class Flattener {
     const int mesh_id = int(scene_.mesh_names.size());
     scene_.mesh_names.push_back(prefix_ + name);
     const int mat = material_override_ >= 0 ? material_override_ : material(mesh.mMaterialIndex);
+    const unsigned channel = material_override_ >= 0 ? 0 : uv_channel_[mesh.mMaterialIndex];
+    const aiVector3D* tex = channel < AI_MAX_NUMBER_OF_TEXTURECOORDS && mesh.HasTextureCoords(channel)
+                                ? mesh.mTextureCoords[channel]
+                                : nullptr;
 
     const aiMatrix3x3 lin(m);
     const float det = lin.Determinant();
@@ -428,7 +616,21 @@ class Flattener {
       }
       t.mesh = mesh_id;
       t.material = mat;
+      // assimp hands every format's UVs with v up (it flips glTF's): v' = 1 − v gives the glTF
+      // convention of texture_shared.h, (0, 0) the image's top-left.
+      TriangleUV uv{};
+      for (int k = 0; tex && k < 3; ++k) {
+        const float u = tex[idx[k]].x, v = 1.f - tex[idx[k]].y;
+        if (!(std::fabs(u) <= kMaxUV && std::fabs(v) <= kMaxUV))
+          throw input_error(file_, "mesh '" + name + "' vertex " + std::to_string(idx[k]) +
+                                       " has a texture coordinate that is not finite or beyond " +
+                                       fmt_float(kMaxUV),
+                            "fix the mesh's UVs");
+        uv.uv[2 * k] = u;
+        uv.uv[2 * k + 1] = v;
+      }
       out_->push_back(t);
+      uvs_->push_back(uv);
     }
   }
 
@@ -436,11 +638,14 @@ class Flattener {
   const std::string& file_;
   Scene& scene_;
   BakeReport& report_;
+  TextureLoader& textures_;
   std::vector<int> material_map_;
+  std::vector<unsigned> uv_channel_;  // per file material: the UV channel of its texture
   std::vector<bool> checked_;
   std::string prefix_;
   int material_override_ = -1;
   std::vector<pf_triangle>* out_ = nullptr;
+  std::vector<TriangleUV>* uvs_ = nullptr;
 };
 
 // Point lights of the file, placed by their nodes. Other light kinds are ignored with a warning.
@@ -599,7 +804,7 @@ Vec3 turn_y_to(UpAxis up, const Vec3& v) {
 // Inserts one extra mesh file, fitted into its box (see MeshInsert), standing along `up`.
 void insert_mesh(const MeshInsert& ins, size_t k, UpAxis up, const Bounds& scene_bounds,
                  Flattener& main_file, const std::string& main_path, const ImportContext& ctx,
-                 Scene& scene, BakeReport& report) {
+                 TextureLoader& textures, Scene& scene, BakeReport& report) {
   const int ua = up.axis;
   Vec3 box_lo(0.3f, 0.3f, 0.3f), box_hi(0.7f, 0.7f, 0.7f);
   box_lo[ua] = up.sign > 0 ? 0.f : 0.6f;
@@ -635,8 +840,9 @@ void insert_mesh(const MeshInsert& ins, size_t k, UpAxis up, const Bounds& scene
   Assimp::Importer importer;
   const aiScene* ai = read_file(importer, ins.path, ctx);
   std::vector<pf_triangle> tris;
-  Flattener(*ai, ins.path, scene, report)
-      .run("insert" + std::to_string(k) + ":", material, tris);
+  std::vector<TriangleUV> uvs;
+  Flattener(*ai, ins.path, scene, report, textures)
+      .run("insert" + std::to_string(k) + ":", material, tris, uvs);
   if (tris.empty())
     throw input_error(ins.path, "has no triangles to insert", "check the mesh file");
 
@@ -664,6 +870,7 @@ void insert_mesh(const MeshInsert& ins, size_t k, UpAxis up, const Bounds& scene
     for (float* v : {t.v0, t.v1, t.v2}) ((Vec3(v) - anchor) * scale + target).store(v);
     scene.triangles.push_back(t);
   }
+  scene.uvs.insert(scene.uvs.end(), uvs.begin(), uvs.end());
   report.inserted_triangles += tris.size();
 }
 
@@ -676,8 +883,9 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
 
   Assimp::Importer importer;
   const aiScene* ai = read_file(importer, file, ctx);
-  Flattener flattener(*ai, file, scene, report);
-  flattener.run("", -1, scene.triangles);
+  TextureLoader textures(scene, report);
+  Flattener flattener(*ai, file, scene, report, textures);
+  flattener.run("", -1, scene.triangles, scene.uvs);
   if (scene.triangles.empty())
     throw input_error(file, "no triangles (" + std::to_string(report.triangles_read) +
                                 " read, " + std::to_string(report.degenerate_dropped) +
@@ -699,7 +907,13 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   scene.compute_bounds();
   for (size_t k = 0; k < options.inserts.size(); ++k)
     insert_mesh(options.inserts[k], k, report.insert_up, scene.bounds, flattener, file, ctx,
-                scene, report);
+                textures, scene, report);
+  // Every material has its texture entry (−1: the inserts' default material); UVs are kept only
+  // where some material has a texture (format version 3, docs/FORMATS.md).
+  scene.material_texture.resize(scene.materials.size(), -1);
+  if (std::none_of(scene.material_texture.begin(), scene.material_texture.end(),
+                   [](int32_t t) { return t >= 0; }))
+    scene.uvs.clear();
 
   bool emitter = !scene.lights.empty();
   for (size_t i = 0; i < scene.triangles.size() && !emitter; ++i)
@@ -818,6 +1032,11 @@ std::string encode(const Scene& s, const BakeReport& r) {
   w.pods(s.lights);
   w.pod(s.camera);
   w.text(s.source);
+  w.pods(s.textures);
+  w.pods(s.texels);
+  w.texts(s.texture_names);
+  w.pods(s.material_texture);
+  w.pods(s.uvs);
   w.pod(uint64_t(r.triangles_read));
   w.pod(uint64_t(r.degenerate_dropped));
   w.pod(uint64_t(r.primitives_skipped));
@@ -839,6 +1058,11 @@ Scene decode(const std::string& bytes, BakeReport& r) {
   s.lights = in.pods<pf_light>();
   s.camera = in.pod<pf_camera>();
   s.source = in.text();
+  s.textures = in.pods<pf_texture>();
+  s.texels = in.pods<float>();
+  s.texture_names = in.texts();
+  s.material_texture = in.pods<int32_t>();
+  s.uvs = in.pods<TriangleUV>();
   r.triangles_read = size_t(in.pod<uint64_t>());
   r.degenerate_dropped = size_t(in.pod<uint64_t>());
   r.primitives_skipped = size_t(in.pod<uint64_t>());

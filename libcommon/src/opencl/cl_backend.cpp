@@ -15,6 +15,7 @@ namespace pf {
 // The baked scene on the device, uploaded once per context (and again when the scene changes).
 struct ClSceneBuffers {
   ClBuffer tris, hh, nodes, leaf_tris, group_of_first, leaf_groups, mats, lights, light_cdf;
+  ClBuffer textures, texels, mat_tex, uvs;  // base-colour textures (PF_TEXTURE_PARAMS)
   cl_int node_count = 0, light_count = 0;
   std::string scene_id;
   size_t triangle_count = 0;
@@ -78,6 +79,23 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
   s->mats = upload_array(dev, scene.materials, "materials");
   s->lights = upload_array(dev, scene.lights, "lights");
   s->light_cdf = upload_array(dev, scene.light_cdf, "light CDF");
+  {  // Textures: every material's entry (−1 without), and one-element stand-ins where the scene
+     // has no textures or UVs (a buffer is never empty; the kernels read them only through a
+     // material whose entry is ≥ 0, and load_scene guarantees the UVs then).
+    std::vector<int32_t> mat_tex(scene.materials.size(), -1);
+    for (size_t m = 0; m < mat_tex.size(); ++m) mat_tex[m] = scene.texture_of(int(m));
+    if (mat_tex.empty()) mat_tex.push_back(-1);
+    std::vector<pf_texture> textures = scene.textures;
+    if (textures.empty()) textures.push_back(pf_texture{1, 1, 0, 0, 0, 0});
+    std::vector<float> texels = scene.texels;
+    if (texels.empty()) texels.assign(4, 0.f);
+    std::vector<float> uvs(std::max<size_t>(1, scene.uvs.size()) * 6, 0.f);
+    if (!scene.uvs.empty()) std::memcpy(uvs.data(), scene.uvs.data(), uvs.size() * sizeof(float));
+    s->textures = upload_array(dev, textures, "texture headers");
+    s->texels = upload_array(dev, texels, "texels");
+    s->mat_tex = upload_array(dev, mat_tex, "materials' textures");
+    s->uvs = upload_array(dev, uvs, "texture coordinates");
+  }
   s->node_count = cl_int(scene.kd.nodes.size());
   s->light_count = cl_int(scene.lights.size());
   s->scene_id = scene.scene_id;
@@ -133,7 +151,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
     const cl_int count = cl_int(std::min(batch, npix - off));
     dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
              sb.leaf_groups, sb.mats, sb.lights,
-             sb.light_cdf, sb.light_count, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
+             sb.light_cdf, sb.light_count, sb.textures, sb.texels, sb.mat_tex, sb.uvs, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps, cl_int(off),
              count, slots, used, emitted, direct);
@@ -176,7 +194,8 @@ void trace_photon_batch(const Scene& scene, uint32_t pass, const PhotonPassOptio
   ClSceneBuffers& sb = scene_buffers(scene, dev);
   cl_kernel k = dev.kernel("trace_photons", "trace_photons");
   dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
-           sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, cl_uint(opt.seed),
+           sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.textures,
+           sb.texels, sb.mat_tex, sb.uvs, cl_uint(opt.seed),
            cl_uint(pass), cl_int(opt.max_bounces), ray_epsilon(scene), cl_uint(first),
            cl_int(count), slots, stored);
   dev.run(k, count);

@@ -176,6 +176,11 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
     if (m.type == PF_MAT_EMITTER && sh.front) emitted += T * Vec3(m.emission);
     if (is_diffuse(m)) {
       Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
+      // A textured material's texture value at the hit joins the weight: every gather's
+      // f_r = color/π times the weight is then the textured f_r (docs/FORMATS.md, hitpoints),
+      // and so is the direct light below. Without texture the weight is T as before.
+      const int texture = scene_.texture_of(sh.material);
+      if (texture >= 0) T = T * scene_.texture_value(texture, size_t(sh.tri), sh.u, sh.v);
       hp = pf_hitpoint{};
       sh.p.store(hp.position);
       n.store(hp.normal);

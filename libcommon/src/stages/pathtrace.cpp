@@ -109,7 +109,7 @@ class PathTracer {
       if (is_diffuse(m)) {
         const Vec3 n = sh.front ? sh.ns : -sh.ns;   // shading normal facing the arriving ray
         const Vec3 ng = sh.front ? sh.ng : -sh.ng;  // geometric normal on the same side
-        const Vec3 albedo(m.color);
+        const Vec3 albedo = diffuse_color(scene_, m, sh);  // textured albedo
         // Next-event estimation: L_direct = f_r · (one light sample), f_r = ρ/π.
         L += T * albedo * kInvPi * sample_light(sh.p, n, ng, rng, rays);
         // Continue with f_r·cos/pdf = ρ (cosine sampling around n), after Russian roulette.

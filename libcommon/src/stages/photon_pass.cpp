@@ -174,10 +174,10 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
         const pf_material& m = scene.materials[size_t(sh.material)];
         Vec3 d = normalize(ray.d);
         Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming photon
-        Vec3 color(m.color);
         bool diffuse = m.type == PF_MAT_DIFFUSE ||
-                       (m.type == PF_MAT_EMITTER && luminance(color) > 0.f);
+                       (m.type == PF_MAT_EMITTER && luminance(Vec3(m.color)) > 0.f);
         if (diffuse) {
+          const Vec3 color = diffuse_color(scene, m, sh);  // textured albedo
           pf_photon ph{};
           sh.p.store(ph.position);
           d.store(ph.dir);
