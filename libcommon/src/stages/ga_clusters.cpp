@@ -988,9 +988,65 @@ Provenance checkpoint_provenance(const GaFitnessInputs& in, const GaOptions& opt
   return p;
 }
 
+// The values and the chromosome's meshes of a checkpoint: what load_checkpoint checks after
+// reading and save_checkpoint before writing (validate.h written_check). InputError naming path.
+void validate_checkpoint(const Checkpoint& ck, const GaFitnessInputs& in, const std::string& path) {
+  const std::string hint = "delete it, or rerun with the options and inputs of that run";
+  if (ck.generations < 1 || size_t(ck.generations) != ck.history.size() || ck.centroids.empty())
+    throw input_error(path, "is a damaged checkpoint (generation count and history disagree)", hint);
+  // Values (validate.h): centroids are world positions, fitness values and seconds finite and
+  // not negative (every fitness of ga_clusters.h counts or times something).
+  const Validator v(path, "the file is damaged; delete it and rerun");
+  static const std::string kCentroids = "centroids", kHistory = "best_fitness";
+  for (size_t k = 0; k < ck.centroids.size(); ++k)
+    v.position(Name(kCentroids, k, "position"), ck.centroids[k].position);
+  for (size_t k = 0; k < ck.history.size(); ++k)
+    v.in_range(Name(kHistory, k), ck.history[k], 0.0, double(kMaxValue));
+  v.in_range("attribute best_fitness", ck.fitness, 0.0, double(kMaxValue));
+  v.in_range("attribute start_fitness", ck.start_fitness, 0.0, double(kMaxValue));
+  v.in_range("attribute seconds", ck.seconds, 0.0, double(kMaxValue));
+  v.int_in_range("attribute evaluations", int64_t(ck.evaluations), 0,
+                 std::numeric_limits<int64_t>::max());
+  // The chromosome indexes the hitpoints' meshes: every centroid on a mesh with hitpoints, every
+  // such mesh with a centroid (what GaState's constructor assumes).
+  const HitpointSet& h = *in.hitpoints;
+  std::vector<size_t> hitpoints_of, centroids_of;
+  for (const pf_hitpoint& p : h.hitpoints) {
+    if (p.mesh < 0) continue;  // refused by the GA itself
+    if (size_t(p.mesh) >= hitpoints_of.size()) hitpoints_of.resize(size_t(p.mesh) + 1, 0);
+    ++hitpoints_of[size_t(p.mesh)];
+  }
+  centroids_of.assign(hitpoints_of.size(), 0);
+  for (size_t k = 0; k < ck.centroids.size(); ++k) {
+    const GaCentroid& c = ck.centroids[k];
+    if (c.mesh < 0 || size_t(c.mesh) >= hitpoints_of.size() || hitpoints_of[size_t(c.mesh)] == 0)
+      throw input_error(path, "centroid " + std::to_string(k) + " lies on mesh " +
+                                  std::to_string(c.mesh) + ", which has no hitpoints",
+                        "the file is damaged; delete it and rerun");
+    ++centroids_of[size_t(c.mesh)];
+  }
+  for (size_t m = 0; m < hitpoints_of.size(); ++m)
+    if (hitpoints_of[m] > 0 && centroids_of[m] == 0)
+      throw input_error(path, "mesh " + std::to_string(m) + " has hitpoints but no centroid",
+                        "the file is damaged; delete it and rerun");
+}
+
+// evaluations is kept as a uint64: refused as an int64 out of range before it is converted.
+void v_evaluations_in_range(const h5::Reader& r, const std::string& path) {
+  const Validator v(path, "the file is damaged; delete it and rerun");
+  v.int_in_range("attribute evaluations", r.attr_int("/", "evaluations"), 0,
+                 std::numeric_limits<int64_t>::max());
+}
+
 void save_checkpoint(const std::string& path, const GaState& st, const GaFitnessInputs& in,
                      const GaOptions& opt, const std::string& hp_hash, const std::string& id,
                      const Checkpoint& ck, double call_seconds) {
+  written_check([&] {
+    Checkpoint written = ck;  // as load_checkpoint will read it back
+    written.centroids = st.centroids();
+    written.next_id = st.next_id();
+    validate_checkpoint(written, in, path);
+  });
   h5::Writer w(path, kGaCheckpointFormat, kCheckpointVersion);
   w.attr("/", "scene_id", in.hitpoints->scene_id);
   w.attr("/", "hitpoints_sha256", hp_hash);
@@ -1041,43 +1097,8 @@ Checkpoint load_checkpoint(const std::string& path, const GaFitnessInputs& in, c
   ck.start_fitness = r.attr_double("/", "start_fitness");
   ck.evaluations = uint64_t(r.attr_int("/", "evaluations"));
   ck.seconds = r.attr_double("/", "seconds");
-  if (ck.generations < 1 || size_t(ck.generations) != ck.history.size() || ck.centroids.empty())
-    throw input_error(path, "is a damaged checkpoint (generation count and history disagree)", hint);
-  // Values (validate.h): centroids are world positions, fitness values and seconds finite and
-  // not negative (every fitness of ga_clusters.h counts or times something).
-  const Validator v(path, "the file is damaged; delete it and rerun");
-  static const std::string kCentroids = "centroids", kHistory = "best_fitness";
-  for (size_t k = 0; k < ck.centroids.size(); ++k)
-    v.position(Name(kCentroids, k, "position"), ck.centroids[k].position);
-  for (size_t k = 0; k < ck.history.size(); ++k)
-    v.in_range(Name(kHistory, k), ck.history[k], 0.0, double(kMaxValue));
-  v.in_range("attribute best_fitness", ck.fitness, 0.0, double(kMaxValue));
-  v.in_range("attribute start_fitness", ck.start_fitness, 0.0, double(kMaxValue));
-  v.in_range("attribute seconds", ck.seconds, 0.0, double(kMaxValue));
-  v.int_in_range("attribute evaluations", r.attr_int("/", "evaluations"), 0,
-                 std::numeric_limits<int64_t>::max());
-  // The chromosome indexes the hitpoints' meshes: every centroid on a mesh with hitpoints, every
-  // such mesh with a centroid (what GaState's constructor assumes).
-  const HitpointSet& h = *in.hitpoints;
-  std::vector<size_t> hitpoints_of, centroids_of;
-  for (const pf_hitpoint& p : h.hitpoints) {
-    if (p.mesh < 0) continue;  // refused by the GA itself
-    if (size_t(p.mesh) >= hitpoints_of.size()) hitpoints_of.resize(size_t(p.mesh) + 1, 0);
-    ++hitpoints_of[size_t(p.mesh)];
-  }
-  centroids_of.assign(hitpoints_of.size(), 0);
-  for (size_t k = 0; k < ck.centroids.size(); ++k) {
-    const GaCentroid& c = ck.centroids[k];
-    if (c.mesh < 0 || size_t(c.mesh) >= hitpoints_of.size() || hitpoints_of[size_t(c.mesh)] == 0)
-      throw input_error(path, "centroid " + std::to_string(k) + " lies on mesh " +
-                                  std::to_string(c.mesh) + ", which has no hitpoints",
-                        "the file is damaged; delete it and rerun");
-    ++centroids_of[size_t(c.mesh)];
-  }
-  for (size_t m = 0; m < hitpoints_of.size(); ++m)
-    if (hitpoints_of[m] > 0 && centroids_of[m] == 0)
-      throw input_error(path, "mesh " + std::to_string(m) + " has hitpoints but no centroid",
-                        "the file is damaged; delete it and rerun");
+  v_evaluations_in_range(r, path);
+  validate_checkpoint(ck, in, path);
   const int64_t next_id = r.attr_int("/", "next_id");
   if (next_id < 0 || next_id > int64_t(UINT32_MAX))
     throw input_error(path, "next_id " + std::to_string(next_id) + " is outside [0, 2^32)",
