@@ -50,6 +50,26 @@ inline void rewrite_dataset_raw(hid_t f, const std::string& dset, hid_t mem_type
   if (n) REQUIRE(H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0);
 }
 
+// Replaces dataset `dset` of open file `f` by the n elements at `data` (memory type `mem_type`),
+// stored as file type `stored` with shape `dims`, and gives it the checksum64 of its new bytes:
+// what a script that retypes or reshapes a dataset consistently leaves.
+inline void rewrite_dataset_as(hid_t f, const std::string& dset, hid_t stored, hid_t mem_type,
+                               const void* data, size_t n, const std::vector<hsize_t>& dims) {
+  REQUIRE(H5Ldelete(f, dset.c_str(), H5P_DEFAULT) >= 0);
+  h5::Handle space(H5Screate_simple(int(dims.size()), dims.data(), nullptr));
+  h5::Handle d(H5Dcreate2(f, dset.c_str(), stored, space.get(), H5P_DEFAULT, H5P_DEFAULT,
+                          H5P_DEFAULT));
+  REQUIRE(d.valid());
+  if (n) REQUIRE(H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0);
+  std::vector<unsigned char> raw;
+  REQUIRE(h5::read_stored_bytes(d.get(), raw));
+  const int64_t sum = int64_t(checksum64(raw.data(), raw.size()));
+  h5::Handle s1(H5Screate(H5S_SCALAR));
+  h5::Handle a(H5Acreate2(d.get(), "checksum64", H5T_NATIVE_INT64, s1.get(), H5P_DEFAULT,
+                          H5P_DEFAULT));
+  REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &sum) >= 0);
+}
+
 template <class T>
 void rewrite_dataset(const std::string& file, const std::string& dset, hid_t mem_type,
                      const std::vector<T>& v) {

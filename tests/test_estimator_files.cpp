@@ -63,26 +63,14 @@ void refused(const std::function<void()>& f, const std::string& file, const std:
   }
 }
 
-// Replaces dataset `dset` of `file` by `n` elements at `data` (memory type `mem`) stored with file
-// type `stored` and shape `dims`, with a fresh checksum: what a script that reshapes or retypes a
-// dataset consistently leaves.
+// Retypes or reshapes dataset `dset` of `file` (h5edit.h rewrite_dataset_as).
 void rewrite_as(const std::string& file, const std::string& dset, hid_t stored, hid_t mem,
                 const void* data, const std::vector<hsize_t>& dims) {
   h5::Handle f(H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
   REQUIRE(f.valid());
-  REQUIRE(H5Ldelete(f.get(), dset.c_str(), H5P_DEFAULT) >= 0);
-  h5::Handle space(H5Screate_simple(int(dims.size()), dims.data(), nullptr));
-  h5::Handle d(H5Dcreate2(f.get(), dset.c_str(), stored, space.get(), H5P_DEFAULT, H5P_DEFAULT,
-                          H5P_DEFAULT));
-  REQUIRE(d.valid());
-  REQUIRE(H5Dwrite(d.get(), mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0);
-  std::vector<unsigned char> raw;
-  REQUIRE(h5::read_stored_bytes(d.get(), raw));
-  const int64_t sum = int64_t(checksum64(raw.data(), raw.size()));
-  h5::Handle s1(H5Screate(H5S_SCALAR));
-  h5::Handle a(H5Acreate2(d.get(), "checksum64", H5T_NATIVE_INT64, s1.get(), H5P_DEFAULT,
-                          H5P_DEFAULT));
-  REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &sum) >= 0);
+  size_t n = 1;
+  for (hsize_t d : dims) n *= size_t(d);
+  test::rewrite_dataset_as(f.get(), dset, stored, mem, data, n, dims);
 }
 
 std::string copy_to(const TempDir& tmp, const std::string& src, const std::string& name) {

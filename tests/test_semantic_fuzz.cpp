@@ -574,24 +574,9 @@ std::string mutate_dataset(hid_t f, const std::string& name, Rng& rng) {
       what = name + " reshaped";
     }
     d = h5::Handle();
-    {
-      REQUIRE(H5Ldelete(f, name.c_str(), H5P_DEFAULT) >= 0);
-      h5::Handle space(H5Screate_simple(int(dims.size()), dims.data(), nullptr));
-      h5::Handle nd(H5Dcreate2(f, name.c_str(), stored, space.get(), H5P_DEFAULT, H5P_DEFAULT,
-                               H5P_DEFAULT));
-      REQUIRE(nd.valid());
-      const void* src = mem == H5T_NATIVE_DOUBLE ? static_cast<const void*>(as_double.data())
-                                                 : static_cast<const void*>(values.data());
-      if (n) REQUIRE(H5Dwrite(nd.get(), mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, src) >= 0);
-      // A consistent edit: the checksum of the new bytes, as a script would leave it.
-      std::vector<unsigned char> raw;
-      REQUIRE(h5::read_stored_bytes(nd.get(), raw));
-      const int64_t sum = int64_t(checksum64(raw.data(), raw.size()));
-      h5::Handle s1(H5Screate(H5S_SCALAR));
-      h5::Handle a(H5Acreate2(nd.get(), "checksum64", H5T_NATIVE_INT64, s1.get(), H5P_DEFAULT,
-                              H5P_DEFAULT));
-      REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &sum) >= 0);
-    }
+    const void* src = mem == H5T_NATIVE_DOUBLE ? static_cast<const void*>(as_double.data())
+                                               : static_cast<const void*>(values.data());
+    test::rewrite_dataset_as(f, name, stored, mem, src, n, dims);  // with a consistent checksum
     return what;
   }
   if (op < 7 && n > 0) {
