@@ -155,7 +155,7 @@ $(DIR)/$(1)/classic.tsv: $(DIR)/$(1)/scene.h5 $(DIR)/$(1)/ref.exr $(DIR)/$(1)/ma
 	$(LOAD) $(DIR)/$(1)/classic.load
 	@C=$(DIR)/$(1)/classic; \
 	/usr/bin/time -f %e -o $$$$C/hp.time $(BIN)/trace-hitpoints --scene $$< -o $$$$C/hp.h5 \
-	  --spp $(EYE_SPP_$(1)) --direct shadow-rays --seed $(SEED) $(T) > /dev/null || exit 1; \
+	  --estimator ppm --spp $(EYE_SPP_$(1)) --direct shadow-rays --seed $(SEED) $(T) > /dev/null || exit 1; \
 	for n in $(CLASSIC_PHOTONS); do \
 	  /usr/bin/time -f %e -o $$$$C/ph-$$$$n.time $(BIN)/trace-photons --scene $$< \
 	    -o $$$$C/ph-$$$$n.h5 --passes 1 --photons $$$$n --seed $(SEED) $(T) > /dev/null || exit 1; \

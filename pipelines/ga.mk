@@ -87,7 +87,7 @@ $(DIR)/scene.h5: $(SCENE_FILE) $(BIN)/scene-bake $(call param_stamp,$(DIR)/bake.
 	$(BIN)/scene-bake $(SCENE_FILE) -o $@ $(BAKE_P)
 
 $(DIR)/hitpoints.h5: $(DIR)/scene.h5 $(BIN)/trace-hitpoints
-	$(BIN)/trace-hitpoints --scene $< -o $@ $(T)
+	$(BIN)/trace-hitpoints --scene $< -o $@ --estimator ppm --direct photons $(T)
 
 $(DIR)/distribution.h5: $(DIR)/hitpoints.h5 $(BIN)/photon-distribution $(call param_stamp,$(DIR)/dist.params,$(DIST_P))
 	$(BIN)/photon-distribution --scene $(DIR)/scene.h5 --hitpoints $< -o $@ $(DIST_P) $(T)
@@ -104,7 +104,7 @@ $(DIR)/photons.h5: $(DIR)/scene.h5 $(BIN)/trace-photons $(call param_stamp,$(DIR
 
 $(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/photons.h5 $(DIR)/clusters.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
 	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $< --photons $(DIR)/photons.h5 \
-	  --clusters $(DIR)/clusters.h5 -o $@ $(ILL_P) $(T)
+	  --clusters $(DIR)/clusters.h5 -o $@ --estimator ppm $(ILL_P) $(T)
 
 $(DIR)/image.exr: $(DIR)/state.h5 $(BIN)/synthesize
 	$(BIN)/synthesize --hitpoints $< -o $@

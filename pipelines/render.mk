@@ -90,7 +90,7 @@ $(DIR)/scene.h5: $(SCENE_FILE) $(BIN)/scene-bake $(call param_stamp,$(DIR)/bake.
 	$(BIN)/scene-bake $(SCENE_FILE) -o $@ $(BAKE_P)
 
 $(DIR)/hitpoints.h5: $(DIR)/scene.h5 $(BIN)/trace-hitpoints $(call param_stamp,$(DIR)/eye.params,$(EYE_P))
-	$(BIN)/trace-hitpoints --scene $< -o $@ $(EYE_P) $(T)
+	$(BIN)/trace-hitpoints --scene $< -o $@ --estimator ppm $(EYE_P) $(T)
 
 $(DIR)/photons.h5: $(DIR)/scene.h5 $(BIN)/trace-photons $(call param_stamp,$(DIR)/photons.params,$(PHOT_P))
 	$(BIN)/trace-photons --scene $< -o $@ $(PHOT_P) $(T)
@@ -100,16 +100,16 @@ $(DIR)/grid.h5: $(DIR)/photons.h5 $(DIR)/hitpoints.h5 $(BIN)/build-grid $(call p
 	$(BIN)/build-grid --scene $(DIR)/scene.h5 --photons $(DIR)/photons.h5 --hitpoints $(DIR)/hitpoints.h5 -o $@ $(GRID_P)
 
 $(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/grid.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
-	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --grid $(DIR)/grid.h5 -o $@ $(ILL_P) $(T)
+	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --grid $(DIR)/grid.h5 -o $@ --estimator ppm $(ILL_P) $(T)
 else ifneq ($(CLUSTER_KIND),)
 $(DIR)/clusters.h5: $(DIR)/hitpoints.h5 $(BIN)/cluster $(call param_stamp,$(DIR)/cluster.params,$(CLU_P))
 	$(BIN)/cluster --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 -o $@ $(CLU_P) $(T)
 
 $(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/photons.h5 $(DIR)/clusters.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
-	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --photons $(DIR)/photons.h5 --clusters $(DIR)/clusters.h5 -o $@ $(ILL_P) $(T)
+	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --photons $(DIR)/photons.h5 --clusters $(DIR)/clusters.h5 -o $@ --estimator ppm $(ILL_P) $(T)
 else
 $(DIR)/state.h5: $(DIR)/hitpoints.h5 $(DIR)/photons.h5 $(BIN)/illuminate $(call param_stamp,$(DIR)/illuminate.params,$(ILL_P))
-	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --photons $(DIR)/photons.h5 -o $@ $(ILL_P) $(T)
+	$(BIN)/illuminate --scene $(DIR)/scene.h5 --hitpoints $(DIR)/hitpoints.h5 --photons $(DIR)/photons.h5 -o $@ --estimator ppm $(ILL_P) $(T)
 endif
 
 $(DIR)/image.exr: $(DIR)/state.h5 $(BIN)/synthesize $(call param_stamp,$(DIR)/synthesize.params,$(SYN_P))

@@ -80,9 +80,9 @@ struct Chain {
     };
     ok("scene-bake", std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae -o " + scene +
                          " --width 16 --height 12");
-    ok("trace-hitpoints", "--scene " + scene + " -o " + hp);
+    ok("trace-hitpoints", "--estimator ppm --direct photons --scene " + scene + " -o " + hp);
     ok("trace-photons", "--scene " + scene + " -o " + ph + " --photons 2000");
-    ok("illuminate", "--scene " + scene + " --hitpoints " + hp + " --photons " + ph + " -o " + st);
+    ok("illuminate", "--estimator ppm --scene " + scene + " --hitpoints " + hp + " --photons " + ph + " -o " + st);
     ok("build-grid", "--scene " + scene + " --photons " + ph + " --hitpoints " + hp + " -o " + grid);
     ok("cluster", "--scene " + scene + " --hitpoints " + hp + " -o " + clusters);
     ok("photon-distribution", "--scene " + scene + " --hitpoints " + hp + " --photons " + ph +
@@ -172,20 +172,20 @@ void fuzz(const Chain& c, const std::string& file, const std::string& tool, cons
 
 TEST_CASE("damaged scene.h5: refused or without effect, never a crash", "[damaged]") {
   Chain c;
-  fuzz(c, c.scene, "trace-hitpoints", "--scene {in} -o {out}", "o.h5", "/hitpoints", 1);
+  fuzz(c, c.scene, "trace-hitpoints", "--estimator ppm --direct photons --scene {in} -o {out}", "o.h5", "/hitpoints", 1);
 }
 
 TEST_CASE("damaged hitpoints.h5: refused or without effect, never a crash", "[damaged]") {
   Chain c;
-  fuzz(c, c.hp, "illuminate", "--scene " + c.scene + " --hitpoints {in} --photons " + c.ph +
+  fuzz(c, c.hp, "illuminate", "--estimator ppm --scene " + c.scene + " --hitpoints {in} --photons " + c.ph +
                                   " -o {out}", "o.h5", "/hitpoints", 2);
 }
 
 TEST_CASE("damaged photons.h5 and grid.h5: refused or without effect, never a crash", "[damaged]") {
   Chain c;
-  fuzz(c, c.ph, "illuminate", "--scene " + c.scene + " --hitpoints " + c.hp +
+  fuzz(c, c.ph, "illuminate", "--estimator ppm --scene " + c.scene + " --hitpoints " + c.hp +
                                   " --photons {in} -o {out}", "o.h5", "/hitpoints", 3);
-  fuzz(c, c.grid, "illuminate", "--scene " + c.scene + " --hitpoints " + c.hp +
+  fuzz(c, c.grid, "illuminate", "--estimator ppm --scene " + c.scene + " --hitpoints " + c.hp +
                                     " --grid {in} -o {out}", "o.h5", "/hitpoints", 4);
 }
 
@@ -208,7 +208,7 @@ TEST_CASE("damaged clusters.h5 and photon_distribution.h5: refused or without ef
     WARN("SKIPPED clusters.h5: no OpenCL device (illuminate --clusters runs on OpenCL)");
     return;
   }
-  fuzz(c, c.clusters, "illuminate", "--scene " + c.scene + " --hitpoints " + c.hp + " --photons " +
+  fuzz(c, c.clusters, "illuminate", "--estimator ppm --scene " + c.scene + " --hitpoints " + c.hp + " --photons " +
                                         c.ph + " --clusters {in} --method grid-kmeans --device "
                                         "opencl -o {out}", "o.h5", "/hitpoints", 8);
 }

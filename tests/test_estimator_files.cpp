@@ -115,7 +115,7 @@ TEST_CASE("estimator files 1: a radius whose square underflows float is refused 
     CHECK_FALSE(std::filesystem::exists(tmp / "r.exr"));
   }
   const test::ToolRun t = test::run_tool(
-      "trace-hitpoints", "--scene " + (tmp / "scene.h5") + " -o " + (tmp / "h.h5") + " --radius 1e-30", tmp);
+      "trace-hitpoints", "--estimator ppm --direct photons --scene " + (tmp / "scene.h5") + " -o " + (tmp / "h.h5") + " --radius 1e-30", tmp);
   INFO(t.err);
   CHECK(t.exit_code == kExitBadInput);
   CHECK_FALSE(std::filesystem::exists(tmp / "h.h5"));

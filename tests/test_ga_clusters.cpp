@@ -874,7 +874,7 @@ TEST_CASE("cluster --method ga and photon-distribution: files, provenance, refus
 
   // illuminate reads the GA clusters (OpenCL grid-kmeans).
   if (!cl_list_devices().empty()) {
-    auto il = test::run_tool("illuminate", S + HP + " --photons " + (tmp / "ph.h5") + " -o " +
+    auto il = test::run_tool("illuminate", "--estimator ppm " + S + HP + " --photons " + (tmp / "ph.h5") + " -o " +
                                                (tmp / "state.h5") + " --device opencl --work-group 16 "
                                                "--method grid-kmeans --clusters " + (tmp / "ga.h5"), tmp);
     INFO(il.err);

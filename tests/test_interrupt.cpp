@@ -212,7 +212,7 @@ TEST_CASE("interrupts: render and cluster's GA stop after the step in progress, 
   }
 
   SECTION("cluster --method ga") {
-    REQUIRE(run_tool("trace-hitpoints", "--scene " + scene + " -o " + hp, tmp).exit_code == 0);
+    REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + scene + " -o " + hp, tmp).exit_code == 0);
     REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + ph + " --photons 2000", tmp)
                 .exit_code == 0);
     const std::string dist = tmp / "dist.h5", ck = tmp / "ga-ck.h5", out = tmp / "c.h5";

@@ -49,12 +49,12 @@ TEST_CASE("OpenCL tools: staged route and render driver on the device", "[opencl
   auto staged = [&](const std::string& dev, const std::string& tag) {
     const std::string hp = tmp / (tag + "-hp.h5"), ph = tmp / (tag + "-ph.h5"),
                       il = tmp / (tag + "-il.h5"), img = tmp / (tag + ".exr");
-    ToolRun a = run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp + " --seed 4 " + dev, tmp);
+    ToolRun a = run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + sc + " -o " + hp + " --seed 4 " + dev, tmp);
     REQUIRE(a.exit_code == 0);
     ToolRun b = run_tool("trace-photons", "--scene " + sc + " -o " + ph +
                                               " --photons 3000 --passes 3 --seed 4 " + dev, tmp);
     REQUIRE(b.exit_code == 0);
-    ToolRun c = run_tool("illuminate", "--scene " + sc + " --hitpoints " + hp + " --photons " + ph +
+    ToolRun c = run_tool("illuminate", "--estimator ppm --scene " + sc + " --hitpoints " + hp + " --photons " + ph +
                                            " -o " + il + " " + dev, tmp);
     REQUIRE(c.exit_code == 0);
     ToolRun d = run_tool("synthesize", "--hitpoints " + il + " -o " + img + " " + dev, tmp);
@@ -129,11 +129,11 @@ TEST_CASE("OpenCL tools: --method, --clusters and build-grid on the device", "[o
   Provenance prov;
   prov.tool = "test";
   save_scene(scene, sc, prov);
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp + " --seed 2", tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + sc + " -o " + hp + " --seed 2", tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", "--scene " + sc + " -o " + ph + " --photons 4000 --passes 3 --seed 2",
                    tmp).exit_code == 0);
   auto illuminate = [&](const std::string& args, const std::string& out) {
-    return run_tool("illuminate", "--scene " + sc + " --hitpoints " + hp + " -o " + (tmp / out) +
+    return run_tool("illuminate", "--estimator ppm --scene " + sc + " --hitpoints " + hp + " -o " + (tmp / out) +
                                       " " + args, tmp);
   };
   auto image = [&](const std::string& state) {
@@ -182,7 +182,7 @@ TEST_CASE("OpenCL tools: --method, --clusters and build-grid on the device", "[o
   refused("--photons " + ph + " --method warp-speed", "--method must be one of");
   {  // clusters of other hitpoints
     const std::string hp2 = tmp / "hp2.h5", km2 = tmp / "km2.h5";
-    REQUIRE(run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp2 + " --seed 9", tmp).exit_code == 0);
+    REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + sc + " -o " + hp2 + " --seed 9", tmp).exit_code == 0);
     REQUIRE(run_tool("cluster", "--scene " + sc + " --hitpoints " + hp2 + " -o " + km2, tmp).exit_code == 0);
     refused("--photons " + ph + " --device opencl --method grid-kmeans --clusters " + km2, km2);
   }
@@ -221,7 +221,7 @@ TEST_CASE("OpenCL tools: without an OpenCL driver, opencl is refused and auto ru
   CHECK(list.out.find("no OpenCL platform or device found (install an OpenCL driver") !=
         std::string::npos);
 
-  ToolRun refused = run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp + " --device opencl",
+  ToolRun refused = run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + sc + " -o " + hp + " --device opencl",
                              tmp, none);
   INFO(refused.err);
   CHECK(refused.exit_code == 2);
@@ -231,11 +231,11 @@ TEST_CASE("OpenCL tools: without an OpenCL driver, opencl is refused and auto ru
   CHECK_FALSE(std::filesystem::exists(hp));
 
   ToolRun fallback =
-      run_tool("trace-hitpoints", "--scene " + sc + " -o " + hp + " --device auto", tmp, none);
+      run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + sc + " -o " + hp + " --device auto", tmp, none);
   INFO(fallback.out << fallback.err);
   REQUIRE(fallback.exit_code == 0);
   CHECK((fallback.out + fallback.err).find("cpu backend (auto: no OpenCL") != std::string::npos);
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + sc + " -o " + cpu + " --device cpu", tmp)
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + sc + " -o " + cpu + " --device cpu", tmp)
               .exit_code == 0);
   CHECK(same_hitpoints(load_hitpoints(hp).hitpoints, load_hitpoints(cpu).hitpoints));
   CHECK(h5::Reader(hp, kHitpointsFormat, 1).attr_string("/provenance/parameters", "backend") ==

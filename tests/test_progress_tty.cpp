@@ -62,7 +62,7 @@ TEST_CASE("progress: long stages show steps, rate and ETA on a terminal, nothing
                                      " --width 16 --height 12",
                    tmp)
               .exit_code == 0);
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + scene + " -o " + hp, tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + scene + " -o " + hp, tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + ph + " --photons 2000 --passes 3",
                    tmp)
               .exit_code == 0);
@@ -79,7 +79,7 @@ TEST_CASE("progress: long stages show steps, rate and ETA on a terminal, nothing
   const std::vector<Case> cases = {
       {"trace-photons", "--scene " + scene + " --photons 2000 --passes 3" + o + ".h5", "pass 3/3",
        "photons/s"},
-      {"illuminate", "--scene " + scene + " --hitpoints " + hp + " --photons " + ph + o + ".h5",
+      {"illuminate", "--estimator ppm --scene " + scene + " --hitpoints " + hp + " --photons " + ph + o + ".h5",
        "pass 3/3", "photons/s"},
       {"photon-distribution", "--scene " + scene + " --hitpoints " + hp + " --passes 2" + o + ".h5",
        "pass 2/2", "photons/s"},

@@ -1,6 +1,7 @@
 // render's defaults by measurement (render_defaults.h, issue 34 item 1): the rule of the automatic
 // photon count and radius, what --help says, what the run record and the summary line say, that
-// every choice is overridable, and that trace-photons takes the same count as render.
+// every choice is overridable, and that trace-photons, trace-hitpoints and illuminate take the
+// same defaults as render (their --help and their run records).
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -251,23 +252,24 @@ TEST_CASE("make render, the staged route and render without options give one ima
   CHECK(record_parameters(tmp / "plain.json").at("photons") == std::to_string(kMinAutoPhotons));
   const Image made = read_exr(dir + "/render.exr"), plain = read_exr(tmp / "plain.exr");
   CHECK(made.rgb == plain.rgb);
-  // The staged route, SPPM named (trace-hitpoints and illuminate keep ppm as their default) and
-  // trace-photons with its default count.
+  // The staged route with no estimator, direct light or photon count: trace-hitpoints and
+  // illuminate default to render's estimator and direct light, trace-photons to its count; pass
+  // p > 0 names only its pass and the state before it.
   std::string state;
   for (int p = 0; p < 2; ++p) {
     const std::string eye = tmp / ("eye" + std::to_string(p) + ".h5");
     const std::string ph = tmp / ("ph" + std::to_string(p) + ".h5");
     const std::string next = tmp / ("sppm" + std::to_string(p) + ".h5");
-    REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) + " --estimator sppm --pass " +
-                                                  std::to_string(p) +
-                                                  " --direct shadow-rays -o " + q(eye),
+    REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) +
+                                                  (p > 0 ? " --pass " + std::to_string(p) : "") +
+                                                  " -o " + q(eye),
                            tmp)
                 .exit_code == 0);
     REQUIRE(test::run_tool("trace-photons", "--scene " + q(scene) + " --first-pass " +
                                                 std::to_string(p) + " -o " + q(ph),
                            tmp)
                 .exit_code == 0);
-    REQUIRE(test::run_tool("illuminate", "--scene " + q(scene) + " --estimator sppm --hitpoints " +
+    REQUIRE(test::run_tool("illuminate", "--scene " + q(scene) + " --hitpoints " +
                                              q(eye) + " --photons " + q(ph) +
                                              (state.empty() ? "" : " --state " + q(state)) +
                                              " -o " + q(next),
@@ -279,4 +281,100 @@ TEST_CASE("make render, the staged route and render without options give one ima
                          tmp)
               .exit_code == 0);
   CHECK(read_exr(tmp / "staged.exr").rgb == plain.rgb);
+}
+
+TEST_CASE("trace-hitpoints and illuminate: --help and the run record say render's estimator and "
+          "direct light, which they default to",
+          "[render_defaults]") {
+  test::TempDir tmp("render-defaults-stage-help");
+  const std::string est = estimator_name(kDefaultEstimator), dir = direct_mode_name(kDefaultDirect);
+  // render's --help, the reference: the same "(default: ...)" in all three tools.
+  const auto render = test::run_tool("render", "--help", tmp);
+  const auto eye = test::run_tool("trace-hitpoints", "--help", tmp);
+  const auto ill = test::run_tool("illuminate", "--help", tmp);
+  REQUIRE(render.exit_code == 0);
+  REQUIRE(eye.exit_code == 0);
+  REQUIRE(ill.exit_code == 0);
+  const std::string est_default = "(default: " + est + ")", dir_default = "(default: " + dir + ")";
+  CHECK(est == "sppm");
+  CHECK(dir == "shadow-rays");
+  CHECK(help_of(render.out, "estimator").find(est_default) != std::string::npos);
+  CHECK(help_of(render.out, "direct").find(dir_default) != std::string::npos);
+  CHECK(help_of(eye.out, "estimator").find(est_default) != std::string::npos);
+  CHECK(help_of(eye.out, "direct").find(dir_default) != std::string::npos);
+  CHECK(help_of(ill.out, "estimator").find(est_default) != std::string::npos);
+
+  // The run records: the values used and that they were the defaults.
+  const std::string dae = test::source_dir() + "/data/cornell-box.dae";
+  const std::string scene = tmp / "s.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5",
+                    st = tmp / "st.h5";
+  REQUIRE(test::run_tool("scene-bake", q(dae) + " -o " + q(scene) + " --width 32 --height 24",
+                         tmp)
+              .exit_code == 0);
+  REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) + " -o " + q(hp), tmp)
+              .exit_code == 0);
+  REQUIRE(test::run_tool("trace-photons", "--scene " + q(scene) + " -o " + q(ph), tmp)
+              .exit_code == 0);
+  const auto lit = test::run_tool("illuminate", "--scene " + q(scene) + " --hitpoints " + q(hp) +
+                                                    " --photons " + q(ph) + " -o " + q(st),
+                                  tmp);
+  INFO(lit.err);
+  REQUIRE(lit.exit_code == 0);
+  const Provenance e = load_hitpoints_provenance(hp);
+  CHECK(e.parameters.at("estimator") == est);
+  CHECK(e.parameters.at("estimator_auto") == "true");
+  CHECK(e.parameters.at("direct") == dir);
+  CHECK(e.parameters.at("direct_auto") == "true");
+  CHECK(e.parameters.at("pixel-sampler") == "sobol");  // sppm's sampler, as render's
+  CHECK(load_hitpoints(hp).direct_mode == kDefaultDirect);
+  const Provenance i = load_hitpoints_provenance(st);
+  CHECK(i.parameters.at("estimator") == est);
+  CHECK(i.parameters.at("estimator_auto") == "true");
+  const HitpointSet state = load_hitpoints(st);
+  CHECK(is_sppm_state(state));
+  CHECK(state.passes == 1);
+  CHECK(state.direct_mode == kDefaultDirect);
+
+  // Named, they are used and recorded as given.
+  REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) + " -o " + q(tmp / "hp2.h5") +
+                                                " --estimator ppm --direct photons --spp 2",
+                         tmp)
+              .exit_code == 0);
+  const Provenance e2 = load_hitpoints_provenance(tmp / "hp2.h5");
+  CHECK(e2.parameters.at("estimator") == "ppm");
+  CHECK(e2.parameters.at("estimator_auto") == "false");
+  CHECK(e2.parameters.at("direct") == "photons");
+  CHECK(e2.parameters.at("direct_auto") == "false");
+  REQUIRE(test::run_tool("illuminate", "--scene " + q(scene) + " --hitpoints " + q(tmp / "hp2.h5") +
+                                           " --photons " + q(ph) + " -o " + q(tmp / "st2.h5") +
+                                           " --estimator ppm",
+                         tmp)
+              .exit_code == 0);
+  const Provenance i2 = load_hitpoints_provenance(tmp / "st2.h5");
+  CHECK(i2.parameters.at("estimator") == "ppm");
+  CHECK(i2.parameters.at("estimator_auto") == "false");
+
+  // What belongs to ppm alone, under the default, is refused with one line that names the way.
+  const auto spp = test::run_tool("trace-hitpoints", "--scene " + q(scene) + " -o " +
+                                                         q(tmp / "x.h5") + " --spp 2",
+                                  tmp);
+  CHECK(spp.exit_code == 2);
+  CHECK(spp.err.find("(the default)") != std::string::npos);
+  CHECK(spp.err.find("--estimator ppm") != std::string::npos);
+  CHECK(std::count(spp.err.begin(), spp.err.end(), '\n') == 1);
+  CHECK_FALSE(std::filesystem::exists(tmp / "x.h5"));
+  const auto cont = test::run_tool("illuminate", "--scene " + q(scene) + " --hitpoints " +
+                                                     q(tmp / "st2.h5") + " --photons " + q(ph) +
+                                                     " -o " + q(tmp / "x.h5"),
+                                   tmp);
+  CHECK(cont.exit_code == 2);
+  CHECK(cont.err.find("give --estimator ppm to continue it") != std::string::npos);
+  CHECK(std::count(cont.err.begin(), cont.err.end(), '\n') == 1);
+  const auto method = test::run_tool("illuminate", "--scene " + q(scene) + " --hitpoints " +
+                                                       q(hp) + " --photons " + q(ph) + " -o " +
+                                                       q(tmp / "x.h5") + " --method flann",
+                                     tmp);
+  CHECK(method.exit_code == 2);
+  CHECK(method.err.find("--estimator ppm") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(tmp / "x.h5"));
 }

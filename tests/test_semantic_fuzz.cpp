@@ -698,18 +698,18 @@ void run_tool_on(Kind kind, const std::string& file, const std::string& what, bo
   std::filesystem::remove(out);
   std::string tool, args;
   switch (kind) {
-    case Kind::Scene: tool = "trace-hitpoints"; args = "--scene " + file; break;
+    case Kind::Scene: tool = "trace-hitpoints"; args = "--estimator ppm --direct photons --scene " + file; break;
     case Kind::Hitpoints:
       tool = "illuminate";
-      args = "--scene " + fx.scene + " --hitpoints " + file + " --photons " + fx.ph;
+      args = "--estimator ppm --scene " + fx.scene + " --hitpoints " + file + " --photons " + fx.ph;
       break;
     case Kind::Photons:
       tool = "illuminate";
-      args = "--scene " + fx.scene + " --hitpoints " + fx.hp + " --photons " + file;
+      args = "--estimator ppm --scene " + fx.scene + " --hitpoints " + fx.hp + " --photons " + file;
       break;
     case Kind::Grid:
       tool = "illuminate";
-      args = "--scene " + fx.scene + " --hitpoints " + fx.hp + " --grid " + file + " --method grid";
+      args = "--estimator ppm --scene " + fx.scene + " --hitpoints " + fx.hp + " --grid " + file + " --method grid";
       break;
     case Kind::Checkpoint:
     case Kind::Sppm: tool = "synthesize"; args = "--hitpoints " + file + " --png none"; break;

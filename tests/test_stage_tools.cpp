@@ -53,19 +53,19 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
   bake(tmp, "cornell-box.dae", "box.h5");
   bake(tmp, "cornell-spheres.dae", "spheres.h5");
   std::string box = tmp / "box.h5", spheres = tmp / "spheres.h5", out = tmp / "out.h5";
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + box + " -o " + (tmp / "hp.h5"), tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + box + " -o " + (tmp / "hp.h5"), tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", "--scene " + box + " -o " + (tmp / "ph.h5") + " --photons 2000", tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", "--scene " + spheres + " -o " + (tmp / "ph-other.h5") + " --photons 2000", tmp).exit_code == 0);
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + spheres + " -o " + (tmp / "hp-other.h5"), tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + spheres + " -o " + (tmp / "hp-other.h5"), tmp).exit_code == 0);
   std::string hp = tmp / "hp.h5", ph = tmp / "ph.h5";
 
   SECTION("hitpoints from another scene") {
-    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + (tmp / "hp-other.h5") +
+    check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + (tmp / "hp-other.h5") +
                                              " --photons " + ph + " -o " + out, tmp),
                   out, "different scene");
   }
   SECTION("photons from another scene") {
-    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
+    check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + hp + " --photons " +
                                              (tmp / "ph-other.h5") + " -o " + out, tmp),
                   out, "different scene");
     check_refused(run_tool("build-grid", "--scene " + box + " --photons " + (tmp / "ph-other.h5") +
@@ -76,12 +76,12 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
     std::string cut = tmp / "cut.h5";
     std::filesystem::copy_file(ph, cut);
     std::filesystem::resize_file(cut, std::filesystem::file_size(ph) / 3);
-    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
+    check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + hp + " --photons " +
                                              cut + " -o " + out, tmp),
                   out, cut);
   }
   SECTION("a foreign file: photons where hitpoints belong, text where HDF5 belongs") {
-    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + ph + " --photons " +
+    check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + ph + " --photons " +
                                              ph + " -o " + out, tmp),
                   out, "expected photonflow.hitpoints");
     std::string text = tmp / "text.h5";
@@ -100,10 +100,10 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
                   tmp / "r.exr", "--photons must be positive");
   }
   SECTION("radius or alpha out of range") {
-    check_refused(run_tool("trace-hitpoints", "--scene " + box + " -o " + out + " --radius -1", tmp),
+    check_refused(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + box + " -o " + out + " --radius -1", tmp),
                   out, "--radius must be 0 (automatic) or a length in [1e-15, 1e+12], got -1");
     for (const char* a : {"0", "1.5", "-0.2"})
-      check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
+      check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + hp + " --photons " +
                                                ph + " -o " + out + " --alpha " + a, tmp),
                     out, "--alpha must be in (0, 1]");
     check_refused(run_tool("render", "--scene " + box + " -o " + (tmp / "r.exr") + " --alpha 2", tmp),
@@ -112,7 +112,7 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
   SECTION("photons of the wrong pass for the hitpoint state") {
     REQUIRE(run_tool("trace-photons", "--scene " + box + " -o " + (tmp / "ph3.h5") +
                                           " --photons 2000 --first-pass 3", tmp).exit_code == 0);
-    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
+    check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + hp + " --photons " +
                                              (tmp / "ph3.h5") + " -o " + out, tmp),
                   out, "--first-pass 0");
     // The same for a photon grid of those passes (illuminate --grid): its photons are not the
@@ -120,7 +120,7 @@ TEST_CASE("stages refuse bad input with one line, exit code 2 and no output", "[
     REQUIRE(run_tool("build-grid", "--scene " + box + " --photons " + (tmp / "ph3.h5") +
                                        " --hitpoints " + hp + " -o " + (tmp / "grid3.h5"), tmp)
                 .exit_code == 0);
-    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --grid " +
+    check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + hp + " --grid " +
                                              (tmp / "grid3.h5") + " -o " + out, tmp),
                   out, "starts at pass 3");
   }
@@ -135,7 +135,7 @@ TEST_CASE("indices out of the scene's range are refused by every stage, never a 
   TempDir tmp("indices");
   bake(tmp, "cornell-box.dae", "box.h5");
   const std::string box = tmp / "box.h5", out = tmp / "out.h5";
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + box + " -o " + (tmp / "hp.h5"), tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + box + " -o " + (tmp / "hp.h5"), tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", "--scene " + box + " -o " + (tmp / "ph.h5") + " --photons 3000", tmp).exit_code == 0);
   const std::string S = "--scene " + box;
   Provenance prov;
@@ -154,7 +154,7 @@ TEST_CASE("indices out of the scene's range are refused by every stage, never a 
   for (int32_t material : {100000000, 999}) {
     const std::string hp = bad_hitpoints("hp-mat.h5", [&](pf_hitpoint& x) { x.material = material; });
     for (const std::string est : {"--estimator ppm", "--estimator ppm --method flann", "--estimator classic"})
-      check_refused(run_tool("illuminate", S + " --hitpoints " + hp + " --photons " + (tmp / "ph.h5") +
+      check_refused(run_tool("illuminate", "--estimator ppm " + S + " --hitpoints " + hp + " --photons " + (tmp / "ph.h5") +
                                                " -o " + out + " " + est, tmp),
                     out, hp + ": hitpoint");
     check_refused(run_tool("cluster", S + " --hitpoints " + hp + " -o " + out, tmp), out,
@@ -163,7 +163,7 @@ TEST_CASE("indices out of the scene's range are refused by every stage, never a 
   const std::string hp_mesh = bad_hitpoints("hp-mesh.h5", [](pf_hitpoint& x) { x.mesh = -1; });
   check_refused(run_tool("cluster", S + " --hitpoints " + hp_mesh + " -o " + out, tmp), out,
                 hp_mesh + ": hitpoint");
-  check_refused(run_tool("illuminate", S + " --hitpoints " + hp_mesh + " --photons " +
+  check_refused(run_tool("illuminate", "--estimator ppm " + S + " --hitpoints " + hp_mesh + " --photons " +
                                            (tmp / "ph.h5") + " -o " + out, tmp),
                 out, hp_mesh + ": hitpoint");
   // Photons on a mesh the scene does not have.
@@ -173,7 +173,7 @@ TEST_CASE("indices out of the scene's range are refused by every stage, never a 
   save_photons(p, ph, prov);
   check_refused(run_tool("build-grid", S + " --photons " + ph + " --radius 0.1 -o " + out, tmp), out,
                 ph + ": photon");
-  check_refused(run_tool("illuminate", S + " --hitpoints " + (tmp / "hp.h5") + " --photons " + ph +
+  check_refused(run_tool("illuminate", "--estimator ppm " + S + " --hitpoints " + (tmp / "hp.h5") + " --photons " + ph +
                                            " -o " + out, tmp),
                 out, ph + ": photon");
   // A render checkpoint with a bad material, resumed.
@@ -188,8 +188,8 @@ TEST_CASE("option values past the grids' and clusters' limits are refused with o
   TempDir tmp("limits");
   bake(tmp, "cornell-box.dae", "box.h5");
   const std::string box = tmp / "box.h5", out = tmp / "out.h5", S = "--scene " + box;
-  REQUIRE(run_tool("trace-hitpoints", S + " -o " + (tmp / "hp.h5"), tmp).exit_code == 0);
-  REQUIRE(run_tool("trace-hitpoints", S + " -o " + (tmp / "tiny.h5") + " --radius 1e-6", tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons " + S + " -o " + (tmp / "hp.h5"), tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons " + S + " -o " + (tmp / "tiny.h5") + " --radius 1e-6", tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", S + " -o " + (tmp / "ph.h5") + " --photons 3000", tmp).exit_code == 0);
   const std::string hp = tmp / "hp.h5", tiny = tmp / "tiny.h5", ph = tmp / "ph.h5";
   // Work-group sizes: a 2e9-item work-group once asked for 8 GB of fillers (std::bad_alloc).
@@ -202,7 +202,7 @@ TEST_CASE("option values past the grids' and clusters' limits are refused with o
   check_refused(run_tool("build-grid", S + " --photons " + ph + " -o " + out +
                                            " --radius 1e-6 --max-bins 5000", tmp),
                 out, "--max-bins");
-  check_refused(run_tool("illuminate", S + " --hitpoints " + tiny + " --photons " + ph + " -o " +
+  check_refused(run_tool("illuminate", "--estimator ppm " + S + " --hitpoints " + tiny + " --photons " + ph + " -o " +
                                            out + " --max-bins 5000", tmp),
                 out, "--max-bins");
   check_refused(run_tool("render", S + " -o " + (tmp / "r.exr") + " --radius 1e-6 --max-bins 5000 "
@@ -240,7 +240,7 @@ TEST_CASE("the staged route gives the render driver's image", "[tools][staged]")
   for (std::string gather : {"grid", "flann"}) {
     // Passes 0-1 in one photons file, pass 2 in another: illuminate continues the state. A seed
     // other than the default: render's one --seed reaches the eye pass and the photon passes.
-    REQUIRE(run_tool("trace-hitpoints", "--scene " + scene + " -o " + (tmp / "hp.h5") + " --spp 2 --seed 7", tmp).exit_code == 0);
+    REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + scene + " -o " + (tmp / "hp.h5") + " --spp 2 --seed 7", tmp).exit_code == 0);
     {  // stderr is a file here: no progress line (progress.h), it is for terminals only
       const test::ToolRun tp = run_tool("trace-photons", "--scene " + scene + " -o " + (tmp / "ph01.h5") + " --photons 5000 --passes 2 --seed 7", tmp);
       REQUIRE(tp.exit_code == 0);
@@ -249,12 +249,12 @@ TEST_CASE("the staged route gives the render driver's image", "[tools][staged]")
     REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + (tmp / "ph2.h5") + " --photons 5000 --first-pass 2 --seed 7", tmp).exit_code == 0);
     if (gather == "grid") {
       REQUIRE(run_tool("build-grid", "--scene " + scene + " --photons " + (tmp / "ph01.h5") + " --hitpoints " + (tmp / "hp.h5") + " -o " + (tmp / "grid01.h5"), tmp).exit_code == 0);
-      REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --grid " + (tmp / "grid01.h5") + " -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
+      REQUIRE(run_tool("illuminate", "--estimator ppm --scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --grid " + (tmp / "grid01.h5") + " -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
     } else {
-      REQUIRE(run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --photons " + (tmp / "ph01.h5") + " --method flann -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
+      REQUIRE(run_tool("illuminate", "--estimator ppm --scene " + scene + " --hitpoints " + (tmp / "hp.h5") + " --photons " + (tmp / "ph01.h5") + " --method flann -o " + (tmp / "s2.h5"), tmp).exit_code == 0);
     }
     {
-      const test::ToolRun il = run_tool("illuminate", "--scene " + scene + " --hitpoints " + (tmp / "s2.h5") + " --photons " + (tmp / "ph2.h5") + " --method " + gather + " -o " + (tmp / "s3.h5"), tmp);
+      const test::ToolRun il = run_tool("illuminate", "--estimator ppm --scene " + scene + " --hitpoints " + (tmp / "s2.h5") + " --photons " + (tmp / "ph2.h5") + " --method " + gather + " -o " + (tmp / "s3.h5"), tmp);
       REQUIRE(il.exit_code == 0);
       CHECK(il.err.empty());
     }
@@ -277,7 +277,7 @@ TEST_CASE("illuminate --estimator classic is classic_estimate with the tool's op
   TempDir tmp("classic-tool");
   bake(tmp, "cornell-spheres.dae", "scene.h5");
   const std::string scene = tmp / "scene.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5";
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + scene + " -o " + hp, tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + scene + " -o " + hp, tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", "--scene " + scene + " -o " + ph + " --photons 20000 --passes 2", tmp).exit_code == 0);
   const Scene sc = load_scene(scene);
   const PhotonSet photons = load_photons(ph);
@@ -483,7 +483,7 @@ TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are r
   bake(tmp, "cornell-box.dae", "box.h5");
   const std::string box = tmp / "box.h5", hp = tmp / "hp.h5", ph = tmp / "ph.h5",
                     grid = tmp / "grid.h5", out = tmp / "out.h5";
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + box + " -o " + hp, tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + box + " -o " + hp, tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", "--scene " + box + " -o " + ph + " --photons 2000", tmp)
               .exit_code == 0);
   REQUIRE(run_tool("build-grid", "--scene " + box + " --photons " + ph + " --hitpoints " + hp +
@@ -491,7 +491,7 @@ TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are r
 
   // --photons beside --grid: before, the grid's photons were gathered and --photons (and its
   // provenance) silently dropped.
-  check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + hp + " --photons " +
+  check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + hp + " --photons " +
                                            ph + " --grid " + grid + " -o " + out, tmp),
                 out, "--photons and --grid exclude each other");
 
@@ -530,7 +530,7 @@ TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are r
     }
     const std::string where = x > 1e12f ? far + ": hitpoints[7].position[0] = 1.00000002e+20 is outside"
                                         : far + ": /hitpoints[7]: position 1e+09,";
-    check_refused(run_tool("illuminate", "--scene " + box + " --hitpoints " + far + " --photons " +
+    check_refused(run_tool("illuminate", "--estimator ppm --scene " + box + " --hitpoints " + far + " --photons " +
                                              ph + " -o " + out, tmp),
                   out, where);
     check_refused(run_tool("cluster", "--scene " + box + " --hitpoints " + far + " -o " + out +

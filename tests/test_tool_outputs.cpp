@@ -74,11 +74,11 @@ Chain make_chain(const TempDir& tmp) {
                                      c.scene + " --width 16 --height 12",
                    tmp)
               .exit_code == 0);
-  REQUIRE(run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + c.hp, tmp).exit_code == 0);
+  REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene + " -o " + c.hp, tmp).exit_code == 0);
   REQUIRE(run_tool("trace-photons", "--scene " + c.scene + " -o " + c.ph + " --photons 2000", tmp)
               .exit_code == 0);
   REQUIRE(run_tool("illuminate",
-                   "--scene " + c.scene + " --hitpoints " + c.hp + " --photons " + c.ph + " -o " +
+                   "--estimator ppm --scene " + c.scene + " --hitpoints " + c.hp + " --photons " + c.ph + " -o " +
                        c.st,
                    tmp)
               .exit_code == 0);
@@ -127,10 +127,10 @@ TEST_CASE("outputs: stages never overwrite an input and fail before their first 
   const std::string scene_hash = sha256_file(c.scene), st_hash = sha256_file(c.st);
 
   SECTION("an output that is an input") {
-    check_refused(run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + c.scene, tmp), tmp,
+    check_refused(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene + " -o " + c.scene, tmp), tmp,
                   "is also an input");
     check_refused(run_tool("trace-hitpoints",
-                           "--scene " + c.scene + " -o " + (tmp / "x/../scene.h5"), tmp),
+                           "--estimator ppm --direct photons --scene " + c.scene + " -o " + (tmp / "x/../scene.h5"), tmp),
                   tmp, "is also an input");
     check_refused(run_tool("synthesize", "--hitpoints " + c.st + " -o " + c.st, tmp), tmp,
                   "is also an input");
@@ -178,10 +178,10 @@ TEST_CASE("outputs: stray arguments and thread counts beyond the limit are refus
   TempDir tmp("args");
   const Chain c = make_chain(tmp);
   const std::string out = tmp / "o.h5";
-  check_refused(run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + out + " stray", tmp),
+  check_refused(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene + " -o " + out + " stray", tmp),
                 tmp, "unexpected argument 'stray'", {out});
   // "-o --spp 2": --spp becomes the output's name, "2" is left over.
-  check_refused(run_tool("trace-hitpoints", "--scene " + c.scene + " -o --spp 2", tmp), tmp,
+  check_refused(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene + " -o --spp 2", tmp), tmp,
                 "unexpected argument '2'", {tmp / "--spp"});
   const std::string big = std::to_string(kMaxThreads + 1);
   check_refused(run_tool("trace-photons", "--scene " + c.scene + " -o " + out + " --threads " + big,
@@ -203,19 +203,19 @@ TEST_CASE("outputs: a missing required option is named, the given ones are not",
   TempDir tmp("required");
   const Chain c = make_chain(tmp);
   const std::string out = tmp / "o.h5";
-  check_refused(run_tool("trace-hitpoints", "--scene " + c.scene, tmp), tmp,
+  check_refused(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene, tmp), tmp,
                 "--output is required (see trace-hitpoints --help)");
-  test::ToolRun r = run_tool("illuminate", "--scene " + c.scene + " --photons " + c.ph, tmp);
+  test::ToolRun r = run_tool("illuminate", "--estimator ppm --scene " + c.scene + " --photons " + c.ph, tmp);
   check_refused(r, tmp, "--hitpoints and --output are required");
   CHECK(r.err.find("--scene") == std::string::npos);
-  check_refused(run_tool("illuminate", "--scene " + c.scene + " --hitpoints " + c.hp + " -o " + out,
+  check_refused(run_tool("illuminate", "--estimator ppm --scene " + c.scene + " --hitpoints " + c.hp + " -o " + out,
                          tmp),
                 tmp, "--photons or --grid is required", {out});
   check_refused(run_tool("cluster", "", tmp), tmp,
                 "--scene, --hitpoints and --output are required");
   check_refused(run_tool("synthesize", "-o " + out, tmp), tmp, "--hitpoints is required", {out});
   // An empty value ("-o \"$OUT\"" with OUT unset) is refused before any work, not at the end.
-  check_refused(run_tool("trace-hitpoints", "--scene " + c.scene + " -o ''", tmp), tmp,
+  check_refused(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene + " -o ''", tmp), tmp,
                 "trace-hitpoints: --output is empty (give it a file name)");
   check_refused(run_tool("trace-photons", "--scene '' -o " + out, tmp), tmp,
                 "--scene is empty", {out});
@@ -328,7 +328,7 @@ TEST_CASE("outputs: out of memory is one line and exit code 1, also from a worke
            {"render", "--scene " + c.scene + " -o " + (tmp / "o.exr") + " --photons " + many +
                           " --passes 1"},
            // 65536 x 65536 hitpoints
-           {"trace-hitpoints", "--scene " + big + " -o " + out}}) {
+           {"trace-hitpoints", "--estimator ppm --direct photons --scene " + big + " -o " + out}}) {
     const test::ToolRun r = run_tool(tool, args, tmp);
     INFO(tool << " " << args << "\nexit " << r.exit_code << ", stderr: " << r.err);
     CHECK(r.exit_code == 1);
@@ -387,11 +387,11 @@ TEST_CASE("outputs: a full disk is one line and exit code 2, and leaves no outpu
   const std::vector<Case> cases = {
       // the import's child cannot write the scene into its memory file
       {"scene-bake", box + " -o " + h5, "file-size limit", {h5}},
-      {"trace-hitpoints", "--scene " + c.scene + " -o " + h5, "is the disk full?", {h5}},
+      {"trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene + " -o " + h5, "is the disk full?", {h5}},
       {"trace-photons", "--scene " + c.scene + " -o " + h5 + " --photons 20000",
        "is the disk full?", {h5}},
       {"illuminate",
-       "--scene " + c.scene + " --hitpoints " + c.hp + " --photons " + c.ph + " -o " + h5,
+       "--estimator ppm --scene " + c.scene + " --hitpoints " + c.hp + " --photons " + c.ph + " -o " + h5,
        "is the disk full?", {h5}},
       {"synthesize", "--hitpoints " + c.st + " -o " + exr, "is the disk full?", {exr, png}},
       {"render", "--scene " + c.scene + " -o " + exr + " --photons 2000 --passes 2",
@@ -498,10 +498,10 @@ TEST_CASE("outputs: a FIFO or directory or device as an input is refused at once
     std::string args, bad;
   };
   const std::vector<Case> cases = {
-      {"trace-hitpoints", "--scene " + fifo + " -o " + out, fifo},  // scene inputs
+      {"trace-hitpoints", "--estimator ppm --direct photons --scene " + fifo + " -o " + out, fifo},  // scene inputs
       {"render", "--scene " + fifo + " -o " + (tmp / "r.exr"), fifo},
       {"scene-bake", obj + " -o " + out, obj},
-      {"illuminate", "--scene " + c.scene + " --hitpoints " + c.hp + " --photons " + fifo +
+      {"illuminate", "--estimator ppm --scene " + c.scene + " --hitpoints " + c.hp + " --photons " + fifo +
                          " -o " + out, fifo},  // HDF5 inputs
       {"synthesize", "--hitpoints " + fifo + " -o " + (tmp / "s.exr"), fifo},
       {"imgcompare", exr + " " + exr + " --mask " + fifo, fifo},  // an image input
@@ -541,7 +541,7 @@ TEST_CASE("outputs: temporary names fit the file system's limit for outputs of u
   const Chain c = make_chain(tmp);
   // Before: "cannot be created" (the probe "<name>.tmp.<pid>" passed 255 bytes), exit 2.
   const std::string hp = tmp / name255;
-  test::ToolRun r = run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + hp, tmp);
+  test::ToolRun r = run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene + " -o " + hp, tmp);
   INFO(r.err);
   CHECK(r.exit_code == 0);
   CHECK(fs::is_regular_file(hp));
@@ -571,7 +571,7 @@ TEST_CASE("outputs: a run removes the temporaries a killed run of the same outpu
     const std::string other = temp_path(tmp / "other.h5", long(dead));  // another output's
     const std::string near = stale + "x";                                 // not the pattern
     for (const std::string& f : {stale, live, other, near}) std::ofstream(f) << "partial";
-    test::ToolRun r = run_tool("trace-hitpoints", "--scene " + c.scene + " -o " + out, tmp);
+    test::ToolRun r = run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + c.scene + " -o " + out, tmp);
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
     CHECK_FALSE(fs::exists(stale));

@@ -1,6 +1,7 @@
 // render_defaults.h — the defaults of render and of the staged route, chosen by measurement (issue
 // 34 item 1; docs/RESULTS.md "Defaults" has the scene set, the measurements and the commands).
-// One place defines them: render, trace-photons and pipelines/render.mk (which passes "auto")
+// One place defines them: render, the staged route (trace-hitpoints --estimator and --direct,
+// trace-photons --photons, illuminate --estimator) and pipelines/render.mk (which passes "auto")
 // take them from here, so a run without flags gets the same numbers by either route.
 //
 //   estimator   sppm (a new eye pass every pass; RESULTS.md section 6, 512×512, 30 s: 7.9–14.6×
@@ -40,7 +41,8 @@
 
 namespace pf {
 
-// The estimator and direct light of a run that does not name them (render --estimator, --direct).
+// The estimator and direct light of a run that does not name them (render --estimator, --direct;
+// trace-hitpoints --estimator, --direct; illuminate --estimator).
 constexpr Estimator kDefaultEstimator = Estimator::Sppm;
 constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
 

@@ -34,9 +34,13 @@ int main(int argc, char** argv) {
       ("grid", "prebuilt photon grids (from build-grid; PPM with --method grid; instead of "
        "--photons)", cxxopts::value<std::string>())
       ("o,output", "output hitpoint state (.h5)", cxxopts::value<std::string>())
-      ("estimator", "ppm | classic | sppm | pppm (render's default is " +
-       std::string(pf::estimator_name(pf::kDefaultEstimator)) + ", render_defaults.h)",
-       cxxopts::value<std::string>()->default_value("ppm"))
+      ("estimator", "ppm | classic | sppm | pppm; the default is render's (render_defaults.h), "
+       "so trace-hitpoints, trace-photons and illuminate with no options make render's pass 0. "
+       "sppm and pppm take one eye pass and one photon pass per call (trace-hitpoints --pass p, "
+       "trace-photons --first-pass p, the --state of passes < p); ppm and classic take the "
+       "hitpoints of trace-hitpoints --estimator ppm (or a PPM state) and any number of photon "
+       "passes, and are the estimators of --grid, --clusters, --method and --device",
+       cxxopts::value<std::string>()->default_value(pf::estimator_name(pf::kDefaultEstimator)))
       ("state", "sppm: the SPPM state, pppm: the pass sums, after the passes before this one "
        "(an earlier illuminate's output); none for the first pass", cxxopts::value<std::string>())
       ("alpha", "PPM: fraction of new photons kept, in (0, 1] (eq. 3.14)",
@@ -71,6 +75,7 @@ int main(int argc, char** argv) {
                              {"output"});
     std::string estimator = a["estimator"].as<std::string>();
     pf::require_choice("estimator", estimator, {"ppm", "classic", "sppm", "pppm"});
+    const bool estimator_auto = !a.count("estimator");
     pf::PpmOptions ppm;
     ppm.alpha = a["alpha"].as<float>();
     ppm.max_bins = a["max-bins"].as<int>();
@@ -84,10 +89,12 @@ int main(int argc, char** argv) {
       // traces them on the device); prebuilt grids and clusters belong to fixed hitpoints.
       if (a.count("grid") || a.count("clusters") || a.count("method") ||
           pf::device_options(a).device != "cpu")
-        throw pf::input_error("", "--estimator " + estimator + " gathers with the CPU grid from "
-                                  "--photons (no --grid, --clusters, --method or --device)",
-                              "render --estimator " + estimator + " --device opencl runs its "
-                              "passes on a device");
+        throw pf::input_error("", "--estimator " + estimator + (estimator_auto ? " (the default)" : "") +
+                                  " gathers with the CPU grid from --photons (no --grid, "
+                                  "--clusters, --method or --device)",
+                              estimator_auto ? "give --estimator ppm for PPM's gathers"
+                                             : "render --estimator " + estimator +
+                                                   " --device opencl runs its passes on a device");
       if (!a.count("photons")) throw pf::input_error("", "--photons is required here");
       pf::Stopwatch clock;
       const std::string scene_path = a["scene"].as<std::string>();
@@ -95,6 +102,10 @@ int main(int argc, char** argv) {
       const std::string ph_path = a["photons"].as<std::string>();
       const pf::Scene scene = pf::load_scene(scene_path);
       const pf::HitpointSet eye = pf::load_hitpoints(eye_path);
+      if (estimator_auto && eye.estimator == "ppm")
+        throw pf::input_error(eye_path, "is a PPM state, and --estimator " + estimator +
+                                            " (the default) takes an eye pass",
+                              "give --estimator ppm to continue it");
       const pf::PhotonSet photons = pf::load_photons(ph_path);
       pf::Provenance prov;
       prov.tool = "illuminate";
@@ -102,6 +113,7 @@ int main(int argc, char** argv) {
       pf::accept_input(prov, "hitpoints", eye_path, eye, scene, scene_path);
       pf::accept_input(prov, "photons", ph_path, photons, scene, scene_path);
       pf::record_options(prov, a);
+      prov.parameters["estimator_auto"] = estimator_auto ? "true" : "false";
       prov.command_line = pf::join_command_line(argc, argv);
       const std::string out = a["output"].as<std::string>();
       if (estimator == "sppm") {
@@ -253,6 +265,7 @@ int main(int argc, char** argv) {
     }
     prov.tool = "illuminate";
     pf::record_options(prov, a);
+    prov.parameters["estimator_auto"] = estimator_auto ? "true" : "false";
     if (estimator == "ppm") prov.parameters["method"] = pf::gather_method_name(ppm.method);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);

@@ -26,18 +26,20 @@ int main(int argc, char** argv) {
       ("max-depth", "specular bounces before an eye path is dropped",
        cxxopts::value<int>()->default_value("16"))
       ("direct", "direct light: photons (all light from photons) | shadow-rays (area-light "
-       "sampling; photons then carry indirect light only); render's default is " +
-       std::string(pf::direct_mode_name(pf::kDefaultDirect)) + " (render_defaults.h)",
-       cxxopts::value<std::string>()->default_value("photons"))
+       "sampling; photons then carry indirect light only); the default is render's "
+       "(render_defaults.h)",
+       cxxopts::value<std::string>()->default_value(pf::direct_mode_name(pf::kDefaultDirect)))
       ("shadow-samples", "light samples per hitpoint with --direct shadow-rays",
        cxxopts::value<int>()->default_value("4"))
       ("radius", "initial radius R0 in world units; 0 = automatic: max(scene diagonal / 200, "
        "4 pixel footprints at the look-at distance)",
        cxxopts::value<float>()->default_value("0"))
-      ("estimator", "the estimator the hitpoints are for: ppm (one eye pass, pass 0) | sppm | "
-       "pppm (eye pass --pass of a run that traces one every pass); render's default is " +
-       std::string(pf::estimator_name(pf::kDefaultEstimator)),
-       cxxopts::value<std::string>()->default_value("ppm"))
+      ("estimator", "the estimator the hitpoints are for: ppm (one eye pass, pass 0, any --spp) | "
+       "sppm | pppm (eye pass --pass of a run that traces one every pass, one sample per pixel); "
+       "the default is render's (render_defaults.h): with no options, trace-hitpoints, "
+       "trace-photons and illuminate make render's pass 0 (pass p: --pass p, trace-photons "
+       "--first-pass p, illuminate --state)",
+       cxxopts::value<std::string>()->default_value(pf::estimator_name(pf::kDefaultEstimator)))
       ("pass", "sppm/pppm: which eye pass (0-based; the photon pass it meets has the same index)",
        cxxopts::value<int>()->default_value("0"))
       ("pixel-sampler", "where samples go in their pixel: auto (strata for ppm, sobol otherwise) "
@@ -65,13 +67,17 @@ int main(int argc, char** argv) {
     opt.seed = a["seed"].as<uint32_t>();
     opt.threads = a["threads"].as<int>();
     const pf::Estimator estimator = pf::parse_estimator(a["estimator"].as<std::string>());
+    const bool estimator_auto = !a.count("estimator");
     const int pass = a["pass"].as<int>();
     if (pass < 0) throw pf::input_error("", "--pass must be >= 0");
     if (pass > 0 && estimator == pf::Estimator::Ppm)
       throw pf::input_error("", "--pass applies to --estimator sppm or pppm (ppm has one eye pass)");
     if (estimator == pf::Estimator::Sppm && opt.spp != 1)
-      throw pf::input_error("", "--estimator sppm takes one eye sample per pixel and pass",
-                            "drop --spp: every pass traces a new sample in each pixel");
+      throw pf::input_error("", std::string("--estimator sppm") + (estimator_auto ? " (the default)" : "") +
+                                    " takes one eye sample per pixel and pass",
+                            estimator_auto ? "drop --spp, or give --estimator ppm for one eye pass "
+                                             "of several samples"
+                                           : "drop --spp: every pass traces a new sample in each pixel");
     opt.pass = uint32_t(pass);
     const std::string sampler = a["pixel-sampler"].as<std::string>();
     opt.sampler = sampler != "auto" ? pf::parse_pixel_sampler(sampler)
@@ -91,6 +97,9 @@ int main(int argc, char** argv) {
     prov.tool = "trace-hitpoints";
     prov.seed = opt.seed;
     pf::record_options(prov, a);
+    // Whether the estimator and direct light were render's defaults (render_defaults.h).
+    prov.parameters["estimator_auto"] = estimator_auto ? "true" : "false";
+    prov.parameters["direct_auto"] = a.count("direct") ? "false" : "true";
     prov.parameters["pixel-sampler"] = pf::pixel_sampler_name(opt.sampler);  // auto resolved
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
