@@ -246,6 +246,25 @@ TEST_CASE("estimator files 4: counts of photons emitted are bounded per pass, so
   CHECK(m.photons_emitted == 3 * kMaxPhotonsPerPass);
 }
 
+TEST_CASE("estimator files: merge takes a recorded seed that is no number (was exit 1)",
+          "[estimator-files][merge]") {
+  TempDir tmp("estfiles-seed");
+  const Scene s = test::room_scene(PF_MAT_GLASS, 8, 6);
+  std::string parts;
+  for (int k = 0; k < 2; ++k) {
+    RenderOptions o = small_run(Estimator::Pppm, 1);
+    o.first_pass = k;
+    const std::string p = tmp / ("part" + std::to_string(k) + ".h5");
+    save_pass_sums(render_pppm(s, o, false, Provenance{}), p, Provenance{});
+    test::set_string_attr(p, "/provenance/parameters", "state.seed", "abc");
+    parts += " " + p;
+  }
+  const test::ToolRun r = test::run_tool("merge", "--sums " + (tmp / "m.h5") + parts, tmp);
+  INFO(r.err);
+  CHECK(r.exit_code == 0);
+  CHECK(load_pass_sums(tmp / "m.h5").parameters.at("seed") == "abc");
+}
+
 TEST_CASE("estimator files 6: datasets of another shape or type are refused", "[estimator-files][h5]") {
   TempDir tmp("estfiles-shape");
   const Scene s = test::room_scene(PF_MAT_GLASS, 16, 12);

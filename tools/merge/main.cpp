@@ -5,6 +5,7 @@
 // overlapping, duplicate or missing ranges are refused, naming the part.
 //
 //   merge parts/*.h5 --range 0:400 -o image.exr --stats run.json
+#include <charconv>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -58,7 +59,10 @@ int main(int argc, char** argv) {
     for (const std::string& part : parts)
       prov.add_input("part", part, pf::kPassSumsFormat, merged.scene_id);
     const auto seed = merged.parameters.find("seed");
-    if (seed != merged.parameters.end()) prov.seed = std::stoull(seed->second);
+    // The parts' recorded seed ("1", or "eye/photon" as "1/2"): its leading number, if any (a
+    // seed the parts record as text that is no number stays in their parameters only).
+    if (seed != merged.parameters.end())
+      std::from_chars(seed->second.data(), seed->second.data() + seed->second.size(), prov.seed);
     prov.wall_time_s = clock.seconds();
     if (!sums.empty()) pf::save_pass_sums(merged, sums, prov);
     std::vector<pf::RenderImageRecord> written;
