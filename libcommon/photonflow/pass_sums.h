@@ -54,12 +54,12 @@ void save_pass_sums(const PassSums& s, const std::string& path, const Provenance
 // Reads and checks a sums file: its datasets' shapes and types (h5io.h), then validate_pass_sums.
 // InputError naming the file and what is wrong.
 PassSums load_pass_sums(const std::string& path);
-// The checks of a sums file's values, which save_pass_sums and merge also apply to what they
-// write (validate.h written_check): image size, pass range (first_pass >= 0, passes >= 0,
-// first_pass + passes <= 2^31 − 1), photons_emitted a count of `passes` passes (validate.h
-// kMaxPhotonsPerPass), one sum in [0, kMaxValue · passes] per pixel channel, radius1 in
-// [kMinRadius, kMaxRadius], alpha in (0, 1], the "state.*" parameters recorded. InputError naming
-// `path`.
+// The checks of a sums file's values, which save_pass_sums also applies to what it writes
+// (merge writes through it; validate.h written_check): image size, pass range (first_pass >= 0,
+// passes >= 0, first_pass + passes <= 2^31 − 1), photons_emitted a count of `passes` passes
+// (validate.h kMaxPhotonsPerPass), one sum in [0, kMaxValue · passes] per pixel channel, radius1
+// in [kMinRadius, kMaxRadius], alpha in (0, 1], the "state.*" parameters recorded. InputError
+// naming `path`.
 void validate_pass_sums(const PassSums& s, const std::string& path);
 // The provenance group of a sums file (the render driver checks a checkpoint's with it).
 Provenance load_pass_sums_provenance(const std::string& path);

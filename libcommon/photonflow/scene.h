@@ -129,7 +129,7 @@ void save_scene(const Scene& scene, const std::string& path, const Provenance& p
 Scene load_scene(const std::string& path);
 // The checks load_scene applies to a scene's tables and values (validate.h): table lengths, every
 // index into them, material and light types, the camera's image size, the kd-tree, every value in
-// range. `s` must have its bounds and face normals computed. save_scene applies them to what it
+// range. `s` must have its bounds computed (compute_bounds). save_scene applies them to what it
 // writes (written_check) and bake_scene to what it baked (InputError naming the source: a
 // coordinate or camera option beyond kMaxCoordinate). InputError naming `path`.
 void validate_scene(const Scene& s, const std::string& path);

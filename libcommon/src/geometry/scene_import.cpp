@@ -1180,7 +1180,6 @@ Scene bake_scene(const BakeOptions& options, BakeReport& report) {
   finish_scene(scene, options.kd);
   // A baked scene is one load_scene reads: refused here, naming the source, when the file's
   // coordinates or the camera options (--eye 1e19) lie beyond what the stages accept.
-  scene.compute_normals();
   validate_scene(scene, options.input);
   return scene;
 }

@@ -46,8 +46,8 @@ void Validator::int_in_range(const Name& what, int64_t v, int64_t lo, int64_t hi
 }
 
 void Validator::photons_emitted(const Name& what, uint64_t emitted, int64_t passes) const {
-  const uint64_t most = uint64_t(passes < 0 ? 0 : passes) * kMaxPhotonsPerPass;
-  if (emitted > most || emitted < uint64_t(passes < 0 ? 0 : passes))
+  const uint64_t n = uint64_t(passes < 0 ? 0 : passes), most = n * kMaxPhotonsPerPass;
+  if (emitted > most || emitted < n)
     fail(what.str() + " = " + std::to_string(emitted) + " is not the count of " +
          std::to_string(passes) + " passes of 1 to " + std::to_string(kMaxPhotonsPerPass) +
          " photons each (at most " + std::to_string(most) + ")");
