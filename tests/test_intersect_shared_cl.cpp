@@ -17,6 +17,7 @@
 #include "photonflow/intersect_shared.h"
 #include "photonflow/procedural.h"
 #include "photonflow/raycast.h"
+#include "cl_raw.h"
 #include "support.h"
 
 namespace {
@@ -41,45 +42,15 @@ __kernel void cast_rays(__global const pf_kd_node* nodes, int node_count,
 }
 )CLC";
 
-// Minimal RAII for the handful of OpenCL objects the test creates.
-template <class T, cl_int (*Release)(T)>
-struct ClHandle {
-  T h = nullptr;
-  ClHandle() = default;
-  explicit ClHandle(T x) : h(x) {}
-  ClHandle(const ClHandle&) = delete;
-  ClHandle& operator=(const ClHandle&) = delete;
-  ~ClHandle() {
-    if (h) Release(h);
-  }
-};
-using Context = ClHandle<cl_context, clReleaseContext>;
-using Queue = ClHandle<cl_command_queue, clReleaseCommandQueue>;
-using Program = ClHandle<cl_program, clReleaseProgram>;
-using Kernel = ClHandle<cl_kernel, clReleaseKernel>;
-using Buffer = ClHandle<cl_mem, clReleaseMemObject>;
+using Context = pf::test::ClContextHandle;
+using Queue = pf::test::ClQueueHandle;
+using Program = pf::test::ClProgramHandle;
+using Kernel = pf::test::ClKernelHandle;
+using Buffer = pf::test::ClBufferHandle;
+using pf::test::find_device;
+using pf::test::upload;
 
-template <class T>
-cl_mem upload(cl_context ctx, const std::vector<T>& v, cl_int* err) {
-  return clCreateBuffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(),
-                        const_cast<T*>(v.data()), err);
-}
 
-// First device of the first platform that has one, and that platform's name; false if none.
-bool find_device(cl_device_id& device, std::string& platform_name) {
-  cl_uint n = 0;
-  if (clGetPlatformIDs(0, nullptr, &n) != CL_SUCCESS || n == 0) return false;
-  std::vector<cl_platform_id> platforms(n);
-  clGetPlatformIDs(n, platforms.data(), nullptr);
-  for (cl_platform_id p : platforms) {
-    if (clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 1, &device, nullptr) != CL_SUCCESS) continue;
-    char buf[256] = {};
-    clGetPlatformInfo(p, CL_PLATFORM_NAME, sizeof buf - 1, buf, nullptr);
-    platform_name = buf;
-    return true;
-  }
-  return false;
-}
 
 }  // namespace
 

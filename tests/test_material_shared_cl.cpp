@@ -20,6 +20,7 @@
 #include "photonflow/material/bsdf_shared.h"
 #include "photonflow/material/lens_shared.h"
 #include "photonflow/material/texture_shared.h"
+#include "cl_raw.h"
 #include "support.h"
 
 namespace {
@@ -89,37 +90,14 @@ __kernel void lens_check(__global const float* in, __global float* out) {
 }
 )CLC";
 
-template <class T, cl_int (*Release)(T)>
-struct ClHandle {
-  T h = nullptr;
-  ClHandle() = default;
-  explicit ClHandle(T x) : h(x) {}
-  ClHandle(const ClHandle&) = delete;
-  ClHandle& operator=(const ClHandle&) = delete;
-  ~ClHandle() {
-    if (h) Release(h);
-  }
-};
-using Context = ClHandle<cl_context, clReleaseContext>;
-using Queue = ClHandle<cl_command_queue, clReleaseCommandQueue>;
-using Program = ClHandle<cl_program, clReleaseProgram>;
-using Kernel = ClHandle<cl_kernel, clReleaseKernel>;
-using Buffer = ClHandle<cl_mem, clReleaseMemObject>;
+using Context = pf::test::ClContextHandle;
+using Queue = pf::test::ClQueueHandle;
+using Program = pf::test::ClProgramHandle;
+using Kernel = pf::test::ClKernelHandle;
+using Buffer = pf::test::ClBufferHandle;
+using pf::test::find_device;
+using pf::test::upload;
 
-bool find_device(cl_device_id& device, std::string& platform_name) {
-  cl_uint n = 0;
-  if (clGetPlatformIDs(0, nullptr, &n) != CL_SUCCESS || n == 0) return false;
-  std::vector<cl_platform_id> platforms(n);
-  clGetPlatformIDs(n, platforms.data(), nullptr);
-  for (cl_platform_id p : platforms) {
-    if (clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 1, &device, nullptr) != CL_SUCCESS) continue;
-    char buf[256] = {};
-    clGetPlatformInfo(p, CL_PLATFORM_NAME, sizeof buf - 1, buf, nullptr);
-    platform_name = buf;
-    return true;
-  }
-  return false;
-}
 
 // Runs cmake/embed_kernels.cmake over a scratch tree holding kernels/material_check.cl and a link
 // to the real libcommon/, and returns the inlined source of that kernel.
@@ -139,11 +117,6 @@ std::string embedded_source(const pf::test::TempDir& tmp) {
   return gen.substr(b + 7, e - b - 7);
 }
 
-template <class T>
-cl_mem upload(cl_context ctx, const std::vector<T>& v, cl_int* err) {
-  return clCreateBuffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(),
-                        const_cast<T*>(v.data()), err);
-}
 
 // |a − b| within float rounding of the larger magnitude (a few ulp after a chain of operations;
 // sqrt, division and the concentric disc are bit-identical on PoCL, pow and floor may not be).

@@ -1,0 +1,52 @@
+// cl_raw.h — the few raw OpenCL objects the shared-header tests make themselves (a kernel that
+// #includes a header shared with the host, built outside the library's ClContext): RAII handles,
+// the first device of any platform, and a read-only buffer holding a vector.
+#pragma once
+#include <CL/cl.h>
+
+#include <string>
+#include <vector>
+
+namespace pf::test {
+
+template <class T, cl_int (*Release)(T)>
+struct ClHandle {
+  T h = nullptr;
+  ClHandle() = default;
+  explicit ClHandle(T x) : h(x) {}
+  ClHandle(const ClHandle&) = delete;
+  ClHandle& operator=(const ClHandle&) = delete;
+  ~ClHandle() {
+    if (h) Release(h);
+  }
+};
+using ClContextHandle = ClHandle<cl_context, clReleaseContext>;
+using ClQueueHandle = ClHandle<cl_command_queue, clReleaseCommandQueue>;
+using ClProgramHandle = ClHandle<cl_program, clReleaseProgram>;
+using ClKernelHandle = ClHandle<cl_kernel, clReleaseKernel>;
+using ClBufferHandle = ClHandle<cl_mem, clReleaseMemObject>;
+
+// A read-only device buffer initialised with `v`.
+template <class T>
+cl_mem upload(cl_context ctx, const std::vector<T>& v, cl_int* err) {
+  return clCreateBuffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * v.size(),
+                        const_cast<T*>(v.data()), err);
+}
+
+// First device of the first platform that has one, and that platform's name; false if none.
+inline bool find_device(cl_device_id& device, std::string& platform_name) {
+  cl_uint n = 0;
+  if (clGetPlatformIDs(0, nullptr, &n) != CL_SUCCESS || n == 0) return false;
+  std::vector<cl_platform_id> platforms(n);
+  clGetPlatformIDs(n, platforms.data(), nullptr);
+  for (cl_platform_id p : platforms) {
+    if (clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 1, &device, nullptr) != CL_SUCCESS) continue;
+    char buf[256] = {};
+    clGetPlatformInfo(p, CL_PLATFORM_NAME, sizeof buf - 1, buf, nullptr);
+    platform_name = buf;
+    return true;
+  }
+  return false;
+}
+
+}  // namespace pf::test
