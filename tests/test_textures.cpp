@@ -5,6 +5,8 @@
 // here with libpng (pf::encode_png); nothing is read from ../shared.
 #include <catch2/catch.hpp>
 
+#include <functional>
+
 #include <cstdio>
 #include <fstream>
 
@@ -231,6 +233,48 @@ std::string checker_jpeg() {
   return bytes;
 }
 
+// The index of the material named "floor" (REQUIREd to exist).
+size_t floor_material(const Scene& s) {
+  size_t m = 0;
+  while (m < s.material_names.size() && s.material_names[m] != "floor") ++m;
+  REQUIRE(m < s.materials.size());
+  return m;
+}
+
+// The floor spans x, z in [−1, 1]: its UVs, in the glTF convention, are ((x + 1)/2, (z + 1)/2).
+void check_floor_uvs(const Scene& s, size_t floor_mat) {
+  REQUIRE(s.uvs.size() == s.triangles.size());
+  for (size_t i = 0; i < s.triangles.size(); ++i) {
+    if (s.triangles[i].material != int(floor_mat)) continue;
+    const float* vs[3] = {s.triangles[i].v0, s.triangles[i].v1, s.triangles[i].v2};
+    for (int k = 0; k < 3; ++k) {
+      CHECK(s.uvs[i].uv[2 * k] == Approx(0.5f * (vs[k][0] + 1.f)));
+      CHECK(s.uvs[i].uv[2 * k + 1] == Approx(0.5f * (vs[k][2] + 1.f)));
+    }
+  }
+}
+
+// The checker's bright squares are brighter than its dark ones by the texels' ratio, in the red
+// channel of `img` (the light is nearly uniform over the floor); `each` sees every square pixel.
+void check_checker_ratio(const Image& img, int size,
+                         const std::function<void(const Vec3&)>& each = {}) {
+  double sb = 0, sd = 0;
+  int nb = 0, nd = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      int i, j;
+      if (!pixel_square(x, y, size, i, j)) continue;
+      const Vec3 c = img.get(x, y);
+      if (each) each(c);
+      (bright_square(i, j) ? sb : sd) += c.x;
+      (bright_square(i, j) ? nb : nd) += 1;
+    }
+  REQUIRE(nb > 0);
+  REQUIRE(nd > 0);
+  CHECK((sb / nb) / (sd / nd) ==
+        Approx(pf_srgb8_to_linear(kBright) / pf_srgb8_to_linear(kDark)).epsilon(0.05));
+}
+
 }  // namespace
 
 TEST_CASE("a JPEG texture is decoded by libjpeg-turbo, a cut one is refused", "[textures]") {
@@ -392,40 +436,17 @@ TEST_CASE("a glb with an embedded texture: texCoord, sampler wrap modes and filt
   CHECK(s.texels[4 * 16] == pf_srgb8_to_linear(kDark));
   CHECK(s.texels[3] == 1.f);
   // The floor's material: the factor (1, 0.5, 1) clamped below 1, its texture 0; the light none.
-  size_t floor_mat = 0;
-  while (floor_mat < s.material_names.size() && s.material_names[floor_mat] != "floor") ++floor_mat;
-  REQUIRE(floor_mat < s.materials.size());
+  const size_t floor_mat = floor_material(s);
   CHECK(s.texture_of(int(floor_mat)) == 0);
   CHECK(s.materials[floor_mat].color[1] == 0.5f);
   // texCoord 1: the UVs are TEXCOORD_1's (TEXCOORD_0 is all zero), in the glTF convention.
-  REQUIRE(s.uvs.size() == s.triangles.size());
-  for (size_t i = 0; i < s.triangles.size(); ++i) {
-    if (s.triangles[i].material != int(floor_mat)) continue;
-    const float* vs[3] = {s.triangles[i].v0, s.triangles[i].v1, s.triangles[i].v2};
-    for (int k = 0; k < 3; ++k) {
-      CHECK(s.uvs[i].uv[2 * k] == Approx(0.5f * (vs[k][0] + 1.f)));
-      CHECK(s.uvs[i].uv[2 * k + 1] == Approx(0.5f * (vs[k][2] + 1.f)));
-    }
-  }
-  // The pattern: bright squares brighter than dark ones by the texels' ratio (the light is
-  // nearly uniform over the floor), green to red as the factor's (0.5 to 0.99).
-  const Image img = pathtrace_image(s, 8);
-  double sb = 0, sd = 0;
-  int nb = 0, nd = 0;
-  for (int y = 0; y < size; ++y)
-    for (int x = 0; x < size; ++x) {
-      int i, j;
-      if (!pixel_square(x, y, size, i, j)) continue;
-      const Vec3 c = img.get(x, y);
-      CHECK(c.y == Approx(c.x * s.materials[floor_mat].color[1] / s.materials[floor_mat].color[0])
-                       .epsilon(1e-4));
-      (bright_square(i, j) ? sb : sd) += c.x;
-      (bright_square(i, j) ? nb : nd) += 1;
-    }
-  REQUIRE(nb > 0);
-  REQUIRE(nd > 0);
-  CHECK((sb / nb) / (sd / nd) ==
-        Approx(pf_srgb8_to_linear(kBright) / pf_srgb8_to_linear(kDark)).epsilon(0.05));
+  check_floor_uvs(s, floor_mat);
+  // The pattern: bright squares brighter than dark ones by the texels' ratio, green to red as
+  // the factor's (0.5 to 0.99).
+  const float green_per_red = s.materials[floor_mat].color[1] / s.materials[floor_mat].color[0];
+  check_checker_ratio(pathtrace_image(s, 8), size, [&](const Vec3& c) {
+    CHECK(c.y == Approx(c.x * green_per_red).epsilon(1e-4));
+  });
 }
 
 TEST_CASE("a COLLADA <diffuse><texture>: the image through its sampler and surface, v flipped",
@@ -492,35 +513,12 @@ TEST_CASE("a COLLADA <diffuse><texture>: the image through its sampler and surfa
   CHECK(report.warnings.empty());
   REQUIRE(s.textures.size() == 1);
   CHECK(s.texture_names[0] == tmp / "checker.png");
-  size_t floor_mat = 0;
-  while (floor_mat < s.material_names.size() && s.material_names[floor_mat] != "floor") ++floor_mat;
-  REQUIRE(floor_mat < s.materials.size());
+  const size_t floor_mat = floor_material(s);
   CHECK(s.texture_of(int(floor_mat)) == 0);
   // <diffuse> is the texture alone: assimp gives it the colour 1, kept below 1 (no warning).
   CHECK(s.materials[floor_mat].color[0] == 0.99f);
-  REQUIRE(s.uvs.size() == s.triangles.size());
-  for (size_t i = 0; i < s.triangles.size(); ++i) {
-    if (s.triangles[i].material != int(floor_mat)) continue;
-    const float* vs[3] = {s.triangles[i].v0, s.triangles[i].v1, s.triangles[i].v2};
-    for (int k = 0; k < 3; ++k) {
-      CHECK(s.uvs[i].uv[2 * k] == Approx(0.5f * (vs[k][0] + 1.f)));
-      CHECK(s.uvs[i].uv[2 * k + 1] == Approx(0.5f * (vs[k][2] + 1.f)));
-    }
-  }
-  const Image img = pathtrace_image(s, 8);
-  double sb = 0, sd = 0;
-  int nb = 0, nd = 0;
-  for (int y = 0; y < size; ++y)
-    for (int x = 0; x < size; ++x) {
-      int i, j;
-      if (!pixel_square(x, y, size, i, j)) continue;
-      (bright_square(i, j) ? sb : sd) += img.get(x, y).x;
-      (bright_square(i, j) ? nb : nd) += 1;
-    }
-  REQUIRE(nb > 0);
-  REQUIRE(nd > 0);
-  CHECK((sb / nb) / (sd / nd) ==
-        Approx(pf_srgb8_to_linear(kBright) / pf_srgb8_to_linear(kDark)).epsilon(0.05));
+  check_floor_uvs(s, floor_mat);
+  check_checker_ratio(pathtrace_image(s, 8), size);
 }
 
 TEST_CASE("one image used by two materials is stored once, other wrap modes share its texels",
@@ -703,8 +701,7 @@ TEST_CASE("a missing texture is one warning naming the file and the material, th
   CHECK(report.warnings[0].find("'floor'") != std::string::npos);
   CHECK(s.textures.empty());
   CHECK(s.uvs.empty());
-  size_t floor_mat = 0;
-  while (s.material_names[floor_mat] != "floor") ++floor_mat;
+  const size_t floor_mat = floor_material(s);
   CHECK(s.texture_of(int(floor_mat)) == -1);
   CHECK(s.materials[floor_mat].color[1] == 0.25f);
   // The tool: exit 0, the scene written, that one line on stderr.
