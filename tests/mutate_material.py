@@ -11,8 +11,7 @@ Run from the repository root with a configured build folder (default build/):
 It builds only test_bsdf, test_texture_shared, test_lens and test_material_shared_cl (-j2);
 about 2 minutes. MUTATE_ONLY=<text> runs only the mutations whose name contains <text>.
 """
-import re
-import subprocess
+import os
 import sys
 
 BUILD = sys.argv[1] if len(sys.argv) > 1 else "build"
@@ -79,41 +78,9 @@ MUTATIONS = [
      "PF_INLINE float pf_pow5(float x) {\n  const float x2 = x * x;",
      "PF_INLINE float pf_pow5(float x) {\n  const float& xr = x;\n  const float x2 = xr * x;"),
 ]
-ONLY = __import__("os").environ.get("MUTATE_ONLY", "")  # run only mutations whose name has this
-MUTATIONS = [m for m in MUTATIONS if ONLY in m[2]]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from mutation_runner import run_mutations  # noqa: E402
 
-
-def run(cmd):
-    return subprocess.run(cmd, shell=True, capture_output=True, text=True)
-
-
-survivors = 0
-originals = {}
-try:
-    for header, test, name, a, b in MUTATIONS:
-        path = M + header
-        if path not in originals:
-            originals[path] = open(path).read()
-        src = originals[path]
-        assert src.count(a) == 1, f"{name}: pattern not found once in {header}"
-        open(path, "w").write(src.replace(a, b))
-        r = run(f"nice cmake --build {BUILD} -j2 --target {test}")
-        if r.returncode:
-            print(f"[{header}] {name}: BUILD FAILED\n{r.stdout[-800:]}")
-            survivors += 1
-        else:
-            r = run(f"{BUILD}/tests/{test} -r junit")
-            failing = sorted(set(re.findall(
-                r'<testcase classname="[^"]*" name="([^"]*)"[^>]*>\s*<failure', r.stdout)))
-            print(f"[{header}] {name}: {'caught' if failing else 'SURVIVED'}")
-            for f in failing:
-                print(f"    fails: {f}")
-            survivors += 0 if failing else 1
-        open(path, "w").write(src)
-finally:
-    for path, src in originals.items():
-        open(path, "w").write(src)
-    run(f"nice cmake --build {BUILD} -j2 --target test_bsdf test_texture_shared test_lens "
-        "test_material_shared_cl")
-print(f"{len(MUTATIONS) - survivors} of {len(MUTATIONS)} mutations caught")
-sys.exit(1 if survivors else 0)
+sys.exit(run_mutations([(M + h, test, name, a, b) for h, test, name, a, b in MUTATIONS], BUILD,
+                       lambda test: test,
+                       "test_bsdf test_texture_shared test_lens test_material_shared_cl"))

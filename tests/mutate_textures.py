@@ -15,8 +15,6 @@ It builds test_textures, scene-bake, render and trace-hitpoints (-j2), about a m
 mutation. MUTATE_ONLY=<text> runs only the mutations whose name contains <text>.
 """
 import os
-import re
-import subprocess
 import sys
 
 BUILD = sys.argv[1] if len(sys.argv) > 1 else "build"
@@ -73,40 +71,8 @@ MUTATIONS = [
      "const float s = w * uv[0] + h->u * uv[2] + h->v * uv[4];",
      "const float s = w * uv[0] + h->v * uv[2] + h->u * uv[4];"),
 ]
-ONLY = os.environ.get("MUTATE_ONLY", "")
-MUTATIONS = [m for m in MUTATIONS if ONLY in m[1]]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from mutation_runner import run_mutations  # noqa: E402
 
-
-def run(cmd):
-    return subprocess.run(cmd, shell=True, capture_output=True, text=True)
-
-
-survivors = 0
-originals = {}
-try:
-    for path, name, a, b in MUTATIONS:
-        if path not in originals:
-            originals[path] = open(path).read()
-        src = originals[path]
-        assert src.count(a) == 1, f"{name}: pattern not found once in {path}"
-        open(path, "w").write(src.replace(a, b))
-        r = run(f"nice cmake --build {BUILD} -j2 --target {TARGETS}")
-        if r.returncode:
-            print(f"{name}: BUILD FAILED\n{r.stdout[-800:]}")
-            survivors += 1
-        else:
-            env = f"PF_BIN={BUILD}/bin"
-            r = run(f"{env} {BUILD}/tests/test_textures -r junit")
-            failing = sorted(set(re.findall(
-                r'<testcase classname="[^"]*" name="([^"]*)"[^>]*>\s*<failure', r.stdout)))
-            print(f"{name}: {'caught' if failing else 'SURVIVED'}", flush=True)
-            for f in failing:
-                print(f"    fails: {f}")
-            survivors += 0 if failing else 1
-        open(path, "w").write(src)
-finally:
-    for path, src in originals.items():
-        open(path, "w").write(src)
-    run(f"nice cmake --build {BUILD} -j2 --target {TARGETS}")
-print(f"{len(MUTATIONS) - survivors} of {len(MUTATIONS)} mutations caught")
-sys.exit(1 if survivors else 0)
+sys.exit(run_mutations([(path, "test_textures", name, a, b) for path, name, a, b in MUTATIONS],
+                       BUILD, lambda test: TARGETS, TARGETS, env=f"PF_BIN={BUILD}/bin"))
