@@ -128,6 +128,22 @@ inline void refresh_checksum(hid_t d) {
   REQUIRE(H5Awrite(a.get(), H5T_NATIVE_INT64, &sum) >= 0);
 }
 
+// `f()` throws an InputError whose one line contains `file` (unless empty) and `needle`: a
+// loader's or a check's refusal (Catch's CHECK: include catch.hpp first).
+inline void refused(const std::function<void()>& f, const std::string& file,
+                    const std::string& needle) {
+  try {
+    f();
+    FAIL_CHECK("accepted: " << file << " (expected '" << needle << "')");
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    INFO(msg);
+    if (!file.empty()) CHECK(msg.find(file) != std::string::npos);
+    CHECK(msg.find(needle) != std::string::npos);
+    CHECK(msg.find('\n') == std::string::npos);
+  }
+}
+
 // Fuzz-style edits of a written file (Catch's REQUIRE: include catch.hpp first).
 // Rewrites dataset `dset` of `file` in place: reads it as T (memory type `type`, fields matched by
 // name), lets `edit` change it, writes it back.

@@ -49,19 +49,7 @@ RenderOptions small_run(Estimator e, int passes) {
   return o;
 }
 
-// `f()` throws an InputError whose one line contains `file` (unless empty) and `needle`.
-void refused(const std::function<void()>& f, const std::string& file, const std::string& needle) {
-  try {
-    f();
-    FAIL_CHECK("accepted (expected '" << needle << "')");
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    INFO(msg);
-    if (!file.empty()) CHECK(msg.find(file) != std::string::npos);
-    CHECK(msg.find(needle) != std::string::npos);
-    CHECK(msg.find('\n') == std::string::npos);
-  }
-}
+using test::refused;
 
 // Retypes or reshapes dataset `dset` of `file` (h5edit.h rewrite_dataset_as).
 void rewrite_as(const std::string& file, const std::string& dset, hid_t stored, hid_t mem,

@@ -46,19 +46,7 @@ std::string copy_of(const TempDir& tmp, const std::string& src) {
   return dst;
 }
 
-// `load()` throws an InputError whose one line names `file` and contains `needle`.
-void refused(const std::function<void()>& load, const std::string& file, const std::string& needle) {
-  try {
-    load();
-    FAIL_CHECK("accepted: " << file << " (expected '" << needle << "')");
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    INFO(msg);
-    CHECK(msg.find(file) != std::string::npos);
-    CHECK(msg.find(needle) != std::string::npos);
-    CHECK(msg.find('\n') == std::string::npos);
-  }
-}
+using test::refused;
 
 // The HDF5 records the tests edit whose compound types the library keeps to itself.
 const h5::Compound& cluster_type() {
