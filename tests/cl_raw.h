@@ -49,4 +49,15 @@ inline bool find_device(cl_device_id& device, std::string& platform_name) {
   return false;
 }
 
+// The short names the tests use: `using namespace pf::test::cl_raw;`.
+namespace cl_raw {
+using Context = ClContextHandle;
+using Queue = ClQueueHandle;
+using Program = ClProgramHandle;
+using Kernel = ClKernelHandle;
+using Buffer = ClBufferHandle;
+using pf::test::find_device;
+using pf::test::upload;
+}  // namespace cl_raw
+
 }  // namespace pf::test

@@ -42,13 +42,7 @@ __kernel void cast_rays(__global const pf_kd_node* nodes, int node_count,
 }
 )CLC";
 
-using Context = pf::test::ClContextHandle;
-using Queue = pf::test::ClQueueHandle;
-using Program = pf::test::ClProgramHandle;
-using Kernel = pf::test::ClKernelHandle;
-using Buffer = pf::test::ClBufferHandle;
-using pf::test::find_device;
-using pf::test::upload;
+using namespace pf::test::cl_raw;
 
 
 

@@ -90,13 +90,7 @@ __kernel void lens_check(__global const float* in, __global float* out) {
 }
 )CLC";
 
-using Context = pf::test::ClContextHandle;
-using Queue = pf::test::ClQueueHandle;
-using Program = pf::test::ClProgramHandle;
-using Kernel = pf::test::ClKernelHandle;
-using Buffer = pf::test::ClBufferHandle;
-using pf::test::find_device;
-using pf::test::upload;
+using namespace pf::test::cl_raw;
 
 
 // Runs cmake/embed_kernels.cmake over a scratch tree holding kernels/material_check.cl and a link
