@@ -15,6 +15,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 #include "trace_common.h"
 #include "photonflow/pixel_sampler.h"
+#include "photonflow/material/lens_shared.h"
 
 #define PF_EYE_STREAM 0xE7E0000u
 #define PF_SHADOW_STREAM 0x5AD0000u
@@ -83,7 +84,8 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     direct[k] = direct[k] + weight[k] * (m->color[k] * PF_S_INV_PI * sum[k] * inv);
 }
 
-/* cam: eye[3], forward[3], right[3], up[3], tan_half_x, tan_half_y (camera.h's CameraFrame).
+/* cam: eye[3], forward[3], right[3], up[3], tan_half_x, tan_half_y, aperture, focus_distance
+ * (camera.h's CameraFrame; aperture > 0: a thin lens, lens_shared.h, as CameraFrame::ray).
  * Pixels pixel_offset .. pixel_offset + pixel_count − 1 (row-major) form this batch; outputs are
  * indexed from the batch's start. */
 __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const float* cam,
@@ -118,6 +120,17 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
       d[k] = cam[3 + k] + cam[6 + k] * sx + cam[9 + k] * sy;
     }
     pf_normalize3(d);
+    if (cam[14] > 0.0f) { /* thin lens: its point is drawn after the jitter (pixel_sampler.h) */
+      float u1, u2, pd[3], fw[3], rt[3], upv[3];
+      pf_eye_lens_keyed(sampler, pf_sobol_key(seed), pass, (uint)pix, smp, spp, &rng, &u1, &u2);
+      for (int k = 0; k < 3; ++k) {
+        pd[k] = d[k];
+        fw[k] = cam[3 + k];
+        rt[k] = cam[6 + k];
+        upv[k] = cam[9 + k];
+      }
+      pf_thin_lens_ray(eye, pd, rt, upv, fw, cam[14], cam[15], u1, u2, o, d);
+    }
     const float w0 = 1.0f / (float)spp;
     float T[3] = {w0, w0, w0};
     for (int depth = 0; depth <= max_depth; ++depth) {

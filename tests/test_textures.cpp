@@ -577,7 +577,7 @@ TEST_CASE("scene.h5 keeps textures, texels, materials' textures and UVs, edits a
   CHECK(r.scene_id == s.scene_id);
   {
     h5::Reader rd(path, kSceneFormat, kSceneFormatVersion);
-    CHECK(rd.version() == 3);
+    CHECK(rd.version() == kSceneFormatVersion);  // 3 added textures
     CHECK(rd.shape("/textures/texels") == std::vector<size_t>{64 * 64, 4});
     CHECK(rd.shape("/geometry/uvs") == std::vector<size_t>{s.triangles.size(), 6});
   }

@@ -72,7 +72,7 @@ std::map<std::string, std::string> help_defaults(const std::string& help) {
 // distribution); their help may say "(default: the file's camera ...)" in words.
 const std::set<std::string> kNoDefault = {
     "scene", "output", "hitpoints", "photons", "grid", "state", "clusters", "distribution",
-    "input", "eye", "look-at", "up", "fov", "insert", "insert-box", "insert-material",
+    "input", "eye", "look-at", "up", "fov", "focus-distance", "insert", "insert-box", "insert-material",
     "checkpoint", "sums", "range", "parts", "reference", "test", "mask", "json", "time-limit",
     "out"};
 

@@ -22,7 +22,7 @@ namespace pf {
 // The names of the bake options, in the order --help lists them.
 inline const std::vector<std::string>& bake_option_names() {
   static const std::vector<std::string> names = {
-      "eye", "look-at", "up", "fov", "width", "height", "insert", "insert-box", "up-axis",
+      "eye", "look-at", "up", "fov", "aperture", "focus-distance", "width", "height", "insert", "insert-box", "up-axis",
       "insert-material", "kd-ct", "kd-ci", "kd-empty-bonus", "kd-max-depth", "kd-max-leaf",
       "import-memory-mb", "import-seconds"};
   return names;
@@ -43,6 +43,12 @@ inline void add_bake_options(cxxopts::Options& o, const std::string& group = "")
      cxxopts::value<std::string>())
     ("fov", "vertical field of view in degrees, (0, 180) (default: from the file's camera, "
             "else " + default_text(kDefaultFovYDeg) + ")", cxxopts::value<float>())
+    ("aperture", "thin-lens radius in scene units for depth of field; 0 = pinhole camera, "
+                 "everything sharp (assimp gives no aperture from files)",
+     cxxopts::value<float>()->default_value("0"))
+    ("focus-distance", "distance of the sharp plane along the view axis, scene units; needs "
+                       "--aperture (default: the distance from the eye to the look-at point)",
+     cxxopts::value<float>())
     ("width", "image width in pixels; 0 = " + default_text(kDefaultImageSize) + ", or from "
               "--height and the file camera's aspect", cxxopts::value<int>()->default_value("0"))
     ("height", "image height in pixels; 0 = " + default_text(kDefaultImageSize) + ", or from "
@@ -99,6 +105,8 @@ inline BakeOptions bake_options(const cxxopts::ParseResult& a, const std::string
   if (a.count("look-at")) o.look_at = parse_vec3("look-at", a["look-at"].as<std::string>());
   if (a.count("up")) o.up = parse_vec3("up", a["up"].as<std::string>());
   if (a.count("fov")) o.fov_y_deg = a["fov"].as<float>();
+  o.aperture = a["aperture"].as<float>();
+  if (a.count("focus-distance")) o.focus_distance = a["focus-distance"].as<float>();
   o.up_axis = parse_up_axis(a["up-axis"].as<std::string>());
   o.width = a["width"].as<int>();
   o.height = a["height"].as<int>();

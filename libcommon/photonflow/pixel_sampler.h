@@ -110,6 +110,38 @@ PF_INLINE void pf_eye_jitter_keyed(pf_int sampler, pf_uint sobol_key, pf_uint pa
   pf_sobol_pixel_sample_keyed(sobol_key, pixel, pass * (pf_uint)spp + (pf_uint)s, jx, jy);
 }
 
+/* The lens sample (u1, u2) in [0, 1)² of eye sample s of pixel `pixel` in pass `pass`, drawn
+ * only for a thin-lens camera (pf_camera.aperture > 0), right after pf_eye_jitter_keyed, so a
+ * pinhole camera's streams are unchanged. `rng` advances by two dimensions under every sampler.
+ *   STRATA  the next two dimensions of the sample's eye stream. PPM traces its eye pass once, so
+ *           each pixel keeps its spp lens points for the whole run: its blur is the mean over those
+ *           few lens positions and never converges to the lens integral (SPPM's reason to exist,
+ *           Hachisuka & Jensen 2009, section 1).
+ *   RANDOM  the next two dimensions of the eye stream (a new lens point every pass).
+ *   SOBOL   a second scrambled (0,2)-sequence, as pbrt-v4's padded Sobol sampler: the index
+ *           i = pass·spp + s is shuffled by a nested permutation of its bits (pf_owen_scramble
+ *           on the index: bit j flips by a hash of the bits above it, so every aligned block of
+ *           2^k indices, in particular the first 2^k samples of the pixel, maps onto an aligned
+ *           block, which Sobol's (0,2)-sequence fills as a (0,k,2)-net), then dimensions 0 and 1
+ *           of the shuffled index, each Owen-scrambled with the pixel's own lens seeds. The lens
+ *           points are stratified like the pixel positions but in an order uncorrelated with
+ *           theirs (the shuffle), so the 4D samples do not line up.
+ * Seeds: pf_rng_bits(sobol_key, pixel, 2, 3, 4): dimensions 0 and 1 of the pixel position use
+ * 0 and 1. */
+PF_INLINE void pf_eye_lens_keyed(pf_int sampler, pf_uint sobol_key, pf_uint pass, pf_uint pixel,
+                                 pf_int s, pf_int spp, pf_rng* rng, pf_float* u1, pf_float* u2) {
+  if (sampler != PF_SAMPLER_SOBOL) {
+    *u1 = pf_rng_next(rng);
+    *u2 = pf_rng_next(rng);
+    return;
+  }
+  rng->dim += 2U;
+  const pf_uint i = pass * (pf_uint)spp + (pf_uint)s;
+  const pf_uint shuffled = pf_owen_scramble(i, pf_rng_bits(sobol_key, pixel, 2U));
+  *u1 = pf_rng_unit(pf_owen_scramble(pf_sobol_dim0(shuffled), pf_rng_bits(sobol_key, pixel, 3U)));
+  *u2 = pf_rng_unit(pf_owen_scramble(pf_sobol_dim1(shuffled), pf_rng_bits(sobol_key, pixel, 4U)));
+}
+
 PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint pixel, pf_int s,
                              pf_int spp, pf_int columns, pf_rng* rng, pf_float* jx,
                              pf_float* jy) {

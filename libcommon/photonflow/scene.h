@@ -13,9 +13,10 @@
 namespace pf {
 
 constexpr const char* kSceneFormat = "photonflow.scene";
-// 3: base-colour textures (textures/*, materials/texture, geometry/uvs); 2: names as fixed-length
-// strings; 1: variable-length names. Versions 1 and 2 are still read (no textures).
-constexpr int kSceneFormatVersion = 3;
+// 4: the thin-lens camera (camera aperture, focus_distance); 3: base-colour textures (textures/*,
+// materials/texture, geometry/uvs); 2: names as fixed-length strings; 1: variable-length names.
+// Versions 1 to 3 are still read (pinhole camera; versions 1 and 2 without textures).
+constexpr int kSceneFormatVersion = 4;
 
 // Largest side of a texture, and most texels of all of a scene's textures together (each texel is
 // 4 floats: 2^26 texels are 1 GiB in memory and in scene.h5). scene-bake refuses a larger image,
@@ -154,6 +155,7 @@ const h5::Compound& h5_type_hh_triangle();
 const h5::Compound& h5_type_material();
 const h5::Compound& h5_type_light();
 const h5::Compound& h5_type_camera();
+const h5::Compound& h5_type_camera_pinhole();  // format versions 1-3: no lens fields
 const h5::Compound& h5_type_kd_node();
 const h5::Compound& h5_type_hitpoint();
 const h5::Compound& h5_type_photon();

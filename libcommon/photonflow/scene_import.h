@@ -57,6 +57,11 @@ struct BakeOptions {
   std::optional<Vec3> look_at;
   std::optional<Vec3> up;
   std::optional<float> fov_y_deg;   // vertical field of view, degrees, in (0, 180)
+  // Thin lens (depth of field): lens radius in world units, 0 = pinhole; focus distance along the
+  // view axis, unset = the distance from the eye to the look-at point. assimp 5.2's aiCamera has
+  // no aperture, so neither comes from the file.
+  float aperture = 0.f;
+  std::optional<float> focus_distance;
   UpAxis up_axis;                   // up for inserted meshes; auto: from the camera's up vector
   int width = 0;                    // pixels; 0 = 512, or derived from the other and the aspect
   int height = 0;                   // pixels; 0 = 512, or derived from the other and the aspect

@@ -98,14 +98,18 @@ typedef struct {
   pf_float radiance[3]; /* area: radiance; point: intensity */
 } pf_light;
 
-/* Pinhole camera. Right-handed world; the image's +x is to the right, +y is down (row 0 at top). */
+/* Camera: a pinhole, or a thin lens when aperture > 0 (depth of field; material/lens_shared.h).
+ * Right-handed world; the image's +x is to the right, +y is down (row 0 at top). */
 typedef struct {
   pf_float eye[3];
   pf_float look_at[3];
   pf_float up[3];
-  pf_float fov_y_deg; /* vertical field of view, degrees */
-  pf_int width;       /* pixels */
-  pf_int height;      /* pixels */
+  pf_float fov_y_deg;      /* vertical field of view, degrees */
+  pf_int width;            /* pixels */
+  pf_int height;           /* pixels */
+  pf_float aperture;       /* lens radius, world units; 0 = pinhole (scene format version 4) */
+  pf_float focus_distance; /* distance of the sharp plane along the view axis, world units (> 0
+                              when aperture > 0; 0 with a pinhole) */
 } pf_camera;
 
 
@@ -206,7 +210,7 @@ static_assert(sizeof(pf_triangle) == 80, "pf_triangle layout");
 static_assert(sizeof(pf_hh_triangle) == 48, "pf_hh_triangle layout");
 static_assert(sizeof(pf_kd_node) == 72, "pf_kd_node layout");
 static_assert(sizeof(pf_light) == 40, "pf_light layout");
-static_assert(sizeof(pf_camera) == 48, "pf_camera layout");
+static_assert(sizeof(pf_camera) == 56, "pf_camera layout");
 static_assert(sizeof(pf_hitpoint) == 84, "pf_hitpoint layout");
 static_assert(sizeof(pf_photon) == 48, "pf_photon layout");
 static_assert(sizeof(pf_photon_keys4) == 64, "pf_photon_keys4 layout");

@@ -59,6 +59,9 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
   std::printf("  camera     eye %g,%g,%g look-at %g,%g,%g up %g,%g,%g fov %.4g deg %dx%d (%s)\n",
               c.eye[0], c.eye[1], c.eye[2], c.look_at[0], c.look_at[1], c.look_at[2], c.up[0],
               c.up[1], c.up[2], c.fov_y_deg, c.width, c.height, r.camera_source.c_str());
+  if (c.aperture > 0.f)
+    std::printf("  lens       radius %g, focused at %g (depth of field)\n", c.aperture,
+                c.focus_distance);
   if (r.inserted_triangles)
     std::printf("  up axis    %s (the inserted meshes stand along it)\n",
                 pf::up_axis_name(r.insert_up).c_str());

@@ -96,7 +96,13 @@ void Scene::compute_scene_id() {
   feed(triangles);
   feed(materials);
   feed(lights);
-  h.update(&camera, sizeof camera);
+  // The pinhole fields always; the lens only when there is one, so that a pinhole scene keeps
+  // the id it had before format version 4 added the lens.
+  h.update(&camera, offsetof(pf_camera, aperture));
+  if (camera.aperture > 0.f) {
+    h.update(&camera.aperture, sizeof camera.aperture);
+    h.update(&camera.focus_distance, sizeof camera.focus_distance);
+  }
   // Textures (format version 3): only where there are some, so that a scene without textures
   // keeps its version-2 id (its materials/texture is all −1 and it has no UVs: nothing to cover).
   if (!textures.empty()) {
@@ -173,6 +179,17 @@ const h5::Compound& h5_type_light() {
 }
 
 const h5::Compound& h5_type_camera() {
+  static const h5::Compound t = [] {
+    h5::Compound c(sizeof(pf_camera));
+    c.PF_F32(pf_camera, eye, 3).PF_F32(pf_camera, look_at, 3).PF_F32(pf_camera, up, 3);
+    c.PF_F32(pf_camera, fov_y_deg, 1).PF_I32(pf_camera, width).PF_I32(pf_camera, height);
+    c.PF_F32(pf_camera, aperture, 1).PF_F32(pf_camera, focus_distance, 1);
+    return c;
+  }();
+  return t;
+}
+
+const h5::Compound& h5_type_camera_pinhole() {
   static const h5::Compound t = [] {
     h5::Compound c(sizeof(pf_camera));
     c.PF_F32(pf_camera, eye, 3).PF_F32(pf_camera, look_at, 3).PF_F32(pf_camera, up, 3);
@@ -361,6 +378,11 @@ void check_scene_values(const Scene& s, const Validator& v) {
            " do not give a view direction");
   if (!(length(cross(normalize(dir), normalize(Vec3(cam.up)))) > 1e-4f))
     v.fail("camera.up " + vec_text(cam.up) + " is parallel to the view direction");
+  // Thin lens (format version 4): a pinhole has aperture 0 and focus_distance 0; a lens has both
+  // in (0, kMaxValue] (camera_lens_problem, the check scene-bake makes too).
+  if (const char* why = camera_lens_problem(cam.aperture, cam.focus_distance))
+    v.fail("camera.aperture = " + value_text(cam.aperture) + ", camera.focus_distance = " +
+           value_text(cam.focus_distance) + ": " + why);
   // kd-tree: validate_kdtree checked the structure; here the boxes against the triangles. Every
   // triangle a leaf lists overlaps the leaf's box, the root box holds every triangle, and every
   // triangle of non-zero area is listed by some leaf (else rays pass through it).
@@ -514,7 +536,9 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
   w.describe("/lights/cdf", "1", "cumulative power fraction, sampling lights by power");
 
   w.write("/camera", h5_type_camera(), &s.camera, 1);
-  w.describe("/camera", "world units, degrees, pixels", "pinhole camera, fov_y_deg vertical");
+  w.describe("/camera", "world units, degrees, pixels",
+             "fov_y_deg vertical; aperture = thin-lens radius (0 = pinhole), focus_distance = "
+             "distance of the sharp plane along the view axis");
 
   w.write("/kdtree/nodes", h5_type_kd_node(), s.kd.nodes);
   w.describe("/kdtree/nodes", "world units",
@@ -594,7 +618,8 @@ Scene load_scene(const std::string& path) {
   s.lights = r.read<pf_light>("/lights/lights", h5_type_light());
   s.light_cdf = r.read<float>("/lights/cdf");
   if (r.count("/camera") != 1) throw input_error(path, "/camera must hold exactly one camera");
-  r.read("/camera", h5_type_camera(), &s.camera, 1);
+  // Format version 4 added the thin lens (aperture, focus_distance); older files are pinholes.
+  r.read("/camera", r.version() >= 4 ? h5_type_camera() : h5_type_camera_pinhole(), &s.camera, 1);
   s.kd.nodes = r.read<pf_kd_node>("/kdtree/nodes", h5_type_kd_node());
   s.kd.leaf_tris = r.read<int32_t>("/kdtree/leaf_tris");
   s.kd.params.cost_traversal = float(r.attr_double("/kdtree", "cost_traversal"));

@@ -770,6 +770,13 @@ pf_camera resolve_camera(const BakeOptions& o, const std::optional<FileCamera>& 
   eye.store(cam.eye);
   look_at.store(cam.look_at);
   normalize(up).store(cam.up);
+  // Thin lens: focused on the look-at point unless --focus-distance says otherwise.
+  if (o.aperture > 0.f) {
+    cam.aperture = o.aperture;
+    cam.focus_distance = o.focus_distance ? *o.focus_distance : length(dir);
+    if (const char* why = camera_lens_problem(cam.aperture, cam.focus_distance))
+      throw input_error(file, why, "give --aperture and --focus-distance in scene units");
+  }
   return cam;
 }
 

@@ -1,4 +1,5 @@
 #include "photonflow/scene_source.h"
+#include "photonflow/camera.h"
 
 #include <unistd.h>
 
@@ -25,6 +26,17 @@ void check_bake_options(const BakeOptions& o) {
   if (o.kd.max_depth < 0 || o.kd.max_depth > kKdMaxDepth)
     throw input_error("", "--kd-max-depth must be in 0.." + std::to_string(kKdMaxDepth));
   require_positive("kd-max-leaf", o.kd.max_leaf_size);
+  if (!(o.aperture >= 0.f && o.aperture <= kMaxLensLength))
+    throw input_error("", "--aperture must be 0 (pinhole) or a lens radius in (0, 1e12] scene units",
+                      "give the lens radius in scene units");
+  if (o.focus_distance) {
+    if (!(*o.focus_distance > 0.f && *o.focus_distance <= kMaxLensLength))
+      throw input_error("", "--focus-distance must be a distance in (0, 1e12] scene units",
+                        "give the distance of the sharp plane along the view axis");
+    if (o.aperture == 0.f)
+      throw input_error("", "--focus-distance needs a lens: a pinhole camera (--aperture 0) is "
+                            "sharp everywhere", "give --aperture, the lens radius");
+  }
 }
 
 namespace {

@@ -106,12 +106,13 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
 }
 
 // The camera basis the eye-pass kernel reads (16 floats): eye, forward, right, up, tan_half_x,
-// tan_half_y, padding — taken from camera.h's CameraFrame, so both backends use one frame.
+// tan_half_y, aperture, focus_distance — taken from camera.h's CameraFrame, so both backends use
+// one frame.
 std::vector<float> camera_frame(const pf_camera& c) {
   CameraFrame f(c);
   const Vec3 &e = f.eye(), &fw = f.forward(), &r = f.right(), &u = f.up();
   return {e.x, e.y, e.z, fw.x, fw.y, fw.z, r.x, r.y, r.z, u.x, u.y, u.z,
-          f.tan_half_x(), f.tan_half_y(), 0.f, 0.f};
+          f.tan_half_x(), f.tan_half_y(), f.aperture(), f.focus_distance()};
 }
 
 }  // namespace

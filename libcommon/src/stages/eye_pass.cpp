@@ -165,7 +165,14 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
   float jx, jy;
   pf_eye_jitter_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_, columns_,
                       &rng, &jx, &jy);
-  Ray ray{cam_.eye(), cam_.direction(float(x) + jx, float(y) + jy)};
+  // A thin lens draws its point on the lens next (pixel_sampler.h); a pinhole draws nothing, so
+  // its streams (and images) are those of the pinhole eye pass.
+  float u1 = 0.5f, u2 = 0.5f;
+  if (cam_.lens())
+    pf_eye_lens_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_, &rng, &u1,
+                      &u2);
+  Ray ray;
+  cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
   const float w = 1.f / float(spp_);
   Vec3 T(w, w, w);  // throughput × box filter weight
   for (int depth = 0; depth <= opt_.max_depth; ++depth) {

@@ -268,7 +268,15 @@ Image pathtrace(const Scene& scene, const PathTraceOptions& opt,
           pf_rng rng = pf_rng_start(opt.seed, kPathStream + uint32_t(s), uint32_t(pix));
           // Box filter: a uniform point in the pixel.
           const float jx = pf_rng_next(&rng), jy = pf_rng_next(&rng);
-          const Ray ray{cam.eye(), cam.direction(float(x) + jx, float(y) + jy)};
+          // A thin lens: a uniform point on the lens next (none for a pinhole: its streams and
+          // images stay those of the pinhole camera).
+          float u1 = 0.5f, u2 = 0.5f;
+          if (cam.lens()) {
+            u1 = pf_rng_next(&rng);
+            u2 = pf_rng_next(&rng);
+          }
+          Ray ray;
+          cam.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
           Vec3 v = tracer.radiance(ray, rng, rays);
           if (!finite(v)) {
             ++nonfinite;
