@@ -1,0 +1,53 @@
+/*
+ * material/alpha_shared.h — alpha cut-outs (glTF 2.0 alphaMode MASK, OBJ/MTL map_d), shared by
+ * the C++ host and the OpenCL C 1.2 kernels (issue 32 item 3, first step).
+ *
+ * glTF 2.0 spec section 3.9.4 (alpha coverage): with alphaMode MASK, "the rendered output is
+ * either fully opaque or fully transparent depending on the alpha value and the specified
+ * alphaCutoff value": a point is opaque when alpha >= alphaCutoff and cut away (rays pass) when
+ * alpha < alphaCutoff. alphaCutoff defaults to 0.5. Here alpha = baseColorFactor.a · texel.a of
+ * the material's base-colour texture (linear: texture_shared.h stores alpha as read).
+ *
+ * Cut-off encoding: a material's cutoff in [0, 1] means "masked"; PF_ALPHA_OPAQUE (−1) means no
+ * mask (the fast path: no texture lookup). Values read from a file are checked with
+ * pf_alpha_cutoff_valid; NaN, negative or > 1 values are refused (the caller reports one line,
+ * exit 2) rather than clamped.
+ *
+ * Not wired in yet: the any-hit test in intersect_shared.h / raycast.cpp / trace_common.h, the
+ * scene.h5 datasets (format version 4) and the importers (see docs/SCENES.md, "Alpha cut-outs").
+ */
+#ifndef PHOTONFLOW_MATERIAL_ALPHA_SHARED_H
+#define PHOTONFLOW_MATERIAL_ALPHA_SHARED_H
+
+#include "photonflow/cl_compat.h"
+#include "photonflow/material/texture_shared.h"
+
+#define PF_ALPHA_OPAQUE (-1.0f)
+#define PF_ALPHA_DEFAULT_CUTOFF 0.5f /* glTF 2.0 alphaCutoff default */
+
+/* 1 when a cutoff read from a file is usable for MASK: finite and in [0, 1] (NaN fails both). */
+PF_INLINE int pf_alpha_cutoff_valid(float cutoff) { return cutoff >= 0.0f && cutoff <= 1.0f; }
+
+/* 1 when a material with this cutoff is masked (not PF_ALPHA_OPAQUE). */
+PF_INLINE int pf_alpha_masked(float cutoff) { return cutoff >= 0.0f; }
+
+/* Coverage test of spec 3.9.4: 1 when alpha (factor · texel alpha) is below the cutoff, i.e. a
+ * ray passes through this point. An opaque material (cutoff < 0) is never cut away. */
+PF_INLINE int pf_alpha_cut_away(float alpha, float cutoff) {
+  return pf_alpha_masked(cutoff) && alpha < cutoff;
+}
+
+/* The texel alpha at the barycentrics (u, v) (weights of v1 and v2) of a triangle with UVs
+ * uv[6] = u0 v0 u1 v1 u2 v2, interpolated in the order of Scene::texture_value, then sampled
+ * with the texture's filter and wrap modes (pf_tex_sample), times the factor's alpha. */
+PF_INLINE float pf_alpha_at(const pf_texture* tex, PF_GLOBAL const float* pool,
+                            PF_GLOBAL const float* uv, float u, float v, float factor_alpha) {
+  const float w = 1.0f - u - v;
+  const float s = w * uv[0] + u * uv[2] + v * uv[4];
+  const float r = w * uv[1] + u * uv[3] + v * uv[5];
+  float rgba[4];
+  pf_tex_sample(tex, pool, s, r, rgba);
+  return factor_alpha * rgba[3];
+}
+
+#endif /* PHOTONFLOW_MATERIAL_ALPHA_SHARED_H */
