@@ -201,13 +201,9 @@ static inline int pf_texture_factor(__global const pf_texture* textures, __globa
                                     int material, const pf_ray_hit* h, float* f) {
   const int ti = mat_tex[material];
   if (ti < 0) return 0;
-  __global const float* uv = uvs + 6 * (size_t)h->tri;
-  const float w = 1.0f - h->u - h->v;
-  const float s = w * uv[0] + h->u * uv[2] + h->v * uv[4];
-  const float r = w * uv[1] + h->u * uv[3] + h->v * uv[5];
   const pf_texture t = textures[ti];
   float rgba[4];
-  pf_tex_sample(&t, texels, s, r, rgba);
+  pf_tex_sample_triangle(&t, texels, uvs + 6 * (size_t)h->tri, h->u, h->v, rgba);
   f[0] = rgba[0];
   f[1] = rgba[1];
   f[2] = rgba[2];

@@ -38,15 +38,12 @@ PF_INLINE int pf_alpha_cut_away(float alpha, float cutoff) {
 }
 
 /* The texel alpha at the barycentrics (u, v) (weights of v1 and v2) of a triangle with UVs
- * uv[6] = u0 v0 u1 v1 u2 v2, interpolated in the order of Scene::texture_value, then sampled
- * with the texture's filter and wrap modes (pf_tex_sample), times the factor's alpha. */
+ * uv[6] = u0 v0 u1 v1 u2 v2 (pf_tex_sample_triangle, the lookup every texture uses), times the
+ * factor's alpha. */
 PF_INLINE float pf_alpha_at(const pf_texture* tex, PF_GLOBAL const float* pool,
                             PF_GLOBAL const float* uv, float u, float v, float factor_alpha) {
-  const float w = 1.0f - u - v;
-  const float s = w * uv[0] + u * uv[2] + v * uv[4];
-  const float r = w * uv[1] + u * uv[3] + v * uv[5];
   float rgba[4];
-  pf_tex_sample(tex, pool, s, r, rgba);
+  pf_tex_sample_triangle(tex, pool, uv, u, v, rgba);
   return factor_alpha * rgba[3];
 }
 

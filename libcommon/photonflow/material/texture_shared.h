@@ -136,6 +136,18 @@ PF_INLINE void pf_tex_sample(const pf_texture* tex, PF_GLOBAL const float* pool,
   }
 }
 
+/* The texel at barycentrics (u, v) (the weights of v1 and v2) of a triangle whose corners have
+ * the UVs uv[6] = u0 v0 u1 v1 u2 v2: the UVs interpolated, then pf_tex_sample. The one lookup of
+ * a triangle's texture for the host (Scene::texture_value), the OpenCL tracers
+ * (pf_texture_factor) and the alpha test (alpha_shared.h). */
+PF_INLINE void pf_tex_sample_triangle(const pf_texture* tex, PF_GLOBAL const float* pool,
+                                      PF_GLOBAL const float* uv, float u, float v, float* rgba) {
+  const float w = 1.0f - u - v;
+  const float s = w * uv[0] + u * uv[2] + v * uv[4];
+  const float r = w * uv[1] + u * uv[3] + v * uv[5];
+  pf_tex_sample(tex, pool, s, r, rgba);
+}
+
 /* The sRGB EOTF (IEC 61966-2-1): encoded c in [0, 1] → linear,
  *   c ≤ 0.04045: c / 12.92;   else ((c + 0.055) / 1.055)^2.4.
  * Inputs outside [0, 1] are clamped (NaN → 0). */

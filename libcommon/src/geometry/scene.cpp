@@ -115,12 +115,8 @@ void Scene::compute_scene_id() {
 }
 
 Vec3 Scene::texture_value(int texture, size_t tri, float u, float v) const {
-  const TriangleUV& t = uvs[tri];
-  const float w = 1.f - u - v;
-  const float s = w * t.uv[0] + u * t.uv[2] + v * t.uv[4];
-  const float r = w * t.uv[1] + u * t.uv[3] + v * t.uv[5];
   float rgba[4];
-  pf_tex_sample(&textures[size_t(texture)], texels.data(), s, r, rgba);
+  pf_tex_sample_triangle(&textures[size_t(texture)], texels.data(), uvs[tri].uv, u, v, rgba);
   return {rgba[0], rgba[1], rgba[2]};
 }
 
@@ -178,24 +174,24 @@ const h5::Compound& h5_type_light() {
   return t;
 }
 
+namespace {
+// The camera's fields, with the thin lens (format version 4) or without (versions 1-3).
+h5::Compound camera_compound(bool lens) {
+  h5::Compound c(sizeof(pf_camera));
+  c.PF_F32(pf_camera, eye, 3).PF_F32(pf_camera, look_at, 3).PF_F32(pf_camera, up, 3);
+  c.PF_F32(pf_camera, fov_y_deg, 1).PF_I32(pf_camera, width).PF_I32(pf_camera, height);
+  if (lens) c.PF_F32(pf_camera, aperture, 1).PF_F32(pf_camera, focus_distance, 1);
+  return c;
+}
+}  // namespace
+
 const h5::Compound& h5_type_camera() {
-  static const h5::Compound t = [] {
-    h5::Compound c(sizeof(pf_camera));
-    c.PF_F32(pf_camera, eye, 3).PF_F32(pf_camera, look_at, 3).PF_F32(pf_camera, up, 3);
-    c.PF_F32(pf_camera, fov_y_deg, 1).PF_I32(pf_camera, width).PF_I32(pf_camera, height);
-    c.PF_F32(pf_camera, aperture, 1).PF_F32(pf_camera, focus_distance, 1);
-    return c;
-  }();
+  static const h5::Compound t = camera_compound(true);
   return t;
 }
 
 const h5::Compound& h5_type_camera_pinhole() {
-  static const h5::Compound t = [] {
-    h5::Compound c(sizeof(pf_camera));
-    c.PF_F32(pf_camera, eye, 3).PF_F32(pf_camera, look_at, 3).PF_F32(pf_camera, up, 3);
-    c.PF_F32(pf_camera, fov_y_deg, 1).PF_I32(pf_camera, width).PF_I32(pf_camera, height);
-    return c;
-  }();
+  static const h5::Compound t = camera_compound(false);
   return t;
 }
 
@@ -379,7 +375,7 @@ void check_scene_values(const Scene& s, const Validator& v) {
   if (!(length(cross(normalize(dir), normalize(Vec3(cam.up)))) > 1e-4f))
     v.fail("camera.up " + vec_text(cam.up) + " is parallel to the view direction");
   // Thin lens (format version 4): a pinhole has aperture 0 and focus_distance 0; a lens has both
-  // in (0, kMaxValue] (camera_lens_problem, the check scene-bake makes too).
+  // in (0, kMaxLensLength] (camera_lens_problem, the check scene-bake makes too).
   if (const char* why = camera_lens_problem(cam.aperture, cam.focus_distance))
     v.fail("camera.aperture = " + value_text(cam.aperture) + ", camera.focus_distance = " +
            value_text(cam.focus_distance) + ": " + why);
