@@ -7,7 +7,10 @@
 # RUNS runs per estimator, interleaved (ppm, sppm, pppm, ppm, ...), medians printed.
 # BASE=DIR adds the PPM of another build (its bin/render; e.g. the commit before SPPM, b1c0a38,
 # whose PPM the issue's "today's PPM pass rate" measured) as a fourth, interleaved, estimator
-# "ppm@base", and prints each rate against it too.
+# "ppm@base", and prints each rate against it too. BASE_ESTIMATORS="ppm sppm pppm" runs those
+# estimators of the base build instead (a base that has --estimator: issue 32 item 9 compares
+# today's SPPM with the SPPM of the commit before a feature), each printed as "<e>@base" and
+# compared with the same estimator of BUILD.
 #
 #   bench/sppm_speed.sh [BUILD]        (PASSES=20 RUNS=5 THREADS=0 by default)
 set -euo pipefail
@@ -17,6 +20,7 @@ PASSES=${PASSES:-20}
 RUNS=${RUNS:-5}
 THREADS=${THREADS:-0}
 BASE=${BASE:-}
+BASE_ESTIMATORS=${BASE_ESTIMATORS:-}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 $B/scene-bake data/cornell-box.dae -o "$T/box.h5" --width 512 --height 512 > /dev/null
@@ -27,17 +31,24 @@ for r in $(seq 1 "$RUNS"); do
       --snapshot-at 1 --snapshot "$T/$e-{pass}.exr" -o "$T/$e.exr" --stats "$T/$e-$r.json" \
       --threads "$THREADS" > /dev/null
   done
-  if [ -n "$BASE" ]; then  # the base build's render predates --estimator: PPM is its only one
+  if [ -n "$BASE" ] && [ -z "$BASE_ESTIMATORS" ]; then  # a base before --estimator: PPM only
     "$BASE/bin/render" --scene "$T/box.h5" --passes $total --photons 262144 \
       --snapshot-at 1 --snapshot "$T/base-{pass}.exr" -o "$T/base.exr" --stats "$T/ppm@base-$r.json" \
       --threads "$THREADS" > /dev/null
   fi
+  for e in $BASE_ESTIMATORS; do
+    "$BASE/bin/render" --scene "$T/box.h5" --estimator "$e" --direct photons --passes $total \
+      --photons 262144 --snapshot-at 1 --snapshot "$T/base-{pass}.exr" -o "$T/base.exr" \
+      --stats "$T/$e@base-$r.json" --threads "$THREADS" > /dev/null
+  done
 done
-/usr/bin/python3 - "$T" "$RUNS" "$PASSES" "$BASE" <<'PY'
+/usr/bin/python3 - "$T" "$RUNS" "$PASSES" "$BASE" "$BASE_ESTIMATORS" <<'PY'
 import json, statistics, sys
 d, runs, passes, base = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+base_est = sys.argv[5].split() if base else []
 rate, runs_of = {}, {}
-for e in ("ppm", "sppm", "pppm") + (("ppm@base",) if base else ()):
+based = [f"{e}@base" for e in base_est] if base_est else (["ppm@base"] if base else [])
+for e in ["ppm", "sppm", "pppm"] + based:
     r = []
     for k in range(1, runs + 1):
         im = json.load(open(f"{d}/{e}-{k}.json"))["images"]
@@ -51,7 +62,10 @@ def ratio(a, b):
     print(f"{a} / {b} pass rate: {rate[a] / rate[b]:.2f} (median of round ratios {paired:.2f})")
 for e in ("sppm", "pppm"):
     ratio(e, "ppm")
-if base:
+if base_est:
+    for e in base_est:
+        ratio(e, f"{e}@base")
+elif base:
     for e in ("ppm", "sppm", "pppm"):
         ratio(e, "ppm@base")
 PY
