@@ -29,8 +29,10 @@
 #
 # Environment (defaults): SCENES="showcase showcase-caustics" W=512 H=512 TIME=30 REF_TIME=600
 # SEED=1 REF_SEED=1001 MASK_SPP=256 THREADS=0 (all cores; the timed runs and the references)
-# OUT=out/showcase-bench. KEEP=1 keeps finished images: a rerun with the same settings re-renders
-# only what is missing (delete $OUT to start afresh).
+# OUT=out/showcase-bench. KEEP=1 keeps finished images whose settings are unchanged: e.g.
+# `KEEP=1 REF_TIME=2400 bench/showcase.sh` after a run re-renders the references alone (the mask,
+# references and timed runs each remember their own settings). Without KEEP everything is rendered
+# again (the right thing after a change to the renderer).
 set -euo pipefail
 BUILD=${1:-build}
 B=$BUILD/bin
@@ -52,25 +54,29 @@ done
 mkdir -p "$OUT"
 SETTINGS="W=$W H=$H TIME=$TIME REF_TIME=$REF_TIME SEED=$SEED REF_SEED=$REF_SEED MASK_SPP=$MASK_SPP THREADS=$THREADS"
 
-# $1 = file; true when it must be (re)made
-need() { [ "$KEEP" != 1 ] || [ ! -s "$1" ]; }
+# need FILE SETTINGS: true when FILE must be (re)made: no KEEP=1, no FILE, or FILE made with other
+# settings (FILE.settings); records SETTINGS for it.
+need() {
+  local f=$1 set=$2 old=""
+  [ -f "$f.settings" ] && old=$(cat "$f.settings")
+  echo "$set" > "$f.settings"
+  [ "$KEEP" != 1 ] || [ ! -s "$f" ] || [ "$old" != "$set" ]
+}
 load() { echo "$1 $(cat /proc/loadavg)" >> "$D/load.txt"; }
 
 for s in $SCENES; do
   D=$OUT/$s
   mkdir -p "$D"
-  [ -f "$D/settings.txt" ] && [ "$(cat "$D/settings.txt")" != "$SETTINGS" ] && rm -f "$D"/*.exr "$D"/*.json "$D"/*.png
-  echo "$SETTINGS" > "$D/settings.txt"
   opts=""
   [ -f "data/$s.bake-options" ] && opts=$(sed -e 's/#.*//' "data/$s.bake-options")
   # shellcheck disable=SC2086  # the options are words
   $B/scene-bake "data/$s.gltf" -o "$D/scene.h5" --width "$W" --height "$H" $opts > "$D/bake.txt" 2>&1 \
     || { cat "$D/bake.txt" >&2; exit 1; }
-  if need "$D/mask.exr"; then
+  if need "$D/mask.exr" "$W $H $MASK_SPP $opts"; then
     $B/emitter-mask --scene "$D/scene.h5" -o "$D/mask.exr" --spp "$MASK_SPP" --threads "$THREADS" > /dev/null
   fi
   for part in 1 2; do
-    if need "$D/ref$part.exr"; then
+    if need "$D/ref$part.exr" "$W $H $REF_TIME $REF_SEED $THREADS $opts"; then
       load "ref$part-before"
       $B/pathtrace --scene "$D/scene.h5" -o "$D/ref$part.exr" --png none --spp 100000000 \
         --time "$REF_TIME" --seed $((REF_SEED + part - 1)) --stats "$D/ref$part.json" \
@@ -78,13 +84,13 @@ for s in $SCENES; do
       load "ref$part-after"
     fi
   done
-  if need "$D/pt.exr"; then
+  if need "$D/pt.exr" "$W $H $TIME $SEED $THREADS $opts"; then
     load pt-before
     $B/pathtrace --scene "$D/scene.h5" -o "$D/pt.exr" --png none --spp 100000000 --time "$TIME" \
       --seed "$SEED" --stats "$D/pt.json" --threads "$THREADS" | tail -1
     load pt-after
   fi
-  if need "$D/sppm.exr"; then
+  if need "$D/sppm.exr" "$W $H $TIME $SEED $THREADS $opts"; then
     load sppm-before
     $B/render --scene "$D/scene.h5" -o "$D/sppm.exr" --time "$TIME" --passes 1000000 \
       --seed "$SEED" --stats "$D/sppm.json" --threads "$THREADS" | tail -1

@@ -289,6 +289,12 @@ LIGHT_X0, LIGHT_X1, LIGHT_Z0, LIGHT_Z1, LIGHT_Y = -0.3, 0.3, -0.4, 0.2, 1.595
 SPOT_POS, SPOT_AIM = [0.85, 1.5, 1.3], [0.0, 0.25, -0.05]
 EYE, TARGET, YFOV_DEG = [0.0, 0.85, 2.25], [0.0, 0.6, -0.5], 52.0
 APERTURE = 0.04                        # lens radius (m): depth of field in showcase.bake-options
+# Light strengths per variant. The spot's intensity is in candela (KHR_lights_punctual); photonflow
+# reads a point light's colour as W/sr (docs/SCENES.md, "Lights"), and these values assume the same
+# 1 cd -> 1 W/sr for spots: about 1 W/m^2 on the spheres, half the ceiling light's irradiance on
+# the floor. An importer that converts photometric units (/683 lm/W) needs them scaled.
+EMISSIVE_STRENGTH = {"showcase": 15.0, "showcase-caustics": 1.0}
+SPOT_INTENSITY = {"showcase": 4.0, "showcase-caustics": 12.0}
 
 WHITE, RED, GREEN = [0.725, 0.71, 0.68], [0.63, 0.065, 0.05], [0.14, 0.45, 0.091]
 
@@ -408,7 +414,7 @@ def build(variant):
         pbr("fence", [1, 1, 1], 0.0, 0.9, alphaMode="MASK", alphaCutoff=0.5, doubleSided=True),
         pbr("ceiling light", [0.8, 0.8, 0.8], 0.0, 1.0, emissiveFactor=[1.0, 0.85, 0.65],
             extensions={"KHR_materials_emissive_strength": {
-                "emissiveStrength": 15.0 if variant == "showcase" else 1.0}}),
+                "emissiveStrength": EMISSIVE_STRENGTH[variant]}}),
     ]
     MAT = {m["name"]: i for i, m in enumerate(materials)}
     materials[MAT["floor tiles"]]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
@@ -449,7 +455,6 @@ def build(variant):
            translation=[num(c) for c in BOX_CENTER],
            rotation=[0.0, num(math.sin(yaw / 2)), 0.0, num(math.cos(yaw / 2))])
 
-    spot_intensity = 4.0 if variant == "showcase" else 12.0
     nodes.append({"name": "spot light", "translation": SPOT_POS,
                   "rotation": look_rotation(sub(SPOT_AIM, SPOT_POS), [0, 1, 0]),
                   "extensions": {"KHR_lights_punctual": {"light": 0}}})
@@ -468,7 +473,7 @@ def build(variant):
             "zfar": 20.0}}],
         "extensions": {"KHR_lights_punctual": {"lights": [{
             "name": "spot light", "type": "spot", "color": [1.0, 0.95, 0.85],
-            "intensity": spot_intensity,
+            "intensity": SPOT_INTENSITY[variant],
             "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.45}}]}},
         "meshes": meshes,
         "materials": materials,
