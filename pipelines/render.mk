@@ -27,7 +27,7 @@
 # DIRECT (photons | shadow-rays), RADIUS (0 = automatic), METHOD (grid | flann on DEVICE=cpu; an
 # OpenCL gather of gather_method.h, e.g. grid-kmeans, with DEVICE=opencl), DEVICE (cpu | opencl |
 # auto), MAX_BINS, WG (work-group size of the clusters), EXPOSURE, BAKE_FLAGS (extra scene-bake
-# options), THREADS. The clustered OpenCL methods add the cluster stage to the DAG (clusters.h5).
+# options, after the scene's own NAME.bake-options file: pipelines/scene.mk), THREADS. The clustered OpenCL methods add the cluster stage to the DAG (clusters.h5).
 BIN        ?= build/bin
 SCENE      ?= cornell-box
 OUT        ?= out
@@ -62,7 +62,7 @@ ifeq ($(SCENE_FILE),)
 $(error no file '$(SCENE)' and no scene named '$(SCENE)' in data/ (looked for .dae .obj .gltf .glb .ply); give SCENE=path/to/file or a name in data/)
 endif
 
-BAKE_P  := --width $(WIDTH) --height $(HEIGHT) $(BAKE_FLAGS)
+BAKE_P  := --width $(WIDTH) --height $(HEIGHT) $(SCENE_BAKE_OPTIONS) $(BAKE_FLAGS)
 EYE_P   := --spp $(SPP) --direct $(DIRECT) --radius $(RADIUS) --seed $(SEED)
 PHOT_P  := --passes $(PASSES) --photons $(PHOTONS) --seed $(SEED)
 GRID_P  := --max-bins $(MAX_BINS)
