@@ -59,6 +59,10 @@ struct Scene {
   std::vector<std::string> texture_names;  // the image file, or "<scene>#<n>" for embedded ones
   std::vector<int32_t> material_texture;
   std::vector<TriangleUV> uvs;
+  // Metallic-roughness textures (format version 5; glTF metallicRoughnessTexture: B = metallic,
+  // G = roughness, linear): each material's texture in the same table as the base-colour ones
+  // (−1 none; empty = none for every material). Read only for PF_MAT_PBR materials.
+  std::vector<int32_t> material_mr_texture;
   std::string scene_id;            // SHA-256 of the baked content (see compute_scene_id)
   std::string source;              // path of the file it was baked from
 
@@ -97,6 +101,11 @@ struct Scene {
   // Base-colour texture of material `material`, −1 for none.
   int texture_of(int material) const {
     return size_t(material) < material_texture.size() ? material_texture[size_t(material)] : -1;
+  }
+  // Metallic-roughness texture of material `material`, −1 for none.
+  int mr_texture_of(int material) const {
+    return size_t(material) < material_mr_texture.size() ? material_mr_texture[size_t(material)]
+                                                         : -1;
   }
   // The texture factor of a diffuse colour at barycentrics (u, v) (weights of v1 and v2, as Hit
   // gives them) of triangle `tri`, whose material's texture is `texture` (≥ 0): the bilinear texel
