@@ -715,3 +715,30 @@ TEST_CASE("scene.h5: NaN, negative or above-1 factors and PBR fields on other ty
     CHECK_FALSE(std::filesystem::exists(out));
   }
 }
+
+TEST_CASE("tests/data/pbr.gltf, the example scene of make_pbr_gltf.py, bakes its metallic-roughness materials",
+          "[pbr_import]") {
+  BakeReport report;
+  BakeOptions o;
+  o.input = test::source_dir() + "/tests/data/pbr.gltf";
+  const Scene s = bake_scene(o, report);
+  CHECK(report.warnings.empty());
+  CHECK(material(s, "floor").type == PF_MAT_DIFFUSE);
+  CHECK(material(s, "gold").type == PF_MAT_PBR);
+  CHECK(material(s, "gold").metallic == 1.f);
+  const pf_material& glass = material(s, "rough_glass");
+  CHECK(glass.type == PF_MAT_PBR);
+  CHECK(glass.transmission == 1.f);
+  CHECK(glass.ior == 1.5f);
+  const size_t t = material_index(s, "textured");
+  CHECK(s.materials[t].type == PF_MAT_PBR);
+  const int mr = s.mr_texture_of(int(t));
+  REQUIRE(mr >= 0);
+  REQUIRE(s.texture_of(int(t)) >= 0);
+  CHECK(s.texture_of(int(t)) != mr);
+  // Its checker's texel (0, 0): B 0, G 230 (linear) — a rough dielectric square.
+  const size_t at = 4 * size_t(s.textures[size_t(mr)].offset);
+  CHECK(s.texels[at + 2] == 0.f);
+  CHECK(s.texels[at + 1] == 230.f / 255.f);
+  CHECK(report.camera_from_file);
+}
