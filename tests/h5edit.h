@@ -103,7 +103,8 @@ inline void set_double_attr(const std::string& file, const std::string& obj,
 }
 
 // Recomputes the scene_id of a scene.h5 from its triangles, materials, lights and camera (and its
-// textures, texels, materials' textures and UVs where it has textures)
+// textures, texels, materials' textures and UVs where it has textures; the metallic-roughness
+// textures where some material is PF_MAT_PBR)
 // (docs/FORMATS.md; Scene::compute_scene_id). Where a field cannot be read (an edit removed it),
 // the id is left as it is.
 inline void refresh_scene_id(const std::string& file) {
@@ -140,6 +141,10 @@ inline void refresh_scene_id(const std::string& file) {
         if (!s.uvs.empty()) std::memcpy(s.uvs.data(), uv.data(), s.uvs.size() * sizeof(TriangleUV));
       }
     }
+    // Format version 5: the metallic-roughness textures (compute_scene_id covers them where some
+    // material is PF_MAT_PBR).
+    if (H5Lexists(f.get(), "/materials/metallic_roughness_texture", H5P_DEFAULT) > 0)
+      read("/materials/metallic_roughness_texture", H5T_NATIVE_INT32, s.material_mr_texture);
   }
   s.compute_scene_id();
   set_string_attr(file, "/", "scene_id", s.scene_id);

@@ -13,10 +13,12 @@
 namespace pf {
 
 constexpr const char* kSceneFormat = "photonflow.scene";
-// 4: the thin-lens camera (camera aperture, focus_distance); 3: base-colour textures (textures/*,
-// materials/texture, geometry/uvs); 2: names as fixed-length strings; 1: variable-length names.
-// Versions 1 to 3 are still read (pinhole camera; versions 1 and 2 without textures).
-constexpr int kSceneFormatVersion = 4;
+// 5: metallic-roughness materials (PF_MAT_PBR; materials metallic, roughness, transmission;
+// materials/metallic_roughness_texture); 4: the thin-lens camera (camera aperture,
+// focus_distance); 3: base-colour textures (textures/*, materials/texture, geometry/uvs); 2: names
+// as fixed-length strings; 1: variable-length names. Versions 1 to 4 are still read (no PBR
+// fields: read as 0; versions 1-3 a pinhole camera; versions 1 and 2 without textures).
+constexpr int kSceneFormatVersion = 5;
 
 // Largest side of a texture, and most texels of all of a scene's textures together (each texel is
 // 4 floats: 2^26 texels are 1 GiB in memory and in scene.h5). scene-bake refuses a larger image,
@@ -59,6 +61,12 @@ struct Scene {
   std::vector<std::string> texture_names;  // the image file, or "<scene>#<n>" for embedded ones
   std::vector<int32_t> material_texture;
   std::vector<TriangleUV> uvs;
+  // Metallic-roughness textures (format version 5; glTF metallicRoughnessTexture: B = metallic,
+  // G = roughness, linear): each material's texture in the same table as the base-colour ones
+  // (−1 none; empty = none for every material). Read only for PF_MAT_PBR materials (validate_scene
+  // refuses one on another type). Its texels are stored linear (not sRGB-decoded): an image used
+  // as colour and as metallic-roughness is two textures.
+  std::vector<int32_t> material_mr_texture;
   std::string scene_id;            // SHA-256 of the baked content (see compute_scene_id)
   std::string source;              // path of the file it was baked from
 
@@ -97,6 +105,17 @@ struct Scene {
   // Base-colour texture of material `material`, −1 for none.
   int texture_of(int material) const {
     return size_t(material) < material_texture.size() ? material_texture[size_t(material)] : -1;
+  }
+  // Metallic-roughness texture of material `material`, −1 for none.
+  int mr_texture_of(int material) const {
+    return size_t(material) < material_mr_texture.size() ? material_mr_texture[size_t(material)]
+                                                         : -1;
+  }
+  // Whether some material is PF_MAT_PBR (format version 5): the scene id covers the
+  // metallic-roughness fields and materials/metallic_roughness_texture only then.
+  bool has_pbr() const {
+    return std::any_of(materials.begin(), materials.end(),
+                       [](const pf_material& m) { return m.type == PF_MAT_PBR; });
   }
   // The texture factor of a diffuse colour at barycentrics (u, v) (weights of v1 and v2, as Hit
   // gives them) of triangle `tri`, whose material's texture is `texture` (≥ 0): the bilinear texel
@@ -153,6 +172,7 @@ namespace h5 { class Compound; }
 const h5::Compound& h5_type_triangle();
 const h5::Compound& h5_type_hh_triangle();
 const h5::Compound& h5_type_material();
+const h5::Compound& h5_type_material_v4();  // format versions 1-4: no metallic-roughness fields
 const h5::Compound& h5_type_light();
 const h5::Compound& h5_type_camera();
 const h5::Compound& h5_type_camera_pinhole();  // format versions 1-3: no lens fields

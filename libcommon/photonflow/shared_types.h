@@ -29,13 +29,23 @@ typedef float pf_float;
 #define PF_MAT_GLASS 2   /* smooth dielectric with Fresnel, color = transmittance tint, ior */
 #define PF_MAT_EMITTER 3 /* one-sided area emitter along the geometric normal, emission = radiance;
                             color = albedo of the (diffuse) surface under the emitter */
+#define PF_MAT_PBR 4     /* glTF 2.0 metallic-roughness BSDF (material/bsdf_shared.h): color =
+                            baseColorFactor (times the base-colour texture), metallic, roughness
+                            (times the metallic-roughness texture's B and G), transmission and
+                            ior (KHR_materials_transmission / _ior); non-delta, so photons are
+                            stored on it and visible points sit on it (scene format version 5) */
 
-/* A material. Units: color dimensionless in [0,1]; emission radiance W/(sr m^2) per channel. */
+/* A material. Units: color dimensionless in [0,1]; emission radiance W/(sr m^2) per channel.
+ * metallic, roughness and transmission are read only for PF_MAT_PBR (0 for every other type);
+ * scene format versions 1-4 have no such fields and read them as 0. */
 typedef struct {
-  pf_int type;          /* PF_MAT_* */
-  pf_float ior;         /* index of refraction (glass only; 1 otherwise) */
-  pf_float color[3];    /* albedo / reflectance / transmittance */
-  pf_float emission[3]; /* radiance of an emitter, 0 otherwise */
+  pf_int type;            /* PF_MAT_* */
+  pf_float ior;           /* index of refraction (glass and PBR; 1 otherwise) */
+  pf_float color[3];      /* albedo / reflectance / transmittance / PBR base colour */
+  pf_float emission[3];   /* radiance of an emitter, 0 otherwise */
+  pf_float metallic;      /* PF_MAT_PBR: glTF metallicFactor, [0,1] */
+  pf_float roughness;     /* PF_MAT_PBR: glTF roughnessFactor (perceptual; alpha = roughness^2) */
+  pf_float transmission;  /* PF_MAT_PBR: KHR_materials_transmission factor, [0,1] */
 } pf_material;
 
 /* A scene triangle in world space. Winding v0→v1→v2 counter-clockwise seen from the front: the
@@ -205,7 +215,7 @@ typedef struct {
 } pf_cluster;
 
 #ifndef __OPENCL_VERSION__
-static_assert(sizeof(pf_material) == 32, "pf_material layout");
+static_assert(sizeof(pf_material) == 44, "pf_material layout");
 static_assert(sizeof(pf_triangle) == 80, "pf_triangle layout");
 static_assert(sizeof(pf_hh_triangle) == 48, "pf_hh_triangle layout");
 static_assert(sizeof(pf_kd_node) == 72, "pf_kd_node layout");

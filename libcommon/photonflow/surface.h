@@ -1,5 +1,6 @@
 // surface.h — what a ray hit: position, normals, side and material, and safe ray offsets.
 #pragma once
+#include "photonflow/material/bsdf_shared.h"
 #include "photonflow/raycast.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
@@ -40,6 +41,25 @@ inline SurfaceHit surface_at(const Scene& s, const Ray& ray, const Hit& h) {
 // The diffuse colour at a hit (scene.h diffuse_color: m.color × the base-colour texture there).
 inline Vec3 diffuse_color(const Scene& s, const pf_material& m, const SurfaceHit& sh) {
   return diffuse_color(s, m, sh.material, sh.tri, sh.u, sh.v);
+}
+
+// The BSDF parameters of a PF_MAT_PBR material at a hit (material/bsdf_shared.h): the glTF
+// factors times the textures there (spec 3.9.2: baseColor = factor × sRGB-decoded texture,
+// metallic = factor × texture.B, roughness = factor × texture.G).
+inline pf_bsdf_params bsdf_params_at(const Scene& s, const pf_material& m, const SurfaceHit& sh) {
+  pf_bsdf_params p;
+  diffuse_color(s, m, sh).store(p.base_color);
+  p.metallic = m.metallic;
+  p.roughness = m.roughness;
+  p.transmission = m.transmission;
+  p.ior = m.ior;
+  const int t = s.mr_texture_of(sh.material);
+  if (t >= 0) {
+    const Vec3 mr = s.texture_value(t, size_t(sh.tri), sh.u, sh.v);
+    p.metallic *= mr.z;
+    p.roughness *= mr.y;
+  }
+  return p;
 }
 
 // Offset of new ray origins from a surface, relative to the scene size, to avoid self-hits.

@@ -24,14 +24,15 @@ const char* material_type_name(int type) {
     case PF_MAT_MIRROR: return "mirror";
     case PF_MAT_GLASS: return "glass";
     case PF_MAT_EMITTER: return "emitter";
+    case PF_MAT_PBR: return "metallic-roughness";
     default: return "unknown";
   }
 }
 
 void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::string& out) {
-  int by_type[4] = {0, 0, 0, 0};
+  int by_type[5] = {0, 0, 0, 0, 0};
   for (auto& m : s.materials)
-    if (m.type >= 0 && m.type < 4) ++by_type[m.type];
+    if (m.type >= 0 && m.type <= PF_MAT_PBR) ++by_type[m.type];
   int area = 0, point = 0;
   double power = 0;
   for (auto& l : s.lights) {
@@ -47,12 +48,18 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
   std::printf("  meshes     %zu\n", s.mesh_names.size());
   std::printf("  materials  %zu:", s.materials.size());
   for (int t = 0; t < 4; ++t) std::printf(" %d %s", by_type[t], material_type_name(t));
+  // glTF metallic-roughness (format version 5): named only where the scene has some.
+  if (by_type[PF_MAT_PBR])
+    std::printf(" %d %s", by_type[PF_MAT_PBR], material_type_name(PF_MAT_PBR));
   if (!s.textures.empty()) {
     size_t textured = 0;
     for (size_t m = 0; m < s.materials.size(); ++m) textured += s.texture_of(int(m)) >= 0;
     std::printf("\n  textures   %zu (%zu texels, %.1f MiB), %zu textured materials",
                 s.textures.size(), s.texels.size() / 4,
                 double(s.texels.size() * sizeof(float)) / double(1 << 20), textured);
+    size_t mr = 0;
+    for (size_t m = 0; m < s.materials.size(); ++m) mr += s.mr_texture_of(int(m)) >= 0;
+    if (mr) std::printf(", %zu with a metallic-roughness texture", mr);
   }
   std::printf("\n  lights     %zu (%d area, %d point), power %.4g W (luminance)\n",
               s.lights.size(), area, point, power);

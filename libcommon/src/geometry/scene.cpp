@@ -94,7 +94,17 @@ void Scene::compute_scene_id() {
     if (n) h.update(v.data(), n * sizeof(v[0]));
   };
   feed(triangles);
-  feed(materials);
+  // Materials: the fields of format versions 1-4 (the first 32 bytes of each pf_material, the
+  // bytes this hashed before version 5 grew the struct), so that a scene without a PBR material
+  // keeps its id; the metallic-roughness fields (validate_scene: 0 on every other type) and
+  // materials/metallic_roughness_texture only when some material is PF_MAT_PBR.
+  constexpr size_t kLegacyMaterialBytes = offsetof(pf_material, metallic);
+  static_assert(kLegacyMaterialBytes == 32, "pf_material: the version 1-4 fields come first");
+  {
+    const uint64_t n = materials.size();
+    h.update(&n, sizeof n);
+    for (const pf_material& m : materials) h.update(&m, kLegacyMaterialBytes);
+  }
   feed(lights);
   // The pinhole fields always; the lens only when there is one, so that a pinhole scene keeps
   // the id it had before format version 4 added the lens.
@@ -110,6 +120,15 @@ void Scene::compute_scene_id() {
     feed(texels);
     feed(material_texture);
     feed(uvs);
+  }
+  if (has_pbr()) {
+    for (const pf_material& m : materials) {
+      const float mr[3] = {m.metallic, m.roughness, m.transmission};
+      h.update(mr, sizeof mr);
+    }
+    std::vector<int32_t> mr_texture = material_mr_texture;
+    mr_texture.resize(materials.size(), -1);
+    feed(mr_texture);
   }
   scene_id = h.hex();
 }
@@ -153,13 +172,28 @@ const h5::Compound& h5_type_hh_triangle() {
   return t;
 }
 
+namespace {
+// The material's fields, with the metallic-roughness ones (format version 5) or without
+// (versions 1-4: they read as the 0 the vector was made with).
+h5::Compound material_compound(bool pbr) {
+  h5::Compound c(sizeof(pf_material));
+  c.PF_I32(pf_material, type).PF_F32(pf_material, ior, 1);
+  c.PF_F32(pf_material, color, 3).PF_F32(pf_material, emission, 3);
+  if (pbr) {
+    c.PF_F32(pf_material, metallic, 1).PF_F32(pf_material, roughness, 1);
+    c.PF_F32(pf_material, transmission, 1);
+  }
+  return c;
+}
+}  // namespace
+
 const h5::Compound& h5_type_material() {
-  static const h5::Compound t = [] {
-    h5::Compound c(sizeof(pf_material));
-    c.PF_I32(pf_material, type).PF_F32(pf_material, ior, 1);
-    c.PF_F32(pf_material, color, 3).PF_F32(pf_material, emission, 3);
-    return c;
-  }();
+  static const h5::Compound t = material_compound(true);
+  return t;
+}
+
+const h5::Compound& h5_type_material_v4() {
+  static const h5::Compound t = material_compound(false);
   return t;
 }
 
@@ -306,6 +340,28 @@ void check_scene_values(const Scene& s, const Validator& v) {
     v.in_range(Name(M, i, "ior"), &m.ior, 1, 1.0, 1000.0);
     v.in_range(Name(M, i, "color"), m.color, 3, 0.0, 1.0);
     v.in_range(Name(M, i, "emission"), m.emission, 3, 0.0, kMaxValue);
+    // Metallic-roughness (format version 5, material/bsdf_shared.h): factors in [0, 1] on a PBR
+    // material, and an ior above 1 where it transmits (ior 1 is index-matched: the surface would
+    // pass light straight through, a delta the BSDF does not represent); 0 on every other type.
+    const struct {
+      const char* name;
+      float value;
+    } mr[3] = {{"metallic", m.metallic}, {"roughness", m.roughness},
+               {"transmission", m.transmission}};
+    for (const auto& f : mr) {
+      if (m.type == PF_MAT_PBR)
+        v.in_range(Name(M, i, f.name), &f.value, 1, 0.0, 1.0);
+      else if (f.value != 0.f)
+        v.fail(Validator::element(M, i, f.name) + " = " + value_text(f.value) +
+               " on a material of type " + std::to_string(m.type) +
+               ", which has none (only PF_MAT_PBR, type " + std::to_string(PF_MAT_PBR) +
+               ", reads it; it must be 0)");
+    }
+    if (m.type == PF_MAT_PBR && m.transmission > 0.f && !(m.ior > 1.f))
+      v.fail(Validator::element(M, i, "ior") + " = " + value_text(m.ior) +
+             " with transmission " + value_text(m.transmission) +
+             ": a transmitting PBR material needs an ior above 1 (ior 1 is index-matched, "
+             "material/bsdf_shared.h)");
   }
   // Lights: values, then the whole table and its CDF against the ones derived from the triangles,
   // materials and point lights (Scene::compute_light_cdf), which the scene id does not cover.
@@ -468,6 +524,21 @@ void check_scene_textures(const Scene& s, const Validator& v) {
     v.int_in_range(Name(M, i), s.material_texture[i], -1, int64_t(s.textures.size()) - 1);
     textured = textured || s.material_texture[i] >= 0;
   }
+  // Format version 5: the metallic-roughness textures, in the same table (PF_MAT_PBR only).
+  if (!s.material_mr_texture.empty() && s.material_mr_texture.size() != s.materials.size())
+    v.fail("materials/metallic_roughness_texture holds " +
+           std::to_string(s.material_mr_texture.size()) + " entries for " +
+           std::to_string(s.materials.size()) + " materials");
+  const std::string R = "materials/metallic_roughness_texture";
+  for (size_t i = 0; i < s.material_mr_texture.size(); ++i) {
+    const int32_t t = s.material_mr_texture[i];
+    v.int_in_range(Name(R, i), t, -1, int64_t(s.textures.size()) - 1);
+    if (t >= 0 && s.materials[i].type != PF_MAT_PBR)
+      v.fail(Validator::element(R, i) + " = " + std::to_string(t) + " on a material of type " +
+             std::to_string(s.materials[i].type) + " (only PF_MAT_PBR, type " +
+             std::to_string(PF_MAT_PBR) + ", has a metallic-roughness texture; it must be -1)");
+    textured = textured || t >= 0;
+  }
   const std::string U = "geometry/uvs";
   if (!textured && !s.uvs.empty())
     v.fail(U + " is present but no material has a texture");
@@ -499,8 +570,11 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
   w.attr("/geometry", "bounds_hi", std::vector<double>{s.bounds.hi.x, s.bounds.hi.y, s.bounds.hi.z});
 
   w.write("/materials/materials", h5_type_material(), s.materials);
-  w.describe("/materials/materials", "color: 1, emission: W/(sr m^2)",
-             "type 0 diffuse, 1 mirror, 2 glass, 3 emitter");
+  w.describe("/materials/materials", "color: 1, emission: W/(sr m^2), metallic, roughness, "
+             "transmission: 1",
+             "type 0 diffuse, 1 mirror, 2 glass, 3 emitter, 4 glTF metallic-roughness (PBR); "
+             "metallic, roughness (perceptual, alpha = roughness^2), transmission: PBR only, 0 "
+             "otherwise");
   w.write_strings("/materials/names", s.material_names);
 
   // Format version 3: the materials' textures always (−1 = none), the texture datasets and the
@@ -509,6 +583,13 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
   material_texture.resize(s.materials.size(), -1);
   w.write("/materials/texture", material_texture);
   w.describe("/materials/texture", "", "base-colour texture of each material (textures/textures), -1 = none");
+  // Format version 5: the metallic-roughness textures always (−1 = none), like materials/texture.
+  std::vector<int32_t> mr_texture = s.material_mr_texture;
+  mr_texture.resize(s.materials.size(), -1);
+  w.write("/materials/metallic_roughness_texture", mr_texture);
+  w.describe("/materials/metallic_roughness_texture", "",
+             "metallic-roughness texture of each PBR material (textures/textures, linear texels: "
+             "B = metallic, G = roughness factors), -1 = none");
   if (!s.textures.empty()) {
     w.write("/textures/textures", h5_type_texture(), s.textures);
     w.describe("/textures/textures", "texels",
@@ -576,7 +657,7 @@ void validate_scene(const Scene& s, const std::string& path) {
              ", the scene has " + std::to_string(s.mesh_names.size()) + " meshes)");
   }
   for (size_t i = 0; i < s.materials.size(); ++i)
-    if (s.materials[i].type < PF_MAT_DIFFUSE || s.materials[i].type > PF_MAT_EMITTER)
+    if (s.materials[i].type < PF_MAT_DIFFUSE || s.materials[i].type > PF_MAT_PBR)
       v.fail(Validator::element("materials/materials", i) + ": a material has unknown type " +
              std::to_string(s.materials[i].type));
   for (size_t i = 0; i < s.lights.size(); ++i) {
@@ -609,7 +690,9 @@ Scene load_scene(const std::string& path) {
   s.triangles = r.read<pf_triangle>("/geometry/triangles", h5_type_triangle());
   s.hh = r.read<pf_hh_triangle>("/geometry/hh", h5_type_hh_triangle());
   s.mesh_names = r.read_strings("/geometry/mesh_names");
-  s.materials = r.read<pf_material>("/materials/materials", h5_type_material());
+  // Format version 5 added the metallic-roughness fields; older files read them as 0.
+  s.materials = r.read<pf_material>("/materials/materials",
+                                    r.version() >= 5 ? h5_type_material() : h5_type_material_v4());
   s.material_names = r.read_strings("/materials/names");
   s.lights = r.read<pf_light>("/lights/lights", h5_type_light());
   s.light_cdf = r.read<float>("/lights/cdf");
@@ -627,6 +710,8 @@ Scene load_scene(const std::string& path) {
   s.kd.build_seconds = r.attr_double("/kdtree", "build_seconds");
   if (r.version() >= 3) {  // textures (versions 1 and 2 have none)
     s.material_texture = r.read<int32_t>("/materials/texture");
+    if (r.version() >= 5)
+      s.material_mr_texture = r.read<int32_t>("/materials/metallic_roughness_texture");
     const std::vector<std::string> root = r.children("/");
     if (std::find(root.begin(), root.end(), "textures") != root.end()) {
       s.textures = r.read<pf_texture>("/textures/textures", h5_type_texture());

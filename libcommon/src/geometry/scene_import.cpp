@@ -22,25 +22,7 @@
 // inverse transpose of its 3×3 part. A transform with a negative determinant (a mirror) reverses
 // the winding, so v1/v2 are swapped to keep the geometric normal on the front (CCW) side.
 //
-// Material mapping (same table in docs/SCENES.md). Values are read through assimp's keys:
-//   Kd = AI_MATKEY_COLOR_DIFFUSE, Ks = AI_MATKEY_COLOR_SPECULAR, Ke = AI_MATKEY_COLOR_EMISSIVE,
-//   Kr = AI_MATKEY_COLOR_REFLECTIVE × AI_MATKEY_REFLECTIVITY (COLLADA <reflective>,
-//        <reflectivity>),
-//   d  = AI_MATKEY_OPACITY (OBJ `d`, COLLADA <transparent> × <transparency>),
-//   Ni = AI_MATKEY_REFRACTI,
-//   illum = AI_MATKEY_OBJ_ILLUM ("$mat.illum", OBJ only: assimp 5.2.5 folds illum 0..2 into
-//           AI_MATKEY_SHADING_MODEL and keeps the original number under this key; checked by
-//           experiment with illum 1, 3, 5 and 7).
-// The first rule that matches decides:
-//   1. max(Ke) > 0                                     → EMITTER, emission = Ke, color = Kd
-//   2. illum 4, 6 or 7, or d < 1                       → GLASS, ior = Ni (1.5 if Ni ≤ 1), color = 1
-//   3. illum 3 or 5, or Kd black and Kr or Ks not black → MIRROR, color = Kr, else Ks, else 1
-//   4. otherwise                                       → DIFFUSE, color = Kd
-// Diffuse albedo (also the emitter's) is clamped per channel to [0, kMaxAlbedo] with a warning;
-// mirror reflectance to [0, 1]. AI_MATKEY_SHADING_MODEL is not consulted: lambert, phong and blinn
-// all reduce to "diffuse unless the colours say mirror", and no shading model means glass.
-// Note: assimp's OBJ loader fills a missing Kd with 0.6 and COLLADA's a missing <specular> with
-// 0.4, so an OBJ mirror needs `illum 3` or an explicit `Kd 0 0 0`.
+// Materials and textures: material_import.cpp (the mapping table, also in docs/SCENES.md).
 //
 // Camera. assimp's camera.h documents mHorizontalFOV as the half angle, but the loaders store the
 // full angle: the COLLADA loader copies <xfov> (the full horizontal angle of the COLLADA spec)
@@ -54,9 +36,7 @@
 #include "photonflow/scene_import.h"
 
 #include <assimp/DefaultIOSystem.h>
-#include <assimp/GltfMaterial.h>
 #include <assimp/IOStream.hpp>
-#include <assimp/ObjMaterial.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <sys/stat.h>
@@ -67,30 +47,25 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <functional>
-#include <map>
 #include <memory>
 #include <new>
+#include <optional>
 #include <set>
 #include <sstream>
-#include <tuple>
 #include <type_traits>
 
 #include "photonflow/camera.h"
 #include "photonflow/error.h"
 #include "photonflow/isolate.h"
-#include "photonflow/material/texture_shared.h"
 #include "photonflow/memory_cap.h"
 #include "photonflow/provenance.h"
-#include "photonflow/texture_image.h"
+#include "material_import.h"
 
 namespace pf {
 
 namespace {
 
-constexpr float kMaxAlbedo = 0.99f;        // diffuse albedo must stay below 1 (energy)
-constexpr float kDefaultGlassIor = 1.5f;   // glass whose file gives no usable Ni
 constexpr float kMinSliver = 1e-7f;        // 2·area / longest_edge² below this = zero area
 constexpr float kPi = 3.14159265358979323846f;
 
@@ -101,25 +76,13 @@ std::string one_line(std::string s) {
   return s;
 }
 
-std::string fmt_float(float f) {
-  std::ostringstream os;
-  os << f;
-  return os.str();
-}
-
-std::string fmt_vec(const Vec3& v) {
-  std::ostringstream os;
-  os << v.x << "," << v.y << "," << v.z;
-  return os.str();
-}
-
-Vec3 to_vec(const aiVector3D& v) { return {v.x, v.y, v.z}; }
-Vec3 to_vec(const aiColor3D& c) { return {c.r, c.g, c.b}; }
-float max3(const Vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
-bool black(const Vec3& v) { return max3(v) <= 0.f; }
-Vec3 clamp3(const Vec3& v, float hi) {
-  return {std::clamp(v.x, 0.f, hi), std::clamp(v.y, 0.f, hi), std::clamp(v.z, 0.f, hi)};
-}
+using import::black;
+using import::clamp3;
+using import::fmt_float;
+using import::fmt_vec;
+using import::ImportedMaterial;
+using import::TextureLoader;
+using import::to_vec;
 
 // ".dae" for "dir/scene.DAE"; "" when the name has no extension.
 std::string lower_extension(const std::string& path) {
@@ -241,232 +204,6 @@ aiMatrix4x4 global_transform(const aiNode* node) {
   return m;
 }
 
-Vec3 get_color(const aiMaterial& m, const char* key, unsigned type, unsigned idx, Vec3 dflt) {
-  aiColor3D c;
-  return m.Get(key, type, idx, c) == aiReturn_SUCCESS ? to_vec(c) : dflt;
-}
-float get_float(const aiMaterial& m, const char* key, unsigned type, unsigned idx, float dflt) {
-  float f = 0;
-  return m.Get(key, type, idx, f) == aiReturn_SUCCESS ? f : dflt;
-}
-
-// Converts one assimp material by the rules at the top of this file.
-// `textured`: the material has a base-colour texture (then Kd is its colour factor; a factor of
-// up to 1, glTF's default, becomes kMaxAlbedo without a warning: texels reach 1 and the product
-// must stay below 1). A COLLADA <diffuse> is a colour or a texture, never both: assimp 5.2.5
-// gives a textured one the colour 1 (test_textures checks it).
-pf_material convert_material(const aiMaterial& am, const std::string& name,
-                             const std::string& file, BakeReport& report, bool textured) {
-  const Vec3 kd = get_color(am, AI_MATKEY_COLOR_DIFFUSE, Vec3(0, 0, 0));
-  const Vec3 ks = get_color(am, AI_MATKEY_COLOR_SPECULAR, Vec3(0, 0, 0));
-  const Vec3 ke = get_color(am, AI_MATKEY_COLOR_EMISSIVE, Vec3(0, 0, 0));
-  const Vec3 kr = get_color(am, AI_MATKEY_COLOR_REFLECTIVE, Vec3(0, 0, 0)) *
-                  get_float(am, AI_MATKEY_REFLECTIVITY, 0.f);
-  const float opacity = get_float(am, AI_MATKEY_OPACITY, 1.f);
-  const float ni = get_float(am, AI_MATKEY_REFRACTI, 1.f);
-  int illum = -1;
-  am.Get(AI_MATKEY_OBJ_ILLUM, illum);
-
-  for (const Vec3& c : {kd, ks, ke, kr})
-    if (!finite(c))
-      throw input_error(file, "material '" + name + "' has a non-finite colour",
-                        "fix the material's numbers");
-  if (!std::isfinite(opacity) || !std::isfinite(ni))
-    throw input_error(file, "material '" + name + "' has a non-finite opacity or IOR",
-                      "fix the material's numbers");
-
-  auto albedo = [&](const Vec3& c) {
-    Vec3 a = clamp3(c, kMaxAlbedo);
-    const bool quiet = textured && max3(c) <= 1.f;
-    if (!quiet && (max3(c) > kMaxAlbedo || c.x < 0 || c.y < 0 || c.z < 0))
-      report.warnings.push_back(file + ": material '" + name + "': albedo " + fmt_vec(c) +
-                                " clamped to " + fmt_vec(a) + " (albedo must be < 1)");
-    return a;
-  };
-
-  pf_material out{};
-  out.ior = 1.f;
-  Vec3 color(1, 1, 1);
-  if (max3(ke) > 0.f) {
-    out.type = PF_MAT_EMITTER;
-    clamp3(ke, INFINITY).store(out.emission);
-    color = albedo(kd);
-  } else if (illum == 4 || illum == 6 || illum == 7 || opacity < 1.f) {
-    out.type = PF_MAT_GLASS;
-    out.ior = ni > 1.f ? ni : kDefaultGlassIor;
-    if (!(ni > 1.f))
-      report.warnings.push_back(file + ": material '" + name + "': glass without an index of " +
-                                "refraction > 1, using " + fmt_float(kDefaultGlassIor));
-  } else if (illum == 3 || illum == 5 || (black(kd) && (!black(kr) || !black(ks)))) {
-    out.type = PF_MAT_MIRROR;
-    color = clamp3(!black(kr) ? kr : (!black(ks) ? ks : Vec3(1, 1, 1)), 1.f);
-  } else {
-    out.type = PF_MAT_DIFFUSE;
-    color = albedo(kd);
-  }
-  color.store(out.color);
-  return out;
-}
-
-// The base-colour texture a material names: glTF's baseColorTexture (assimp 5.2 gives it as
-// aiTextureType_BASE_COLOR and as DIFFUSE), OBJ's map_Kd and COLLADA's diffuse <texture> (DIFFUSE).
-struct TextureRef {
-  std::string path;          // as the file gives it: a file name, or "*N" / a name for embedded ones
-  unsigned uv_channel = 0;   // glTF texCoord (AI_MATKEY_UVWSRC)
-  int wrap_s = PF_TEX_WRAP_REPEAT, wrap_t = PF_TEX_WRAP_REPEAT;
-  int filter = PF_TEX_FILTER_BILINEAR;
-};
-
-int wrap_mode(aiTextureMapMode m) {
-  if (m == aiTextureMapMode_Clamp) return PF_TEX_WRAP_CLAMP;
-  if (m == aiTextureMapMode_Mirror) return PF_TEX_WRAP_MIRROR;
-  return PF_TEX_WRAP_REPEAT;  // wrap, decal (not modelled) or absent
-}
-
-std::optional<TextureRef> base_color_texture(const aiMaterial& am) {
-  for (aiTextureType type : {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE}) {
-    if (am.GetTextureCount(type) == 0) continue;
-    aiString path;
-    aiTextureMapping mapping = aiTextureMapping_UV;
-    unsigned uv = 0;
-    aiTextureMapMode modes[3] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap,
-                                 aiTextureMapMode_Wrap};
-    if (am.GetTexture(type, 0, &path, &mapping, &uv, nullptr, nullptr, modes) != aiReturn_SUCCESS)
-      continue;
-    if (path.length == 0) continue;
-    TextureRef r;
-    r.path = path.C_Str();
-    r.uv_channel = uv;
-    r.wrap_s = wrap_mode(modes[0]);
-    r.wrap_t = wrap_mode(modes[1]);
-    int mag = 0;
-    if (am.Get(AI_MATKEY_GLTF_MAPPINGFILTER_MAG(type, 0), mag) == aiReturn_SUCCESS && mag == 9728)
-      r.filter = PF_TEX_FILTER_NEAREST;  // GL NEAREST
-    return r;
-  }
-  return std::nullopt;
-}
-
-// Linear value of each 8-bit sRGB code (texture_shared.h's EOTF).
-const float* srgb8_table() {
-  static const auto table = [] {
-    std::vector<float> t(256);
-    for (int i = 0; i < 256; ++i) t[size_t(i)] = pf_srgb8_to_linear(i);
-    return t;
-  }();
-  return table.data();
-}
-
-// Largest texture file read (a PNG of the largest allowed image compresses to less).
-constexpr uint64_t kMaxTextureFileBytes = uint64_t(1) << 30;
-
-// The textures of one bake: image files and embedded images decoded once each into the scene's
-// texel pool, one pf_texture header per (image, wrap modes, filter).
-class TextureLoader {
- public:
-  TextureLoader(Scene& scene, BakeReport& report) : scene_(scene), report_(report) {}
-
-  // Texture index for `ref` of material `material` in scene file `file`, or −1 (with one warning
-  // line) when its file is missing. InputError for a damaged or oversized image.
-  int load(const aiScene& ai, const std::string& file, const std::string& material,
-           const TextureRef& ref) {
-    std::string key, name, bytes;
-    const aiTexture* embedded = ai.GetEmbeddedTexture(ref.path.c_str());
-    if (embedded) {
-      const int index = ai.GetEmbeddedTextureAndIndex(ref.path.c_str()).second;
-      key = "embedded:" + file + "#" + std::to_string(index);
-      name = file + "#" + std::to_string(index);
-    } else {
-      std::string rel = ref.path;
-      std::replace(rel.begin(), rel.end(), '\\', '/');  // Windows exporters
-      const size_t slash = file.find_last_of('/');
-      key = name = (rel.empty() || rel[0] == '/' || slash == std::string::npos)
-                       ? rel
-                       : file.substr(0, slash + 1) + rel;
-    }
-    // Refusals name the image and the material that uses it.
-    const std::string label = name + " (texture of material '" + material + "')";
-    auto image = images_.find(key);
-    if (image == images_.end()) {
-      const uint64_t pool = scene_.texels.size() / 4;
-      const uint64_t left = kMaxTextureTexels - pool;
-      DecodedImage img;
-      if (embedded && embedded->mHeight != 0) {  // raw BGRA8 texels
-        const uint64_t w = embedded->mWidth, h = embedded->mHeight;
-        if (w > uint64_t(kMaxTextureSide) || h > uint64_t(kMaxTextureSide) || w * h > left)
-          throw input_error(label, "embedded texture of " + std::to_string(w) + "x" +
-                                      std::to_string(h) + " texels is larger than the limit",
-                            "scale the image down");
-        img.width = int(w);
-        img.height = int(h);
-        img.rgba8.resize(size_t(w * h * 4));
-        for (size_t i = 0; i < size_t(w * h); ++i) {
-          const aiTexel& t = embedded->pcData[i];
-          img.rgba8[4 * i] = t.r;
-          img.rgba8[4 * i + 1] = t.g;
-          img.rgba8[4 * i + 2] = t.b;
-          img.rgba8[4 * i + 3] = t.a;
-        }
-      } else {
-        if (embedded) {
-          bytes.assign(reinterpret_cast<const char*>(embedded->pcData), embedded->mWidth);
-        } else {
-          struct stat st {};
-          if (stat(name.c_str(), &st) != 0 || !S_ISREG(st.st_mode) ||
-              access(name.c_str(), R_OK) != 0) {
-            report_.warnings.push_back(file + ": material '" + material + "': texture '" + name +
-                                       "' not found, using the colour factor alone");
-            return -1;
-          }
-          if (uint64_t(st.st_size) > kMaxTextureFileBytes)
-            throw input_error(label, "texture file of " + std::to_string(st.st_size) +
-                                        " bytes is larger than the limit of " +
-                                        std::to_string(kMaxTextureFileBytes),
-                              "scale the image down");
-          std::ifstream in(name, std::ios::binary);
-          bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-          if (!in.good() && !in.eof())
-            throw input_error(label, "cannot read the texture file", "check its permissions");
-        }
-        img = decode_texture_image(bytes, label, kMaxTextureSide, left);
-      }
-      // Colour map: sRGB-encoded RGB to linear, alpha as stored.
-      const float* lut = srgb8_table();
-      const size_t n = size_t(img.width) * size_t(img.height);
-      scene_.texels.reserve(scene_.texels.size() + 4 * n);
-      for (size_t i = 0; i < n; ++i) {
-        scene_.texels.push_back(lut[img.rgba8[4 * i]]);
-        scene_.texels.push_back(lut[img.rgba8[4 * i + 1]]);
-        scene_.texels.push_back(lut[img.rgba8[4 * i + 2]]);
-        scene_.texels.push_back(float(img.rgba8[4 * i + 3]) / 255.f);
-      }
-      pf_texture t{};
-      t.width = img.width;
-      t.height = img.height;
-      t.offset = int32_t(pool);
-      image = images_.emplace(key, std::make_pair(t, name)).first;
-    }
-    pf_texture t = image->second.first;
-    t.wrap_s = ref.wrap_s;
-    t.wrap_t = ref.wrap_t;
-    t.filter = ref.filter;
-    const auto header = std::make_tuple(key, t.wrap_s, t.wrap_t, t.filter);
-    auto found = headers_.find(header);
-    if (found != headers_.end()) return found->second;
-    const int index = int(scene_.textures.size());
-    scene_.textures.push_back(t);
-    scene_.texture_names.push_back(image->second.second);
-    headers_.emplace(header, index);
-    return index;
-  }
-
- private:
-  Scene& scene_;
-  BakeReport& report_;
-  std::map<std::string, std::pair<pf_texture, std::string>> images_;  // key → pool part, name
-  std::map<std::tuple<std::string, int, int, int>, int> headers_;
-};
-
 // Appends the triangles of one assimp scene to a triangle list, adding mesh names and (lazily, in
 // order of first use) materials to the Scene.
 class Flattener {
@@ -496,17 +233,14 @@ class Flattener {
       std::string name = am.GetName().C_Str();
       if (name.empty()) name = "material" + std::to_string(i);
       material_map_[i] = int(scene_.materials.size());
-      const std::optional<TextureRef> ref = base_color_texture(am);
-      const pf_material m = convert_material(am, name, file_, report_, ref.has_value());
-      int texture = -1;
-      if (ref && (m.type == PF_MAT_DIFFUSE || m.type == PF_MAT_EMITTER)) {
-        texture = textures_.load(ai_, file_, name, *ref);
-        uv_channel_[i] = ref->uv_channel;
-      }
-      scene_.materials.push_back(m);
+      const ImportedMaterial m = import::import_material(ai_, am, name, file_, textures_, report_);
+      uv_channel_[i] = m.uv_channel;
+      scene_.materials.push_back(m.material);
       scene_.material_names.push_back(name);
       scene_.material_texture.resize(scene_.materials.size(), -1);
-      scene_.material_texture.back() = texture;
+      scene_.material_texture.back() = m.texture;
+      scene_.material_mr_texture.resize(scene_.materials.size(), -1);
+      scene_.material_mr_texture.back() = m.mr_texture;
     }
     return material_map_[i];
   }
@@ -915,12 +649,15 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   for (size_t k = 0; k < options.inserts.size(); ++k)
     insert_mesh(options.inserts[k], k, report.insert_up, scene.bounds, flattener, file, ctx,
                 textures, scene, report);
-  // Every material has its texture entry (−1: the inserts' default material); UVs are kept only
-  // where some material has a texture (format version 3, docs/FORMATS.md).
+  // Every material has its texture entries (−1: the inserts' default material); UVs are kept only
+  // where some material has a texture (format version 3, docs/FORMATS.md), base-colour or
+  // metallic-roughness (version 5).
   scene.material_texture.resize(scene.materials.size(), -1);
-  if (std::none_of(scene.material_texture.begin(), scene.material_texture.end(),
-                   [](int32_t t) { return t >= 0; }))
-    scene.uvs.clear();
+  scene.material_mr_texture.resize(scene.materials.size(), -1);
+  auto some = [](const std::vector<int32_t>& v) {
+    return std::any_of(v.begin(), v.end(), [](int32_t t) { return t >= 0; });
+  };
+  if (!some(scene.material_texture) && !some(scene.material_mr_texture)) scene.uvs.clear();
 
   bool emitter = !scene.lights.empty();
   for (size_t i = 0; i < scene.triangles.size() && !emitter; ++i)
@@ -1043,6 +780,7 @@ std::string encode(const Scene& s, const BakeReport& r) {
   w.pods(s.texels);
   w.texts(s.texture_names);
   w.pods(s.material_texture);
+  w.pods(s.material_mr_texture);
   w.pods(s.uvs);
   w.pod(uint64_t(r.triangles_read));
   w.pod(uint64_t(r.degenerate_dropped));
@@ -1069,6 +807,7 @@ Scene decode(const std::string& bytes, BakeReport& r) {
   s.texels = in.pods<float>();
   s.texture_names = in.texts();
   s.material_texture = in.pods<int32_t>();
+  s.material_mr_texture = in.pods<int32_t>();
   s.uvs = in.pods<TriangleUV>();
   r.triangles_read = size_t(in.pod<uint64_t>());
   r.degenerate_dropped = size_t(in.pod<uint64_t>());

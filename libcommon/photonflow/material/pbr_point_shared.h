@@ -1,0 +1,53 @@
+/*
+ * material/pbr_point_shared.h — the BSDF at a visible point (a hitpoint) on a PF_MAT_PBR surface,
+ * as every gather evaluates it per photon, written once for the C++ host and the OpenCL C kernels
+ * (the rules of bsdf_shared.h).
+ *
+ * A hitpoint on a diffuse surface needs nothing beyond pf_hitpoint: f_r = color/π does not depend
+ * on directions and its texture factor rides in the weight. A PF_MAT_PBR surface's f depends on the
+ * photon's direction and on its textured parameters at the point, so the eye pass records one
+ * pf_pbr_point per hitpoint (a table parallel to the hitpoints, present only when the scene has a
+ * PBR material; hitpoints.h5 /hitpoints/bsdf). The gather then forms
+ *   τ += weight · Σ_p f(x, ω_o, ω_p) Φ_p                          (HJ09 eq. 10–11, thesis eq. 3.17)
+ * with ω_o = −hp.dir (towards the camera) and ω_p = −photon.dir (towards where the photon came
+ * from), both in world space, in radiance mode (pf_bsdf_eval's PF_TRANSPORT_RADIANCE).
+ *
+ * The side: pf_hitpoint.normal faces the incoming ray (as for diffuse hitpoints, so the gathers'
+ * normal tests are unchanged). A transmissive surface has sides (bsdf_shared.h: +z outside, IOR 1),
+ * so `outside` says whether the facing normal is the outside (1) or the inside (0).
+ */
+#ifndef PHOTONFLOW_MATERIAL_PBR_POINT_SHARED_H
+#define PHOTONFLOW_MATERIAL_PBR_POINT_SHARED_H
+
+#include "photonflow/material/bsdf_shared.h"
+
+#ifdef __OPENCL_VERSION__
+#pragma OPENCL FP_CONTRACT OFF
+#endif
+
+typedef struct {
+  pf_bsdf_params params; /* textures applied (surface.h bsdf_params_at) */
+  pf_int outside;        /* 1: the hitpoint's (facing) normal is the outside, 0: the inside */
+} pf_pbr_point;
+
+#ifndef __OPENCL_VERSION__
+static_assert(sizeof(pf_pbr_point) == 32, "pf_pbr_point layout");
+#endif
+
+/* f(ω_o, ω_i) at the point, rgb, radiance mode. n_facing: the hitpoint's unit normal (facing the
+ * incoming ray); wo, wi: unit world directions away from the surface. */
+PF_INLINE void pf_pbr_point_eval(const pf_pbr_point* pt, const float* n_facing, const float* wo,
+                                 const float* wi, float* f) {
+  float n[3] = {n_facing[0], n_facing[1], n_facing[2]};
+  if (!pt->outside) {
+    n[0] = -n[0];
+    n[1] = -n[1];
+    n[2] = -n[2];
+  }
+  float o[3], i[3];
+  pf_bsdf_to_local(n, wo, o);
+  pf_bsdf_to_local(n, wi, i);
+  pf_bsdf_eval(&pt->params, o, i, PF_TRANSPORT_RADIANCE, f);
+}
+
+#endif /* PHOTONFLOW_MATERIAL_PBR_POINT_SHARED_H */
