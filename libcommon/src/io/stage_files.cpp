@@ -24,21 +24,6 @@ namespace {
 constexpr int kHitpointsVersion = 2;
 constexpr const char* kHitpointBsdf = "/hitpoint_bsdf";
 
-// HDF5 record type of pf_pbr_point (pbr_point_shared.h), named fields for h5py.
-const h5::Compound& h5_type_pbr_point() {
-  static const h5::Compound t = [] {
-    h5::Compound c(sizeof(pf_pbr_point));
-    c.f32("base_color", offsetof(pf_pbr_point, params.base_color), 3);
-    c.f32("metallic", offsetof(pf_pbr_point, params.metallic));
-    c.f32("roughness", offsetof(pf_pbr_point, params.roughness));
-    c.f32("transmission", offsetof(pf_pbr_point, params.transmission));
-    c.f32("ior", offsetof(pf_pbr_point, params.ior));
-    c.i32("outside", offsetof(pf_pbr_point, outside));
-    return c;
-  }();
-  return t;
-}
-
 // The "no BSDF" entry of a hitpoint that is not on a PBR material: every byte zero.
 bool empty_pbr_point(const pf_pbr_point& b) {
   static const pf_pbr_point zero{};
@@ -251,6 +236,21 @@ void check_pass_emitted(const std::vector<uint64_t>& emitted, const Validator& v
              " is outside [1, " + std::to_string(kMaxPhotonsPerPass) + "]");
 }
 }  // namespace
+
+// HDF5 record type of pf_pbr_point (pbr_point_shared.h), named fields for h5py.
+const h5::Compound& h5_type_pbr_point() {
+  static const h5::Compound t = [] {
+    h5::Compound c(sizeof(pf_pbr_point));
+    c.f32("base_color", offsetof(pf_pbr_point, params.base_color), 3);
+    c.f32("metallic", offsetof(pf_pbr_point, params.metallic));
+    c.f32("roughness", offsetof(pf_pbr_point, params.roughness));
+    c.f32("transmission", offsetof(pf_pbr_point, params.transmission));
+    c.f32("ior", offsetof(pf_pbr_point, params.ior));
+    c.i32("outside", offsetof(pf_pbr_point, outside));
+    return c;
+  }();
+  return t;
+}
 
 const h5::Compound& h5_type_mesh_grid() {
   static const h5::Compound t = [] {
