@@ -457,28 +457,31 @@ TEST_CASE("a PBR material with metallic 0, roughness 1, transmission 0 renders a
 TEST_CASE("glossy room: SPPM, PPPM and the path tracer agree within their noise",
           "[glossy][agreement]") {
   // A closed room with a rough gold block and a plastic ball (glossy_room) or a rough glass ball,
-  // lit by a small ceiling light. Each estimator runs from 4 seeds; the means over the image and
-  // over its 3 × 3 blocks agree within 4 standard errors of the difference (estimated from the
-  // seeds' spread) plus the photon estimators' smoothing bias, measured as the change from R to
-  // R/2 in SPPM (the same seeds). Caught: photons stopped at PBR hits (the room darker), f
+  // lit by a small ceiling light. Each estimator runs from 6 seeds; the means over the image and
+  // over its 3 × 3 blocks agree within 5 standard errors of the difference (estimated from the
+  // seeds' spread: t with 5 degrees of freedom per side) plus the photon estimators' smoothing
+  // bias, measured as the change from R to R/2 in SPPM (the same seeds). (The same comparison on
+  // the all-diffuse room shows the photon estimators 1–4 % below the path tracer per block: their
+  // bias at this radius, not the BSDF's.) Caught: photons stopped at PBR hits, a gather
+  // evaluating f with a wrong ω_p, photons from the far side refused at transmissive points. Caught: photons stopped at PBR hits (the room darker), f
   // without its cosine or π, the gathers' side rule at transmissive points, NEE's MIS weight
   // without its BSDF pdf (the path tracer brighter).
   const bool glass = GENERATE(false, true);
   INFO((glass ? "rough glass ball" : "plastic ball"));
   const Scene s = glossy_room(20, 15, glass);
-  const int seeds = 4;
+  const int seeds = 6;
   std::vector<std::vector<double>> pt, sppm, pppm, sppm_half;
   for (uint32_t seed = 1; seed <= uint32_t(seeds); ++seed) {
     PathTraceOptions po;
-    po.spp = 32;
+    po.spp = 24;
     po.seed = seed;
     pt.push_back(region_means(pathtrace(s, po)));
-    RenderOptions so = render_options(Estimator::Sppm, 10, 15000, 0.04f, seed);
+    RenderOptions so = render_options(Estimator::Sppm, 8, 12000, 0.04f, seed);
     so.eye.direct = DirectMode::ShadowRays;
     sppm.push_back(region_means(render_image(s, so)));
     so.eye.radius = 0.02f;
     sppm_half.push_back(region_means(render_image(s, so)));
-    const RenderOptions qo = render_options(Estimator::Pppm, 10, 15000, 0.04f, seed);
+    const RenderOptions qo = render_options(Estimator::Pppm, 8, 12000, 0.04f, seed);
     pppm.push_back(region_means(render_image(s, qo)));
   }
   const RegionStats a = stats(pt), b = stats(sppm), c = stats(pppm), d = stats(sppm_half);
@@ -488,8 +491,8 @@ TEST_CASE("glossy room: SPPM, PPPM and the path tracer agree within their noise"
                    << b.mean[r] << " ± " << b.se[r] << ", pppm " << c.mean[r] << " ± " << c.se[r]
                    << ", sppm at R/2 " << d.mean[r] << ", bias allowance " << bias);
     CHECK(a.mean[r] > 0.0);
-    CHECK(std::fabs(a.mean[r] - b.mean[r]) <= 4 * std::hypot(a.se[r], b.se[r]) + bias);
-    CHECK(std::fabs(a.mean[r] - c.mean[r]) <= 4 * std::hypot(a.se[r], c.se[r]) + bias);
+    CHECK(std::fabs(a.mean[r] - b.mean[r]) <= 5 * std::hypot(a.se[r], b.se[r]) + bias);
+    CHECK(std::fabs(a.mean[r] - c.mean[r]) <= 5 * std::hypot(a.se[r], c.se[r]) + bias);
   }
 }
 
@@ -737,5 +740,129 @@ TEST_CASE("hitpoints.h5: /hitpoint_bsdf round-trips, bad tables are refused", "[
     CHECK(r.exit_code == 2);
     CHECK(r.err.find("transmission") != std::string::npos);
     CHECK(!std::filesystem::exists(tmp / "bad.exr"));
+  }
+}
+
+namespace {
+
+// A rough gold floor (6 × 6 at y = 0) under a small square area light (0.4 × 0.4, radiance 10,
+// facing down, at height 1.2 behind the floor's centre), the camera looking down at the floor so
+// that the light's glossy reflection lies in the image and the light itself does not.
+Scene highlight_scene(int width, int height, float roughness) {
+  Scene s;
+  s.triangles = test::quad(Vec3(-3, 0, -3), Vec3(-3, 0, 3), Vec3(3, 0, 3), Vec3(3, 0, -3), 0);
+  const float a = 0.2f, y = 1.2f, z = -1.f;
+  auto light = test::quad(Vec3(-a, y, z - a), Vec3(a, y, z - a), Vec3(a, y, z + a),
+                          Vec3(-a, y, z + a), 1);  // counter-clockwise seen from below
+  s.triangles.insert(s.triangles.end(), light.begin(), light.end());
+  s.mesh_names = {"floor", "light"};
+  pf_material e{};
+  e.type = PF_MAT_EMITTER;
+  e.ior = 1.f;
+  e.emission[0] = e.emission[1] = e.emission[2] = 10.f;
+  s.materials = {pbr_material(0.95f, 0.75f, 0.45f, 1.f, roughness), e};
+  s.material_names = {"floor", "light"};
+  s.camera = pf_camera{{0.f, 1.f, 2.f}, {0.f, 0.f, 0.f}, {0, 1, 0}, 40.f, width, height};
+  finish_scene(s);
+  return s;
+}
+
+// The image's exact mean luminance: per pixel the mean over n × n points of L(x) = ∫_light f(wo,
+// wl) L_e cos θ_x cos θ_l / d² dA by the midpoint rule on m × m cells of the light.
+double highlight_exact(const Scene& s, int n, int m) {
+  const CameraFrame cam(s.camera);
+  const pf_bsdf_params p{{s.materials[0].color[0], s.materials[0].color[1], s.materials[0].color[2]},
+                         s.materials[0].metallic, s.materials[0].roughness, 0.f, 1.5f};
+  const pf_triangle& t0 = s.triangles[2];
+  const Vec3 lo(-0.2f, 1.2f, -1.2f);
+  const double side = 0.4, le = 10.0;
+  (void)t0;
+  const float up[3] = {0, 1, 0};
+  double total = 0;
+  for (int py = 0; py < s.camera.height; ++py)
+    for (int px = 0; px < s.camera.width; ++px)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const Vec3 d = cam.direction(float(px) + (i + 0.5f) / float(n), float(py) + (j + 0.5f) / float(n));
+          if (!(d.y < 0.f)) continue;
+          const Vec3 x = cam.eye() + d * (cam.eye().y / -d.y);
+          if (std::fabs(x.x) > 3.f || std::fabs(x.z) > 3.f) continue;
+          float wo[3], o[3];
+          (-d).store(wo);
+          pf_bsdf_to_local(up, wo, o);
+          double l[3] = {0, 0, 0};
+          for (int b = 0; b < m; ++b)
+            for (int a = 0; a < m; ++a) {
+              const Vec3 q(float(lo.x + (a + 0.5) * side / m), lo.y, float(lo.z + (b + 0.5) * side / m));
+              Vec3 w = q - x;
+              const double d2 = double(dot(w, w));
+              w = w / float(std::sqrt(d2));
+              float wl[3], i3[3], f[3];
+              w.store(wl);
+              pf_bsdf_to_local(up, wl, i3);
+              pf_bsdf_eval(&p, o, i3, PF_TRANSPORT_RADIANCE, f);
+              const double g = double(w.y) * double(w.y) / d2 * (side / m) * (side / m);  // cos_x cos_l
+              for (int c = 0; c < 3; ++c) l[c] += double(f[c]) * le * g;
+            }
+          total += double(luminance(Vec3(float(l[0]), float(l[1]), float(l[2])))) / double(n * n);
+        }
+  return total / double(s.camera.width * s.camera.height);
+}
+
+double luminance_mean(const Image& img) {
+  double s = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) s += double(luminance(img.get(x, y)));
+  return s / double(img.pixel_count());
+}
+
+}  // namespace
+
+TEST_CASE("glossy highlight of an area light: the path tracer (with and without MIS), SPPM's shadow "
+          "rays and PPPM's photons converge to its integral", "[glossy][highlight]") {
+  // Direct light only (an open scene): the image mean is ∫ f L_e cos cos / d² over the light,
+  // by quadrature (two resolutions give its error). The path tracer's standard error comes from
+  // its variance layer, SPPM's and PPPM's from 8 seeds; 5 standard errors are allowed. Caught: NEE at PBR points without the MIS
+  // weight while BSDF-sampled emitter hits keep theirs (counted twice), the BSDF sample's pdf
+  // left out of the emitter's MIS weight, direct_light_pbr with cos θ at the geometric normal
+  // or without f, a PBR visible point's direct photons gathered with the wrong ω.
+  const float roughness = GENERATE(0.15f, 0.5f);
+  INFO("roughness " << roughness);
+  const Scene s = highlight_scene(16, 12, roughness);
+  const double fine = highlight_exact(s, 6, 24), coarse = highlight_exact(s, 3, 12);
+  const double quad_err = std::fabs(fine - coarse);
+  double se_of[2] = {0, 0};
+  for (MisMode mis : {MisMode::Power, MisMode::Off}) {
+    PathTraceOptions po;
+    po.spp = 256;
+    po.mis = mis;
+    const Image img = pathtrace(s, po);
+    double var = 0;
+    for (float v : img.layers.at("variance")) var += double(v);
+    const double se = std::sqrt(var) / double(img.pixel_count());
+    const double mean = luminance_mean(img);
+    INFO("path tracer, MIS " << mis_mode_name(mis) << ": " << mean << " ± " << se << ", exact "
+                             << fine << " (coarse " << coarse << ")");
+    CHECK(std::fabs(mean - fine) <= 5 * se + 2 * quad_err);
+    se_of[mis == MisMode::Power ? 0 : 1] = se;
+  }
+  // Both strategies' errors are dominated by the highlight's edges inside pixels (the pixel
+  // jitter), which MIS does not change: it must not make the estimate much noisier either.
+  CHECK(se_of[0] < 1.5 * se_of[1]);
+  for (Estimator e : {Estimator::Sppm, Estimator::Pppm}) {
+    // 8 seeds: 5 standard errors of a mean of 8 (t with 7 degrees of freedom: p ≈ 0.002).
+    const int seeds = 8;
+    std::vector<double> means;
+    for (uint32_t seed = 1; seed <= uint32_t(seeds); ++seed) {
+      RenderOptions opt = render_options(e, 6, 20000, 0.03f, seed);
+      opt.eye.direct = e == Estimator::Sppm ? DirectMode::ShadowRays : DirectMode::Photons;
+      means.push_back(luminance_mean(render_image(s, opt)));
+    }
+    double m = 0, v = 0;
+    for (double x : means) m += x / seeds;
+    for (double x : means) v += (x - m) * (x - m);
+    const double se = std::sqrt(v / (seeds - 1) / seeds);
+    INFO(estimator_name(e) << ": " << m << " ± " << se << ", exact " << fine);
+    CHECK(std::fabs(m - fine) <= 5 * se + 2 * quad_err);
   }
 }
