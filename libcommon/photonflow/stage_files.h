@@ -21,6 +21,9 @@ struct Scene;  // scene.h
 
 // HDF5 record type of pf_mesh_grid (grid.h5's mesh_grid; photon_distribution.h5).
 const h5::Compound& h5_type_mesh_grid();
+// HDF5 record type of pf_pbr_point (hitpoints.h5's /hitpoint_bsdf): fields base_color[3],
+// metallic, roughness, transmission, ior (float) and outside (int32).
+const h5::Compound& h5_type_pbr_point();
 
 constexpr const char* kHitpointsFormat = "photonflow.hitpoints";
 constexpr const char* kPhotonsFormat = "photonflow.photons";
@@ -29,6 +32,10 @@ constexpr const char* kGridFormat = "photonflow.grid";
 // Hitpoints with their accumulated state.
 struct HitpointSet {
   std::vector<pf_hitpoint> hitpoints;
+  // The BSDF at each hitpoint (EyePassResult::bsdf): parallel to `hitpoints`, all zero at a
+  // hitpoint that is not on a PF_MAT_PBR material; empty when the scene has none. File: the
+  // optional dataset /hitpoint_bsdf (docs/FORMATS.md), format version 2.
+  std::vector<pf_pbr_point> bsdf;
   std::vector<float> emitted;  // width × height × 3, W/(sr m^2)
   std::vector<float> direct;   // width × height × 3, W/(sr m^2)
   int width = 0, height = 0;
