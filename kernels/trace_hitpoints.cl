@@ -20,10 +20,13 @@
 #define PF_EYE_STREAM 0xE7E0000u
 #define PF_SHADOW_STREAM 0x5AD0000u
 
-/* eye_pass.cpp's direct_light: irradiance-weighted direct radiance at a diffuse point by light
- * sampling with shadow rays. Adds weight · L_direct to `direct`. */
+/* eye_pass.cpp's direct_light: direct radiance at a visible point by light sampling with shadow
+ * rays — at a diffuse point irradiance-weighted by color/π, at a PF_MAT_PBR point (pt non-zero)
+ * with the point's BSDF f(wo, ω_light) per sample (pbr_point_shared.h). Adds weight · L_direct to
+ * `direct`. */
 static void pf_direct_light(const pf_scene_view* s, const float* p, const float* ng,
-                            const float* ns, __global const pf_material* m, int samples,
+                            const float* ns, __global const pf_material* m,
+                            const pf_pbr_point* pt, const float* wo, int samples,
                             uint seed, uint pass, uint index, float eps, const float* weight,
                             float* direct) {
   if (s->light_count <= 0 || samples <= 0) return;
@@ -77,11 +80,20 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     pf_ray_hit hit;
     if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
     const float f = g / p_light;
-    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + l->radiance[k] * f;
+    if (pt) {
+      float fb[3];
+      pf_pbr_point_eval(pt, ns, wo, w, fb);
+      for (int k = 0; k < 3; ++k) sum[k] = sum[k] + fb[k] * (l->radiance[k] * f);
+    } else {
+      for (int k = 0; k < 3; ++k) sum[k] = sum[k] + l->radiance[k] * f;
+    }
   }
   const float inv = 1.0f / (float)samples;
-  for (int k = 0; k < 3; ++k)
-    direct[k] = direct[k] + weight[k] * (m->color[k] * PF_S_INV_PI * sum[k] * inv);
+  if (pt)
+    for (int k = 0; k < 3; ++k) direct[k] = direct[k] + weight[k] * (sum[k] * inv);
+  else
+    for (int k = 0; k < 3; ++k)
+      direct[k] = direct[k] + weight[k] * (m->color[k] * PF_S_INV_PI * sum[k] * inv);
 }
 
 /* cam: eye[3], forward[3], right[3], up[3], tan_half_x, tan_half_y, aperture, focus_distance
@@ -95,7 +107,8 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
                               int sampler, float eps,
                               int pixel_offset, int pixel_count, __global pf_hitpoint* slots,
                               __global int* used, __global float* emitted_out,
-                              __global float* direct_out) {
+                              __global float* direct_out, int has_pbr,
+                              __global pf_pbr_point* pbr_slots) {
   const int local_pix = (int)get_global_id(0);
   if (local_pix >= pixel_count) return;
   PF_SCENE_VIEW(s);
@@ -143,11 +156,21 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
         for (int k = 0; k < 3; ++k) emitted[k] = emitted[k] + T[k] * m->emission[k];
       float n[3];
       for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
-      if (pf_is_diffuse(m)) {
-        /* The texture's value joins the weight (eye_pass.cpp): the gathers' f_r = color/π. */
+      const int pbr = m->type == PF_MAT_PBR;
+      if (pbr || pf_is_diffuse(m)) {
+        /* Diffuse: the texture's value joins the weight (eye_pass.cpp): the gathers' f_r =
+         * color/π. PBR (non-delta, the visible point sits here): the weight carries no texture
+         * factor; the point's BSDF parameters do (pbr_point_shared.h, a table parallel to the
+         * hitpoints, written for every hitpoint of a scene with a PBR material). */
         float tf[3];
-        if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf))
+        pf_pbr_point pt;
+        if (pbr) {
+          pf_pbr_params_hit(textures, texels, mat_tex, uvs, mr_tex, s.mats, sh.material, &h,
+                            &pt.params);
+          pt.outside = sh.front ? 1 : 0;
+        } else if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf)) {
           for (int k = 0; k < 3; ++k) T[k] = T[k] * tf[k];
+        }
         pf_hitpoint hp;
         float nd[3] = {d[0], d[1], d[2]};
         if (depth > 0) pf_normalize3(nd); /* the camera ray's is unit already */
@@ -166,10 +189,20 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
         hp.material = sh.material;
         slots[slot] = hp;
         used[slot] = 1;
+        if (has_pbr) {
+          if (!pbr) { /* a diffuse hitpoint's entry: zeros, never read */
+            for (int k = 0; k < 3; ++k) pt.params.base_color[k] = 0.0f;
+            pt.params.metallic = pt.params.roughness = pt.params.transmission = pt.params.ior = 0.0f;
+            pt.outside = 0;
+          }
+          pbr_slots[slot] = pt;
+        }
         if (shadow_rays) {
           float ng[3];
+          const float wo[3] = {-nd[0], -nd[1], -nd[2]};
           for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
-          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, seed, pass, index, eps, T, direct);
+          pf_direct_light(&s, sh.p, ng, n, m, pbr ? &pt : 0, wo, shadow_samples, seed, pass,
+                          index, eps, T, direct);
         }
         break;
       }

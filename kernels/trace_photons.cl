@@ -109,6 +109,34 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, uint seed, uint 
       const float b2 = pf_rng_next(&rng);
       pf_sample_cosine_hemisphere(n, b1, b2, d);
       specular_only = 0;
+    } else if (m->type == PF_MAT_PBR) {
+      /* glTF metallic-roughness (photon_pass.cpp): stored as at a diffuse hit, then continued by
+       * sampling the adjoint BSDF (PF_TRANSPORT_IMPORTANCE) in the local frame of the outside
+       * shading normal, times Veach's shading-normal correction; draws u1, u2, u3, then u_rr. */
+      pf_photon ph;
+      for (int k = 0; k < 3; ++k) {
+        ph.position[k] = sh.p[k];
+        ph.dir[k] = d[k];
+        ph.flux[k] = flux[k];
+      }
+      ph.mesh = sh.mesh;
+      ph.pass = (int)pass;
+      ph.flags = (first_hit ? PF_PHOTON_DIRECT : 0) |
+                 (!first_hit && specular_only ? PF_PHOTON_CAUSTIC : 0);
+      slots[(size_t)n_stored * (size_t)count + (size_t)local_i] = ph;
+      ++n_stored;
+      pf_bsdf_params bp;
+      pf_pbr_params_hit(textures, texels, mat_tex, uvs, mr_tex, s.mats, sh.material, &h, &bp);
+      float w[3];
+      if (!pf_pbr_photon_bounce(&bp, &sh, d, &rng, w)) break;
+      /* Russian roulette by the bounce's throughput: p = min(1, max(w0, w1, w2)) */
+      const float m12 = w[1] < w[2] ? w[2] : w[1];
+      const float pm = w[0] < m12 ? m12 : w[0];
+      const float p = pm < 1.0f ? pm : 1.0f;
+      if (pf_rng_next(&rng) >= p) break;
+      const float inv_p = 1.0f / p;
+      for (int k = 0; k < 3; ++k) flux[k] = flux[k] * w[k] * inv_p;
+      specular_only = 0;
     } else if (m->type == PF_MAT_MIRROR) {
       for (int k = 0; k < 3; ++k) flux[k] = flux[k] * c[k];
       pf_reflect(d, n, d);
