@@ -1,6 +1,6 @@
 // eye_pass.h — the eye pass of progressive photon mapping (thesis ch. 3.5 and 7.1; Hachisuka et
 // al. 2008, section 4.1): trace rays from the camera through each pixel, follow mirror reflection
-// and glass refraction, and store a hitpoint at the first diffuse surface.
+// and glass refraction, and store a hitpoint at the first non-delta surface (diffuse or PF_MAT_PBR).
 //
 // Besides the hitpoints it produces two image layers (linear RGB, W/(sr m^2)):
 //   emitted — emitters seen directly or through specular chains (photons never carry this);
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "photonflow/camera.h"
+#include "photonflow/material/pbr_point_shared.h"
 #include "photonflow/pixel_sampler.h"
 #include "photonflow/raycast.h"
 #include "photonflow/scene.h"
@@ -51,6 +52,10 @@ struct EyePassOptions {
 
 struct EyePassResult {
   std::vector<pf_hitpoint> hitpoints;  // sorted by pixel (row-major), then sample
+  // The BSDF at each hitpoint, parallel to `hitpoints` (material/pbr_point_shared.h): the
+  // textured parameters at a PF_MAT_PBR hitpoint, all zero at any other. EMPTY when the scene has
+  // no PBR material (scene_has_pbr, surface.h): other scenes keep and write nothing more.
+  std::vector<pf_pbr_point> bsdf;
   std::vector<float> emitted;          // width × height × 3
   std::vector<float> direct;           // width × height × 3 (zero unless ShadowRays)
   float radius = 0.f;                  // R0 used
@@ -82,6 +87,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt);
 // What trace_hitpoints_into keeps between calls: the visible points of each image row.
 struct EyePassWork {
   std::vector<std::vector<pf_hitpoint>> rows;
+  std::vector<std::vector<pf_pbr_point>> pbr_rows;  // the rows' BSDF tables (PBR scenes only)
 };
 // trace_hitpoints into `res`, reusing the storage of res's vectors and of `work` from the last
 // call: the estimators that trace an eye pass every pass (sppm.h) allocate nothing after the
@@ -90,8 +96,12 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
                           EyePassWork& work);
 
 // One eye sample at a time, as trace_hitpoints_into traces them all: the camera ray of sample s
-// of pixel (x, y) in pass opt.pass, followed through mirrors and glass to its first diffuse
-// surface. sample() adds the emitted light the path sees (times its throughput and the box filter
+// of pixel (x, y) in pass opt.pass, followed through mirrors and glass to its first non-delta
+// surface (diffuse, or PF_MAT_PBR: the glossy BSDF, whose visible point sits there too; HJ09
+// section 4, SPPM's visible points). At a PBR visible point `pbr` (when given) receives the BSDF
+// there (pbr_point_at, surface.h) and the hitpoint's weight is the throughput alone (the texture
+// is inside the parameters); at any other it is set to all zeros. No random number is drawn at
+// the visible point, PBR or not. sample() adds the emitted light the path sees (times its throughput and the box filter
 // weight 1/spp) to `emitted` and, with DirectMode::ShadowRays, the direct light at its visible
 // point to `direct`; it returns whether the path found a visible point, written to `hp` (radius
 // R0 = radius()). The estimators that gather as they trace (sppm_pass_traced) call it pixel by
@@ -99,7 +109,8 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
 class EyeTracer {
  public:
   EyeTracer(const Scene& scene, const EyePassOptions& opt);
-  bool sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct) const;
+  bool sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct,
+              pf_pbr_point* pbr = nullptr) const;
   float radius() const { return radius_; }
   int spp() const { return spp_; }
 
@@ -117,5 +128,12 @@ class EyeTracer {
 // shadow rays (`samples` per call; rng streams of (seed, pass, index)). Exposed for tests.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
                   const pf_material& m, int samples, uint32_t seed, uint32_t pass, uint32_t index);
+// The same estimator (the same draws and shadow rays) at a PF_MAT_PBR point: L_direct =
+// (1/n) Σ f(wo, w_l)·L_e·|cos θ_x|·G/p, with f the BSDF in radiance mode (pf_pbr_eval_world:
+// front shading normal ns_front, front geometric normal ng_front, wo towards the eye). Light
+// from behind the surface counts where the BSDF transmits; the shadow ray leaves on w_l's side.
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, uint32_t seed, uint32_t pass, uint32_t index);
 
 }  // namespace pf

@@ -8,12 +8,24 @@
 //   - with DirectMode::ShadowRays, photons flagged PF_PHOTON_DIRECT are skipped (direct light
 //     already came from shadow rays).
 // Each gathered photon contributes f_r·Φ_p with the Lambertian f_r = albedo/π (eq. 3.17).
+//
+// At a hitpoint on a PF_MAT_PBR surface (its material's type; the hitpoints then carry the BSDF
+// table, HitpointSet::bsdf / EyePassResult::bsdf, pbr_point_shared.h) the photon's term is
+// f(x, ω_o, ω_p)·Φ_p with ω_o = −hitpoint.dir and ω_p = −photon.dir, the BSDF in radiance mode
+// evaluated per photon (HJ09 eq. 10–11; thesis eq. 3.17 with the direction-dependent f_r):
+//   τ_M = Σ_p f(x, −d_hp, −d_p) Φ_p,
+// each term one float product per channel (f_c·Φ_c), summed in double in increasing photon index
+// (or in any order when that sum is exact, as for diffuse hitpoints). The side rule is the same,
+// except where the BSDF transmits (transmission > 0 and metallic < 1 at the point): photons from
+// both sides are gathered there, and f (zero for the side a lobe cannot reach) weighs them.
+// Diffuse hitpoints take exactly the code path (and bits) they took before.
 #pragma once
 #include <cstdint>
 #include <vector>
 
 #include "photonflow/gather_method.h"
 #include "photonflow/hash_grid.h"
+#include "photonflow/material/pbr_point_shared.h"
 #include "photonflow/photon_grid.h"
 #include "photonflow/photon_map.h"
 #include "photonflow/scene.h"
@@ -87,8 +99,21 @@ constexpr float kDefaultSlab = 0.25f;
 // increasing photon index as every gather method sums. Returns M, the photons gathered. The
 // caller has checked the site's material against the scene; a mesh outside the grid gathers none.
 // `slab` > 0 cuts the sphere to the slab |n·(x − x_p)| <= slab·radius (pf_ppm_in_slab).
+// `pbr`: the BSDF at a PF_MAT_PBR site (pbr_of), nullptr at a diffuse one.
 int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
-                bool skip_direct, float slab, float tau_m[3]);
+                bool skip_direct, float slab, float tau_m[3], const pf_pbr_point* pbr = nullptr);
+
+// The BSDF entry of hitpoint i (`hp`) in `table` (parallel to the hitpoints) when hp lies on a
+// PF_MAT_PBR material, nullptr otherwise (a diffuse hitpoint, or an SPPM pixel not reached yet).
+// InputError when hp is on a PBR material but the table lacks the entry. hp.material must be a
+// valid index or negative (check_against_scene).
+const pf_pbr_point* pbr_of(const Scene& scene, const pf_hitpoint& hp,
+                           const std::vector<pf_pbr_point>& table, size_t i);
+
+// Whether a PBR point gathers photons from both sides of its surface (its BSDF transmits).
+inline bool pbr_two_sided_gather(const pf_pbr_point* pbr) {
+  return pbr && pbr->params.metallic < 1.f && pbr->params.transmission > 0.f;
+}
 
 struct ClassicOptions {
   int k = 100;                  // nearest global photons per estimate (eq. 3.10)
@@ -104,11 +129,14 @@ struct ClassicOptions {
 void classic_estimate(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& photons,
                       uint64_t emitted, const ClassicOptions& opt);
 
-// True when photon `p` may contribute to hitpoint `hp` (the rule above, without the distance).
-inline bool photon_accepted(const pf_hitpoint& hp, const pf_photon& p, bool skip_direct) {
+// True when photon `p` may contribute to hitpoint `hp` (the rule above, without the distance);
+// both_sides: a transmissive PBR point (pbr_two_sided_gather) skips the side test.
+inline bool photon_accepted(const pf_hitpoint& hp, const pf_photon& p, bool skip_direct,
+                            bool both_sides = false) {
   if (p.mesh != hp.mesh) return false;
   if (skip_direct && (p.flags & PF_PHOTON_DIRECT)) return false;
-  return p.dir[0] * hp.normal[0] + p.dir[1] * hp.normal[1] + p.dir[2] * hp.normal[2] < 0.f;
+  return both_sides ||
+         p.dir[0] * hp.normal[0] + p.dir[1] * hp.normal[1] + p.dir[2] * hp.normal[2] < 0.f;
 }
 
 }  // namespace pf

@@ -13,6 +13,26 @@
 // Mirrors reflect (flux ·= reflectance); glass reflects with the Fresnel probability and refracts
 // otherwise (flux ·= tint).
 //
+// PF_MAT_PBR (the glTF metallic-roughness BSDF, material/bsdf_shared.h) is a non-delta surface:
+// the photon is stored there exactly as at a diffuse hit (the same record and flags), then
+// continues by sampling the BSDF in importance-transport mode (pf_pbr_scatter,
+// material/pbr_scatter_shared.h: the front shading frame, Veach's shading-normal adjoint
+// |wo·ns||wi·ng|/(|wo·ng||wi·ns|) where ns ≠ ng, pairs that the geometric normal sees otherwise
+// than the shading normal dropped). Random draws at a PBR bounce, in this order (the OpenCL
+// tracer copies it): u1, u2, u3 → pf_pbr_scatter (u3 picks the lobe), then u_rr, always drawn.
+// Russian roulette on the throughput: with Φ' = Φ·weight (weight = f·|cos|/pdf · adjoint, rgb),
+//   q = min(1, max_c Φ'_c / max_c Φ_c),  continue when u_rr < q,  Φ ← Φ' · (1/q),
+// so a bounce that keeps (or, at grazing angles of the glTF dielectric, gains: MATERIALS.md)
+// the photon's power continues with probability 1 and its flux is never raised by the roulette,
+// while a lossy one (rough metal, absorbing base colour) is thinned without changing the
+// expectation E[Φ_next] = Φ·E[weight]. A lost BSDF sample (under the horizon, total internal
+// reflection) ends the photon: the model's single-scattering loss.
+// Flags: a glossy (PBR) bounce is not specular; it ends an L S+ chain, so photons after it are
+// not PF_PHOTON_CAUSTIC (classic PM's fixed-radius caustic map holds L S+ D paths through delta
+// surfaces only, and glossy-surface photons go to the global map); a photon stored on a PBR
+// surface right after delta bounces is caustic like one on a diffuse surface.
+// A diffuse bounce keeps its own draws and arithmetic: diffuse scenes trace the same bits.
+//
 // Randomness is counter-based: photon i of pass p uses the stream (seed, p, i), so the photons do
 // not depend on the thread count (and equal the OpenCL backend's up to float rounding).
 #pragma once

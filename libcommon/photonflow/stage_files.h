@@ -29,6 +29,10 @@ constexpr const char* kGridFormat = "photonflow.grid";
 // Hitpoints with their accumulated state.
 struct HitpointSet {
   std::vector<pf_hitpoint> hitpoints;
+  // The BSDF at each hitpoint (EyePassResult::bsdf): parallel to `hitpoints`, all zero at a
+  // hitpoint that is not on a PF_MAT_PBR material; empty when the scene has none. File: the
+  // optional dataset /hitpoint_bsdf (docs/FORMATS.md), format version 2.
+  std::vector<pf_pbr_point> bsdf;
   std::vector<float> emitted;  // width × height × 3, W/(sr m^2)
   std::vector<float> direct;   // width × height × 3, W/(sr m^2)
   int width = 0, height = 0;

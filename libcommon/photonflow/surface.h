@@ -2,6 +2,7 @@
 #pragma once
 #include "photonflow/material/bsdf_shared.h"
 #include "photonflow/material/pbr_point_shared.h"
+#include "photonflow/material/pbr_scatter_shared.h"
 #include "photonflow/raycast.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
@@ -54,6 +55,25 @@ inline pf_bsdf_params bsdf_params_at(const Scene& s, const pf_material& m, const
   pf_pbr_params_at(&m, s.textures.data(), s.texels.data(), bt, mt,
                    bt >= 0 || mt >= 0 ? s.uvs[size_t(sh.tri)].uv : nullptr, sh.u, sh.v, &p);
   return p;
+}
+
+// Whether the scene has a PF_MAT_PBR material: only then do the eye passes keep a pf_pbr_point
+// per hitpoint (EyePassResult::bsdf, HitpointSet::bsdf); other scenes pay nothing.
+inline bool scene_has_pbr(const Scene& s) {
+  for (const pf_material& m : s.materials)
+    if (m.type == PF_MAT_PBR) return true;
+  return false;
+}
+
+// The BSDF at a visible point on a PF_MAT_PBR surface (material/pbr_point_shared.h): the textured
+// parameters, and whether the facing normal (the hitpoint's normal: ns on the side the ray
+// arrived from) is the outside, i.e. the front: pf_pbr_point_eval then works in the frame of the
+// front shading normal, as the photon and path tracers do (pbr_scatter_shared.h).
+inline pf_pbr_point pbr_point_at(const Scene& s, const pf_material& m, const SurfaceHit& sh) {
+  pf_pbr_point pt;
+  pt.params = bsdf_params_at(s, m, sh);
+  pt.outside = sh.front ? 1 : 0;
+  return pt;
 }
 
 // Offset of new ray origins from a surface, relative to the scene size, to avoid self-hits.

@@ -12,6 +12,7 @@
 #include "photonflow/pass_sums.h"
 #include "photonflow/ppm.h"
 #include "photonflow/sampling.h"
+#include "photonflow/surface.h"
 #include "photonflow/threads.h"
 
 namespace pf {
@@ -54,6 +55,9 @@ HitpointSet make_sppm_state(const Scene& scene, float radius0, DirectMode mode) 
     hp.material = -1;
     h.hitpoints[i] = hp;
   }
+  // A PBR scene's state keeps each pixel's last visible point's BSDF beside its hitpoint (what
+  // the file shows of the pass, as the geometry; the gather reads the pass's own).
+  if (scene_has_pbr(scene)) h.bsdf.assign(n, pf_pbr_point{});
   return h;
 }
 
@@ -98,6 +102,25 @@ inline void take_visible_point(pf_hitpoint& s, const pf_hitpoint& v) {
   s.material = v.material;
 }
 
+// take_visible_point for pixel px of `state`, with the visible point's BSDF (pbr, nullptr at a
+// diffuse one) into the state's table; the table is made when a PBR point first needs it.
+inline void take_visible_point(HitpointSet& state, size_t px, const pf_hitpoint& v,
+                               const pf_pbr_point* pbr) {
+  take_visible_point(state.hitpoints[px], v);
+  if (state.bsdf.empty()) {
+    if (!pbr) return;
+    state.bsdf.assign(state.hitpoints.size(), pf_pbr_point{});
+  }
+  state.bsdf[px] = pbr ? *pbr : pf_pbr_point{};
+}
+
+// The BSDF of visible point i of an eye pass (pbr_of), nullptr for a diffuse one; `pbr`: the
+// scene has a PBR material (scene_has_pbr, computed once per pass).
+inline const pf_pbr_point* eye_pbr(bool pbr, const Scene& scene, const EyePassResult& eye,
+                                   size_t i) {
+  return pbr ? pbr_of(scene, eye.hitpoints[i], eye.bsdf, i) : nullptr;
+}
+
 // The running mean of a layer's value over k passes, L̄_k = L̄_{k−1} + (L_d,k − L̄_{k−1}) · (1/k),
 // value by value (any thread count gives the same bits).
 inline void running_mean(float& mean, float value, float inv_k) { mean += (value - mean) * inv_k; }
@@ -127,13 +150,16 @@ void average_layers(HitpointSet& state, const EyePassResult& eye, uint64_t emitt
 
 // One visible point v of pixel state s: the pass's photons around it, β-weighted into τ_M
 // (HJ09 eq. 11), then thesis eq. 3.14, 3.16, 3.18, and s takes v's geometry.
+// At a PBR visible point (pbr) the sum is Σ f(x_i, ω_o, ω_p) Φ_p (HJ09 eq. 10–11, illuminate.h).
 inline void gather_visible_point(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& v,
-                                 pf_hitpoint& s, bool skip_direct, const PpmOptions& opt) {
+                                 const pf_pbr_point* pbr, HitpointSet& state, size_t px,
+                                 bool skip_direct, const PpmOptions& opt) {
+  pf_hitpoint& s = state.hitpoints[px];
   float tau_m[3];
-  const int m = gather_site(scene, grid, v, s.radius, skip_direct, opt.slab, tau_m);
+  const int m = gather_site(scene, grid, v, s.radius, skip_direct, opt.slab, tau_m, pbr);
   for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
   pf_ppm_update(&s, m, tau_m, opt.alpha);              // thesis eq. 3.14, 3.16, 3.18
-  take_visible_point(s, v);
+  take_visible_point(state, px, v, pbr);
 }
 
 }  // namespace
@@ -147,11 +173,14 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
     throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
   const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
   const int64_t count = int64_t(eye.hitpoints.size());
+  const bool pbr = scene_has_pbr(scene);
+  if (state.bsdf.empty() && pbr)  // made here, not by the workers
+    state.bsdf.assign(state.hitpoints.size(), pf_pbr_point{});
 #pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
   for (int64_t i = 0; i < count; ++i) {
     const pf_hitpoint& v = eye.hitpoints[size_t(i)];
-    gather_visible_point(scene, grid, v, state.hitpoints[pixel_of(v, state.width)], skip_direct,
-                         opt);
+    gather_visible_point(scene, grid, v, eye_pbr(pbr, scene, eye, size_t(i)), state,
+                         pixel_of(v, state.width), skip_direct, opt);
   }
   average_layers(state, eye, emitted, opt.threads);
 }
@@ -169,14 +198,20 @@ void sppm_pass_traced(const Scene& scene, HitpointSet& state, const EyePassOptio
   const EyeTracer tracer(scene, eye);
   const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
   const float inv_k = 1.f / float(state.passes + 1);
+  const bool pbr_scene = scene_has_pbr(scene);
+  if (pbr_scene && state.bsdf.empty()) state.bsdf.assign(state.hitpoints.size(), pf_pbr_point{});
 #pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(opt.threads))
   for (int y = 0; y < H; ++y) {
     for (int x = 0; x < W; ++x) {
       const size_t px = size_t(y) * size_t(W) + size_t(x);
       pf_hitpoint v;
+      pf_pbr_point pt;
       Vec3 e, d;
-      if (tracer.sample(x, y, 0, v, e, d))
-        gather_visible_point(scene, grid, v, state.hitpoints[px], skip_direct, opt);
+      if (tracer.sample(x, y, 0, v, e, d, pbr_scene ? &pt : nullptr)) {
+        const bool on_pbr = pbr_scene && scene.materials[size_t(v.material)].type == PF_MAT_PBR;
+        gather_visible_point(scene, grid, v, on_pbr ? &pt : nullptr, state, px, skip_direct,
+                             opt);
+      }
       for (int c = 0; c < 3; ++c) {
         running_mean(state.emitted[px * 3 + size_t(c)], e[c], inv_k);
         running_mean(state.direct[px * 3 + size_t(c)], d[c], inv_k);
@@ -204,8 +239,12 @@ void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<
 }
 
 void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted) {
-  for (const pf_hitpoint& v : eye.hitpoints)  // check_visible_pixels checked the pixels
-    take_visible_point(state.hitpoints[pixel_of(v, state.width)], v);
+  for (size_t i = 0; i < eye.hitpoints.size(); ++i) {  // check_visible_pixels checked the pixels
+    const pf_hitpoint& v = eye.hitpoints[i];
+    const pf_pbr_point* pbr = i < eye.bsdf.size() ? &eye.bsdf[i] : nullptr;
+    if (pbr && !(pbr->params.ior >= 1.f)) pbr = nullptr;  // an all-zero (diffuse) entry
+    take_visible_point(state, pixel_of(v, state.width), v, pbr);
+  }
   average_layers(state, eye, emitted, 0);
 }
 
@@ -265,6 +304,7 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
   const float r = pppm_pass_radius(sums);
   const bool skip = sums.direct_mode == DirectMode::ShadowRays;
   const int64_t count = int64_t(eye.hitpoints.size());
+  const bool pbr = scene_has_pbr(scene);
   // The calling thread's buffer, kept from pass to pass (no allocation per pass); the workers
   // write it through `out` (a thread_local named inside the region would be each worker's own).
   thread_local std::vector<float> tau_beta;
@@ -275,7 +315,8 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
     for (int64_t i = 0; i < count; ++i) {
       const pf_hitpoint& v = eye.hitpoints[size_t(i)];
       float tau_m[3];
-      gather_site(scene, grid, v, r, skip, opt.slab, tau_m);
+      gather_site(scene, grid, v, r, skip, opt.slab, tau_m,
+                  eye_pbr(pbr, scene, eye, size_t(i)));
       for (int c = 0; c < 3; ++c) out[size_t(i) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
     }
   }
@@ -293,6 +334,7 @@ void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& 
   const EyeTracer tracer(scene, eye);
   const int spp = tracer.spp();
   const float r = pppm_pass_radius(sums);
+  const bool pbr_scene = scene_has_pbr(scene);
   const bool skip = sums.direct_mode == DirectMode::ShadowRays;
   // β Σ f_r Φ / (π r_i² N_p) of a visible point (pppm_accumulate's).
   const double norm = emitted > 0 ? 1.0 / (double(kPi) * double(r) * double(r) * double(emitted))
@@ -307,9 +349,11 @@ void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& 
       int visible = 0;
       for (int s = 0; s < spp; ++s) {
         pf_hitpoint v;
-        if (!tracer.sample(x, y, s, v, e, d)) continue;
+        pf_pbr_point pt;
+        if (!tracer.sample(x, y, s, v, e, d, pbr_scene ? &pt : nullptr)) continue;
+        const bool on_pbr = pbr_scene && scene.materials[size_t(v.material)].type == PF_MAT_PBR;
         float tau_m[3] = {0.f, 0.f, 0.f};
-        if (emitted > 0) gather_site(scene, grid, v, r, skip, opt.slab, tau_m);
+        if (emitted > 0) gather_site(scene, grid, v, r, skip, opt.slab, tau_m, on_pbr ? &pt : nullptr);
         for (int c = 0; c < 3; ++c) tau_beta[size_t(visible) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
         ++visible;
       }
@@ -372,6 +416,7 @@ EyePassResult staged_eye_pass(const HitpointSet& eye, const std::string& eye_pat
                       "trace it with --first-pass " + std::to_string(pass) + " --passes 1");
   EyePassResult r;
   r.hitpoints = eye.hitpoints;
+  r.bsdf = eye.bsdf;
   r.emitted = eye.emitted;
   r.direct = eye.direct;
   r.radius = eye.radius0;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 #include <sstream>
 
@@ -17,7 +18,59 @@
 namespace pf {
 
 namespace {
-constexpr int kHitpointsVersion = 1;
+// Version 2 (issue 32): the optional dataset /hitpoint_bsdf (PF_MAT_PBR visible points). Version
+// 1 files are read as before (no table: refused by check_against_scene where the scene's
+// hitpoints need one).
+constexpr int kHitpointsVersion = 2;
+constexpr const char* kHitpointBsdf = "/hitpoint_bsdf";
+
+// HDF5 record type of pf_pbr_point (pbr_point_shared.h), named fields for h5py.
+const h5::Compound& h5_type_pbr_point() {
+  static const h5::Compound t = [] {
+    h5::Compound c(sizeof(pf_pbr_point));
+    c.f32("base_color", offsetof(pf_pbr_point, params.base_color), 3);
+    c.f32("metallic", offsetof(pf_pbr_point, params.metallic));
+    c.f32("roughness", offsetof(pf_pbr_point, params.roughness));
+    c.f32("transmission", offsetof(pf_pbr_point, params.transmission));
+    c.f32("ior", offsetof(pf_pbr_point, params.ior));
+    c.i32("outside", offsetof(pf_pbr_point, outside));
+    return c;
+  }();
+  return t;
+}
+
+// The "no BSDF" entry of a hitpoint that is not on a PBR material: every byte zero.
+bool empty_pbr_point(const pf_pbr_point& b) {
+  static const pf_pbr_point zero{};
+  return std::memcmp(&b, &zero, sizeof b) == 0;
+}
+
+// Largest IOR a /hitpoint_bsdf entry may hold (diamond is 2.42; bsdf_shared.h takes any > 1).
+constexpr double kMaxPbrIor = 10.0;
+
+// The table's own checks (docs/FORMATS.md): one entry per hitpoint; each entry all zero or the
+// parameters of a PBR point in range (base colour, metallic, roughness, transmission in [0, 1],
+// ior in [1, kMaxPbrIor], outside 0 or 1). Which entries must be zero is the scene's
+// (check_against_scene).
+void check_bsdf_table(const HitpointSet& h, const Validator& v) {
+  if (h.bsdf.empty()) return;
+  if (h.bsdf.size() != h.hitpoints.size())
+    v.fail("hitpoint_bsdf has " + std::to_string(h.bsdf.size()) + " entries for " +
+           std::to_string(h.hitpoints.size()) + " hitpoints");
+  const std::string B = "hitpoint_bsdf";
+  for (size_t i = 0; i < h.bsdf.size(); ++i) {
+    const pf_pbr_point& b = h.bsdf[i];
+    if (empty_pbr_point(b)) continue;
+    v.in_range(Name(B, i, "base_color"), b.params.base_color, 3, 0.0, 1.0);
+    v.in_range(Name(B, i, "metallic"), &b.params.metallic, 1, 0.0, 1.0);
+    v.in_range(Name(B, i, "roughness"), &b.params.roughness, 1, 0.0, 1.0);
+    v.in_range(Name(B, i, "transmission"), &b.params.transmission, 1, 0.0, 1.0);
+    v.in_range(Name(B, i, "ior"), &b.params.ior, 1, 1.0, kMaxPbrIor);
+    if (b.outside != 0 && b.outside != 1)
+      v.fail(Validator::element(B, i, "outside") + " = " + std::to_string(b.outside) +
+             " is neither 0 nor 1");
+  }
+}
 constexpr int kPhotonsVersion = 1;
 constexpr int kGridVersion = 1;
 
@@ -240,6 +293,23 @@ void check_against_scene(const std::string& path, const HitpointSet& h, const Sc
                                   fmt3(scene.bounds.lo) + " .. " + fmt3(scene.bounds.hi),
                         hint);
   }
+  // The BSDF table (hitpoint_bsdf): an entry exactly at the hitpoints on PBR materials. A PBR
+  // hitpoint without one cannot be gathered (its f depends on the parameters there).
+  for (size_t i = 0; i < h.hitpoints.size(); ++i) {
+    const pf_hitpoint& hp = h.hitpoints[i];
+    const bool pbr = hp.material >= 0 && scene.materials[size_t(hp.material)].type == PF_MAT_PBR;
+    if (pbr && h.bsdf.empty())
+      throw input_error(path, "hitpoint " + std::to_string(i) + " lies on PBR material " +
+                                  std::to_string(hp.material) + " but the file has no " +
+                                  "/hitpoint_bsdf (made before format version 2, or damaged)",
+                        "remake it with trace-hitpoints");
+    if (h.bsdf.empty()) continue;
+    if (pbr == empty_pbr_point(h.bsdf[i]))
+      throw input_error(path, "/hitpoint_bsdf[" + std::to_string(i) + "] " +
+                                  (pbr ? "is empty at a hitpoint on a PBR material"
+                                       : "holds a BSDF at a hitpoint that is not on a PBR material"),
+                        hint);
+  }
 }
 
 void check_against_scene(const std::string& path, const PhotonSet& p, const Scene& scene) {
@@ -295,6 +365,7 @@ HitpointSet make_hitpoint_set(EyePassResult&& eye, DirectMode mode, const std::s
   HitpointSet h;
   h.eye_pass = eye_pass;
   h.hitpoints = std::move(eye.hitpoints);
+  h.bsdf = std::move(eye.bsdf);
   h.emitted = std::move(eye.emitted);
   h.direct = std::move(eye.direct);
   h.width = eye.width;
@@ -313,6 +384,13 @@ void save_hitpoints(const HitpointSet& h, const std::string& path, const Provena
   w.describe("/hitpoints", "world units; flux W/sr",
              "PPM hitpoints: position, normal (facing the eye ray), dir, weight, radius R, "
              "n_photons N, flux tau, pixel, mesh, material (thesis ch. 3.5)");
+  if (!h.bsdf.empty()) {
+    w.write(kHitpointBsdf, h5_type_pbr_point(), h.bsdf);
+    w.describe(kHitpointBsdf, "",
+               "the BSDF at each hitpoint (parallel to /hitpoints): glTF metallic-roughness "
+               "parameters with textures applied and outside (1: the hitpoint's normal is the "
+               "outside) at a PBR hitpoint, all zero at any other (material/pbr_point_shared.h)");
+  }
   std::vector<size_t> shape{size_t(h.height), size_t(h.width), 3};
   w.write("/image/emitted", h.emitted, shape);
   w.describe("/image/emitted", "W/(sr m^2)", "emitters seen directly or via specular chains");
@@ -362,6 +440,11 @@ HitpointSet load_hitpoints(const std::string& path) {
   // Files written before the estimators with a new eye pass every pass hold eye pass 0.
   if (r.has_attr("/", "eye_pass")) h.eye_pass = int(attr_in(r, path, "/", "eye_pass", 0, kIntMax, hint));
   h.hitpoints = r.read<pf_hitpoint>("/hitpoints", h5_type_hitpoint());
+  if (r.version() >= 2 && r.exists(kHitpointBsdf)) {
+    h.bsdf = r.read<pf_pbr_point>(kHitpointBsdf, h5_type_pbr_point());
+    if (h.bsdf.empty())
+      v.fail("hitpoint_bsdf is present but empty (a file without PBR hitpoints has none)");
+  }
   const std::vector<size_t> layer{size_t(h.height), size_t(h.width), 3};
   h.emitted = r.read<float>("/image/emitted", layer);
   h.direct = r.read<float>("/image/direct", layer);
@@ -405,6 +488,7 @@ void validate_hitpoints(const HitpointSet& h, const std::string& path) {
     check_hitpoint_values(h, i, no_surface, v);
   }
   if (h.estimator == "sppm") check_one_per_pixel(h, v);
+  check_bsdf_table(h, v);
 }
 
 // ---- photons.h5 -----------------------------------------------------------------------------

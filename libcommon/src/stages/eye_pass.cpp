@@ -107,6 +107,56 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
   return mat_color(m) * kInvPi * sum * (1.f / float(samples));
 }
 
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, uint32_t seed, uint32_t pass, uint32_t index) {
+  if (scene.lights.empty() || samples <= 0) return {};
+  pf_rng rng = pf_rng_start(seed, kShadowStream + pass, index);
+  const float eps = ray_epsilon(scene);
+  float ns[3], ng[3], o[3];
+  ns_front.store(ns);
+  ng_front.store(ng);
+  wo.store(o);
+  Vec3 sum;
+  for (int s = 0; s < samples; ++s) {  // direct_light's draws, light choice and point
+    float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+    float p_light;
+    const pf_light& l = scene.lights[scene.pick_light(ul, p_light)];
+    if (p_light <= 0.f) continue;
+    Vec3 q, w;
+    float g;  // |cos θ_x| · geometry / pdf, without visibility
+    float d2;
+    if (l.type == PF_LIGHT_AREA) {
+      const pf_triangle& t = scene.triangles[size_t(l.triangle)];
+      q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
+      const Vec3 nl = scene.normal_of(size_t(l.triangle));
+      w = q - p;
+      d2 = dot(w, w);
+      if (d2 <= 0.f) continue;
+      w = w / std::sqrt(d2);
+      const float cos_l = -dot(w, nl);  // one-sided emitter: light leaves along +nl
+      if (cos_l <= 0.f) continue;
+      g = std::fabs(dot(w, ns_front)) * cos_l * l.area / d2;  // pdf_area = 1 / area
+    } else {
+      q = Vec3(l.position);
+      w = q - p;
+      d2 = dot(w, w);
+      if (d2 <= 0.f) continue;
+      w = w / std::sqrt(d2);
+      g = std::fabs(dot(w, ns_front)) / d2;
+    }
+    float wl[3], f[3];
+    w.store(wl);
+    pf_pbr_eval_world(&params, ns, ng, o, wl, f);  // 0 for a pair the normals disagree on
+    if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) continue;
+    const Vec3 origin = p + ng_front * (dot(w, ng_front) >= 0.f ? eps : -eps);
+    Ray shadow{origin, q - origin, 0.f, 1.f - 1e-4f};
+    if (intersect_any(scene, shadow)) continue;
+    sum += Vec3(f) * Vec3(l.radiance) * (g / p_light);
+  }
+  return sum * (1.f / float(samples));
+}
+
 void check_options(const EyePassOptions& opt) {
   require_positive("spp", opt.spp);
   require_positive("max-depth", opt.max_depth);
@@ -158,7 +208,8 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
   check_eye_samples(scene, opt);
 }
 
-bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct) const {
+bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct,
+                       pf_pbr_point* pbr) const {
   const size_t pix = size_t(y) * size_t(scene_.camera.width) + size_t(x);
   const uint32_t index = uint32_t(pix * size_t(spp_) + size_t(s));
   pf_rng rng{eye_key_, index, 0};  // = pf_rng_start(seed, kEyeStream + pass, index)
@@ -201,6 +252,30 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       if (opt_.direct == DirectMode::ShadowRays)
         direct += T * direct_light(scene_, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
                                    opt_.shadow_samples, opt_.seed, opt_.pass, index);
+      if (pbr) *pbr = pf_pbr_point{};
+      return true;
+    }
+    if (m.type == PF_MAT_PBR) {
+      // A glossy visible point (HJ09 section 4): the hitpoint as at a diffuse surface, its weight
+      // the throughput alone, the BSDF's textured parameters beside it; every gather evaluates f
+      // per photon (pbr_point_shared.h). No random number is drawn here.
+      const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
+      const Vec3 d = depth > 0 ? normalize(ray.d) : ray.d;  // camera rays are unit
+      hp = pf_hitpoint{};
+      sh.p.store(hp.position);
+      n.store(hp.normal);
+      d.store(hp.dir);
+      T.store(hp.weight);
+      hp.radius = radius_;
+      hp.pixel_x = x;
+      hp.pixel_y = y;
+      hp.mesh = sh.mesh;
+      hp.material = sh.material;
+      const pf_pbr_point pt = pbr_point_at(scene_, m, sh);
+      if (pbr) *pbr = pt;
+      if (opt_.direct == DirectMode::ShadowRays)
+        direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
+                                       opt_.shadow_samples, opt_.seed, opt_.pass, index);
       return true;
     }
     if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;  // black emitter
@@ -226,16 +301,30 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
   // order afterwards, so the result does not depend on the thread count.
   std::vector<std::vector<pf_hitpoint>>& rows = work.rows;
   rows.resize(size_t(std::max(H, 0)));
+  // The BSDF table only for a scene with a PBR material (eye_pass.h, EyePassResult::bsdf).
+  const bool pbr = scene_has_pbr(scene);
+  std::vector<std::vector<pf_pbr_point>>& pbr_rows = work.pbr_rows;
+  pbr_rows.resize(pbr ? rows.size() : 0);
   int threads = worker_threads(opt.threads);
 
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
   for (int y = 0; y < H; ++y) {
     std::vector<pf_hitpoint>& row_buf = rows[size_t(y)];  // kept from the last call (work)
     row_buf.clear();
+    std::vector<pf_pbr_point>* pbr_buf = pbr ? &pbr_rows[size_t(y)] : nullptr;
+    if (pbr_buf) pbr_buf->clear();
     for (int x = 0; x < W; ++x) {
       Vec3 emitted, direct;
       for (int s = 0; s < spp; ++s) {
         pf_hitpoint& hp = row_buf.emplace_back();  // written in place (no copy of a temporary)
+        if (pbr_buf) {
+          pf_pbr_point pt;
+          if (tracer.sample(x, y, s, hp, emitted, direct, &pt))
+            pbr_buf->push_back(pt);
+          else
+            row_buf.pop_back();
+          continue;
+        }
         if (!tracer.sample(x, y, s, hp, emitted, direct)) row_buf.pop_back();
       }
       const size_t pix = size_t(y) * W + x;
@@ -246,10 +335,15 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
   std::vector<size_t> offset(rows.size() + 1, 0);
   for (size_t y = 0; y < rows.size(); ++y) offset[y + 1] = offset[y] + rows[y].size();
   res.hitpoints.resize(offset.back());
+  res.bsdf.resize(pbr ? offset.back() : 0);
 #pragma omp parallel for schedule(static) num_threads(threads)
-  for (int y = 0; y < H; ++y)
+  for (int y = 0; y < H; ++y) {
     std::copy(rows[size_t(y)].begin(), rows[size_t(y)].end(),
               res.hitpoints.begin() + long(offset[size_t(y)]));
+    if (pbr)
+      std::copy(pbr_rows[size_t(y)].begin(), pbr_rows[size_t(y)].end(),
+                res.bsdf.begin() + long(offset[size_t(y)]));
+  }
 }
 
 }  // namespace pf

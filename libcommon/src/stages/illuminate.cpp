@@ -92,6 +92,48 @@ inline void gather_update(pf_hitpoint& hp, const Vec3& fr, size_t m, PhotonAt&& 
   pf_ppm_update(&hp, int(m), tau_m, alpha);  // eq. 3.14, 3.16, 3.18
 }
 
+// A PBR hitpoint's term for photon p (illuminate.h): f(x, ω_o = −hp.dir, ω_p = −p.dir)·Φ_p, one
+// float product per channel (HJ09 eq. 10–11, thesis eq. 3.17).
+inline void pbr_term(const pf_pbr_point& pt, const pf_hitpoint& hp, const pf_photon& p,
+                     float t[3]) {
+  const float wo[3] = {-hp.dir[0], -hp.dir[1], -hp.dir[2]};
+  const float wi[3] = {-p.dir[0], -p.dir[1], -p.dir[2]};
+  float f[3];
+  pf_pbr_point_eval(&pt, hp.normal, wo, wi, f);
+  for (int c = 0; c < 3; ++c) t[c] = f[c] * p.flux[c];
+}
+
+// Σ of m float terms (3 per term) in double, in the order given, rounded to float.
+inline void sum_terms(const float* terms, size_t m, float tau_m[3]) {
+  double tau[3] = {0, 0, 0};
+  for (size_t k = 0; k < m; ++k)
+    for (int c = 0; c < 3; ++c) tau[c] += double(terms[3 * k + size_t(c)]);
+  for (int c = 0; c < 3; ++c) tau_m[c] = float(tau[c]);
+}
+
+// sum_terms when that sum is exact (the argument of sum_flux_if_exact), false otherwise.
+inline bool sum_terms_if_exact(const float* terms, size_t m, float tau_m[3]) {
+  double tau[3] = {0, 0, 0};
+  uint32_t lo[3] = {255, 255, 255}, hi[3] = {0, 0, 0};
+  for (size_t k = 0; k < m; ++k)
+    for (int c = 0; c < 3; ++c) {
+      const float t = terms[3 * k + size_t(c)];
+      tau[c] += double(t);
+      uint32_t bits;
+      std::memcpy(&bits, &t, 4);
+      const uint32_t e = std::max<uint32_t>((bits >> 23) & 0xffu, 1u);
+      if ((bits & 0x7fffffffu) == 0) continue;  // ±0
+      lo[c] = std::min(lo[c], e);
+      hi[c] = std::max(hi[c], e);
+    }
+  uint32_t log2m = 0;
+  while ((size_t(1) << log2m) < m) ++log2m;
+  for (int c = 0; c < 3; ++c)
+    if (hi[c] >= 255u || (hi[c] >= lo[c] && hi[c] - lo[c] + 24u + log2m > 53u)) return false;
+  for (int c = 0; c < 3; ++c) tau_m[c] = float(tau[c]);
+  return true;
+}
+
 // Sorts distinct keys ascending. The lists are short (tens of photons) and made of a few
 // ascending runs (one per grid bin), where insertion sort beats std::sort; long ones use the
 // latter.
@@ -137,8 +179,18 @@ void ppm_pass_grid(const Scene& scene, HitpointSet& h, const PhotonGrid& grid, u
   ppm_pass_grid_prechecked(scene, h, grid, emitted, opt);
 }
 
+const pf_pbr_point* pbr_of(const Scene& scene, const pf_hitpoint& hp,
+                           const std::vector<pf_pbr_point>& table, size_t i) {
+  if (hp.material < 0 || scene.materials[size_t(hp.material)].type != PF_MAT_PBR) return nullptr;
+  if (i >= table.size())
+    throw input_error("", "hitpoint " + std::to_string(i) +
+                              " lies on a PBR material but the hitpoints carry no BSDF for it",
+                      "remake them with trace-hitpoints from this scene");
+  return &table[i];
+}
+
 int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
-                bool skip_direct, float slab, float tau_m[3]) {
+                bool skip_direct, float slab, float tau_m[3], const pf_pbr_point* pbr) {
   tau_m[0] = tau_m[1] = tau_m[2] = 0.f;
   const int mesh = site.mesh;
   const int mesh_count = int(grid.mesh_grid.size());
@@ -164,10 +216,11 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
   // The rest of the rule for a photon inside the sphere. facing: its own mesh, not a direct
   // photon when shadow rays give direct light, arriving at the front (photon_accepted).
   // accepted: facing and, with a slab (κ > 0), within κR of the tangent plane (pf_ppm_in_slab).
+  const bool both_sides = pbr_two_sided_gather(pbr);  // a transmissive PBR point (illuminate.h)
   const auto facing = [&](int32_t i) {
     const pf_photon& p = photons[i];
     if (p.mesh != mesh || (skip_direct && (p.flags & PF_PHOTON_DIRECT) != 0)) return false;
-    return p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
+    return both_sides || p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
   };
   const auto accepted = [&](int32_t i) {
     const pf_photon& p = photons[i];
@@ -248,6 +301,25 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
     m = kept;
   }
   if (m == 0) return 0;
+  if (pbr) {
+    // f·Φ per photon (HJ09 eq. 10–11), evaluated once per candidate; summed as below.
+    thread_local std::vector<float> terms;
+    if (terms.size() < 3 * m) terms.resize(6 * m);
+    float* t = terms.data();
+    for (size_t j = 0; j < m; ++j) pbr_term(*pbr, site, photons[cand[j]], t + 3 * j);
+    if (sum_terms_if_exact(t, m, tau_m)) return int(m);
+    // Sum order: original photon index; low bits: the candidate's slot j.
+    if (keys.size() < m) keys.resize(2 * m);
+    uint64_t* k = keys.data();
+    for (size_t j = 0; j < m; ++j) k[j] = (uint64_t(uint32_t(order[cand[j]])) << 32) | uint32_t(j);
+    sort_keys(k, m);
+    thread_local std::vector<float> sorted;
+    if (sorted.size() < 3 * m) sorted.resize(6 * m);
+    for (size_t j = 0; j < m; ++j)
+      for (int c = 0; c < 3; ++c) sorted[3 * j + size_t(c)] = t[3 * uint32_t(k[j]) + size_t(c)];
+    sum_terms(sorted.data(), m, tau_m);
+    return int(m);
+  }
   // Eq. 3.17 as sum_flux sums it, in the candidates' order first: when that sum is exact it is
   // the sum in any order, so sum_flux's order (original photon index) gives the same bits and the
   // sort is not needed.
@@ -280,7 +352,8 @@ void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGr
   for (int64_t hi = 0; hi < count; ++hi) {
     pf_hitpoint& hp = h.hitpoints[size_t(hi)];
     float tau_m[3];
-    const int m = gather_site(scene, grid, hp, hp.radius, skip_direct, 0.f, tau_m);  // sphere
+    const pf_pbr_point* pbr = h.bsdf.empty() ? nullptr : pbr_of(scene, hp, h.bsdf, size_t(hi));
+    const int m = gather_site(scene, grid, hp, hp.radius, skip_direct, 0.f, tau_m, pbr);  // sphere
     pf_ppm_update(&hp, m, tau_m, alpha);  // eq. 3.14, 3.16, 3.18 (m = 0: unchanged)
   }
   finish_pass(h, emitted);
@@ -316,13 +389,24 @@ void ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_photon>& 
 #pragma omp parallel num_threads(worker_threads(opt.threads))
   {
     thread_local std::vector<int32_t> idx;  // per-thread work space, kept from pass to pass
+    thread_local std::vector<float> terms;
 #pragma omp for schedule(dynamic, 256)
     for (int64_t i = 0; i < count; ++i) {
       pf_hitpoint& hp = h.hitpoints[size_t(i)];
+      const pf_pbr_point* pbr = h.bsdf.empty() ? nullptr : pbr_of(scene, hp, h.bsdf, size_t(i));
       map.gather_radius(hp.position, hp.radius, hp.mesh, idx);  // increasing photon index
       size_t m = 0;
+      const bool both = pbr_two_sided_gather(pbr);
       for (int32_t j : idx)  // keep the accepted ones, in order
-        if (photon_accepted(hp, photons[size_t(j)], skip_direct)) idx[m++] = j;
+        if (photon_accepted(hp, photons[size_t(j)], skip_direct, both)) idx[m++] = j;
+      if (pbr) {  // f·Φ per photon in increasing photon index (gather_site's sum)
+        terms.resize(3 * m);
+        for (size_t k = 0; k < m; ++k) pbr_term(*pbr, hp, photons[size_t(idx[k])], &terms[3 * k]);
+        float tau_m[3];
+        sum_terms(terms.data(), m, tau_m);
+        pf_ppm_update(&hp, int(m), tau_m, alpha);  // eq. 3.14, 3.16, 3.18
+        continue;
+      }
       gather_update(hp, brdf(scene, hp), m,
                     [&](size_t k) -> const pf_photon& { return photons[size_t(idx[k])]; },
                     alpha);
@@ -350,6 +434,16 @@ void classic_estimate(const Scene& scene, HitpointSet& h, const std::vector<pf_p
   for (size_t i = 0; i < h.hitpoints.size(); ++i) {
     pf_hitpoint& hp = h.hitpoints[i];
     Vec3 fr = brdf(scene, hp);
+    // A PBR hitpoint's f depends on the photon's direction (illuminate.h): f·Φ per photon.
+    const pf_pbr_point* pbr = h.bsdf.empty() ? nullptr : pbr_of(scene, hp, h.bsdf, i);
+    const bool both = pbr_two_sided_gather(pbr);
+    const auto terms = [&](const pf_photon& p, float t[3]) {
+      if (pbr) {
+        pbr_term(*pbr, hp, p, t);
+        return;
+      }
+      for (int c = 0; c < 3; ++c) t[c] = fr[c] * p.flux[c];
+    };
     thread_local std::vector<int32_t> idx;
     thread_local std::vector<float> d2;
     double tau[3] = {0, 0, 0};
@@ -359,10 +453,13 @@ void classic_estimate(const Scene& scene, HitpointSet& h, const std::vector<pf_p
       r2 = gmap.knn(hp.position, k, idx, d2, opt.eps);  // squared distance of the k-th photon
       for (int32_t j : idx) {
         const pf_photon& p = global[size_t(j)];
-        if (p.dir[0] * hp.normal[0] + p.dir[1] * hp.normal[1] + p.dir[2] * hp.normal[2] >= 0.f)
+        if (!both &&
+            p.dir[0] * hp.normal[0] + p.dir[1] * hp.normal[1] + p.dir[2] * hp.normal[2] >= 0.f)
           continue;  // arrived from the other side
         ++used;
-        for (int c = 0; c < 3; ++c) tau[c] += double(fr[c] * p.flux[c]);
+        float t[3];
+        terms(p, t);
+        for (int c = 0; c < 3; ++c) tau[c] += double(t[c]);
       }
     }
     float rg = r2 > 0.f ? std::sqrt(r2) : rc;
@@ -372,10 +469,13 @@ void classic_estimate(const Scene& scene, HitpointSet& h, const std::vector<pf_p
       double scale = double(rg) * rg / (double(rc) * rc);
       for (int32_t j : idx) {
         const pf_photon& p = caustic[size_t(j)];
-        if (p.dir[0] * hp.normal[0] + p.dir[1] * hp.normal[1] + p.dir[2] * hp.normal[2] >= 0.f)
+        if (!both &&
+            p.dir[0] * hp.normal[0] + p.dir[1] * hp.normal[1] + p.dir[2] * hp.normal[2] >= 0.f)
           continue;
         ++used;
-        for (int c = 0; c < 3; ++c) tau[c] += double(fr[c] * p.flux[c]) * scale;
+        float t[3];
+        terms(p, t);
+        for (int c = 0; c < 3; ++c) tau[c] += double(t[c]) * scale;
       }
     }
     hp.radius = rg;

@@ -124,6 +124,30 @@ class PathTracer {
         nee_could = dot(wi, ng) > 0.f;  // sample_light refuses directions below the surface
         specular = false;
         ray = Ray{offset_origin(sh, wi, eps_), wi};
+      } else if (m.type == PF_MAT_PBR) {
+        // The glTF BSDF (bsdf_shared.h) in the front shading frame (pbr_scatter_shared.h):
+        // NEE with f (draws ul, u1, u2 as sample_light), then the BSDF's sample (u1, u2, u3),
+        // then Russian roulette (roulette's draw when it applies).
+        const pf_bsdf_params params = bsdf_params_at(scene_, m, sh);
+        PbrFrame fr;
+        sh.ns.store(fr.ns);
+        sh.ng.store(fr.ng);
+        (-d).store(fr.wo);
+        L += T * sample_light_pbr(sh.p, sh.ng, params, fr, rng, rays);
+        const float u1 = pf_rng_next(&rng);
+        const float u2 = pf_rng_next(&rng);
+        const float u3 = pf_rng_next(&rng);
+        float wi[3], w[3], pdf;
+        if (!pf_pbr_scatter(&params, fr.ns, fr.ng, fr.wo, u1, u2, u3, PF_TRANSPORT_RADIANCE, wi,
+                            w, &pdf))
+          break;
+        T = T * Vec3(w);
+        if (!(max3(T) > 0.f) || !roulette(depth, T, rng)) break;
+        bsdf_pdf = pdf;
+        nee_could = true;  // NEE at a PBR point reaches every direction the BSDF samples
+        specular = false;
+        const Vec3 dir(wi);
+        ray = Ray{offset_origin(sh, dir, eps_), dir};
       } else if (m.type == PF_MAT_MIRROR || m.type == PF_MAT_GLASS) {
         const Vec3 wo = specular_bounce(m, sh, d, &rng, T);
         if (!(max3(T) > 0.f)) break;
@@ -194,6 +218,59 @@ class PathTracer {
     ++rays;
     if (caster_.any(Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
     return Vec3(l.radiance) * (g * w);
+  }
+
+  // NEE at a PF_MAT_PBR point (radiance mode): sample_light's draws, light choice and point, and
+  // its shadow ray, with f(wo, w_l) of the BSDF instead of ρ/π and |cos θ_x| at the shading
+  // normal; a light behind the surface counts where the BSDF transmits (the shadow ray leaves on
+  // its side). Area lights are MIS-weighted against the BSDF's density pf_bsdf_pdf (power
+  // heuristic); point lights are NEE's alone. Returns f·L_e·|cos θ_x|·w / density.
+  struct PbrFrame {
+    float ns[3], ng[3], wo[3];  // front shading and geometric normals, direction to the eye
+  };
+  Vec3 sample_light_pbr(const Vec3& p, const Vec3& ng_front, const pf_bsdf_params& params,
+                        const PbrFrame& fr, pf_rng& rng, uint64_t& rays) const {
+    const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+    if (scene_.lights.empty()) return {};
+    float p_light;
+    const size_t li = scene_.pick_light(ul, p_light);
+    if (!(p_light > 0.f)) return {};
+    const pf_light& l = scene_.lights[li];
+    Vec3 q, wl;
+    float g, w = 1.f;
+    float d2;
+    if (l.type == PF_LIGHT_AREA) {
+      const pf_triangle& t = scene_.triangles[size_t(l.triangle)];
+      q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
+      wl = q - p;
+      d2 = dot(wl, wl);
+      if (!(d2 > 0.f)) return {};
+      wl = wl / std::sqrt(d2);
+      const float cos_l = -dot(wl, light_normal_[li]);
+      if (cos_l <= 0.f) return {};
+      const float pdf = p_light * d2 / (l.area * cos_l);
+      g = std::fabs(dot(wl, Vec3(fr.ns))) / pdf;
+      if (opt_.mis == MisMode::Power) {
+        float wv[3];
+        wl.store(wv);
+        w = power_heuristic(pdf, pf_pbr_pdf_world(&params, fr.ns, fr.ng, fr.wo, wv));
+      }
+    } else {
+      q = Vec3(l.position);
+      wl = q - p;
+      d2 = dot(wl, wl);
+      if (!(d2 > 0.f)) return {};
+      wl = wl / std::sqrt(d2);
+      g = std::fabs(dot(wl, Vec3(fr.ns))) / (d2 * p_light);
+    }
+    float wv[3], f[3];
+    wl.store(wv);
+    pf_pbr_eval_world(&params, fr.ns, fr.ng, fr.wo, wv, f);
+    if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) return {};
+    const Vec3 o = p + ng_front * (dot(wl, ng_front) >= 0.f ? eps_ : -eps_);
+    ++rays;
+    if (caster_.any(Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
+    return Vec3(f) * Vec3(l.radiance) * (g * w);
   }
 
   const Scene& scene_;

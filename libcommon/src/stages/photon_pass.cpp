@@ -176,8 +176,8 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
         Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming photon
         bool diffuse = m.type == PF_MAT_DIFFUSE ||
                        (m.type == PF_MAT_EMITTER && luminance(Vec3(m.color)) > 0.f);
-        if (diffuse) {
-          const Vec3 color = diffuse_color(scene, m, sh);  // textured albedo
+        const bool pbr = m.type == PF_MAT_PBR;
+        if (diffuse || pbr) {  // a non-delta surface: the photon is stored
           pf_photon ph{};
           sh.p.store(ph.position);
           d.store(ph.dir);
@@ -187,6 +187,33 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
           ph.flags = (first_hit ? PF_PHOTON_DIRECT : 0) |
                      (!first_hit && specular_only ? PF_PHOTON_CAUSTIC : 0);
           append(out, ph);
+        }
+        if (pbr) {
+          // Continue by sampling the BSDF for importance transport in the front shading frame,
+          // times Veach's adjoint where ns ≠ ng (pbr_scatter_shared.h); draws u1, u2, u3, then
+          // u_rr (photon_pass.h). A glossy bounce ends the caustic chain (photon_pass.h).
+          const float u1 = pf_rng_next(&rng);
+          const float u2 = pf_rng_next(&rng);
+          const float u3 = pf_rng_next(&rng);
+          const pf_bsdf_params params = bsdf_params_at(scene, m, sh);
+          float ns[3], ng[3], wo[3], wi[3], w[3], pdf;
+          sh.ns.store(ns);
+          sh.ng.store(ng);
+          (-d).store(wo);
+          const bool ok = pf_pbr_scatter(&params, ns, ng, wo, u1, u2, u3,
+                                         PF_TRANSPORT_IMPORTANCE, wi, w, &pdf) != 0;
+          const float u_rr = pf_rng_next(&rng);
+          if (!ok) break;
+          const Vec3 next = flux * Vec3(w);
+          const float before = std::max(flux.x, std::max(flux.y, flux.z));
+          const float after = std::max(next.x, std::max(next.y, next.z));
+          const float q = std::min(1.f, after / before);
+          if (!(q > 0.f) || u_rr >= q) break;
+          flux = next * (1.f / q);
+          d = Vec3(wi);
+          specular_only = false;
+        } else if (diffuse) {
+          const Vec3 color = diffuse_color(scene, m, sh);  // textured albedo
           // Russian roulette by albedo.
           float p = std::max(color.x, std::max(color.y, color.z));
           if (pf_rng_next(&rng) >= p) break;
