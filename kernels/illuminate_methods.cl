@@ -50,6 +50,7 @@ typedef struct {
   int m;
   pf_acc t0, t1, t2;
   int pbr;         /* a PF_MAT_PBR hitpoint: f per photon from pt (HJ09 eq. 10–11) */
+  int both;        /* a transmissive PBR point gathers from both sides (illuminate.h) */
   pf_pbr_point pt; /* read only when pbr */
   float wo[3];     /* ω_o = −hp.dir, only when pbr */
 } pf_gather_hp;
@@ -80,12 +81,15 @@ static inline void pf_gather_start(pf_gather_hp* h, __global const float* positi
   h->t1 = 0;
   h->t2 = 0;
   h->pbr = material >= 0 && mat->type == PF_MAT_PBR;
+  h->both = 0;
   if (h->pbr) {
     __global const pf_pbr_site* ps = &pbr[hi];
     h->pt = ps->pt;
     h->wo[0] = ps->wo[0];
     h->wo[1] = ps->wo[1];
     h->wo[2] = ps->wo[2];
+    /* illuminate.h pbr_two_sided_gather: the BSDF transmits at the point */
+    h->both = h->pt.params.metallic < 1.0f && h->pt.params.transmission > 0.0f;
   }
 }
 
@@ -154,7 +158,7 @@ static inline void pf_gather_photon(pf_gather_hp* h, float px, float py, float p
                                     float f2, const int skip_direct, const int builtin) {
   if (mesh != h->mesh) return;
   if (skip_direct && (flags & PF_PHOTON_DIRECT)) return;
-  if (!(dx * h->nx + dy * h->ny + dz * h->nz < 0.0f)) return;
+  if (!h->both && !(dx * h->nx + dy * h->ny + dz * h->nz < 0.0f)) return;
   if (!pf_in_radius(h, px, py, pz, builtin)) return;
   pf_gather_add(h, dx, dy, dz, f0, f1, f2);
 }
@@ -176,7 +180,7 @@ static inline void pf_gather_local(pf_gather_hp* h, __local const pf_photon* p,
 /* The rest of the rule for a photon whose key and distance passed: the direction, then the sums
  * (from its payload, hash_grid.h). */
 static inline void pf_gather_payload(pf_gather_hp* h, __global const pf_photon_payload* p) {
-  if (!(p->dir[0] * h->nx + p->dir[1] * h->ny + p->dir[2] * h->nz < 0.0f)) return;
+  if (!h->both && !(p->dir[0] * h->nx + p->dir[1] * h->ny + p->dir[2] * h->nz < 0.0f)) return;
   pf_gather_add(h, p->dir[0], p->dir[1], p->dir[2], p->flux[0], p->flux[1], p->flux[2]);
 }
 

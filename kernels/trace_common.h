@@ -15,6 +15,7 @@
 #include "photonflow/shared_types.h"
 #include "photonflow/material/texture_shared.h"
 #include "photonflow/material/pbr_point_shared.h"
+#include "photonflow/material/pbr_scatter_shared.h"
 
 /* The rope traversal's leaf test, vectorised: intersect_shared.h's pf_kd_leaf_intersect runs one
  * Havel–Herout test per triangle through the leaf's index list; this one reads a leaf-ordered copy
@@ -221,30 +222,6 @@ static inline void pf_pbr_params_hit(__global const pf_texture* textures, __glob
   const int bt = mat_tex[material], mt = mr_tex[material];
   pf_pbr_params_at(&mats[material], textures, texels, bt, mt,
                    bt >= 0 || mt >= 0 ? uvs + 6 * (size_t)h->tri : uvs, h->u, h->v, p);
-}
-
-/* A photon's bounce at a PF_MAT_PBR surface: draws u1, u2, u3 for pf_bsdf_sample in importance
- * mode (local frame of the outside shading normal sh->ns, ω_o = −d), turns the sampled direction
- * to world space into d and writes the bounce's throughput w = f*·|cos|/pdf · the shading-normal
- * adjoint (pf_shading_normal_adjoint). 0 when the sample is lost (the path ends). */
-static inline int pf_pbr_photon_bounce(const pf_bsdf_params* bp, const pf_surface* sh, float* d,
-                                       pf_rng* rng, float* w) {
-  const float wo[3] = {-d[0], -d[1], -d[2]};
-  float lo[3];
-  pf_bsdf_to_local(sh->ns, wo, lo);
-  const float u1 = pf_rng_next(rng);
-  const float u2 = pf_rng_next(rng);
-  const float u3 = pf_rng_next(rng);
-  pf_bsdf_sample_rec rec;
-  if (!pf_bsdf_sample(bp, lo, u1, u2, u3, PF_TRANSPORT_IMPORTANCE, &rec)) return 0;
-  float wi[3];
-  pf_to_world(rec.wi, sh->ns, wi);
-  const float adj = pf_shading_normal_adjoint(wo, wi, sh->ns, sh->ng);
-  for (int k = 0; k < 3; ++k) w[k] = rec.weight[k] * adj;
-  d[0] = wi[0];
-  d[1] = wi[1];
-  d[2] = wi[2];
-  return 1;
 }
 
 /* Origin of a ray leaving the surface along d: pushed off on d's side (surface.h). */

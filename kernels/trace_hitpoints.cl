@@ -20,13 +20,10 @@
 #define PF_EYE_STREAM 0xE7E0000u
 #define PF_SHADOW_STREAM 0x5AD0000u
 
-/* eye_pass.cpp's direct_light: direct radiance at a visible point by light sampling with shadow
- * rays — at a diffuse point irradiance-weighted by color/π, at a PF_MAT_PBR point (pt non-zero)
- * with the point's BSDF f(wo, ω_light) per sample (pbr_point_shared.h). Adds weight · L_direct to
- * `direct`. */
+/* eye_pass.cpp's direct_light: irradiance-weighted direct radiance at a diffuse point by light
+ * sampling with shadow rays. Adds weight · L_direct to `direct`. */
 static void pf_direct_light(const pf_scene_view* s, const float* p, const float* ng,
-                            const float* ns, __global const pf_material* m,
-                            const pf_pbr_point* pt, const float* wo, int samples,
+                            const float* ns, __global const pf_material* m, int samples,
                             uint seed, uint pass, uint index, float eps, const float* weight,
                             float* direct) {
   if (s->light_count <= 0 || samples <= 0) return;
@@ -80,20 +77,77 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     pf_ray_hit hit;
     if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
     const float f = g / p_light;
-    if (pt) {
-      float fb[3];
-      pf_pbr_point_eval(pt, ns, wo, w, fb);
-      for (int k = 0; k < 3; ++k) sum[k] = sum[k] + fb[k] * (l->radiance[k] * f);
-    } else {
-      for (int k = 0; k < 3; ++k) sum[k] = sum[k] + l->radiance[k] * f;
-    }
+    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + l->radiance[k] * f;
   }
   const float inv = 1.0f / (float)samples;
-  if (pt)
-    for (int k = 0; k < 3; ++k) direct[k] = direct[k] + weight[k] * (sum[k] * inv);
-  else
-    for (int k = 0; k < 3; ++k)
-      direct[k] = direct[k] + weight[k] * (m->color[k] * PF_S_INV_PI * sum[k] * inv);
+  for (int k = 0; k < 3; ++k)
+    direct[k] = direct[k] + weight[k] * (m->color[k] * PF_S_INV_PI * sum[k] * inv);
+}
+
+/* eye_pass.cpp's direct_light_pbr: the same draws and shadow rays at a PF_MAT_PBR point, L_direct
+ * = (1/n) Σ f(wo, w_l)·L_e·|cos θ_x|·G/p with the BSDF in radiance mode (pf_pbr_eval_world: front
+ * shading normal ns, front geometric normal ng); light from behind counts where the BSDF
+ * transmits, and the shadow ray leaves on w_l's side. Adds weight · L_direct to `direct`. */
+static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const float* ng,
+                                const float* ns, const pf_bsdf_params* bp, const float* wo,
+                                int samples, uint seed, uint pass, uint index, float eps,
+                                const float* weight, float* direct) {
+  if (s->light_count <= 0 || samples <= 0) return;
+  pf_rng rng = pf_rng_start(seed, PF_SHADOW_STREAM + pass, index);
+  float sum[3] = {0.0f, 0.0f, 0.0f};
+  for (int smp = 0; smp < samples; ++smp) {
+    const float ul = pf_rng_next(&rng);
+    const float u1 = pf_rng_next(&rng);
+    const float u2 = pf_rng_next(&rng);
+    float p_light;
+    const int li = pf_pick_light(s, ul, &p_light);
+    __global const pf_light* l = &s->lights[li];
+    if (p_light <= 0.0f) continue;
+    float q[3], w[3], g;
+    if (l->type == PF_LIGHT_AREA) {
+      __global const pf_triangle* t = &s->tris[l->triangle];
+      const float v0[3] = {t->v0[0], t->v0[1], t->v0[2]};
+      const float v1[3] = {t->v1[0], t->v1[1], t->v1[2]};
+      const float v2[3] = {t->v2[0], t->v2[1], t->v2[2]};
+      pf_sample_triangle(v0, v1, v2, u1, u2, q);
+      float e1[3], e2[3], nl[3];
+      for (int k = 0; k < 3; ++k) {
+        e1[k] = v1[k] - v0[k];
+        e2[k] = v2[k] - v0[k];
+      }
+      pf_cross3(e1, e2, nl);
+      pf_normalize3(nl);
+      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
+      const float d2 = pf_dot3(w, w);
+      if (d2 <= 0.0f) continue;
+      const float dl = sqrt(d2);
+      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
+      const float cos_l = -pf_dot3(w, nl);
+      if (cos_l <= 0.0f) continue;
+      g = fabs(pf_dot3(w, ns)) * cos_l * l->area / d2;
+    } else {
+      for (int k = 0; k < 3; ++k) q[k] = l->position[k];
+      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
+      const float d2 = pf_dot3(w, w);
+      if (d2 <= 0.0f) continue;
+      const float dl = sqrt(d2);
+      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
+      g = fabs(pf_dot3(w, ns)) / d2;
+    }
+    float f[3];
+    pf_pbr_eval_world(bp, ns, ng, wo, w, f); /* 0 for a pair the normals disagree on */
+    if (!(f[0] > 0.0f || f[1] > 0.0f || f[2] > 0.0f)) continue;
+    const float e = pf_dot3(w, ng) >= 0.0f ? eps : -eps;
+    float o[3], sd[3];
+    for (int k = 0; k < 3; ++k) o[k] = p[k] + ng[k] * e;
+    for (int k = 0; k < 3; ++k) sd[k] = q[k] - o[k];
+    pf_ray_hit hit;
+    if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
+    const float gp = g / p_light;
+    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + f[k] * l->radiance[k] * gp;
+  }
+  const float inv = 1.0f / (float)samples;
+  for (int k = 0; k < 3; ++k) direct[k] = direct[k] + weight[k] * (sum[k] * inv);
 }
 
 /* cam: eye[3], forward[3], right[3], up[3], tan_half_x, tan_half_y, aperture, focus_distance
@@ -197,12 +251,14 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
           }
           pbr_slots[slot] = pt;
         }
-        if (shadow_rays) {
-          float ng[3];
+        if (shadow_rays && pbr) {
           const float wo[3] = {-nd[0], -nd[1], -nd[2]};
+          pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, seed, pass,
+                              index, eps, T, direct);
+        } else if (shadow_rays) {
+          float ng[3];
           for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
-          pf_direct_light(&s, sh.p, ng, n, m, pbr ? &pt : 0, wo, shadow_samples, seed, pass,
-                          index, eps, T, direct);
+          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, seed, pass, index, eps, T, direct);
         }
         break;
       }

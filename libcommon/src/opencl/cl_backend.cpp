@@ -157,7 +157,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
   const ClBuffer& pbr = dev.scratch("eye.pbr", (sb.has_pbr ? batch * size_t(spp) : 1) * sizeof(pf_pbr_point));
   std::vector<cl_int> flags;
   res.hitpoints.reserve(npix * size_t(spp));
-  if (sb.has_pbr) res.pbr.reserve(npix * size_t(spp));
+  if (sb.has_pbr) res.bsdf.reserve(npix * size_t(spp));
   const cl_int shadow = opt.direct == DirectMode::ShadowRays ? 1 : 0;
   for (size_t off = 0; off < npix; off += batch) {
     const cl_int count = cl_int(std::min(batch, npix - off));
@@ -180,7 +180,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
       ClMapping pmap(dev, pbr, nslots * sizeof(pf_pbr_point), ClMapping::Mode::Read);
       const auto* pp = pmap.as<const pf_pbr_point>();
       for (size_t i = 0; i < nslots; ++i)
-        if (flags[i]) res.pbr.push_back(pp[i]);
+        if (flags[i]) res.bsdf.push_back(pp[i]);
       pmap.unmap();
     }
     dev.read(emitted, size_t(count) * 3 * sizeof(float), &res.emitted[off * 3]);

@@ -18,6 +18,7 @@
 #include "photonflow/illuminate.h"
 #include "photonflow/provenance.h"
 #include "photonflow/sppm.h"
+#include "photonflow/surface.h"
 
 namespace pf {
 
@@ -484,13 +485,6 @@ void count_pass(HitpointSet& h, uint64_t emitted) {
   h.estimator = "ppm";
 }
 
-// Whether a scene has a PF_MAT_PBR material (its hitpoints then carry a pf_pbr_point table).
-bool scene_has_pbr(const Scene& scene) {
-  for (const pf_material& m : scene.materials)
-    if (m.type == PF_MAT_PBR) return true;
-  return false;
-}
-
 // A state's pf_pbr_point table must cover its hitpoints when the scene has a PBR material (the
 // gathers read entry i of hitpoint i; pbr_point_shared.h).
 void check_pbr_table(const Scene& scene, size_t hitpoints, size_t table) {
@@ -590,7 +584,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   check_pass(opt, nh, np);
   require_sphere(opt.slab);
   check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
-  check_pbr_table(scene, nh, h.pbr.size());
+  check_pbr_table(scene, nh, h.bsdf.size());
   const int mesh_count = int(scene.mesh_names.size());
   const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
   const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
@@ -607,7 +601,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
                                &dev.scratch("ppm.states", nh * sizeof(pf_ppm_state))};
       write_split(dev, hps, h.hitpoints.data(), nullptr, nh);
       const ClBuffer& pbr =
-          pbr_sites(dev, scene, "ppm.pbr", h.hitpoints.data(), h.pbr.data(), nullptr, nh);
+          pbr_sites(dev, scene, "ppm.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh);
       hash_grid_pass(scene, hps, mats, pbr, nh, h.direct_mode, max_radius(h),
                      PassPhotons{photons.data(), nullptr, np}, opt, dev, times);
       read_split_states(dev, hps, h.hitpoints.data(), nullptr, nh);
@@ -626,7 +620,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
         const cl_int hcount = cl_int(std::min(hb, nh - hoff));
         dev.write(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
         const ClBuffer& pbr = pbr_sites(dev, scene, "ppm.pbr", &h.hitpoints[hoff],
-                                        h.pbr.empty() ? nullptr : &h.pbr[hoff], nullptr,
+                                        h.bsdf.empty() ? nullptr : &h.bsdf[hoff], nullptr,
                                         size_t(hcount));
         dev.fill_zero(acc_m, size_t(hcount) * sizeof(cl_int));
         dev.fill_zero(acc_tau, size_t(hcount) * 3 * acc);
@@ -655,7 +649,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       const ClBuffer& phs = dev.scratch("ppm.photons", np * sizeof(pf_photon));
       dev.write(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
       const ClBuffer& pbr =
-          pbr_sites(dev, scene, "ppm.pbr", h.hitpoints.data(), h.pbr.data(), nullptr, nh);
+          pbr_sites(dev, scene, "ppm.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh);
       dev.write(phs, np * sizeof(pf_photon), photons.data());
       dev.fill_zero(acc_m, nh * sizeof(cl_int));
       dev.fill_zero(acc_tau, nh * 3 * acc);
@@ -833,7 +827,7 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
       m.unmap();
     }
     {  // the PBR sites of the pass's visible points, by pixel (sppm_sites' placement)
-      check_pbr_table(scene_, eye.hitpoints.size(), eye.pbr.size());
+      check_pbr_table(scene_, eye.hitpoints.size(), eye.bsdf.size());
       std::vector<int32_t>& at = sppm_pbr_order_;
       at.assign(nh, -1);
       for (size_t i = 0; i < eye.hitpoints.size(); ++i)
@@ -843,7 +837,7 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
         for (int32_t& j : at) j = std::max(j, 0);
         if (eye.hitpoints.empty()) at.clear();
       }
-      pbr_sites(dev_, scene_, "", eye.hitpoints.data(), eye.pbr.data(),
+      pbr_sites(dev_, scene_, "", eye.hitpoints.data(), eye.bsdf.data(),
                 at.empty() ? nullptr : at.data(), at.empty() ? 0 : nh, &pbr_);
     }
     if (np > 0) {
@@ -889,9 +883,9 @@ std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& e
   dev.write(weights, nh * 3 * sizeof(float), beta.data());
   const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
   dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
-  check_pbr_table(scene, nh, eye.pbr.size());
+  check_pbr_table(scene, nh, eye.bsdf.size());
   const ClBuffer& pbr =
-      pbr_sites(dev, scene, "pppm.pbr", eye.hitpoints.data(), eye.pbr.data(), nullptr, nh);
+      pbr_sites(dev, scene, "pppm.pbr", eye.hitpoints.data(), eye.bsdf.data(), nullptr, nh);
   GatherTimes times;
   hash_grid_pass(scene, hps, mats, pbr, nh, direct, radius,
                  PassPhotons{nullptr, photons.photons, np}, o, dev, times, &weights);
@@ -923,8 +917,8 @@ void DevicePpmState::upload() {
     write_split(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(),
                 order_.empty() ? nullptr : order_.data(), nh);
     if (!is_sppm_state(h_)) {  // (SPPM's come with each pass's visible points)
-      check_pbr_table(scene_, nh, h_.pbr.size());
-      pbr_sites(dev_, scene_, "", h_.hitpoints.data(), h_.pbr.data(),
+      check_pbr_table(scene_, nh, h_.bsdf.size());
+      pbr_sites(dev_, scene_, "", h_.hitpoints.data(), h_.bsdf.data(),
                 order_.empty() ? nullptr : order_.data(), nh, &pbr_);
     }
   }
@@ -960,8 +954,8 @@ GridGatherTimer::GridGatherTimer(const Scene& scene, const HitpointSet& h,
   dev.write(*mats_, scene.materials.size() * sizeof(pf_material), scene.materials.data());
   hps_ = &dev.scratch("timer.hitpoints", nh1 * sizeof(pf_hitpoint));
   dev.write(*hps_, nh_ * sizeof(pf_hitpoint), h.hitpoints.data());
-  check_pbr_table(scene, nh_, h.pbr.size());
-  pbr_ = &pbr_sites(dev, scene, "timer.pbr", h.hitpoints.data(), h.pbr.data(), nullptr, nh_);
+  check_pbr_table(scene, nh_, h.bsdf.size());
+  pbr_ = &pbr_sites(dev, scene, "timer.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh_);
   acc_m_ = &dev.scratch("timer.acc_m", nh1 * sizeof(cl_int));
   acc_tau_ = &dev.scratch("timer.acc_tau", nh1 * 3 * acc_bytes_);
   dev.fill_zero(*acc_m_, nh1 * sizeof(cl_int));
