@@ -14,6 +14,12 @@
 //             (times its tint), total internal reflection reflects (specular_bounce);
 //   emitter   one-sided: emits radiance L_e along its geometric normal (front side) only, and
 //             reflects diffusely with its colour when that is not black (a black emitter absorbs).
+//   PBR       the glTF metallic-roughness BSDF (material/bsdf_shared.h, PF_MAT_PBR) in the front
+//             shading frame: NEE with f(wo, w_l) (area lights MIS-weighted against pf_bsdf_pdf by
+//             the power heuristic, point lights by NEE alone), then the BSDF's sample in radiance
+//             mode (pf_pbr_scatter, material/pbr_scatter_shared.h; draws u1, u2, u3 after NEE's,
+//             then the roulette's), and an emitter hit after it is MIS-weighted with that
+//             sample's pdf. Pairs the geometric and shading normals disagree on end the path.
 //
 // Direct light by next-event estimation (Veach 1997, §9.2; the area form of the light transport
 // integral, eq. 8.3 there): at every diffuse vertex x one light is picked in proportion to power

@@ -21,6 +21,9 @@ struct Scene;  // scene.h
 
 // HDF5 record type of pf_mesh_grid (grid.h5's mesh_grid; photon_distribution.h5).
 const h5::Compound& h5_type_mesh_grid();
+// HDF5 record type of pf_pbr_point (hitpoints.h5's /hitpoint_bsdf): fields base_color[3],
+// metallic, roughness, transmission, ior (float) and outside (int32).
+const h5::Compound& h5_type_pbr_point();
 
 constexpr const char* kHitpointsFormat = "photonflow.hitpoints";
 constexpr const char* kPhotonsFormat = "photonflow.photons";

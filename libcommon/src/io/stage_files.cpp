@@ -13,6 +13,7 @@
 #include "photonflow/photon_pass.h"
 #include "photonflow/ppm.h"
 #include "photonflow/scene.h"
+#include "photonflow/surface.h"
 #include "photonflow/validate.h"
 
 namespace pf {
@@ -23,21 +24,6 @@ namespace {
 // hitpoints need one).
 constexpr int kHitpointsVersion = 2;
 constexpr const char* kHitpointBsdf = "/hitpoint_bsdf";
-
-// HDF5 record type of pf_pbr_point (pbr_point_shared.h), named fields for h5py.
-const h5::Compound& h5_type_pbr_point() {
-  static const h5::Compound t = [] {
-    h5::Compound c(sizeof(pf_pbr_point));
-    c.f32("base_color", offsetof(pf_pbr_point, params.base_color), 3);
-    c.f32("metallic", offsetof(pf_pbr_point, params.metallic));
-    c.f32("roughness", offsetof(pf_pbr_point, params.roughness));
-    c.f32("transmission", offsetof(pf_pbr_point, params.transmission));
-    c.f32("ior", offsetof(pf_pbr_point, params.ior));
-    c.i32("outside", offsetof(pf_pbr_point, outside));
-    return c;
-  }();
-  return t;
-}
 
 // The "no BSDF" entry of a hitpoint that is not on a PBR material: every byte zero.
 bool empty_pbr_point(const pf_pbr_point& b) {
@@ -252,6 +238,21 @@ void check_pass_emitted(const std::vector<uint64_t>& emitted, const Validator& v
 }
 }  // namespace
 
+// HDF5 record type of pf_pbr_point (pbr_point_shared.h), named fields for h5py.
+const h5::Compound& h5_type_pbr_point() {
+  static const h5::Compound t = [] {
+    h5::Compound c(sizeof(pf_pbr_point));
+    c.f32("base_color", offsetof(pf_pbr_point, params.base_color), 3);
+    c.f32("metallic", offsetof(pf_pbr_point, params.metallic));
+    c.f32("roughness", offsetof(pf_pbr_point, params.roughness));
+    c.f32("transmission", offsetof(pf_pbr_point, params.transmission));
+    c.f32("ior", offsetof(pf_pbr_point, params.ior));
+    c.i32("outside", offsetof(pf_pbr_point, outside));
+    return c;
+  }();
+  return t;
+}
+
 const h5::Compound& h5_type_mesh_grid() {
   static const h5::Compound t = [] {
     h5::Compound c(sizeof(pf_mesh_grid));
@@ -295,6 +296,7 @@ void check_against_scene(const std::string& path, const HitpointSet& h, const Sc
   }
   // The BSDF table (hitpoint_bsdf): an entry exactly at the hitpoints on PBR materials. A PBR
   // hitpoint without one cannot be gathered (its f depends on the parameters there).
+  if (h.bsdf.empty() && !scene_has_pbr(scene)) return;  // a diffuse scene: nothing to check
   for (size_t i = 0; i < h.hitpoints.size(); ++i) {
     const pf_hitpoint& hp = h.hitpoints[i];
     const bool pbr = hp.material >= 0 && scene.materials[size_t(hp.material)].type == PF_MAT_PBR;
