@@ -28,6 +28,7 @@
 #include "photonflow/shared_types.h"
 #include "photonflow/ppm.h"
 #include "photonflow/grid_shared.h"
+#include "photonflow/material/pbr_point_shared.h"
 
 #if defined(PF_FP64) && PF_FP64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -45,17 +46,24 @@ typedef float pf_acc;
 typedef struct {
   float x, y, z, nx, ny, nz, r;
   int mesh;
-  float fr0, fr1, fr2;  /* f_r = albedo/π, eq. 3.17 */
+  float fr0, fr1, fr2;  /* f_r = albedo/π, eq. 3.17 (diffuse hitpoints) */
   int m;
   pf_acc t0, t1, t2;
+  int pbr;         /* a PF_MAT_PBR hitpoint: f per photon from pt (HJ09 eq. 10–11) */
+  int both;        /* a transmissive PBR point gathers from both sides (illuminate.h) */
+  pf_pbr_point pt; /* read only when pbr */
+  float wo[3];     /* ω_o = −hp.dir, only when pbr */
 } pf_gather_hp;
 
 /* A hitpoint's gather state from its fields, with zero accumulators (the loaders below call it
  * for whole and for split hitpoints). A hitpoint with a negative or NaN radius gathers nothing
- * (mesh −1 matches no photon), as on the CPU. */
+ * (mesh −1 matches no photon), as on the CPU. A hitpoint on a PF_MAT_PBR material takes its
+ * pf_pbr_site (entry hi of `pbr`, the pass's table parallel to the hitpoints; a one-element
+ * stand-in, never read, when the scene has no PBR material). */
 static inline void pf_gather_start(pf_gather_hp* h, __global const float* position,
                                    __global const float* normal, float radius, int mesh,
-                                   int material, __global const pf_material* mats) {
+                                   int material, __global const pf_material* mats,
+                                   __global const pf_pbr_site* pbr, int hi) {
   h->x = position[0];
   h->y = position[1];
   h->z = position[2];
@@ -72,29 +80,64 @@ static inline void pf_gather_start(pf_gather_hp* h, __global const float* positi
   h->t0 = 0;
   h->t1 = 0;
   h->t2 = 0;
+  h->pbr = material >= 0 && mat->type == PF_MAT_PBR;
+  h->both = 0;
+  if (h->pbr) {
+    __global const pf_pbr_site* ps = &pbr[hi];
+    h->pt = ps->pt;
+    h->wo[0] = ps->wo[0];
+    h->wo[1] = ps->wo[1];
+    h->wo[2] = ps->wo[2];
+    /* illuminate.h pbr_two_sided_gather: the BSDF transmits at the point */
+    h->both = h->pt.params.metallic < 1.0f && h->pt.params.transmission > 0.0f;
+  }
+}
+
+/* Adds an accepted photon (direction d, flux f): f_r·Φ (eq. 3.17) at a diffuse hitpoint, at a PBR
+ * hitpoint f(x, ω_o, ω_p)·Φ with ω_p = −d (HJ09 eq. 10–11; pbr_point_shared.h), each product one
+ * float multiplication as on the CPU. */
+static inline void pf_gather_add(pf_gather_hp* h, float dx, float dy, float dz, float f0, float f1,
+                                 float f2) {
+  h->m += 1;
+  if (h->pbr) {
+    const float n[3] = {h->nx, h->ny, h->nz};
+    const float wi[3] = {-dx, -dy, -dz};
+    float f[3];
+    pf_pbr_point_eval(&h->pt, n, h->wo, wi, f);
+    h->t0 += (pf_acc)(f[0] * f0);
+    h->t1 += (pf_acc)(f[1] * f1);
+    h->t2 += (pf_acc)(f[2] * f2);
+    return;
+  }
+  h->t0 += (pf_acc)(h->fr0 * f0);
+  h->t1 += (pf_acc)(h->fr1 * f1);
+  h->t2 += (pf_acc)(h->fr2 * f2);
 }
 
 /* Loads hitpoint hi with zero accumulators. */
 static inline void pf_gather_load_fresh(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
-                                        __global const pf_material* mats) {
+                                        __global const pf_material* mats,
+                                        __global const pf_pbr_site* pbr) {
   __global const pf_hitpoint* hp = &hps[hi];
-  pf_gather_start(h, hp->position, hp->normal, hp->radius, hp->mesh, hp->material, mats);
+  pf_gather_start(h, hp->position, hp->normal, hp->radius, hp->mesh, hp->material, mats, pbr, hi);
 }
 
 /* The same from a split hitpoint (pf_gather_site and pf_ppm_state, the hashed grid's). */
 static inline void pf_gather_load_split(pf_gather_hp* h, __global const pf_gather_site* sites,
                                         __global const pf_ppm_state* states, int hi,
-                                        __global const pf_material* mats) {
+                                        __global const pf_material* mats,
+                                        __global const pf_pbr_site* pbr) {
   __global const pf_gather_site* s = &sites[hi];
-  pf_gather_start(h, s->position, s->normal, states[hi].radius, s->mesh, s->material, mats);
+  pf_gather_start(h, s->position, s->normal, states[hi].radius, s->mesh, s->material, mats, pbr,
+                  hi);
 }
 
 /* Loads hitpoint hi and resumes its accumulators (zero at the start of a pass; the naive
  * kernel's photon batches continue the same sum). */
 static inline void pf_gather_load(pf_gather_hp* h, __global const pf_hitpoint* hps, int hi,
-                                  __global const pf_material* mats, __global const int* acc_m,
-                                  __global const pf_acc* acc_tau) {
-  pf_gather_load_fresh(h, hps, hi, mats);
+                                  __global const pf_material* mats, __global const pf_pbr_site* pbr,
+                                  __global const int* acc_m, __global const pf_acc* acc_tau) {
+  pf_gather_load_fresh(h, hps, hi, mats, pbr);
   h->m = acc_m[hi];
   h->t0 = acc_tau[3 * hi];
   h->t1 = acc_tau[3 * hi + 1];
@@ -115,12 +158,9 @@ static inline void pf_gather_photon(pf_gather_hp* h, float px, float py, float p
                                     float f2, const int skip_direct, const int builtin) {
   if (mesh != h->mesh) return;
   if (skip_direct && (flags & PF_PHOTON_DIRECT)) return;
-  if (!(dx * h->nx + dy * h->ny + dz * h->nz < 0.0f)) return;
+  if (!h->both && !(dx * h->nx + dy * h->ny + dz * h->nz < 0.0f)) return;
   if (!pf_in_radius(h, px, py, pz, builtin)) return;
-  h->m += 1;
-  h->t0 += (pf_acc)(h->fr0 * f0);
-  h->t1 += (pf_acc)(h->fr1 * f1);
-  h->t2 += (pf_acc)(h->fr2 * f2);
+  pf_gather_add(h, dx, dy, dz, f0, f1, f2);
 }
 
 static inline void pf_gather_global(pf_gather_hp* h, __global const pf_photon* p,
@@ -140,11 +180,8 @@ static inline void pf_gather_local(pf_gather_hp* h, __local const pf_photon* p,
 /* The rest of the rule for a photon whose key and distance passed: the direction, then the sums
  * (from its payload, hash_grid.h). */
 static inline void pf_gather_payload(pf_gather_hp* h, __global const pf_photon_payload* p) {
-  if (!(p->dir[0] * h->nx + p->dir[1] * h->ny + p->dir[2] * h->nz < 0.0f)) return;
-  h->m += 1;
-  h->t0 += (pf_acc)(h->fr0 * p->flux[0]);
-  h->t1 += (pf_acc)(h->fr1 * p->flux[1]);
-  h->t2 += (pf_acc)(h->fr2 * p->flux[2]);
+  if (!h->both && !(p->dir[0] * h->nx + p->dir[1] * h->ny + p->dir[2] * h->nz < 0.0f)) return;
+  pf_gather_add(h, p->dir[0], p->dir[1], p->dir[2], p->flux[0], p->flux[1], p->flux[2]);
 }
 
 /* How the hashed-grid gather handles candidates whose key and distance passed (PF_GATHER_LIST, a
@@ -266,12 +303,13 @@ static inline void pf_gather_store(const pf_gather_hp* h, int hi, __global int* 
 /* ---- naive: one work-item per hitpoint, every photon of the batch, index order ---------------- */
 __kernel void gather_naive(__global const pf_hitpoint* hps, int count,
                            __global const pf_photon* photons, int photon_count,
-                           __global const pf_material* mats, int skip_direct,
+                           __global const pf_material* mats,
+                           __global const pf_pbr_site* pbr, int skip_direct,
                            __global int* acc_m, __global pf_acc* acc_tau) {
   const int hi = (int)get_global_id(0);
   if (hi >= count) return;
   pf_gather_hp h;
-  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  pf_gather_load(&h, hps, hi, mats, pbr, acc_m, acc_tau);
   for (int j = 0; j < photon_count; ++j) pf_gather_global(&h, &photons[j], skip_direct, 1);
   pf_gather_store(&h, hi, acc_m, acc_tau);
 }
@@ -279,13 +317,14 @@ __kernel void gather_naive(__global const pf_hitpoint* hps, int count,
 /* ---- local memory: the work-group stages all photons through local memory, L at a time ------ */
 __kernel void gather_local_memory(__global const pf_hitpoint* hps, int count,
                                   __global const pf_photon* photons, int photon_count,
-                                  __global const pf_material* mats, int skip_direct,
+                                  __global const pf_material* mats,
+                                  __global const pf_pbr_site* pbr, int skip_direct,
                                   __global int* acc_m, __global pf_acc* acc_tau,
                                   __local pf_photon* tile) {
   const int hi = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
   const int active = hi < count;
   pf_gather_hp h;
-  if (active) pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  if (active) pf_gather_load(&h, hps, hi, mats, pbr, acc_m, acc_tau);
   for (int base = 0; base < photon_count; base += L) {
     if (base + lid < photon_count) tile[lid] = photons[base + lid];
     barrier(CLK_LOCAL_MEM_FENCE);
@@ -301,11 +340,12 @@ __kernel void gather_local_memory(__global const pf_hitpoint* hps, int count,
 __kernel void gather_photon_sort(__global const pf_hitpoint* hps, int count,
                                  __global const pf_photon* sorted, __global const int* mesh_start,
                                  int mesh_count, __global const pf_material* mats,
-                                 int skip_direct, __global int* acc_m, __global pf_acc* acc_tau) {
+                                 __global const pf_pbr_site* pbr, int skip_direct,
+                                 __global int* acc_m, __global pf_acc* acc_tau) {
   const int hi = (int)get_global_id(0);
   if (hi >= count) return;
   pf_gather_hp h;
-  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  pf_gather_load(&h, hps, hi, mats, pbr, acc_m, acc_tau);
   if (h.mesh >= 0 && h.mesh < mesh_count) {
     const int end = mesh_start[h.mesh + 1];
     for (int j = mesh_start[h.mesh]; j < end; ++j)
@@ -318,14 +358,15 @@ __kernel void gather_photon_sort(__global const pf_hitpoint* hps, int count,
 __kernel void gather_hitpoint_sort(__global const pf_hitpoint* hps, __global const int* order,
                                    int order_count, __global const pf_photon* sorted,
                                    __global const int* mesh_start, int mesh_count,
-                                   __global const pf_material* mats, int skip_direct,
+                                   __global const pf_material* mats,
+                                   __global const pf_pbr_site* pbr, int skip_direct,
                                    __global int* acc_m, __global pf_acc* acc_tau) {
   const int s = (int)get_global_id(0);
   if (s >= order_count) return;
   const int hi = order[s];
   if (hi < 0) return; /* filler */
   pf_gather_hp h;
-  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  pf_gather_load(&h, hps, hi, mats, pbr, acc_m, acc_tau);
   if (h.mesh >= 0 && h.mesh < mesh_count) {
     const int end = mesh_start[h.mesh + 1];
     for (int j = mesh_start[h.mesh]; j < end; ++j)
@@ -339,7 +380,8 @@ static inline void pf_hitpoint_sort_local(__global const pf_hitpoint* hps,
                                           __global const int* order, int order_count,
                                           __global const pf_photon* sorted,
                                           __global const int* mesh_start, int mesh_count,
-                                          __global const pf_material* mats, int skip_direct,
+                                          __global const pf_material* mats,
+                                          __global const pf_pbr_site* pbr, int skip_direct,
                                           __global int* acc_m, __global pf_acc* acc_tau,
                                           __local pf_photon* tile, const int builtin) {
   const int s = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
@@ -349,7 +391,7 @@ static inline void pf_hitpoint_sort_local(__global const pf_hitpoint* hps,
   if (mesh < 0 || mesh >= mesh_count) return; /* uniform */
   const int hi = s < order_count ? order[s] : -1;
   pf_gather_hp h;
-  if (hi >= 0) pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  if (hi >= 0) pf_gather_load(&h, hps, hi, mats, pbr, acc_m, acc_tau);
   const int begin = mesh_start[mesh], end = mesh_start[mesh + 1];
   for (int base = begin; base < end; base += L) {
     if (base + lid < end) tile[lid] = sorted[base + lid];
@@ -366,20 +408,22 @@ __kernel void gather_hitpoint_sort_local(__global const pf_hitpoint* hps,
                                          __global const int* order, int order_count,
                                          __global const pf_photon* sorted,
                                          __global const int* mesh_start, int mesh_count,
-                                         __global const pf_material* mats, int skip_direct,
+                                         __global const pf_material* mats,
+                                         __global const pf_pbr_site* pbr, int skip_direct,
                                          __global int* acc_m, __global pf_acc* acc_tau,
                                          __local pf_photon* tile) {
-  pf_hitpoint_sort_local(hps, order, order_count, sorted, mesh_start, mesh_count, mats,
+  pf_hitpoint_sort_local(hps, order, order_count, sorted, mesh_start, mesh_count, mats, pbr,
                          skip_direct, acc_m, acc_tau, tile, 1);
 }
 
 __kernel void gather_manual_distance(__global const pf_hitpoint* hps, __global const int* order,
                                      int order_count, __global const pf_photon* sorted,
                                      __global const int* mesh_start, int mesh_count,
-                                     __global const pf_material* mats, int skip_direct,
+                                     __global const pf_material* mats,
+                                     __global const pf_pbr_site* pbr, int skip_direct,
                                      __global int* acc_m, __global pf_acc* acc_tau,
                                      __local pf_photon* tile) {
-  pf_hitpoint_sort_local(hps, order, order_count, sorted, mesh_start, mesh_count, mats,
+  pf_hitpoint_sort_local(hps, order, order_count, sorted, mesh_start, mesh_count, mats, pbr,
                          skip_direct, acc_m, acc_tau, tile, 0);
 }
 
@@ -424,10 +468,11 @@ static inline void pf_tile_flush(pf_gather_hp* h, int active, __local const pf_p
 
 /* Loads the work-group's cluster and this work-item's member (hi < 0: filler). */
 static inline int pf_cluster_member(__global const pf_hitpoint* hps, __global const int* order,
-                                    __global const pf_material* mats, __global const int* acc_m,
+                                    __global const pf_material* mats,
+                                    __global const pf_pbr_site* pbr, __global const int* acc_m,
                                     __global const pf_acc* acc_tau, pf_gather_hp* h) {
   const int hi = order[get_global_id(0)];
-  if (hi >= 0) pf_gather_load(h, hps, hi, mats, acc_m, acc_tau);
+  if (hi >= 0) pf_gather_load(h, hps, hi, mats, pbr, acc_m, acc_tau);
   return hi;
 }
 
@@ -437,7 +482,8 @@ __kernel void gather_clusters(__global const pf_hitpoint* hps, __global const in
                               __global const int* group_cluster,
                               __global const pf_cluster* clusters,
                               __global const pf_photon* sorted, __global const int* mesh_start,
-                              int mesh_count, __global const pf_material* mats, int skip_direct,
+                              int mesh_count, __global const pf_material* mats,
+                              __global const pf_pbr_site* pbr, int skip_direct,
                               __global int* acc_m, __global pf_acc* acc_tau,
                               __local pf_photon* tile, __local int* scan) {
   const int L = (int)get_local_size(0);
@@ -445,7 +491,7 @@ __kernel void gather_clusters(__global const pf_hitpoint* hps, __global const in
   const int mesh = c->mesh;
   if (mesh < 0 || mesh >= mesh_count) return; /* uniform */
   pf_gather_hp h;
-  const int hi = pf_cluster_member(hps, order, mats, acc_m, acc_tau, &h);
+  const int hi = pf_cluster_member(hps, order, mats, pbr, acc_m, acc_tau, &h);
   const float cx = c->centre[0], cy = c->centre[1], cz = c->centre[2];
   const float rc = c->radius * PF_SLACK, r2 = rc * rc;
   const int begin = mesh_start[mesh], end = mesh_start[mesh + 1];
@@ -473,7 +519,8 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
                                    __global const pf_photon* sorted,
                                    __global const pf_mesh_grid* mesh_grid,
                                    __global const int* cell_start, int mesh_count,
-                                   __global const pf_material* mats, int skip_direct,
+                                   __global const pf_material* mats,
+                                   __global const pf_pbr_site* pbr, int skip_direct,
                                    __global int* acc_m, __global pf_acc* acc_tau) {
   __global const pf_cluster* c = &clusters[group_cluster[get_group_id(0)]];
   const int mesh = c->mesh;
@@ -483,7 +530,7 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
   const int hi = order[get_global_id(0)];
   if (hi < 0) return; /* filler */
   pf_gather_hp h;
-  pf_gather_load(&h, hps, hi, mats, acc_m, acc_tau);
+  pf_gather_load(&h, hps, hi, mats, pbr, acc_m, acc_tau);
   const float cx = c->centre[0], cy = c->centre[1], cz = c->centre[2];
   const float pad = c->radius * PF_SLACK * PF_SLACK;
   const int x0 = pf_grid_coord(cx - pad, g->lo[0], g->bin_size, g->nx);
@@ -535,13 +582,14 @@ __kernel void gather_hash_grid(__global const pf_gather_site* sites,
                                __global const pf_photon_keys4* keys, __global const int* slot_start,
                                float ox, float oy, float oz, float cell, int nx, int ny, int nz,
                                uint mask, int unique, __global const pf_material* mats,
+                               __global const pf_pbr_site* pbr,
                                int skip_direct, float alpha, float slab,
                                __global const float* weights,
                                int weighted, __global int* rmax_next, __local int* lmax) {
   const int hi = (int)get_global_id(0), lid = (int)get_local_id(0), L = (int)get_local_size(0);
   int r_next = 0; /* pf_float_ordered(0.0f) */
   pf_gather_hp h;
-  if (hi < count) pf_gather_load_split(&h, sites, states, hi, mats);
+  if (hi < count) pf_gather_load_split(&h, sites, states, hi, mats, pbr);
   if (hi < count && h.mesh >= 0) {
     const float pad = h.r * PF_SLACK;
     const int x0 = pf_grid_coord(h.x - pad, ox, cell, nx), x1 = pf_grid_coord(h.x + pad, ox, cell, nx);

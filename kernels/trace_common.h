@@ -14,6 +14,8 @@
 
 #include "photonflow/shared_types.h"
 #include "photonflow/material/texture_shared.h"
+#include "photonflow/material/pbr_point_shared.h"
+#include "photonflow/material/pbr_scatter_shared.h"
 
 /* The rope traversal's leaf test, vectorised: intersect_shared.h's pf_kd_leaf_intersect runs one
  * Havel–Herout test per triangle through the leaf's index list; this one reads a leaf-ordered copy
@@ -186,12 +188,13 @@ static inline void pf_surface_at(const pf_scene_view* s, const float* o, const f
   sh->material = t->material;
 }
 
-/* Base-colour textures (scene.h, texture_shared.h): the kernel parameters of the tracing kernels
- * that shade, after PF_SCENE_PARAMS. mat_tex[m] is material m's texture (−1 none), uvs six floats
- * per triangle (u0 v0 u1 v1 u2 v2), texels the linear RGBA pool. */
+/* Textures (scene.h, texture_shared.h): the kernel parameters of the tracing kernels that shade,
+ * after PF_SCENE_PARAMS. mat_tex[m] is material m's base-colour texture (−1 none), mr_tex[m] its
+ * metallic-roughness texture (Scene::mr_texture_of; −1 none), uvs six floats per triangle (u0 v0
+ * u1 v1 u2 v2), texels the linear RGBA pool. */
 #define PF_TEXTURE_PARAMS                                                                 \
   __global const pf_texture *textures, __global const float *texels,                      \
-      __global const pf_int *mat_tex, __global const float *uvs
+      __global const pf_int *mat_tex, __global const float *uvs, __global const pf_int *mr_tex
 
 /* The texture factor of a diffuse colour at hit h (Scene::texture_value: the UV interpolated by
  * the barycentrics in the host's order, then pf_tex_sample): 1 and f = the texel value when
@@ -208,6 +211,17 @@ static inline int pf_texture_factor(__global const pf_texture* textures, __globa
   f[1] = rgba[1];
   f[2] = rgba[2];
   return 1;
+}
+
+/* The BSDF parameters of a PF_MAT_PBR material at hit h: surface.h's bsdf_params_at, through the
+ * same shared function (pbr_point_shared.h pf_pbr_params_at). */
+static inline void pf_pbr_params_hit(__global const pf_texture* textures, __global const float* texels,
+                                     __global const pf_int* mat_tex, __global const float* uvs,
+                                     __global const pf_int* mr_tex, __global const pf_material* mats,
+                                     int material, const pf_ray_hit* h, pf_bsdf_params* p) {
+  const int bt = mat_tex[material], mt = mr_tex[material];
+  pf_pbr_params_at(&mats[material], textures, texels, bt, mt,
+                   bt >= 0 || mt >= 0 ? uvs + 6 * (size_t)h->tri : uvs, h->u, h->v, p);
 }
 
 /* Origin of a ray leaving the surface along d: pushed off on d's side (surface.h). */

@@ -84,6 +84,72 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     direct[k] = direct[k] + weight[k] * (m->color[k] * PF_S_INV_PI * sum[k] * inv);
 }
 
+/* eye_pass.cpp's direct_light_pbr: the same draws and shadow rays at a PF_MAT_PBR point, L_direct
+ * = (1/n) Σ f(wo, w_l)·L_e·|cos θ_x|·G/p with the BSDF in radiance mode (pf_pbr_eval_world: front
+ * shading normal ns, front geometric normal ng); light from behind counts where the BSDF
+ * transmits, and the shadow ray leaves on w_l's side. Adds weight · L_direct to `direct`. */
+static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const float* ng,
+                                const float* ns, const pf_bsdf_params* bp, const float* wo,
+                                int samples, uint seed, uint pass, uint index, float eps,
+                                const float* weight, float* direct) {
+  if (s->light_count <= 0 || samples <= 0) return;
+  pf_rng rng = pf_rng_start(seed, PF_SHADOW_STREAM + pass, index);
+  float sum[3] = {0.0f, 0.0f, 0.0f};
+  for (int smp = 0; smp < samples; ++smp) {
+    const float ul = pf_rng_next(&rng);
+    const float u1 = pf_rng_next(&rng);
+    const float u2 = pf_rng_next(&rng);
+    float p_light;
+    const int li = pf_pick_light(s, ul, &p_light);
+    __global const pf_light* l = &s->lights[li];
+    if (p_light <= 0.0f) continue;
+    float q[3], w[3], g;
+    if (l->type == PF_LIGHT_AREA) {
+      __global const pf_triangle* t = &s->tris[l->triangle];
+      const float v0[3] = {t->v0[0], t->v0[1], t->v0[2]};
+      const float v1[3] = {t->v1[0], t->v1[1], t->v1[2]};
+      const float v2[3] = {t->v2[0], t->v2[1], t->v2[2]};
+      pf_sample_triangle(v0, v1, v2, u1, u2, q);
+      float e1[3], e2[3], nl[3];
+      for (int k = 0; k < 3; ++k) {
+        e1[k] = v1[k] - v0[k];
+        e2[k] = v2[k] - v0[k];
+      }
+      pf_cross3(e1, e2, nl);
+      pf_normalize3(nl);
+      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
+      const float d2 = pf_dot3(w, w);
+      if (d2 <= 0.0f) continue;
+      const float dl = sqrt(d2);
+      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
+      const float cos_l = -pf_dot3(w, nl);
+      if (cos_l <= 0.0f) continue;
+      g = fabs(pf_dot3(w, ns)) * cos_l * l->area / d2;
+    } else {
+      for (int k = 0; k < 3; ++k) q[k] = l->position[k];
+      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
+      const float d2 = pf_dot3(w, w);
+      if (d2 <= 0.0f) continue;
+      const float dl = sqrt(d2);
+      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
+      g = fabs(pf_dot3(w, ns)) / d2;
+    }
+    float f[3];
+    pf_pbr_eval_world(bp, ns, ng, wo, w, f); /* 0 for a pair the normals disagree on */
+    if (!(f[0] > 0.0f || f[1] > 0.0f || f[2] > 0.0f)) continue;
+    const float e = pf_dot3(w, ng) >= 0.0f ? eps : -eps;
+    float o[3], sd[3];
+    for (int k = 0; k < 3; ++k) o[k] = p[k] + ng[k] * e;
+    for (int k = 0; k < 3; ++k) sd[k] = q[k] - o[k];
+    pf_ray_hit hit;
+    if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
+    const float gp = g / p_light;
+    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + f[k] * l->radiance[k] * gp;
+  }
+  const float inv = 1.0f / (float)samples;
+  for (int k = 0; k < 3; ++k) direct[k] = direct[k] + weight[k] * (sum[k] * inv);
+}
+
 /* cam: eye[3], forward[3], right[3], up[3], tan_half_x, tan_half_y, aperture, focus_distance
  * (camera.h's CameraFrame; aperture > 0: a thin lens, lens_shared.h, as CameraFrame::ray).
  * Pixels pixel_offset .. pixel_offset + pixel_count − 1 (row-major) form this batch; outputs are
@@ -95,7 +161,8 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
                               int sampler, float eps,
                               int pixel_offset, int pixel_count, __global pf_hitpoint* slots,
                               __global int* used, __global float* emitted_out,
-                              __global float* direct_out) {
+                              __global float* direct_out, int has_pbr,
+                              __global pf_pbr_point* pbr_slots) {
   const int local_pix = (int)get_global_id(0);
   if (local_pix >= pixel_count) return;
   PF_SCENE_VIEW(s);
@@ -143,11 +210,21 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
         for (int k = 0; k < 3; ++k) emitted[k] = emitted[k] + T[k] * m->emission[k];
       float n[3];
       for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
-      if (pf_is_diffuse(m)) {
-        /* The texture's value joins the weight (eye_pass.cpp): the gathers' f_r = color/π. */
+      const int pbr = m->type == PF_MAT_PBR;
+      if (pbr || pf_is_diffuse(m)) {
+        /* Diffuse: the texture's value joins the weight (eye_pass.cpp): the gathers' f_r =
+         * color/π. PBR (non-delta, the visible point sits here): the weight carries no texture
+         * factor; the point's BSDF parameters do (pbr_point_shared.h, a table parallel to the
+         * hitpoints, written for every hitpoint of a scene with a PBR material). */
         float tf[3];
-        if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf))
+        pf_pbr_point pt;
+        if (pbr) {
+          pf_pbr_params_hit(textures, texels, mat_tex, uvs, mr_tex, s.mats, sh.material, &h,
+                            &pt.params);
+          pt.outside = sh.front ? 1 : 0;
+        } else if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf)) {
           for (int k = 0; k < 3; ++k) T[k] = T[k] * tf[k];
+        }
         pf_hitpoint hp;
         float nd[3] = {d[0], d[1], d[2]};
         if (depth > 0) pf_normalize3(nd); /* the camera ray's is unit already */
@@ -166,7 +243,19 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
         hp.material = sh.material;
         slots[slot] = hp;
         used[slot] = 1;
-        if (shadow_rays) {
+        if (has_pbr) {
+          if (!pbr) { /* a diffuse hitpoint's entry: zeros, never read */
+            for (int k = 0; k < 3; ++k) pt.params.base_color[k] = 0.0f;
+            pt.params.metallic = pt.params.roughness = pt.params.transmission = pt.params.ior = 0.0f;
+            pt.outside = 0;
+          }
+          pbr_slots[slot] = pt;
+        }
+        if (shadow_rays && pbr) {
+          const float wo[3] = {-nd[0], -nd[1], -nd[2]};
+          pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, seed, pass,
+                              index, eps, T, direct);
+        } else if (shadow_rays) {
           float ng[3];
           for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
           pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, seed, pass, index, eps, T, direct);

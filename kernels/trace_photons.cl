@@ -109,6 +109,50 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, uint seed, uint 
       const float b2 = pf_rng_next(&rng);
       pf_sample_cosine_hemisphere(n, b1, b2, d);
       specular_only = 0;
+    } else if (m->type == PF_MAT_PBR) {
+      /* glTF metallic-roughness (photon_pass.cpp): stored as at a diffuse hit, then continued by
+       * sampling the adjoint BSDF (PF_TRANSPORT_IMPORTANCE) in the local frame of the outside
+       * shading normal, times Veach's shading-normal correction; draws u1, u2, u3, then u_rr. */
+      pf_photon ph;
+      for (int k = 0; k < 3; ++k) {
+        ph.position[k] = sh.p[k];
+        ph.dir[k] = d[k];
+        ph.flux[k] = flux[k];
+      }
+      ph.mesh = sh.mesh;
+      ph.pass = (int)pass;
+      ph.flags = (first_hit ? PF_PHOTON_DIRECT : 0) |
+                 (!first_hit && specular_only ? PF_PHOTON_CAUSTIC : 0);
+      slots[(size_t)n_stored * (size_t)count + (size_t)local_i] = ph;
+      ++n_stored;
+      /* photon_pass.h: u1, u2, u3 for pf_pbr_scatter, then u_rr (always drawn) */
+      const float u1 = pf_rng_next(&rng);
+      const float u2 = pf_rng_next(&rng);
+      const float u3 = pf_rng_next(&rng);
+      pf_bsdf_params bp;
+      pf_pbr_params_hit(textures, texels, mat_tex, uvs, mr_tex, s.mats, sh.material, &h, &bp);
+      const float wo[3] = {-d[0], -d[1], -d[2]};
+      float wi[3], w[3], pdf;
+      const int ok = pf_pbr_scatter(&bp, sh.ns, sh.ng, wo, u1, u2, u3, PF_TRANSPORT_IMPORTANCE,
+                                    wi, w, &pdf);
+      const float u_rr = pf_rng_next(&rng);
+      if (!ok) break;
+      /* Russian roulette on the throughput: q = min(1, max_c Φ'_c / max_c Φ_c), Φ' = Φ·w */
+      float next[3];
+      for (int k = 0; k < 3; ++k) next[k] = flux[k] * w[k];
+      const float b12 = flux[1] < flux[2] ? flux[2] : flux[1];
+      const float before = flux[0] < b12 ? b12 : flux[0];
+      const float a12 = next[1] < next[2] ? next[2] : next[1];
+      const float after = next[0] < a12 ? a12 : next[0];
+      const float r = after / before;
+      const float q = r < 1.0f ? r : 1.0f; /* std::min(1.f, r) */
+      if (!(q > 0.0f) || u_rr >= q) break;
+      const float inv_q = 1.0f / q;
+      for (int k = 0; k < 3; ++k) {
+        flux[k] = next[k] * inv_q;
+        d[k] = wi[k];
+      }
+      specular_only = 0;
     } else if (m->type == PF_MAT_MIRROR) {
       for (int k = 0; k < 3; ++k) flux[k] = flux[k] * c[k];
       pf_reflect(d, n, d);

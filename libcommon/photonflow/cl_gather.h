@@ -142,6 +142,8 @@ class DevicePpmState {
   // hash-grid pass). A pass changes only the states: sync copies those back.
   ClBuffer sites_, states_;
   ClBuffer mats_;                // the scene's materials, written with the hitpoints
+  ClBuffer pbr_;                 // the hitpoints' pf_pbr_site table (one stand-in without PBR)
+  std::vector<int32_t> sppm_pbr_order_;  // SPPM: the visible point of each pixel
   ClBuffer weights_;             // SPPM: the pass's eye-path throughputs β, 3 per pixel
   // SPPM: the pass's sites and β on the host (sppm_sites), kept from pass to pass.
   std::vector<pf_hitpoint> sppm_sites_;
@@ -189,7 +191,8 @@ class GridGatherTimer {
   size_t nh_ = 0, np_ = 0;
   int mesh_count_ = 0;
   int skip_direct_ = 0;
-  const ClBuffer *hps_ = nullptr, *mats_ = nullptr, *acc_m_ = nullptr, *acc_tau_ = nullptr;
+  const ClBuffer *hps_ = nullptr, *mats_ = nullptr, *pbr_ = nullptr, *acc_m_ = nullptr,
+                 *acc_tau_ = nullptr;
   const ClBuffer *sorted_ = nullptr, *mesh_grid_ = nullptr, *cell_start_ = nullptr;
   size_t acc_bytes_ = 0;
 };

@@ -49,18 +49,11 @@ inline Vec3 diffuse_color(const Scene& s, const pf_material& m, const SurfaceHit
 // factors times the textures there (spec 3.9.2: baseColor = factor × sRGB-decoded texture,
 // metallic = factor × texture.B, roughness = factor × texture.G).
 inline pf_bsdf_params bsdf_params_at(const Scene& s, const pf_material& m, const SurfaceHit& sh) {
+  // One definition for both backends (material/pbr_point_shared.h, the kernels call it too).
+  const int bt = s.texture_of(sh.material), mt = s.mr_texture_of(sh.material);
   pf_bsdf_params p;
-  diffuse_color(s, m, sh).store(p.base_color);
-  p.metallic = m.metallic;
-  p.roughness = m.roughness;
-  p.transmission = m.transmission;
-  p.ior = m.ior;
-  const int t = s.mr_texture_of(sh.material);
-  if (t >= 0) {
-    const Vec3 mr = s.texture_value(t, size_t(sh.tri), sh.u, sh.v);
-    p.metallic *= mr.z;
-    p.roughness *= mr.y;
-  }
+  pf_pbr_params_at(&m, s.textures.data(), s.texels.data(), bt, mt,
+                   bt >= 0 || mt >= 0 ? s.uvs[size_t(sh.tri)].uv : nullptr, sh.u, sh.v, &p);
   return p;
 }
 

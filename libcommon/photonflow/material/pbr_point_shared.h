@@ -20,6 +20,7 @@
 #define PHOTONFLOW_MATERIAL_PBR_POINT_SHARED_H
 
 #include "photonflow/material/bsdf_shared.h"
+#include "photonflow/material/texture_shared.h"
 
 #ifdef __OPENCL_VERSION__
 #pragma OPENCL FP_CONTRACT OFF
@@ -32,6 +33,55 @@ typedef struct {
 
 #ifndef __OPENCL_VERSION__
 static_assert(sizeof(pf_pbr_point) == 32, "pf_pbr_point layout");
+#endif
+
+/* The BSDF parameters of PF_MAT_PBR material m at barycentrics (u, v) (the weights of v1 and v2)
+ * of a triangle: the glTF factors times the textures there (glTF 2.0 spec 3.9.2: baseColor =
+ * factor × the (linear) base-colour texel, metallic = factor × texel.B, roughness = factor ×
+ * texel.G). base_tex / mr_tex: the material's base-colour and metallic-roughness textures (−1
+ * none) in `textures`/`texels` (scene.h); uv: the triangle's six UVs (u0 v0 u1 v1 u2 v2), read
+ * only when a texture is present. The one definition of the parameters at a hit: the host's
+ * bsdf_params_at (surface.h) and the tracing kernels (trace_common.h) both call it, so both
+ * backends shade with the same bits (each product one rounded float multiplication, as
+ * diffuse_color's m.color × texture_value). */
+PF_INLINE void pf_pbr_params_at(PF_GLOBAL const pf_material* m, PF_GLOBAL const pf_texture* textures,
+                                PF_GLOBAL const float* texels, int base_tex, int mr_tex,
+                                PF_GLOBAL const float* uv, float u, float v, pf_bsdf_params* p) {
+  p->base_color[0] = m->color[0];
+  p->base_color[1] = m->color[1];
+  p->base_color[2] = m->color[2];
+  p->metallic = m->metallic;
+  p->roughness = m->roughness;
+  p->transmission = m->transmission;
+  p->ior = m->ior;
+  float rgba[4];
+  if (base_tex >= 0) {
+    const pf_texture t = textures[base_tex];
+    pf_tex_sample_triangle(&t, texels, uv, u, v, rgba);
+    p->base_color[0] = m->color[0] * rgba[0];
+    p->base_color[1] = m->color[1] * rgba[1];
+    p->base_color[2] = m->color[2] * rgba[2];
+  }
+  if (mr_tex >= 0) {
+    const pf_texture t = textures[mr_tex];
+    pf_tex_sample_triangle(&t, texels, uv, u, v, rgba);
+    p->metallic = m->metallic * rgba[2];
+    p->roughness = m->roughness * rgba[1];
+  }
+}
+
+/* A PBR visible point as the device gathers read it (kernels/illuminate_methods.cl): its BSDF
+ * and ω_o = −hp.dir (the split hitpoints of the hashed grid carry no direction). One per hitpoint
+ * of a pass, built by the host (cl_gather.cpp) from the hitpoints and their pf_pbr_point table;
+ * entries of diffuse hitpoints are never read. 48 bytes. */
+typedef struct {
+  pf_pbr_point pt;
+  pf_float wo[3];
+  pf_int pad;
+} pf_pbr_site;
+
+#ifndef __OPENCL_VERSION__
+static_assert(sizeof(pf_pbr_site) == 48, "pf_pbr_site layout");
 #endif
 
 /* f(ω_o, ω_i) at the point, rgb, radiance mode. n_facing: the hitpoint's unit normal (facing the

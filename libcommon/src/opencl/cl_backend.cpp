@@ -15,7 +15,8 @@ namespace pf {
 // The baked scene on the device, uploaded once per context (and again when the scene changes).
 struct ClSceneBuffers {
   ClBuffer tris, hh, nodes, leaf_tris, group_of_first, leaf_groups, mats, lights, light_cdf;
-  ClBuffer textures, texels, mat_tex, uvs;  // base-colour textures (PF_TEXTURE_PARAMS)
+  ClBuffer textures, texels, mat_tex, uvs, mr_tex;  // textures (PF_TEXTURE_PARAMS)
+  bool has_pbr = false;  // a PF_MAT_PBR material: the eye pass writes a pf_pbr_point table
   cl_int node_count = 0, light_count = 0;
   std::string scene_id;
   size_t triangle_count = 0;
@@ -82,9 +83,14 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
   {  // Textures: every material's entry (−1 without), and one-element stand-ins where the scene
      // has no textures or UVs (a buffer is never empty; the kernels read them only through a
      // material whose entry is ≥ 0, and load_scene guarantees the UVs then).
-    std::vector<int32_t> mat_tex(scene.materials.size(), -1);
-    for (size_t m = 0; m < mat_tex.size(); ++m) mat_tex[m] = scene.texture_of(int(m));
+    std::vector<int32_t> mat_tex(scene.materials.size(), -1), mr_tex(scene.materials.size(), -1);
+    for (size_t m = 0; m < mat_tex.size(); ++m) {
+      mat_tex[m] = scene.texture_of(int(m));
+      mr_tex[m] = scene.mr_texture_of(int(m));
+      s->has_pbr = s->has_pbr || scene.materials[m].type == PF_MAT_PBR;
+    }
     if (mat_tex.empty()) mat_tex.push_back(-1);
+    if (mr_tex.empty()) mr_tex.push_back(-1);
     std::vector<pf_texture> textures = scene.textures;
     if (textures.empty()) textures.push_back(pf_texture{1, 1, 0, 0, 0, 0});
     std::vector<float> texels = scene.texels;
@@ -95,6 +101,7 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
     s->texels = upload_array(dev, texels, "texels");
     s->mat_tex = upload_array(dev, mat_tex, "materials' textures");
     s->uvs = upload_array(dev, uvs, "texture coordinates");
+    s->mr_tex = upload_array(dev, mr_tex, "materials' metallic-roughness textures");
   }
   s->node_count = cl_int(scene.kd.nodes.size());
   s->light_count = cl_int(scene.lights.size());
@@ -145,17 +152,21 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
   const ClBuffer& used = dev.scratch("eye.used", batch * size_t(spp) * sizeof(cl_int));
   const ClBuffer& emitted = dev.scratch("eye.emitted", batch * 3 * sizeof(float));
   const ClBuffer& direct = dev.scratch("eye.direct", batch * 3 * sizeof(float));
+  // The PBR table (parallel to the hitpoints) only for a scene with a PF_MAT_PBR material; else a
+  // one-element stand-in the kernel never writes.
+  const ClBuffer& pbr = dev.scratch("eye.pbr", (sb.has_pbr ? batch * size_t(spp) : 1) * sizeof(pf_pbr_point));
   std::vector<cl_int> flags;
   res.hitpoints.reserve(npix * size_t(spp));
+  if (sb.has_pbr) res.bsdf.reserve(npix * size_t(spp));
   const cl_int shadow = opt.direct == DirectMode::ShadowRays ? 1 : 0;
   for (size_t off = 0; off < npix; off += batch) {
     const cl_int count = cl_int(std::min(batch, npix - off));
     dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
              sb.leaf_groups, sb.mats, sb.lights,
-             sb.light_cdf, sb.light_count, sb.textures, sb.texels, sb.mat_tex, sb.uvs, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
+             sb.light_cdf, sb.light_count, sb.textures, sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps, cl_int(off),
-             count, slots, used, emitted, direct);
+             count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr);
     dev.run(k, size_t(count));
     const size_t nslots = size_t(count) * size_t(spp);
     flags.resize(nslots);
@@ -165,6 +176,13 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
     for (size_t i = 0; i < nslots; ++i)
       if (flags[i]) res.hitpoints.push_back(hp[i]);
     map.unmap();
+    if (sb.has_pbr) {
+      ClMapping pmap(dev, pbr, nslots * sizeof(pf_pbr_point), ClMapping::Mode::Read);
+      const auto* pp = pmap.as<const pf_pbr_point>();
+      for (size_t i = 0; i < nslots; ++i)
+        if (flags[i]) res.bsdf.push_back(pp[i]);
+      pmap.unmap();
+    }
     dev.read(emitted, size_t(count) * 3 * sizeof(float), &res.emitted[off * 3]);
     dev.read(direct, size_t(count) * 3 * sizeof(float), &res.direct[off * 3]);
   }
@@ -196,7 +214,7 @@ void trace_photon_batch(const Scene& scene, uint32_t pass, const PhotonPassOptio
   cl_kernel k = dev.kernel("trace_photons", "trace_photons");
   dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
            sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.textures,
-           sb.texels, sb.mat_tex, sb.uvs, cl_uint(opt.seed),
+           sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, cl_uint(opt.seed),
            cl_uint(pass), cl_int(opt.max_bounces), ray_epsilon(scene), cl_uint(first),
            cl_int(count), slots, stored);
   dev.run(k, count);

@@ -18,6 +18,7 @@
 #include "photonflow/illuminate.h"
 #include "photonflow/provenance.h"
 #include "photonflow/sppm.h"
+#include "photonflow/surface.h"
 
 namespace pf {
 
@@ -378,7 +379,8 @@ struct PassPhotons {
   size_t n = 0;
 };
 
-// One hash-grid pass over nh split hitpoints already in `hps` (the scene's materials in `mats`),
+// One hash-grid pass over nh split hitpoints already in `hps` (the scene's materials in `mats`,
+// their pf_pbr_site table in `pbr`, pbr_sites),
 // rmax being their largest finite positive radius as max_radius computes it (the cell side is
 // hash_cell·rmax): builds the hashed grid — on the host into mapped buffers (photons on the
 // device are mapped, no copy on a CPU device; order_hash_grid checks them), or with the device's
@@ -388,7 +390,8 @@ struct PassPhotons {
 // kept on the device needs no copy to the host between passes).
 // With `weights` (SPPM, DevicePpmState::sppm_pass), τ_M of hitpoint i is multiplied by
 // weights[3i .. 3i + 2] before the update.
-float hash_grid_pass(const Scene& scene, const SplitHitpoints& hps, const ClBuffer& mats, size_t nh,
+float hash_grid_pass(const Scene& scene, const SplitHitpoints& hps, const ClBuffer& mats,
+                     const ClBuffer& pbr, size_t nh,
                      DirectMode direct, float rmax, const PassPhotons& photons,
                      const PpmOptions& opt, ClContext& dev, GatherTimes& times,
                      const ClBuffer* weights = nullptr) {
@@ -438,7 +441,7 @@ float hash_grid_pass(const Scene& scene, const SplitHitpoints& hps, const ClBuff
   cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
   dev.args(k, *hps.sites, *hps.states, cl_int(nh), *d.payload, *d.keys, *d.slot_start, g.origin[0],
            g.origin[1], g.origin[2], g.cell, cl_int(g.n[0]), cl_int(g.n[1]), cl_int(g.n[2]),
-           cl_uint(g.mask), cl_int(g.unique), mats,
+           cl_uint(g.mask), cl_int(g.unique), mats, pbr,
            cl_int(direct == DirectMode::ShadowRays ? 1 : 0), opt.alpha, opt.slab,
            weights ? *weights : dev.scratch("ppm.no-weights", sizeof(float)),
            cl_int(weights ? 1 : 0), next, ClLocal{L * sizeof(cl_int)});
@@ -480,6 +483,46 @@ void count_pass(HitpointSet& h, uint64_t emitted) {
   h.photons_emitted += emitted;
   h.passes += 1;
   h.estimator = "ppm";
+}
+
+// A state's pf_pbr_point table must cover its hitpoints when the scene has a PBR material (the
+// gathers read entry i of hitpoint i; pbr_point_shared.h).
+void check_pbr_table(const Scene& scene, size_t hitpoints, size_t table) {
+  if (scene_has_pbr(scene) && table != hitpoints)
+    throw input_error("", "the hitpoints (" + std::to_string(hitpoints) + ") of a scene with PBR "
+                              "materials come with " + std::to_string(table) +
+                              " BSDF records (hitpoints.h5 /hitpoints/bsdf)",
+                      "remake the hitpoints with trace-hitpoints");
+}
+
+// The gathers' pf_pbr_site table (pbr_point_shared.h) of n hitpoints: entry i from hitpoint
+// hps[order[i]] and its record pbr[order[i]] (hps[i], pbr[i] without an order), ω_o = −dir, in
+// the scratch buffer `name` (or `own`, a resident state's buffer, grown as needed). A scene
+// without PBR material gets a one-element stand-in the kernels never read, and costs nothing more.
+const ClBuffer& pbr_sites(ClContext& dev, const Scene& scene, const std::string& name,
+                          const pf_hitpoint* hps, const pf_pbr_point* pbr, const int32_t* order,
+                          size_t n, ClBuffer* own = nullptr) {
+  const bool has = scene_has_pbr(scene) && n > 0;
+  const size_t bytes = (has ? n : 1) * sizeof(pf_pbr_site);
+  const ClBuffer* b;
+  if (own) {
+    if (own->bytes() < bytes) *own = dev.buffer(bytes);
+    b = own;
+  } else {
+    b = &dev.scratch(name, bytes);
+  }
+  if (!has) return *b;
+  ClMapping map(dev, *b, bytes, ClMapping::Mode::Write);
+  pf_pbr_site* out = map.as<pf_pbr_site>();
+  for (size_t i = 0; i < n; ++i) {
+    const size_t j = order ? size_t(order[i]) : i;
+    pf_pbr_site site{};
+    site.pt = pbr[j];
+    for (int a = 0; a < 3; ++a) site.wo[a] = -hps[j].dir[a];
+    out[i] = site;
+  }
+  map.unmap();
+  return *b;
 }
 
 }  // namespace
@@ -541,6 +584,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   check_pass(opt, nh, np);
   require_sphere(opt.slab);
   check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
+  check_pbr_table(scene, nh, h.bsdf.size());
   const int mesh_count = int(scene.mesh_names.size());
   const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
   const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
@@ -556,7 +600,9 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       const SplitHitpoints hps{&dev.scratch("ppm.sites", nh * sizeof(pf_gather_site)),
                                &dev.scratch("ppm.states", nh * sizeof(pf_ppm_state))};
       write_split(dev, hps, h.hitpoints.data(), nullptr, nh);
-      hash_grid_pass(scene, hps, mats, nh, h.direct_mode, max_radius(h),
+      const ClBuffer& pbr =
+          pbr_sites(dev, scene, "ppm.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh);
+      hash_grid_pass(scene, hps, mats, pbr, nh, h.direct_mode, max_radius(h),
                      PassPhotons{photons.data(), nullptr, np}, opt, dev, times);
       read_split_states(dev, hps, h.hitpoints.data(), nullptr, nh);
     } else if (opt.method == GatherMethod::Naive) {
@@ -573,12 +619,15 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       for (size_t hoff = 0; hoff < nh; hoff += hb) {
         const cl_int hcount = cl_int(std::min(hb, nh - hoff));
         dev.write(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
+        const ClBuffer& pbr = pbr_sites(dev, scene, "ppm.pbr", &h.hitpoints[hoff],
+                                        h.bsdf.empty() ? nullptr : &h.bsdf[hoff], nullptr,
+                                        size_t(hcount));
         dev.fill_zero(acc_m, size_t(hcount) * sizeof(cl_int));
         dev.fill_zero(acc_tau, size_t(hcount) * 3 * acc);
         for (size_t poff = 0; poff < np; poff += pb) {
           const cl_int pcount = cl_int(std::min(pb, np - poff));
           if (pb != np) dev.write(phs, size_t(pcount) * sizeof(pf_photon), &photons[poff]);
-          dev.args(gather, hps, hcount, phs, pcount, mats, skip_direct, acc_m, acc_tau);
+          dev.args(gather, hps, hcount, phs, pcount, mats, pbr, skip_direct, acc_m, acc_tau);
           const double t0 = dev.kernel_seconds();
           dev.run(gather, size_t(hcount));
           times.gather += since(dev, t0);
@@ -599,6 +648,8 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       const ClBuffer& acc_tau = dev.scratch("ppm.acc_tau", nh * 3 * acc);
       const ClBuffer& phs = dev.scratch("ppm.photons", np * sizeof(pf_photon));
       dev.write(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
+      const ClBuffer& pbr =
+          pbr_sites(dev, scene, "ppm.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh);
       dev.write(phs, np * sizeof(pf_photon), photons.data());
       dev.fill_zero(acc_m, nh * sizeof(cl_int));
       dev.fill_zero(acc_tau, nh * 3 * acc);
@@ -607,7 +658,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       if (m == GatherMethod::LocalMemory) {
         require_local(dev, L * sizeof(pf_photon), L, "pass a smaller --work-group");
         cl_kernel k = dev.kernel("illuminate_methods", "gather_local_memory");
-        dev.args(k, hps, cl_int(nh), phs, cl_int(np), mats, skip_direct, acc_m, acc_tau,
+        dev.args(k, hps, cl_int(nh), phs, cl_int(np), mats, pbr, skip_direct, acc_m, acc_tau,
                  ClLocal{L * sizeof(pf_photon)});
         dev.run(k, nh);
         times.work_items = (nh + L - 1) / L * L;
@@ -618,7 +669,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
         t0 = dev.kernel_seconds();
         if (m == GatherMethod::PhotonSort) {
           cl_kernel k = dev.kernel("illuminate_methods", "gather_photon_sort");
-          dev.args(k, hps, cl_int(nh), *s.sorted, *s.mesh_start, cl_int(mesh_count), mats,
+          dev.args(k, hps, cl_int(nh), *s.sorted, *s.mesh_start, cl_int(mesh_count), mats, pbr,
                    skip_direct, acc_m, acc_tau);
           dev.run(k, nh);
           times.work_items = nh;
@@ -633,11 +684,11 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
           cl_kernel k = dev.kernel("illuminate_methods", name);
           if (m == GatherMethod::HitpointSort)
             dev.args(k, hps, ob, cl_int(order.size()), *s.sorted, *s.mesh_start,
-                     cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau);
+                     cl_int(mesh_count), mats, pbr, skip_direct, acc_m, acc_tau);
           else {
             require_local(dev, L * sizeof(pf_photon), L, "pass a smaller --work-group");
             dev.args(k, hps, ob, cl_int(order.size()), *s.sorted, *s.mesh_start,
-                     cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau,
+                     cl_int(mesh_count), mats, pbr, skip_direct, acc_m, acc_tau,
                      ClLocal{L * sizeof(pf_photon)});
           }
           dev.run(k, order.size());
@@ -664,7 +715,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
                         "make clusters with a smaller --wg-size");
           cl_kernel k = dev.kernel("illuminate_methods", "gather_clusters");
           dev.args(k, hps, *dc.order, *dc.groups, *dc.clusters, *s.sorted, *s.mesh_start,
-                   cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau, tile, scan);
+                   cl_int(mesh_count), mats, pbr, skip_direct, acc_m, acc_tau, tile, scan);
           dev.run(k, dc.items, dc.wg);
         } else {
           DeviceGrid g = device_grid(dev, phs, np, mesh_count, ppm_grid_params(h, opt));
@@ -672,7 +723,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
           t0 = dev.kernel_seconds();
           cl_kernel k = dev.kernel("illuminate_methods", "gather_grid_clusters");
           dev.args(k, hps, *dc.order, *dc.groups, *dc.clusters, *g.sorted, *g.mesh_grid,
-                   *g.cell_start, cl_int(mesh_count), mats, skip_direct, acc_m, acc_tau);
+                   *g.cell_start, cl_int(mesh_count), mats, pbr, skip_direct, acc_m, acc_tau);
           dev.run(k, dc.items, dc.wg);
         }
         times.work_items = dc.items;
@@ -722,8 +773,8 @@ GatherTimes DevicePpmState::hash_grid(const pf_photon* host, const ClBuffer* dev
   require_sphere(opt.slab);
   if (nh > 0 && np > 0) {
     upload();
-    rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, nh, h_.direct_mode,
-                           rmax_, PassPhotons{host, device, np}, opt, dev_, times);
+    rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, pbr_, nh,
+                           h_.direct_mode, rmax_, PassPhotons{host, device, np}, opt, dev_, times);
     host_current_ = false;
   }
   count_pass(h_, emitted);
@@ -775,9 +826,24 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
       }
       m.unmap();
     }
+    {  // the PBR sites of the pass's visible points, by pixel (sppm_sites' placement)
+      check_pbr_table(scene_, eye.hitpoints.size(), eye.bsdf.size());
+      std::vector<int32_t>& at = sppm_pbr_order_;
+      at.assign(nh, -1);
+      for (size_t i = 0; i < eye.hitpoints.size(); ++i)
+        at[size_t(eye.hitpoints[i].pixel_y) * size_t(h_.width) + size_t(eye.hitpoints[i].pixel_x)] =
+            int32_t(i);
+      if (scene_has_pbr(scene_)) {  // pixels without a visible point (−1) take entry 0, unread
+        for (int32_t& j : at) j = std::max(j, 0);
+        if (eye.hitpoints.empty()) at.clear();
+      }
+      pbr_sites(dev_, scene_, "", eye.hitpoints.data(), eye.bsdf.data(),
+                at.empty() ? nullptr : at.data(), at.empty() ? 0 : nh, &pbr_);
+    }
     if (np > 0) {
-      rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, nh, h_.direct_mode,
-                             rmax_, PassPhotons{host, device, np}, o, dev_, times, &weights_);
+      rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, pbr_, nh,
+                             h_.direct_mode, rmax_, PassPhotons{host, device, np}, o, dev_, times,
+                             &weights_);
       host_current_ = false;
     }
   }
@@ -817,9 +883,12 @@ std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& e
   dev.write(weights, nh * 3 * sizeof(float), beta.data());
   const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
   dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
+  check_pbr_table(scene, nh, eye.bsdf.size());
+  const ClBuffer& pbr =
+      pbr_sites(dev, scene, "pppm.pbr", eye.hitpoints.data(), eye.bsdf.data(), nullptr, nh);
   GatherTimes times;
-  hash_grid_pass(scene, hps, mats, nh, direct, radius, PassPhotons{nullptr, photons.photons, np},
-                 o, dev, times, &weights);
+  hash_grid_pass(scene, hps, mats, pbr, nh, direct, radius,
+                 PassPhotons{nullptr, photons.photons, np}, o, dev, times, &weights);
   read_split_states(dev, hps, fresh.data(), nullptr, nh);
   for (size_t i = 0; i < nh; ++i)
     for (int c = 0; c < 3; ++c) tau_beta[i * 3 + size_t(c)] = fresh[i].flux[c];
@@ -847,6 +916,11 @@ void DevicePpmState::upload() {
                                : hitpoint_cell_order(h_.hitpoints, origin, kHitpointOrderCell * rmax_);
     write_split(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(),
                 order_.empty() ? nullptr : order_.data(), nh);
+    if (!is_sppm_state(h_)) {  // (SPPM's come with each pass's visible points)
+      check_pbr_table(scene_, nh, h_.bsdf.size());
+      pbr_sites(dev_, scene_, "", h_.hitpoints.data(), h_.bsdf.data(),
+                order_.empty() ? nullptr : order_.data(), nh, &pbr_);
+    }
   }
   device_current_ = true;
 }
@@ -880,6 +954,8 @@ GridGatherTimer::GridGatherTimer(const Scene& scene, const HitpointSet& h,
   dev.write(*mats_, scene.materials.size() * sizeof(pf_material), scene.materials.data());
   hps_ = &dev.scratch("timer.hitpoints", nh1 * sizeof(pf_hitpoint));
   dev.write(*hps_, nh_ * sizeof(pf_hitpoint), h.hitpoints.data());
+  check_pbr_table(scene, nh_, h.bsdf.size());
+  pbr_ = &pbr_sites(dev, scene, "timer.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh_);
   acc_m_ = &dev.scratch("timer.acc_m", nh1 * sizeof(cl_int));
   acc_tau_ = &dev.scratch("timer.acc_tau", nh1 * 3 * acc_bytes_);
   dev.fill_zero(*acc_m_, nh1 * sizeof(cl_int));
@@ -903,7 +979,7 @@ double GridGatherTimer::time(const ClusterSet& c, int runs) {
     dev_.fill_zero(*acc_m_, nh_ * sizeof(cl_int));
     dev_.fill_zero(*acc_tau_, nh_ * 3 * acc_bytes_);
     dev_.args(k, *hps_, *dc.order, *dc.groups, *dc.clusters, *sorted_, *mesh_grid_, *cell_start_,
-              cl_int(mesh_count_), *mats_, cl_int(skip_direct_), *acc_m_, *acc_tau_);
+              cl_int(mesh_count_), *mats_, *pbr_, cl_int(skip_direct_), *acc_m_, *acc_tau_);
     const double t0 = dev_.kernel_seconds();
     dev_.run(k, dc.items, dc.wg);
     best = std::min(best, since(dev_, t0));
