@@ -53,6 +53,8 @@
 // so the position is taken from the node alone for .gltf/.glb files.
 #include "photonflow/scene_import.h"
 
+#include "alpha_import.h"
+
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/GltfMaterial.h>
 #include <assimp/IOStream.hpp>
@@ -254,15 +256,18 @@ float get_float(const aiMaterial& m, const char* key, unsigned type, unsigned id
 // `textured`: the material has a base-colour texture (then Kd is its colour factor; a factor of
 // up to 1, glTF's default, becomes kMaxAlbedo without a warning: texels reach 1 and the product
 // must stay below 1). A COLLADA <diffuse> is a colour or a texture, never both: assimp 5.2.5
-// gives a textured one the colour 1 (test_textures checks it).
+// gives a textured one the colour 1 (test_textures checks it). `alpha_masked`: a glTF MASK/BLEND
+// material (alpha_import.h), whose baseColorFactor alpha (which assimp 5.2.5 also hands as
+// AI_MATKEY_OPACITY) is its cut-out, not a glass: the opacity is not read then.
 pf_material convert_material(const aiMaterial& am, const std::string& name,
-                             const std::string& file, BakeReport& report, bool textured) {
+                             const std::string& file, BakeReport& report, bool textured,
+                             bool alpha_masked = false) {
   const Vec3 kd = get_color(am, AI_MATKEY_COLOR_DIFFUSE, Vec3(0, 0, 0));
   const Vec3 ks = get_color(am, AI_MATKEY_COLOR_SPECULAR, Vec3(0, 0, 0));
   const Vec3 ke = get_color(am, AI_MATKEY_COLOR_EMISSIVE, Vec3(0, 0, 0));
   const Vec3 kr = get_color(am, AI_MATKEY_COLOR_REFLECTIVE, Vec3(0, 0, 0)) *
                   get_float(am, AI_MATKEY_REFLECTIVITY, 0.f);
-  const float opacity = get_float(am, AI_MATKEY_OPACITY, 1.f);
+  const float opacity = alpha_masked ? 1.f : get_float(am, AI_MATKEY_OPACITY, 1.f);
   const float ni = get_float(am, AI_MATKEY_REFRACTI, 1.f);
   int illum = -1;
   am.Get(AI_MATKEY_OBJ_ILLUM, illum);
@@ -367,9 +372,11 @@ class TextureLoader {
   TextureLoader(Scene& scene, BakeReport& report) : scene_(scene), report_(report) {}
 
   // Texture index for `ref` of material `material` in scene file `file`, or −1 (with one warning
-  // line) when its file is missing. InputError for a damaged or oversized image.
+  // line) when its file is missing. InputError for a damaged or oversized image. alpha_map: an
+  // OBJ map_d, stored as its coverage (map_d_coverage) in all four channels, apart from the same
+  // image used as a colour map.
   int load(const aiScene& ai, const std::string& file, const std::string& material,
-           const TextureRef& ref) {
+           const TextureRef& ref, bool alpha_map = false) {
     std::string key, name, bytes;
     const aiTexture* embedded = ai.GetEmbeddedTexture(ref.path.c_str());
     if (embedded) {
@@ -386,6 +393,7 @@ class TextureLoader {
     }
     // Refusals name the image and the material that uses it.
     const std::string label = name + " (texture of material '" + material + "')";
+    if (alpha_map) key = "alpha:" + key;
     auto image = images_.find(key);
     if (image == images_.end()) {
       const uint64_t pool = scene_.texels.size() / 4;
@@ -430,11 +438,15 @@ class TextureLoader {
         }
         img = decode_texture_image(bytes, label, kMaxTextureSide, left);
       }
-      // Colour map: sRGB-encoded RGB to linear, alpha as stored.
+      // Colour map: sRGB-encoded RGB to linear, alpha as stored. Alpha map: the coverage.
       const float* lut = srgb8_table();
       const size_t n = size_t(img.width) * size_t(img.height);
       scene_.texels.reserve(scene_.texels.size() + 4 * n);
-      for (size_t i = 0; i < n; ++i) {
+      const std::vector<float> coverage =
+          alpha_map ? map_d_coverage(img.rgba8) : std::vector<float>();
+      for (size_t i = 0; alpha_map && i < n; ++i)
+        scene_.texels.insert(scene_.texels.end(), 4, coverage[i]);
+      for (size_t i = 0; !alpha_map && i < n; ++i) {
         scene_.texels.push_back(lut[img.rgba8[4 * i]]);
         scene_.texels.push_back(lut[img.rgba8[4 * i + 1]]);
         scene_.texels.push_back(lut[img.rgba8[4 * i + 2]]);
@@ -497,7 +509,10 @@ class Flattener {
       if (name.empty()) name = "material" + std::to_string(i);
       material_map_[i] = int(scene_.materials.size());
       const std::optional<TextureRef> ref = base_color_texture(am);
-      const pf_material m = convert_material(am, name, file_, report_, ref.has_value());
+      const AlphaImport alpha =
+          read_alpha(am, file_, name, lower_extension(file_) == ".obj", report_.warnings);
+      const pf_material m = convert_material(am, name, file_, report_, ref.has_value(),
+                                             alpha.masked() && alpha.base_texture_alpha);
       int texture = -1;
       if (ref && (m.type == PF_MAT_DIFFUSE || m.type == PF_MAT_EMITTER)) {
         texture = textures_.load(ai_, file_, name, *ref);
@@ -507,8 +522,35 @@ class Flattener {
       scene_.material_names.push_back(name);
       scene_.material_texture.resize(scene_.materials.size(), -1);
       scene_.material_texture.back() = texture;
+      add_alpha(alpha, i, name, ref, texture);
     }
     return material_map_[i];
+  }
+
+  // The alpha cut-out of the material just added (alpha_import.h): its material_alpha entry
+  // (the table is created at the first masked material, earlier ones opaque). A masked material
+  // reads the base-colour texture's alpha even where it is not diffuse (it is loaded then).
+  void add_alpha(const AlphaImport& a, unsigned i, const std::string& name,
+                 const std::optional<TextureRef>& ref, int texture) {
+    if (!a.masked()) {
+      if (!scene_.material_alpha.empty())
+        scene_.material_alpha.push_back(pf_alpha_material{PF_ALPHA_OPAQUE, 1.f, -1, 0});
+      return;
+    }
+    pf_alpha_material m{a.cutoff, a.factor, -1, 0};
+    if (a.base_texture_alpha && ref) {
+      m.texture = texture >= 0 ? texture : textures_.load(ai_, file_, name, *ref);
+      uv_channel_[i] = ref->uv_channel;
+    } else if (a.map_d) {
+      TextureRef d;
+      d.path = a.map_d_path;
+      d.wrap_s = a.map_d_wrap_s;
+      d.wrap_t = a.map_d_wrap_t;
+      m.texture = textures_.load(ai_, file_, name, d, true);  // OBJ: one UV set
+    }
+    scene_.material_alpha.resize(scene_.materials.size() - 1,
+                                 pf_alpha_material{PF_ALPHA_OPAQUE, 1.f, -1, 0});
+    scene_.material_alpha.push_back(m);
   }
 
   // Scene material index of the file's material called `name`, or −1 if there is none.
@@ -918,8 +960,14 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   // Every material has its texture entry (−1: the inserts' default material); UVs are kept only
   // where some material has a texture (format version 3, docs/FORMATS.md).
   scene.material_texture.resize(scene.materials.size(), -1);
+  // Alpha cut-outs (format version 5): an entry per material once one is masked (the inserts'
+  // default material opaque); the UVs stay where a masked material reads an alpha texture.
+  if (!scene.material_alpha.empty())
+    scene.material_alpha.resize(scene.materials.size(), pf_alpha_material{PF_ALPHA_OPAQUE, 1.f, -1, 0});
   if (std::none_of(scene.material_texture.begin(), scene.material_texture.end(),
-                   [](int32_t t) { return t >= 0; }))
+                   [](int32_t t) { return t >= 0; }) &&
+      std::none_of(scene.material_alpha.begin(), scene.material_alpha.end(),
+                   [](const pf_alpha_material& a) { return a.texture >= 0; }))
     scene.uvs.clear();
 
   bool emitter = !scene.lights.empty();
@@ -1044,6 +1092,7 @@ std::string encode(const Scene& s, const BakeReport& r) {
   w.texts(s.texture_names);
   w.pods(s.material_texture);
   w.pods(s.uvs);
+  w.pods(s.material_alpha);
   w.pod(uint64_t(r.triangles_read));
   w.pod(uint64_t(r.degenerate_dropped));
   w.pod(uint64_t(r.primitives_skipped));
@@ -1070,6 +1119,7 @@ Scene decode(const std::string& bytes, BakeReport& r) {
   s.texture_names = in.texts();
   s.material_texture = in.pods<int32_t>();
   s.uvs = in.pods<TriangleUV>();
+  s.material_alpha = in.pods<pf_alpha_material>();
   r.triangles_read = size_t(in.pod<uint64_t>());
   r.degenerate_dropped = size_t(in.pod<uint64_t>());
   r.primitives_skipped = size_t(in.pod<uint64_t>());
