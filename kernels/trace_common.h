@@ -38,7 +38,9 @@ struct pf_trace_hit_s; /* defined below, after intersect_shared.h's pf_ray_hit *
  * operations in the same order per lane, so the same bits — then applies the scalar rules
  * (interval (tmin, t], ties to the lower triangle index, any-hit at the first hit in leaf order)
  * lane by lane. The traversal passes it the group table as `leaf_tris` (group of each leaf's
- * first index) and the groups as `hh`. */
+ * first index) and the groups as `hh`. In a scene with alpha cut-outs it also skips a lane whose
+ * hit point is cut away (pf_alpha_hit_cut_away, where the scalar test would accept it), reading
+ * the alpha view from the pf_trace_hit its hit pointer belongs to. */
 static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int* group_of_first,
                          __global const pf_hh_triangle* groups, const float* o, const float* d,
                          float tmin, int any_hit, struct pf_trace_hit_s* th);
