@@ -16,6 +16,22 @@
 #include "photonflow/material/texture_shared.h"
 #include "photonflow/material/pbr_point_shared.h"
 #include "photonflow/material/pbr_scatter_shared.h"
+#include "photonflow/material/alpha_shared.h"
+
+/* Alpha cut-outs (alpha_shared.h): the masked scene's tables the leaf test reads. pf_trace hands
+ * the traversal a pf_trace_hit, whose first member is the pf_ray_hit the traversal passes through
+ * to PF_KD_LEAF_TEST unchanged, so the leaf test recovers the view from its hit pointer (a
+ * pointer to a struct's first member converts to one to the struct, C99 6.7.2.1). alpha = 0: the
+ * scene has no masked material, and the leaf test never reads the tables. */
+typedef struct {
+  __global const pf_alpha_material* mats;
+  __global const pf_triangle* tris;
+  __global const pf_texture* textures;
+  __global const float* texels;
+  __global const float* uvs;
+} pf_alpha_view;
+
+struct pf_trace_hit_s; /* defined below, after intersect_shared.h's pf_ray_hit */
 
 /* The rope traversal's leaf test, vectorised: intersect_shared.h's pf_kd_leaf_intersect runs one
  * Havel–Herout test per triangle through the leaf's index list; this one reads a leaf-ordered copy
@@ -24,26 +40,37 @@
  * operations in the same order per lane, so the same bits — then applies the scalar rules
  * (interval (tmin, t], ties to the lower triangle index, any-hit at the first hit in leaf order)
  * lane by lane. The traversal passes it the group table as `leaf_tris` (group of each leaf's
- * first index) and the groups as `hh`. */
+ * first index) and the groups as `hh`. In a scene with alpha cut-outs it also skips a lane whose
+ * hit point is cut away (pf_alpha_hit_cut_away, where the scalar test would accept it), reading
+ * the alpha view from the pf_trace_hit its hit pointer belongs to. */
 static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int* group_of_first,
                          __global const pf_hh_triangle* groups, const float* o, const float* d,
-                         float tmin, int any_hit, float* hit_t, int* hit_tri, float* hit_u,
-                         float* hit_v);
+                         float tmin, int any_hit, struct pf_trace_hit_s* th);
 #define PF_KD_LEAF_TEST(n, lt, h, o, d, tmin, any, hit) \
-  pf_leaf_test4(n, lt, h, o, d, tmin, any, &(hit)->t, &(hit)->tri, &(hit)->u, &(hit)->v)
+  pf_leaf_test4(n, lt, h, o, d, tmin, any, (struct pf_trace_hit_s*)(hit))
 
 #include "photonflow/intersect_shared.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling_shared.h"
 
+struct pf_trace_hit_s {
+  pf_ray_hit hit; /* first */
+  const pf_alpha_view* alpha;
+};
+typedef struct pf_trace_hit_s pf_trace_hit;
+
 #define PF_LEAF_GROUP_FLOAT4 13 /* float4 per group: n, n1, n2 (x, y, z, w each), triangle ids */
 
 static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int* group_of_first,
                          __global const pf_hh_triangle* groups, const float* o, const float* d,
-                         float tmin, int any_hit, float* hit_t, int* hit_tri, float* hit_u,
-                         float* hit_v) {
+                         float tmin, int any_hit, struct pf_trace_hit_s* th) {
   const int count = leaf->count;
   if (count <= 0) return 0;
+  float* hit_t = &th->hit.t;
+  int* hit_tri = &th->hit.tri;
+  float* hit_u = &th->hit.u;
+  float* hit_v = &th->hit.v;
+  const pf_alpha_view* alpha = th->alpha; /* pf_trace's record */
   __global const float4* g =
       (__global const float4*)groups + (size_t)group_of_first[leaf->first] * PF_LEAF_GROUP_FLOAT4;
   float best_t = *hit_t, best_u = *hit_u, best_v = *hit_v;
@@ -82,6 +109,9 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
       if (!in[k] || !(st_[k] <= adet_[k] * best_t)) continue;
       if (!(t[k] > tmin && t[k] <= best_t)) continue;
       if (t[k] == best_t && best_tri >= 0 && tri[k] > best_tri) continue;
+      if (alpha && pf_alpha_hit_cut_away(alpha->mats, alpha->tris, alpha->textures,
+                                         alpha->texels, alpha->uvs, tri[k], u[k], v[k]))
+        continue; /* a cut-away point: the ray passes (alpha_shared.h) */
       best_t = t[k];
       best_tri = tri[k];
       best_u = u[k];
@@ -113,6 +143,8 @@ typedef struct {
   __global const float* light_cdf;
   int node_count;
   int light_count;
+  pf_alpha_view alpha; /* read only when alpha_on (PF_ALPHA_VIEW) */
+  int alpha_on;
 } pf_scene_view;
 
 /* Kernel parameters of the scene, in this order in every tracing kernel. */
@@ -135,19 +167,39 @@ typedef struct {
   s.lights = lights;       \
   s.light_cdf = light_cdf; \
   s.node_count = node_count; \
-  s.light_count = light_count
+  s.light_count = light_count; \
+  s.alpha_on = 0
 
-/* Closest (any_hit = 0) or any (1) hit of o + t·d for t in (tmin, tmax], rope traversal. */
+/* Alpha cut-outs: the kernel parameters after PF_TEXTURE_PARAMS in every tracing kernel (the
+ * texture parameters hold the alpha textures and UVs). alpha_mats: one pf_alpha_material per
+ * material, or one stand-in when alpha_on = 0 (no masked material: never read). */
+#define PF_ALPHA_PARAMS __global const pf_alpha_material *alpha_mats, int alpha_on
+
+/* The alpha view of PF_SCENE_VIEW's s, after it, from PF_TEXTURE_PARAMS and PF_ALPHA_PARAMS. */
+#define PF_ALPHA_VIEW(s)      \
+  s.alpha.mats = alpha_mats;  \
+  s.alpha.tris = tris;        \
+  s.alpha.textures = textures; \
+  s.alpha.texels = texels;    \
+  s.alpha.uvs = uvs;          \
+  s.alpha_on = alpha_on
+
+/* Closest (any_hit = 0) or any (1) hit of o + t·d for t in (tmin, tmax], rope traversal; in a
+ * masked scene hits on cut-away points do not count (pf_leaf_test4). */
 static inline int pf_trace(const pf_scene_view* s, const float* o, const float* d, float tmin,
                            float tmax, int any_hit, pf_ray_hit* hit) {
-  hit->t = tmax;
-  hit->tri = -1;
-  hit->u = 0.0f;
-  hit->v = 0.0f;
+  pf_trace_hit th;
+  th.hit.t = tmax;
+  th.hit.tri = -1;
+  th.hit.u = 0.0f;
+  th.hit.v = 0.0f;
+  th.alpha = s->alpha_on ? &s->alpha : 0;
   /* PF_KD_LEAF_TEST = pf_leaf_test4: the groups travel in the leaf_tris / hh arguments */
-  return pf_kd_traverse_ropes(s->nodes, s->node_count, s->group_of_first,
-                              (__global const pf_hh_triangle*)s->leaf_groups, o, d, tmin,
-                              any_hit, hit);
+  const int r = pf_kd_traverse_ropes(s->nodes, s->node_count, s->group_of_first,
+                                     (__global const pf_hh_triangle*)s->leaf_groups, o, d, tmin,
+                                     any_hit, &th.hit);
+  *hit = th.hit;
+  return r;
 }
 
 /* surface.h's SurfaceHit. */

@@ -154,7 +154,8 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
  * (camera.h's CameraFrame; aperture > 0: a thin lens, lens_shared.h, as CameraFrame::ray).
  * Pixels pixel_offset .. pixel_offset + pixel_count − 1 (row-major) form this batch; outputs are
  * indexed from the batch's start. */
-__kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const float* cam,
+__kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
+                              __global const float* cam,
                               int width, int height,
                               int spp, int columns, int max_depth, int shadow_rays,
                               int shadow_samples, float radius, uint seed, uint pass,
@@ -166,6 +167,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, __global const
   const int local_pix = (int)get_global_id(0);
   if (local_pix >= pixel_count) return;
   PF_SCENE_VIEW(s);
+  PF_ALPHA_VIEW(s);
   const int pix = pixel_offset + local_pix;
   const int x = pix % width, y = pix / width;
   const float eye[3] = {cam[0], cam[1], cam[2]};

@@ -18,12 +18,13 @@
 #include "trace_common.h"
 
 /* Photons first .. first + count − 1 of the pass form this batch; outputs indexed from 0. */
-__kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, uint seed, uint pass, int max_bounces, float eps,
+__kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS, uint seed, uint pass, int max_bounces, float eps,
                             uint first, int count, __global pf_photon* slots,
                             __global int* stored) {
   const int local_i = (int)get_global_id(0);
   if (local_i >= count) return;
   PF_SCENE_VIEW(s);
+  PF_ALPHA_VIEW(s);
   const uint i = first + (uint)local_i;
   int n_stored = 0;
   pf_rng rng = pf_rng_start(seed, pass, i);

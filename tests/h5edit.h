@@ -145,6 +145,16 @@ inline void refresh_scene_id(const std::string& file) {
     // material is PF_MAT_PBR).
     if (H5Lexists(f.get(), "/materials/metallic_roughness_texture", H5P_DEFAULT) > 0)
       read("/materials/metallic_roughness_texture", H5T_NATIVE_INT32, s.material_mr_texture);
+    // Format version 5: the alpha cut-outs, where the file has them.
+    std::vector<float> cutoff, factor;
+    std::vector<int32_t> texture;
+    if (H5Lexists(f.get(), "/materials/alpha_cutoff", H5P_DEFAULT) > 0 &&
+        read("/materials/alpha_cutoff", H5T_NATIVE_FLOAT, cutoff) &&
+        read("/materials/alpha_factor", H5T_NATIVE_FLOAT, factor) &&
+        read("/materials/alpha_texture", H5T_NATIVE_INT32, texture) &&
+        factor.size() == cutoff.size() && texture.size() == cutoff.size())
+      for (size_t i = 0; i < cutoff.size(); ++i)
+        s.material_alpha.push_back(pf_alpha_material{cutoff[i], factor[i], texture[i], 0});
   }
   s.compute_scene_id();
   set_string_attr(file, "/", "scene_id", s.scene_id);

@@ -55,10 +55,10 @@ TEST_CASE("scene.h5 round-trips every dataset", "[formats][scene]") {
   CHECK(r.source == "in-memory");
   CHECK(read_provenance(h5::Reader(tmp / "scene.h5", kSceneFormat, kSceneFormatVersion))
             .parameters.at("answer") == "42");
-  // Versions 1 (variable-length names, h5io.cpp reads both kinds), 2 (no textures) and 3 (no
-  // lens: the camera's pinhole fields only) are still read; a later version is refused by its
-  // number. (Version 4, the materials without the metallic-roughness fields of version 5:
-  // test_pbr_import.)
+  // Versions 1 (variable-length names, h5io.cpp reads both kinds), 2 (no textures), 3 (no
+  // lens: the camera's pinhole fields only) and 4 (no alpha cut-outs; the materials without the
+  // metallic-roughness fields of version 5: test_pbr_import) are still read; a later version is
+  // refused by its number.
   CHECK(kSceneFormatVersion == 5);
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 1);
   CHECK(load_scene(tmp / "scene.h5").mesh_names == s.mesh_names);
@@ -68,6 +68,7 @@ TEST_CASE("scene.h5 round-trips every dataset", "[formats][scene]") {
   CHECK(load_scene(tmp / "scene.h5").camera.aperture == 0.f);
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 4);
   CHECK(load_scene(tmp / "scene.h5").scene_id == s.scene_id);
+  CHECK(load_scene(tmp / "scene.h5").material_alpha.empty());
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 6);
   CHECK_THROWS_AS(load_scene(tmp / "scene.h5"), InputError);
 }

@@ -14,7 +14,9 @@
 //           on 0.1–15 % of the vertex and edge rays of test_raycast's procedural meshes and on
 //           251 of 2,048 rays at the vertices of a flat grid; those tests require only a hit;
 //   Brute — every triangle (the reference).
-// Triangles are tested with the Havel–Herout test (thesis eq. 4.3–4.7).
+// Triangles are tested with the Havel–Herout test (thesis eq. 4.3–4.7). In a scene with alpha
+// cut-outs (Scene::material_alpha, alpha_shared.h) every traversal skips the hits on cut-away
+// points: a ray passes through them (closest and any hit).
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -65,7 +67,8 @@ class RayCaster {
   bool any(const Ray& ray) const;
 
  private:
-  const void* kd_;  // the scene's HostKd (raycast.cpp)
+  const void* kd_;            // the scene's HostKd (raycast.cpp)
+  const Scene* alpha_scene_;  // the scene when it has alpha masks (their test), else nullptr
 };
 
 // The stack traversal's leaf test takes eight triangles per AVX operation where the CPU has AVX

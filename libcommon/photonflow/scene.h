@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "photonflow/kdtree.h"
+#include "photonflow/material/alpha_shared.h"
 #include "photonflow/material/texture_shared.h"
 #include "photonflow/provenance.h"
 #include "photonflow/shared_types.h"
@@ -14,10 +15,11 @@ namespace pf {
 
 constexpr const char* kSceneFormat = "photonflow.scene";
 // 5: metallic-roughness materials (PF_MAT_PBR; materials metallic, roughness, transmission;
-// materials/metallic_roughness_texture); 4: the thin-lens camera (camera aperture,
+// materials/metallic_roughness_texture) and alpha cut-outs (materials/alpha_cutoff, alpha_factor,
+// alpha_texture; only when some material is masked); 4: the thin-lens camera (camera aperture,
 // focus_distance); 3: base-colour textures (textures/*, materials/texture, geometry/uvs); 2: names
 // as fixed-length strings; 1: variable-length names. Versions 1 to 4 are still read (no PBR
-// fields: read as 0; versions 1-3 a pinhole camera; versions 1 and 2 without textures).
+// fields: read as 0; opaque; versions 1-3 a pinhole camera; versions 1 and 2 without textures).
 constexpr int kSceneFormatVersion = 5;
 
 // Largest side of a texture, and most texels of all of a scene's textures together (each texel is
@@ -67,6 +69,10 @@ struct Scene {
   // refuses one on another type). Its texels are stored linear (not sRGB-decoded): an image used
   // as colour and as metallic-roughness is two textures.
   std::vector<int32_t> material_mr_texture;
+  // Alpha cut-outs (format version 5; alpha_shared.h): one entry per material (cutoff −1 = not
+  // masked), or empty when no material is masked (the rays' fast path: no alpha test at all).
+  // A masked material's alpha texture needs uvs, like a base-colour texture.
+  std::vector<pf_alpha_material> material_alpha;
   std::string scene_id;            // SHA-256 of the baked content (see compute_scene_id)
   std::string source;              // path of the file it was baked from
 
@@ -102,6 +108,10 @@ struct Scene {
     return i;
   }
   size_t pick_light_search(float u) const;  // upper_bound over light_cdf
+  // True when the ray casters test alpha (raycast.cpp, kernels): material_alpha is not empty.
+  // load_scene and the importer leave it empty when no material is masked; a table without a
+  // masked entry (a scene built in memory) gives the same hits, only through the slower path.
+  bool has_alpha_masks() const { return !material_alpha.empty(); }
   // Base-colour texture of material `material`, −1 for none.
   int texture_of(int material) const {
     return size_t(material) < material_texture.size() ? material_texture[size_t(material)] : -1;
@@ -124,7 +134,8 @@ struct Scene {
   // scene_id = SHA-256 over triangles, materials, lights and camera: two bakes of the same input
   // with the same options have the same id; any change of geometry, material, light or camera
   // changes it. With textures, also over the texture table, texels, the materials' textures and
-  // the UVs (a scene without textures keeps the id of format version 2).
+  // the UVs (a scene without textures keeps the id of format version 2). With a masked material,
+  // also over material_alpha (a scene without masks keeps the id of format version 4).
   void compute_scene_id();
 };
 

@@ -13,8 +13,11 @@
  * pf_alpha_cutoff_valid; NaN, negative or > 1 values are refused (the caller reports one line,
  * exit 2) rather than clamped.
  *
- * Not wired in yet: the any-hit test in intersect_shared.h / raycast.cpp / trace_common.h, the
- * scene.h5 datasets (format version 4) and the importers (see docs/SCENES.md, "Alpha cut-outs").
+ * Where it is used: scene.h5 format version 5 stores one pf_alpha_material per material
+ * (/materials/alpha_cutoff, alpha_factor, alpha_texture; scene.h); the host's leaf loops
+ * (raycast.cpp) and the kernels' leaf test (kernels/trace_common.h) skip a hit for which
+ * pf_alpha_hit_cut_away is 1, so eye rays, photons, shadow rays and the path tracer pass through
+ * cut-away texels. Scenes without a masked material never call it.
  */
 #ifndef PHOTONFLOW_MATERIAL_ALPHA_SHARED_H
 #define PHOTONFLOW_MATERIAL_ALPHA_SHARED_H
@@ -45,6 +48,42 @@ PF_INLINE float pf_alpha_at(const pf_texture* tex, PF_GLOBAL const float* pool,
   float rgba[4];
   pf_tex_sample_triangle(tex, pool, uv, u, v, rgba);
   return factor_alpha * rgba[3];
+}
+
+/* Where a material's alpha comes from (scene.h5 version 5, one per material):
+ *   cutoff  — PF_ALPHA_OPAQUE (−1, exactly): not masked, alpha never read; [0, 1]: masked with
+ *             this alphaCutoff (any other value is refused on read);
+ *   factor  — the constant alpha in [0, 1] (glTF baseColorFactor.a; 1 for OBJ map_d);
+ *   texture — index into the scene's texture table whose texel ALPHA channel multiplies factor
+ *             (glTF: the base-colour texture; OBJ: the map_d texture, its own entry), −1: none. */
+typedef struct {
+  pf_float cutoff;
+  pf_float factor;
+  pf_int texture;
+  pf_int pad; /* 0 */
+} pf_alpha_material;
+
+#ifndef __OPENCL_VERSION__
+static_assert(sizeof(pf_alpha_material) == 16, "pf_alpha_material layout");
+#endif
+
+/* The any-hit test of a hit on triangle `tri` at barycentrics (u, v) (weights of v1 and v2):
+ * 1 when the triangle's material is masked and its alpha there is below the cutoff, so the hit
+ * does not count (the ray goes on). uvs: six floats per triangle (needed only when some masked
+ * material has a texture; scene.h5 guarantees them then). */
+PF_INLINE int pf_alpha_hit_cut_away(PF_GLOBAL const pf_alpha_material* mats,
+                                    PF_GLOBAL const pf_triangle* tris,
+                                    PF_GLOBAL const pf_texture* textures,
+                                    PF_GLOBAL const float* texels, PF_GLOBAL const float* uvs,
+                                    int tri, float u, float v) {
+  const pf_alpha_material a = mats[tris[tri].material];
+  if (!pf_alpha_masked(a.cutoff)) return 0;
+  float alpha = a.factor;
+  if (a.texture >= 0) {
+    const pf_texture t = textures[a.texture];
+    alpha = pf_alpha_at(&t, texels, uvs + 6 * (long)tri, u, v, a.factor);
+  }
+  return pf_alpha_cut_away(alpha, a.cutoff);
 }
 
 #endif /* PHOTONFLOW_MATERIAL_ALPHA_SHARED_H */

@@ -55,6 +55,8 @@
 // COLLADA <phong> or <blinn> without <specular> is glossy (rule 4, roughness 0.89).
 #include "material_import.h"
 
+#include "alpha_import.h"
+
 #include <assimp/GltfMaterial.h>
 #include <assimp/ObjMaterial.h>
 #include <assimp/material.h>
@@ -143,13 +145,6 @@ std::optional<TextureRef> texture_ref(const aiMaterial& am, aiTextureType type,
   return r;
 }
 
-// The base-colour texture a material names: glTF's baseColorTexture (assimp 5.2 gives it as
-// aiTextureType_BASE_COLOR and as DIFFUSE), OBJ's map_Kd and COLLADA's diffuse <texture> (DIFFUSE).
-std::optional<TextureRef> base_color_texture(const aiMaterial& am) {
-  for (aiTextureType type : {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE})
-    if (auto r = texture_ref(am, type, TexelDecoding::kSrgb)) return r;
-  return std::nullopt;
-}
 
 // glTF's metallicRoughnessTexture (assimp 5.2.5: aiTextureType_UNKNOWN index 0; it is also listed
 // as METALNESS and DIFFUSE_ROUGHNESS), decoded linear.
@@ -223,6 +218,12 @@ MaterialValues read_values(const aiMaterial& am, const std::string& name, const 
 
 }  // namespace
 
+std::optional<TextureRef> base_color_texture(const aiMaterial& am) {
+  for (aiTextureType type : {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE})
+    if (auto r = texture_ref(am, type, TexelDecoding::kSrgb)) return r;
+  return std::nullopt;
+}
+
 int TextureLoader::load(const aiScene& ai, const std::string& file, const std::string& material,
                         const TextureRef& ref) {
   std::string key, name, bytes;
@@ -241,7 +242,9 @@ int TextureLoader::load(const aiScene& ai, const std::string& file, const std::s
   }
   const bool linear = ref.decoding == TexelDecoding::kLinear;
   // Refusals name the image and the material that uses it.
-  const std::string label = name + " (" + (linear ? "metallic-roughness" : "base-colour") +
+  const bool coverage_map = ref.decoding == TexelDecoding::kCoverage;
+  const std::string label = name + " (" +
+                            (linear ? "metallic-roughness" : coverage_map ? "alpha" : "base-colour") +
                             " texture of material '" + material + "')";
   const auto image_key = std::make_pair(int(ref.decoding), key);
   auto image = images_.find(image_key);
@@ -296,7 +299,13 @@ int TextureLoader::load(const aiScene& ai, const std::string& file, const std::s
     const float* lut = srgb8_table();
     const size_t n = size_t(img.width) * size_t(img.height);
     scene_.texels.reserve(scene_.texels.size() + 4 * n);
-    for (size_t i = 0; i < n; ++i) {
+    // Coverage map (OBJ map_d): the coverage in all four channels.
+    const std::vector<float> coverage = ref.decoding == TexelDecoding::kCoverage
+                                            ? map_d_coverage(img.rgba8)
+                                            : std::vector<float>();
+    for (size_t i = 0; i < coverage.size(); ++i)
+      scene_.texels.insert(scene_.texels.end(), 4, coverage[i]);
+    for (size_t i = 0; coverage.empty() && i < n; ++i) {
       for (int k = 0; k < 3; ++k) {
         const uint8_t c = img.rgba8[4 * i + size_t(k)];
         scene_.texels.push_back(linear ? float(c) / 255.f : lut[c]);
@@ -325,8 +334,9 @@ int TextureLoader::load(const aiScene& ai, const std::string& file, const std::s
 
 ImportedMaterial import_material(const aiScene& ai, const aiMaterial& am, const std::string& name,
                                  const std::string& file, TextureLoader& textures,
-                                 BakeReport& report) {
-  const MaterialValues v = read_values(am, name, file);
+                                 BakeReport& report, bool alpha_masked) {
+  MaterialValues v = read_values(am, name, file);
+  if (alpha_masked) v.opacity = 1.f;  // the alpha is a cut-out (alpha_import.h), not a glass
   const std::optional<TextureRef> base_ref = base_color_texture(am);
   // The metallic-roughness texture belongs to the glTF factors (rule 3).
   const std::optional<TextureRef> mr_ref =

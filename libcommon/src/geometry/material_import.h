@@ -5,6 +5,7 @@
 #include <assimp/scene.h>
 
 #include <map>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -30,6 +31,7 @@ std::string fmt_vec(const Vec3& v);
 enum class TexelDecoding {
   kSrgb,    // colour map (base colour): sRGB-encoded RGB → linear, alpha as stored
   kLinear,  // data map (glTF metallicRoughnessTexture: B metallic, G roughness): code / 255
+  kCoverage,  // OBJ map_d (alpha_import.h map_d_coverage): the coverage in all four channels
 };
 struct TextureRef {
   std::string path;          // as the file gives it: a file name, or "*N" / a name for embedded ones
@@ -66,11 +68,17 @@ struct ImportedMaterial {
   unsigned uv_channel = 0;  // the mesh UV channel its textures read
 };
 
+// The base-colour texture a material names: glTF's baseColorTexture (assimp 5.2 gives it as
+// aiTextureType_BASE_COLOR and as DIFFUSE), OBJ's map_Kd and COLLADA's diffuse <texture> (DIFFUSE).
+std::optional<TextureRef> base_color_texture(const aiMaterial& am);
+
 // Converts material `am` (called `name`) of assimp scene `ai`, read from `file`, by the rules of
 // docs/SCENES.md, loading its textures through `textures`. Warnings go to `report`; InputError for
-// non-finite values and for a transmitting material with an ior of 1.
+// non-finite values and for a transmitting material with an ior of 1. `alpha_masked`: a glTF
+// MASK/BLEND material (alpha_import.h), whose baseColorFactor alpha (which assimp 5.2.5 also
+// hands as AI_MATKEY_OPACITY) is its cut-out, not a glass: the opacity is not read then.
 ImportedMaterial import_material(const aiScene& ai, const aiMaterial& am, const std::string& name,
                                  const std::string& file, TextureLoader& textures,
-                                 BakeReport& report);
+                                 BakeReport& report, bool alpha_masked = false);
 
 }  // namespace pf::import

@@ -9,6 +9,11 @@
 // operations in the same order per lane, so the same bits as pf_kd_leaf_intersect. The stack
 // traversal uses the same leaf test over the 8-byte nodes, or where the CPU has AVX one that
 // tests eight triangles per operation (leaf_intersect_avx), with the same bits again.
+//
+// Alpha cut-outs (alpha_shared.h): in a scene with a masked material every traversal skips a hit
+// whose pf_alpha_hit_cut_away is 1 where it would accept it (the ray goes on, closest and any
+// hit alike). The test is compiled into separate instances (template kMasked) chosen once per
+// ray, so a scene without masks runs the unchanged leaf loops.
 #include "photonflow/raycast.h"
 
 #include <omp.h>
@@ -23,7 +28,8 @@
 
 #include "photonflow/shared_types.h"
 
-// The compact rope loop's leaf test (PF_KD_CLEAF_TEST): a leaf record's aux is its first packet.
+// The compact rope loop's leaf test (PF_KD_CLEAF_TEST): a leaf record's aux is its first packet;
+// `groups` is the RopeCtx (packets and alpha test) that cast passes as the hh argument.
 static int pf_host_cleaf_test4(int first_packet, int count, const pf_hh_triangle* groups,
                                const float* o, const float* d, float tmin, int any_hit,
                                float* hit_t, pf_int* hit_tri, float* hit_u, float* hit_v);
@@ -38,14 +44,27 @@ namespace pf {
 
 namespace {
 
+// The any-hit test of a masked scene (alpha_shared.h) over the scene's own tables.
+struct AlphaTest {
+  const Scene* s;
+  bool cut_away(int32_t tri, float u, float v) const {
+    return pf_alpha_hit_cut_away(s->material_alpha.data(), s->triangles.data(),
+                                 s->textures.data(), s->texels.data(),
+                                 s->uvs.empty() ? nullptr : s->uvs[0].uv, tri, u, v) != 0;
+  }
+};
+
 // Brute force: every triangle, the reference for tests.
 bool traverse_brute(const Scene& scene, const float* o, const float* d, float tmin, bool any_hit,
                     pf_ray_hit& hit) {
   const int32_t n = int32_t(scene.hh.size());
+  const AlphaTest alpha{&scene};
+  const bool masked = scene.has_alpha_masks();
   for (int32_t i = 0; i < n; ++i) {
     float t, u, v;
     if (!pf_hh_intersect(&scene.hh[size_t(i)], o, d, tmin, hit.t, &t, &u, &v)) continue;
     if (t == hit.t && hit.tri >= 0) continue;  // equal t: the lower index (found first) wins
+    if (masked && alpha.cut_away(i, u, v)) continue;
     hit = {t, i, u, v};
     if (any_hit) return true;
   }
@@ -216,11 +235,11 @@ struct Lanes {
 };
 
 // The lanes of `mask` that passed a packet test, finished one by one in leaf order, each against
-// the tmax of that moment (pf_hh_intersect's last steps; tri_of(l) is lane l's triangle).
-// Returns true at the first hit with any_hit.
-template <class TriOf>
+// the tmax of that moment (pf_hh_intersect's last steps; tri_of(l) is lane l's triangle); with
+// kMasked skipping cut-away points (alpha->cut_away). Returns true at the first hit with any_hit.
+template <bool kMasked, class TriOf>
 inline bool finish_lanes(int mask, const Lanes& a, TriOf&& tri_of, float tmin, bool any_hit,
-                         pf_ray_hit& best) {
+                         pf_ray_hit& best, const AlphaTest* alpha) {
   for (; mask; mask &= mask - 1) {
     const int l = __builtin_ctz(unsigned(mask));
     if (!(a.st[l] <= a.adet[l] * best.t)) continue;  // tmax has shrunk within the packet
@@ -228,7 +247,9 @@ inline bool finish_lanes(int mask, const Lanes& a, TriOf&& tri_of, float tmin, b
     if (!(t > tmin && t <= best.t)) continue;
     const int32_t tri = tri_of(l);
     if (t == best.t && best.tri >= 0 && tri > best.tri) continue;
-    best = {t, tri, a.su[l] / a.adet[l], a.sv[l] / a.adet[l]};
+    const float u = a.su[l] / a.adet[l], v = a.sv[l] / a.adet[l];
+    if (kMasked && alpha->cut_away(tri, u, v)) continue;
+    best = {t, tri, u, v};
     if (any_hit) return true;
   }
   return false;
@@ -240,8 +261,9 @@ inline bool finish_lanes(int mask, const Lanes& a, TriOf&& tri_of, float tmin, b
 // pf_hh_intersect's expressions in the same order (no contraction: baseline x86-64 has no FMA),
 // and the lanes that pass are then finished one by one in leaf order, each against the tmax of
 // that moment, exactly as the scalar loop does.
+template <bool kMasked>
 inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r, float tmin,
-                           bool any_hit, pf_ray_hit& best) {
+                           bool any_hit, pf_ray_hit& best, const AlphaTest* alpha) {
 #ifdef __SSE2__
   const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), minus_one = _mm_set1_ps(-1.0f);
   const __m128 sign = _mm_set1_ps(-0.0f), eps = _mm_set1_ps(PF_HH_EDGE_EPS);
@@ -290,7 +312,8 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
     _mm_store_ps(a_su, su);
     _mm_store_ps(a_sv, sv);
     const Lanes lanes{a_st, a_adet, a_tp, a_det, a_su, a_sv};
-    if (finish_lanes(mask, lanes, [p](int l) { return p->tri[l]; }, tmin, any_hit, best))
+    if (finish_lanes<kMasked>(mask, lanes, [p](int l) { return p->tri[l]; }, tmin, any_hit, best,
+                              alpha))
       return true;
   }
   return false;
@@ -307,6 +330,7 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
     float t, u, v;
     if (!pf_hh_intersect(&h, r.o, r.d, tmin, best.t, &t, &u, &v)) continue;
     if (t == best.t && best.tri >= 0 && q.tri[l] > best.tri) continue;
+    if (kMasked && alpha->cut_away(q.tri[l], u, v)) continue;
     best = {t, q.tri[l], u, v};
     if (any_hit) return true;
   }
@@ -321,9 +345,11 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
 // operation as SSE does; no FMA), the passing lanes finished one by one in leaf order against the
 // tmax of that moment, a last odd packet by the SSE test: the same hits bit for bit. Built for
 // the AVX target and called only where the CPU has it (kd_leaf_avx).
+template <bool kMasked>
 __attribute__((target("avx"))) bool leaf_intersect_avx(const HHPacket* p, uint32_t count,
                                                        const RayLanes& r, float tmin,
-                                                       bool any_hit, pf_ray_hit& best) {
+                                                       bool any_hit, pf_ray_hit& best,
+                                                       const AlphaTest* alpha) {
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
   const __m256 minus_one = _mm256_set1_ps(-1.0f), sign = _mm256_set1_ps(-0.0f);
   const __m256 eps = _mm256_set1_ps(PF_HH_EDGE_EPS);
@@ -380,12 +406,13 @@ __attribute__((target("avx"))) bool leaf_intersect_avx(const HHPacket* p, uint32
     _mm256_store_ps(a_su, su);
     _mm256_store_ps(a_sv, sv);
     const Lanes lanes{a_st, a_adet, a_tp, a_det, a_su, a_sv};
-    if (finish_lanes(mask, lanes, [p, q](int l) { return l < 4 ? p->tri[l] : q->tri[l - 4]; },
-                     tmin, any_hit, best))
+    if (finish_lanes<kMasked>(
+            mask, lanes, [p, q](int l) { return l < 4 ? p->tri[l] : q->tri[l - 4]; }, tmin,
+            any_hit, best, alpha))
       return true;
   }
 #undef both
-  return first < count && leaf_intersect(p, count - first, r, tmin, any_hit, best);
+  return first < count && leaf_intersect<kMasked>(p, count - first, r, tmin, any_hit, best, alpha);
 }
 #endif
 
@@ -402,16 +429,25 @@ std::atomic<bool>& kd_leaf_avx() {
 
 // The same for one leaf of the rope traversal (PF_KD_CLEAF_TEST).
 bool leaf_intersect_packets(const HHPacket* p, uint32_t count, const float* o, const float* d,
-                            float tmin, bool any_hit, pf_ray_hit& best) {
+                            float tmin, bool any_hit, pf_ray_hit& best, const AlphaTest* alpha) {
   const RayLanes r(o, d);
-  return leaf_intersect(p, count, r, tmin, any_hit, best);
+  return alpha ? leaf_intersect<true>(p, count, r, tmin, any_hit, best, alpha)
+               : leaf_intersect<false>(p, count, r, tmin, any_hit, best, nullptr);
 }
+
+// What the rope traversal passes as its hh argument to PF_KD_CLEAF_TEST: the scene's packets and,
+// in a masked scene, the alpha test (nullptr otherwise).
+struct RopeCtx {
+  const HHPacket* packets;
+  const AlphaTest* alpha;
+};
 
 // Classic front-to-back kd traversal with an explicit stack (pbrt's KdTreeAccel) over the compact
 // copy: each node is visited with the parametric interval [t0, t1] of the ray inside it; the near
 // child is entered first and the far child pushed with its interval.
+template <bool kMasked>
 bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin, bool any_hit,
-                    pf_ray_hit& hit) {
+                    pf_ray_hit& hit, const AlphaTest* alpha) {
   if (kd.nodes.empty()) return false;
   const float inv_d[3] = {1.f / d[0], 1.f / d[1], 1.f / d[2]};
   float t0, t1;
@@ -456,11 +492,11 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
 #ifdef PF_HAVE_AVX_LEAF
     // A leaf of up to four triangles is one packet: the inlined SSE test, no call.
     const uint32_t count = n.w1 >> 2;
-    const bool hit_now = avx && count > 4
-                             ? leaf_intersect_avx(leaf, count, r, tmin, any_hit, best)
-                             : leaf_intersect(leaf, count, r, tmin, any_hit, best);
+    const bool hit_now =
+        avx && count > 4 ? leaf_intersect_avx<kMasked>(leaf, count, r, tmin, any_hit, best, alpha)
+                         : leaf_intersect<kMasked>(leaf, count, r, tmin, any_hit, best, alpha);
 #else
-    const bool hit_now = leaf_intersect(leaf, n.w1 >> 2, r, tmin, any_hit, best);
+    const bool hit_now = leaf_intersect<kMasked>(leaf, n.w1 >> 2, r, tmin, any_hit, best, alpha);
 #endif
     if (hit_now) {
       hit = best;
@@ -476,22 +512,32 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
   return hit.tri >= 0;
 }
 
+// traverse_stack with the alpha test where the scene has masks (alpha != nullptr).
+inline bool traverse_stack_any(const HostKd& kd, const float* o, const float* d, float tmin,
+                               bool any_hit, pf_ray_hit& hit, const AlphaTest* alpha) {
+  return alpha ? traverse_stack<true>(kd, o, d, tmin, any_hit, hit, alpha)
+               : traverse_stack<false>(kd, o, d, tmin, any_hit, hit, nullptr);
+}
+
 bool cast(const Scene& scene, const Ray& ray, bool any_hit, Traversal trav, pf_ray_hit& hit) {
   const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   hit = {ray.tmax, -1, 0.f, 0.f};
+  const AlphaTest at{&scene};
+  const AlphaTest* alpha = scene.has_alpha_masks() ? &at : nullptr;
   switch (trav) {
     case Traversal::Ropes: {
       // The shared rope loop over the compact copy (the same bits as pf_kd_traverse_ropes over
       // the pf_kd_node array, tested); the packets travel in the hh argument (PF_KD_CLEAF_TEST).
       const HostKd& h = host_kd(scene);
+      const RopeCtx ctx{h.packets.data(), alpha};
       return pf_kd_traverse_ropes_compact(
                  h.cnodes.data(), pf_int(h.cnodes.size()), h.cleaves.data(), h.root_box, nullptr,
-                 reinterpret_cast<const pf_hh_triangle*>(h.packets.data()), o, d, ray.tmin,
-                 any_hit, &hit) != 0;
+                 reinterpret_cast<const pf_hh_triangle*>(&ctx), o, d, ray.tmin, any_hit,
+                 &hit) != 0;
     }
     case Traversal::Stack:
-      return traverse_stack(host_kd(scene), o, d, ray.tmin, any_hit, hit);
+      return traverse_stack_any(host_kd(scene), o, d, ray.tmin, any_hit, hit, alpha);
     case Traversal::Brute:
       return traverse_brute(scene, o, d, ray.tmin, any_hit, hit);
   }
@@ -509,13 +555,16 @@ Hit to_hit(const pf_ray_hit& h) {
 
 }  // namespace
 
-RayCaster::RayCaster(const Scene& scene) : kd_(&host_kd(scene)) {}
+RayCaster::RayCaster(const Scene& scene)
+    : kd_(&host_kd(scene)), alpha_scene_(scene.has_alpha_masks() ? &scene : nullptr) {}
 
 bool RayCaster::closest(const Ray& ray, Hit& hit) const {
   const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   pf_ray_hit h{ray.tmax, -1, 0.f, 0.f};
-  const bool found = traverse_stack(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, false, h);
+  const AlphaTest at{alpha_scene_};
+  const bool found = traverse_stack_any(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, false,
+                                        h, alpha_scene_ ? &at : nullptr);
   hit = found ? to_hit(h) : Hit{};
   return found;
 }
@@ -524,7 +573,9 @@ bool RayCaster::any(const Ray& ray) const {
   const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   pf_ray_hit h{ray.tmax, -1, 0.f, 0.f};
-  return traverse_stack(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, true, h);
+  const AlphaTest at{alpha_scene_};
+  return traverse_stack_any(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, true, h,
+                            alpha_scene_ ? &at : nullptr);
 }
 
 bool set_kd_leaf_avx(bool on) {
@@ -584,10 +635,11 @@ void intersect_any_batch(const Scene& scene, const std::vector<Ray>& rays,
 static int pf_host_cleaf_test4(int first_packet, int count, const pf_hh_triangle* groups,
                                const float* o, const float* d, float tmin, int any_hit,
                                float* hit_t, pf_int* hit_tri, float* hit_u, float* hit_v) {
-  const auto* p = reinterpret_cast<const pf::HHPacket*>(groups) + first_packet;
+  const auto* ctx = reinterpret_cast<const pf::RopeCtx*>(groups);
+  const pf::HHPacket* p = ctx->packets + first_packet;
   pf_ray_hit best = {*hit_t, *hit_tri, *hit_u, *hit_v};
   const bool stop =
-      pf::leaf_intersect_packets(p, uint32_t(count), o, d, tmin, any_hit != 0, best);
+      pf::leaf_intersect_packets(p, uint32_t(count), o, d, tmin, any_hit != 0, best, ctx->alpha);
   *hit_t = best.t;
   *hit_tri = best.tri;
   *hit_u = best.u;

@@ -130,6 +130,11 @@ void Scene::compute_scene_id() {
     mr_texture.resize(materials.size(), -1);
     feed(mr_texture);
   }
+  // Alpha cut-outs (format version 5): only when some material is masked, so that every scene
+  // without masks keeps its version-4 id.
+  bool masked = false;
+  for (const pf_alpha_material& a : material_alpha) masked = masked || pf_alpha_masked(a.cutoff);
+  if (masked) feed(material_alpha);
   scene_id = h.hex();
 }
 
@@ -490,6 +495,7 @@ void check_scene_values(const Scene& s, const Validator& v) {
 // limits, the texels' values, the materials' texture ids, and the UVs where a material has a
 // texture. Part of validate_scene: load_scene runs it on what it read, save_scene (written_check)
 // on what it writes, bake_scene on what it baked.
+bool alpha_textured(const Scene& s);
 void check_scene_textures(const Scene& s, const Validator& v) {
   if (s.texture_names.size() != s.textures.size())
     v.fail("textures/names holds " + std::to_string(s.texture_names.size()) +
@@ -539,6 +545,7 @@ void check_scene_textures(const Scene& s, const Validator& v) {
              std::to_string(PF_MAT_PBR) + ", has a metallic-roughness texture; it must be -1)");
     textured = textured || t >= 0;
   }
+  textured = textured || alpha_textured(s);  // a masked material's alpha texture (version 5)
   const std::string U = "geometry/uvs";
   if (!textured && !s.uvs.empty())
     v.fail(U + " is present but no material has a texture");
@@ -546,6 +553,35 @@ void check_scene_textures(const Scene& s, const Validator& v) {
     v.fail(U + " holds " + std::to_string(s.uvs.size()) + " rows for " +
            std::to_string(s.triangles.size()) + " triangles (a material has a texture)");
   for (size_t i = 0; i < s.uvs.size(); ++i) v.in_range(Name(U, i), s.uvs[i].uv, 6, -kMaxUV, kMaxUV);
+}
+
+// The alpha cut-outs of a scene (format version 5, docs/FORMATS.md): one entry per material;
+// cutoff exactly −1 (not masked) or in [0, 1]; factor in [0, 1]; texture −1 or a texture of the
+// table, and then the UVs (check_scene_textures demands them for it). Part of validate_scene.
+void check_scene_alpha(const Scene& s, const Validator& v) {
+  if (s.material_alpha.empty()) return;
+  if (s.material_alpha.size() != s.materials.size())
+    v.fail("materials/alpha_cutoff holds " + std::to_string(s.material_alpha.size()) +
+           " entries for " + std::to_string(s.materials.size()) + " materials");
+  for (size_t i = 0; i < s.material_alpha.size(); ++i) {
+    const pf_alpha_material& a = s.material_alpha[i];
+    if (!(a.cutoff == PF_ALPHA_OPAQUE || pf_alpha_cutoff_valid(a.cutoff)))
+      v.fail(Validator::element("materials/alpha_cutoff", i) + ": alpha cutoff " +
+             std::to_string(a.cutoff) + " is neither -1 (not masked) nor in [0, 1]");
+    if (!(a.factor >= 0.f && a.factor <= 1.f))
+      v.fail(Validator::element("materials/alpha_factor", i) + ": alpha factor " +
+             std::to_string(a.factor) + " is outside [0, 1]");
+    v.int_in_range(Name("materials/alpha_texture", i), a.texture, -1,
+                   int64_t(s.textures.size()) - 1);
+    if (a.pad != 0) v.fail(Validator::element("materials/alpha_texture", i) + ": padding is not 0");
+  }
+}
+
+// Whether some material's alpha names a texture (then the UVs must be there).
+bool alpha_textured(const Scene& s) {
+  for (const pf_alpha_material& a : s.material_alpha)
+    if (a.texture >= 0) return true;
+  return false;
 }
 
 }  // namespace
@@ -604,6 +640,26 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
     for (size_t i = 0; i < s.uvs.size(); ++i) std::copy(s.uvs[i].uv, s.uvs[i].uv + 6, &uv[6 * i]);
     w.write("/geometry/uvs", uv, {s.uvs.size(), 6});
     w.describe("/geometry/uvs", "1", "u0,v0,u1,v1,u2,v2 per triangle (glTF convention: v down)");
+  }
+
+  // Format version 5: alpha cut-outs, only when some material is masked (pf_alpha_material as
+  // three datasets, one entry per material).
+  if (s.has_alpha_masks()) {
+    std::vector<float> cutoff, factor;
+    std::vector<int32_t> texture;
+    for (const pf_alpha_material& a : s.material_alpha) {
+      cutoff.push_back(a.cutoff);
+      factor.push_back(a.factor);
+      texture.push_back(a.texture);
+    }
+    w.write("/materials/alpha_cutoff", cutoff);
+    w.describe("/materials/alpha_cutoff", "1",
+               "alpha cut-out (glTF alphaMode MASK): cut away where alpha < cutoff; -1 = not masked");
+    w.write("/materials/alpha_factor", factor);
+    w.describe("/materials/alpha_factor", "1", "constant alpha (glTF baseColorFactor.a)");
+    w.write("/materials/alpha_texture", texture);
+    w.describe("/materials/alpha_texture", "",
+               "texture (textures/textures) whose alpha channel multiplies alpha_factor, -1 = none");
   }
 
   w.write("/lights/lights", h5_type_light(), s.lights);
@@ -679,6 +735,7 @@ void validate_scene(const Scene& s, const std::string& path) {
   std::string problem = validate_kdtree(s.kd, s.triangles.size());
   if (!problem.empty()) throw input_error(path, "invalid kd-tree: " + problem, hint);
   check_scene_values(s, v);
+  check_scene_alpha(s, v);  // first: the UVs' check counts its textures
   check_scene_textures(s, v);
 }
 
@@ -728,11 +785,30 @@ Scene load_scene(const std::string& path) {
     }
   }
 
+  if (r.version() >= 5) {  // alpha cut-outs (versions 1-4: every material opaque)
+    const std::vector<std::string> mats = r.children("/materials");
+    if (std::find(mats.begin(), mats.end(), "alpha_cutoff") != mats.end()) {
+      const std::vector<float> cutoff = r.read<float>("/materials/alpha_cutoff");
+      const std::vector<float> factor = r.read<float>("/materials/alpha_factor");
+      const std::vector<int32_t> texture = r.read<int32_t>("/materials/alpha_texture");
+      if (factor.size() != cutoff.size() || texture.size() != cutoff.size())
+        throw input_error(path, "materials/alpha_cutoff, alpha_factor and alpha_texture differ in length",
+                          "the file is damaged; rebake it with scene-bake");
+      s.material_alpha.resize(cutoff.size());
+      for (size_t i = 0; i < cutoff.size(); ++i)
+        s.material_alpha[i] = pf_alpha_material{cutoff[i], factor[i], texture[i], 0};
+    }
+  }
+
   // Bounds and face normals first (plain arithmetic on any values), then the checks, which
   // read them (validate_scene).
   s.compute_bounds();
   s.compute_normals();
   validate_scene(s, path);
+  // No masked material: no alpha table (has_alpha_masks, the rays' fast path).
+  bool masked = false;
+  for (const pf_alpha_material& a : s.material_alpha) masked = masked || pf_alpha_masked(a.cutoff);
+  if (!masked) s.material_alpha.clear();
   s.kd.bounds.lo = Vec3(s.kd.nodes[0].lo);
   s.kd.bounds.hi = Vec3(s.kd.nodes[0].hi);
   // The id names the content: a file edited after baking (or damaged) no longer matches it.

@@ -35,6 +35,8 @@
 // so the position is taken from the node alone for .gltf/.glb files.
 #include "photonflow/scene_import.h"
 
+#include "alpha_import.h"
+
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/IOStream.hpp>
 #include <assimp/postprocess.h>
@@ -233,7 +235,10 @@ class Flattener {
       std::string name = am.GetName().C_Str();
       if (name.empty()) name = "material" + std::to_string(i);
       material_map_[i] = int(scene_.materials.size());
-      const ImportedMaterial m = import::import_material(ai_, am, name, file_, textures_, report_);
+      const AlphaImport alpha =
+          read_alpha(am, file_, name, lower_extension(file_) == ".obj", report_.warnings);
+      const ImportedMaterial m = import::import_material(ai_, am, name, file_, textures_, report_,
+                                                         alpha.masked() && alpha.base_texture_alpha);
       uv_channel_[i] = m.uv_channel;
       scene_.materials.push_back(m.material);
       scene_.material_names.push_back(name);
@@ -241,8 +246,37 @@ class Flattener {
       scene_.material_texture.back() = m.texture;
       scene_.material_mr_texture.resize(scene_.materials.size(), -1);
       scene_.material_mr_texture.back() = m.mr_texture;
+      add_alpha(alpha, i, name, am, m.texture);
     }
     return material_map_[i];
+  }
+
+  // The alpha cut-out of the material just added (alpha_import.h): its material_alpha entry
+  // (the table is created at the first masked material, earlier ones opaque). A masked material
+  // reads the base-colour texture's alpha even where it is not diffuse (it is loaded then).
+  void add_alpha(const AlphaImport& a, unsigned i, const std::string& name, const aiMaterial& am,
+                 int texture) {
+    if (!a.masked()) {
+      if (!scene_.material_alpha.empty())
+        scene_.material_alpha.push_back(pf_alpha_material{PF_ALPHA_OPAQUE, 1.f, -1, 0});
+      return;
+    }
+    pf_alpha_material m{a.cutoff, a.factor, -1, 0};
+    const std::optional<import::TextureRef> ref = import::base_color_texture(am);
+    if (a.base_texture_alpha && ref) {
+      m.texture = texture >= 0 ? texture : textures_.load(ai_, file_, name, *ref);
+      uv_channel_[i] = ref->uv_channel;
+    } else if (a.map_d) {
+      import::TextureRef d;
+      d.path = a.map_d_path;
+      d.wrap_s = a.map_d_wrap_s;
+      d.wrap_t = a.map_d_wrap_t;
+      d.decoding = import::TexelDecoding::kCoverage;
+      m.texture = textures_.load(ai_, file_, name, d);  // OBJ: one UV set
+    }
+    scene_.material_alpha.resize(scene_.materials.size() - 1,
+                                 pf_alpha_material{PF_ALPHA_OPAQUE, 1.f, -1, 0});
+    scene_.material_alpha.push_back(m);
   }
 
   // Scene material index of the file's material called `name`, or −1 if there is none.
@@ -654,10 +688,17 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   // metallic-roughness (version 5).
   scene.material_texture.resize(scene.materials.size(), -1);
   scene.material_mr_texture.resize(scene.materials.size(), -1);
+  // Alpha cut-outs (format version 5): an entry per material once one is masked (the inserts'
+  // default material opaque); the UVs stay where a masked material reads an alpha texture.
+  if (!scene.material_alpha.empty())
+    scene.material_alpha.resize(scene.materials.size(), pf_alpha_material{PF_ALPHA_OPAQUE, 1.f, -1, 0});
   auto some = [](const std::vector<int32_t>& v) {
     return std::any_of(v.begin(), v.end(), [](int32_t t) { return t >= 0; });
   };
-  if (!some(scene.material_texture) && !some(scene.material_mr_texture)) scene.uvs.clear();
+  if (!some(scene.material_texture) && !some(scene.material_mr_texture) &&
+      std::none_of(scene.material_alpha.begin(), scene.material_alpha.end(),
+                   [](const pf_alpha_material& a) { return a.texture >= 0; }))
+    scene.uvs.clear();
 
   bool emitter = !scene.lights.empty();
   for (size_t i = 0; i < scene.triangles.size() && !emitter; ++i)
@@ -782,6 +823,7 @@ std::string encode(const Scene& s, const BakeReport& r) {
   w.pods(s.material_texture);
   w.pods(s.material_mr_texture);
   w.pods(s.uvs);
+  w.pods(s.material_alpha);
   w.pod(uint64_t(r.triangles_read));
   w.pod(uint64_t(r.degenerate_dropped));
   w.pod(uint64_t(r.primitives_skipped));
@@ -809,6 +851,7 @@ Scene decode(const std::string& bytes, BakeReport& r) {
   s.material_texture = in.pods<int32_t>();
   s.material_mr_texture = in.pods<int32_t>();
   s.uvs = in.pods<TriangleUV>();
+  s.material_alpha = in.pods<pf_alpha_material>();
   r.triangles_read = size_t(in.pod<uint64_t>());
   r.degenerate_dropped = size_t(in.pod<uint64_t>());
   r.primitives_skipped = size_t(in.pod<uint64_t>());

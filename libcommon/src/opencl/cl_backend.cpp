@@ -17,6 +17,8 @@ struct ClSceneBuffers {
   ClBuffer tris, hh, nodes, leaf_tris, group_of_first, leaf_groups, mats, lights, light_cdf;
   ClBuffer textures, texels, mat_tex, uvs, mr_tex;  // textures (PF_TEXTURE_PARAMS)
   bool has_pbr = false;  // a PF_MAT_PBR material: the eye pass writes a pf_pbr_point table
+  ClBuffer alpha_mats;   // alpha cut-outs (PF_ALPHA_PARAMS)
+  cl_int alpha_on = 0;
   cl_int node_count = 0, light_count = 0;
   std::string scene_id;
   size_t triangle_count = 0;
@@ -102,6 +104,12 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
     s->mat_tex = upload_array(dev, mat_tex, "materials' textures");
     s->uvs = upload_array(dev, uvs, "texture coordinates");
     s->mr_tex = upload_array(dev, mr_tex, "materials' metallic-roughness textures");
+    // Alpha cut-outs: the per-material table where some material is masked, else one opaque
+    // stand-in with alpha_on = 0 (the kernels' leaf test then never reads it).
+    std::vector<pf_alpha_material> alpha = scene.material_alpha;
+    s->alpha_on = alpha.empty() ? 0 : 1;
+    if (alpha.empty()) alpha.push_back(pf_alpha_material{PF_ALPHA_OPAQUE, 1.f, -1, 0});
+    s->alpha_mats = upload_array(dev, alpha, "materials' alpha cut-outs");
   }
   s->node_count = cl_int(scene.kd.nodes.size());
   s->light_count = cl_int(scene.lights.size());
@@ -163,7 +171,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
     const cl_int count = cl_int(std::min(batch, npix - off));
     dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
              sb.leaf_groups, sb.mats, sb.lights,
-             sb.light_cdf, sb.light_count, sb.textures, sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
+             sb.light_cdf, sb.light_count, sb.textures, sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex,
+             sb.alpha_mats, sb.alpha_on, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps, cl_int(off),
              count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr);
@@ -214,7 +223,7 @@ void trace_photon_batch(const Scene& scene, uint32_t pass, const PhotonPassOptio
   cl_kernel k = dev.kernel("trace_photons", "trace_photons");
   dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
            sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.textures,
-           sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, cl_uint(opt.seed),
+           sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, sb.alpha_mats, sb.alpha_on, cl_uint(opt.seed),
            cl_uint(pass), cl_int(opt.max_bounces), ray_epsilon(scene), cl_uint(first),
            cl_int(count), slots, stored);
   dev.run(k, count);
@@ -399,7 +408,8 @@ std::vector<ClRayHit> cast_rays(const Scene& scene, const std::vector<float>& ra
     const cl_int count = cl_int(std::min(batch, n - off));
     dev.write(rb, size_t(count) * 8 * sizeof(float), &rays[off * 8]);
     dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
-             sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, rb, count,
+             sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.textures,
+             sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, sb.alpha_mats, sb.alpha_on, rb, count,
              cl_int(any_hit ? 1 : 0), hb);
     dev.run(k, size_t(count));
     dev.read(hb, size_t(count) * sizeof(ClRayHit), &hits[off]);
