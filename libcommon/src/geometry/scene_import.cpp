@@ -22,6 +22,9 @@
 // inverse transpose of its 3×3 part. A transform with a negative determinant (a mirror) reverses
 // the winding, so v1/v2 are swapped to keep the geometric normal on the front (CCW) side.
 //
+// Alpha cut-outs (glTF alphaMode/alphaCutoff, OBJ map_d): read by alpha_import.cpp, stored per
+// material in Scene::material_alpha (format version 5), the map_d image as its own texture.
+//
 // Material mapping (same table in docs/SCENES.md). Values are read through assimp's keys:
 //   Kd = AI_MATKEY_COLOR_DIFFUSE, Ks = AI_MATKEY_COLOR_SPECULAR, Ke = AI_MATKEY_COLOR_EMISSIVE,
 //   Kr = AI_MATKEY_COLOR_REFLECTIVE × AI_MATKEY_REFLECTIVITY (COLLADA <reflective>,
@@ -34,6 +37,8 @@
 // The first rule that matches decides:
 //   1. max(Ke) > 0                                     → EMITTER, emission = Ke, color = Kd
 //   2. illum 4, 6 or 7, or d < 1                       → GLASS, ior = Ni (1.5 if Ni ≤ 1), color = 1
+//      (d is not read for a glTF MASK/BLEND material: its base-colour alpha, which assimp also
+//      hands as d, is its alpha cut-out, alpha_import.h)
 //   3. illum 3 or 5, or Kd black and Kr or Ks not black → MIRROR, color = Kr, else Ks, else 1
 //   4. otherwise                                       → DIFFUSE, color = Kd
 // Diffuse albedo (also the emitter's) is clamped per channel to [0, kMaxAlbedo] with a warning;
