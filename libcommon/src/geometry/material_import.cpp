@@ -22,6 +22,8 @@
 // The first rule that matches decides:
 //   1. max(Ke) > 0                                     → EMITTER, emission = Ke, color = Kd
 //   2. illum 4, 6 or 7, or d < 1                       → GLASS, ior = Ni (1.5 if Ni ≤ 1), color = 1
+//      (d is not read for a glTF MASK/BLEND material: its base-colour alpha, which assimp also
+//      hands as d, is its alpha cut-out, alpha_import.h)
 //   3. M or R present (glTF, MTL Pm/Pr)                → metallic-roughness (below): base = Kd,
 //                                                         metallic M (0 if absent), roughness R
 //                                                         (1 if absent), transmission T

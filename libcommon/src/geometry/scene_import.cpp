@@ -22,6 +22,9 @@
 // inverse transpose of its 3×3 part. A transform with a negative determinant (a mirror) reverses
 // the winding, so v1/v2 are swapped to keep the geometric normal on the front (CCW) side.
 //
+// Alpha cut-outs (glTF alphaMode/alphaCutoff, OBJ map_d): read by alpha_import.cpp, stored per
+// material in Scene::material_alpha (format version 5), the map_d image as its own texture.
+//
 // Materials and textures: material_import.cpp (the mapping table, also in docs/SCENES.md).
 //
 // Camera. assimp's camera.h documents mHorizontalFOV as the half angle, but the loaders store the
