@@ -33,6 +33,7 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
 #include "photonflow/intersect_shared.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling_shared.h"
+#include "photonflow/light_shared.h"
 
 #define PF_LEAF_GROUP_FLOAT4 13 /* float4 per group: n, n1, n2 (x, y, z, w each), triangle ids */
 

@@ -55,17 +55,19 @@ TEST_CASE("scene.h5 round-trips every dataset", "[formats][scene]") {
   CHECK(r.source == "in-memory");
   CHECK(read_provenance(h5::Reader(tmp / "scene.h5", kSceneFormat, kSceneFormatVersion))
             .parameters.at("answer") == "42");
-  // Versions 1 (variable-length names, h5io.cpp reads both kinds), 2 (no textures) and 3 (no
-  // lens: the camera's pinhole fields only) are still read; a later version is refused by its
-  // number.
-  CHECK(kSceneFormatVersion == 4);
+  // Versions 1 (variable-length names, h5io.cpp reads both kinds), 2 (no textures), 3 (no
+  // lens: the camera's pinhole fields only) and 4 (no spot/directional light fields) are still
+  // read; a later version is refused by its number.
+  CHECK(kSceneFormatVersion == 5);
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 1);
   CHECK(load_scene(tmp / "scene.h5").mesh_names == s.mesh_names);
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 2);
   CHECK(load_scene(tmp / "scene.h5").mesh_names == s.mesh_names);
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 3);
   CHECK(load_scene(tmp / "scene.h5").camera.aperture == 0.f);
-  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 5);
+  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 4);
+  CHECK(same_bytes(load_scene(tmp / "scene.h5").lights, s.lights));
+  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 6);
   CHECK_THROWS_AS(load_scene(tmp / "scene.h5"), InputError);
 }
 

@@ -32,10 +32,13 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
   int by_type[4] = {0, 0, 0, 0};
   for (auto& m : s.materials)
     if (m.type >= 0 && m.type < 4) ++by_type[m.type];
-  int area = 0, point = 0;
+  int area = 0, point = 0, spot = 0, directional = 0;
   double power = 0;
   for (auto& l : s.lights) {
-    (l.type == PF_LIGHT_AREA ? area : point)++;
+    (l.type == PF_LIGHT_AREA    ? area
+     : l.type == PF_LIGHT_SPOT  ? spot
+     : l.type == PF_LIGHT_POINT ? point
+                                : directional)++;
     power += l.power;
   }
   size_t leaves = 0;
@@ -54,8 +57,9 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
                 s.textures.size(), s.texels.size() / 4,
                 double(s.texels.size() * sizeof(float)) / double(1 << 20), textured);
   }
-  std::printf("\n  lights     %zu (%d area, %d point), power %.4g W (luminance)\n",
-              s.lights.size(), area, point, power);
+  std::printf("\n  lights     %zu (%d area, %d point", s.lights.size(), area, point);
+  if (spot + directional > 0) std::printf(", %d spot, %d directional", spot, directional);
+  std::printf("), power %.4g W (luminance)\n", power);
   std::printf("  camera     eye %g,%g,%g look-at %g,%g,%g up %g,%g,%g fov %.4g deg %dx%d (%s)\n",
               c.eye[0], c.eye[1], c.eye[2], c.look_at[0], c.look_at[1], c.look_at[2], c.up[0],
               c.up[1], c.up[2], c.fov_y_deg, c.width, c.height, r.camera_source.c_str());

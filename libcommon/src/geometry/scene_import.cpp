@@ -84,6 +84,7 @@
 #include "photonflow/memory_cap.h"
 #include "photonflow/provenance.h"
 #include "photonflow/texture_image.h"
+#include "light_import.h"
 
 namespace pf {
 
@@ -255,11 +256,14 @@ float get_float(const aiMaterial& m, const char* key, unsigned type, unsigned id
 // up to 1, glTF's default, becomes kMaxAlbedo without a warning: texels reach 1 and the product
 // must stay below 1). A COLLADA <diffuse> is a colour or a texture, never both: assimp 5.2.5
 // gives a textured one the colour 1 (test_textures checks it).
+// `emissive_strength`: glTF's KHR_materials_emissive_strength (light_import.h; 1 for other
+// formats), a factor on Ke: radiance = emissiveFactor × emissiveStrength.
 pf_material convert_material(const aiMaterial& am, const std::string& name,
-                             const std::string& file, BakeReport& report, bool textured) {
+                             const std::string& file, BakeReport& report, bool textured,
+                             float emissive_strength) {
   const Vec3 kd = get_color(am, AI_MATKEY_COLOR_DIFFUSE, Vec3(0, 0, 0));
   const Vec3 ks = get_color(am, AI_MATKEY_COLOR_SPECULAR, Vec3(0, 0, 0));
-  const Vec3 ke = get_color(am, AI_MATKEY_COLOR_EMISSIVE, Vec3(0, 0, 0));
+  const Vec3 ke = get_color(am, AI_MATKEY_COLOR_EMISSIVE, Vec3(0, 0, 0)) * emissive_strength;
   const Vec3 kr = get_color(am, AI_MATKEY_COLOR_REFLECTIVE, Vec3(0, 0, 0)) *
                   get_float(am, AI_MATKEY_REFLECTIVITY, 0.f);
   const float opacity = get_float(am, AI_MATKEY_OPACITY, 1.f);
@@ -475,7 +479,7 @@ class Flattener {
             TextureLoader& textures)
       : ai_(ai), file_(file), scene_(scene), report_(report), textures_(textures),
         material_map_(ai.mNumMaterials, -1), uv_channel_(ai.mNumMaterials, 0),
-        checked_(ai.mNumMeshes, false) {}
+        checked_(ai.mNumMeshes, false), emissive_strength_(gltf_emissive_strengths(file)) {}
 
   // Flattens the whole node graph into `out`, each triangle's texture coordinates into `uvs`
   // (zero where the mesh has none). Mesh names get `prefix` in front; material ≥ 0 replaces the
@@ -497,7 +501,9 @@ class Flattener {
       if (name.empty()) name = "material" + std::to_string(i);
       material_map_[i] = int(scene_.materials.size());
       const std::optional<TextureRef> ref = base_color_texture(am);
-      const pf_material m = convert_material(am, name, file_, report_, ref.has_value());
+      const pf_material m = convert_material(
+          am, name, file_, report_, ref.has_value(),
+          i < emissive_strength_.size() ? emissive_strength_[i] : 1.f);
       int texture = -1;
       if (ref && (m.type == PF_MAT_DIFFUSE || m.type == PF_MAT_EMITTER)) {
         texture = textures_.load(ai_, file_, name, *ref);
@@ -642,41 +648,12 @@ class Flattener {
   std::vector<int> material_map_;
   std::vector<unsigned> uv_channel_;  // per file material: the UV channel of its texture
   std::vector<bool> checked_;
+  std::vector<float> emissive_strength_;  // glTF materials' emissiveStrength (light_import.h)
   std::string prefix_;
   int material_override_ = -1;
   std::vector<pf_triangle>* out_ = nullptr;
   std::vector<TriangleUV>* uvs_ = nullptr;
 };
-
-// Point lights of the file, placed by their nodes. Other light kinds are ignored with a warning.
-void add_point_lights(const aiScene& ai, const std::string& file, Scene& scene,
-                      BakeReport& report) {
-  for (unsigned i = 0; i < ai.mNumLights; ++i) {
-    const aiLight& l = *ai.mLights[i];
-    std::string name = l.mName.C_Str();
-    if (l.mType != aiLightSource_POINT) {
-      report.warnings.push_back(file + ": light '" + name +
-                                "' ignored (only point lights and emissive surfaces are used)");
-      continue;
-    }
-    const aiNode* node = ai.mRootNode->FindNode(l.mName);
-    const Vec3 pos = to_vec((node ? global_transform(node) : aiMatrix4x4()) * l.mPosition);
-    const Vec3 intensity = to_vec(l.mColorDiffuse);
-    if (!finite(pos) || !finite(intensity))
-      throw input_error(file, "light '" + name + "' has a non-finite position or colour",
-                        "fix the light");
-    if (black(intensity)) {
-      report.warnings.push_back(file + ": light '" + name + "' ignored (zero intensity)");
-      continue;
-    }
-    pf_light pl{};
-    pl.type = PF_LIGHT_POINT;
-    pl.triangle = -1;
-    pos.store(pl.position);
-    clamp3(intensity, INFINITY).store(pl.radiance);  // power is set by compute_light_cdf
-    scene.lights.push_back(pl);
-  }
-}
 
 // The first camera of a file in world space.
 struct FileCamera {
@@ -899,7 +876,7 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
                                 " of zero area, " + std::to_string(report.primitives_skipped) +
                                 " points or lines)",
                       "the scene needs triangle or polygon meshes");
-  add_point_lights(*ai, file, scene, report);
+  add_lights(*ai, file, scene, report);  // light_import.cpp
   const std::optional<FileCamera> file_camera = read_camera(*ai, file, report);
   report.camera_from_file = file_camera.has_value();
   report.camera_source = camera_sources(options, file_camera);
