@@ -68,3 +68,15 @@ lamp["asset"]["generator"] = "photonflow tests/data/make_punctual_gltf.py (lamp.
 lamp["extensionsUsed"] = ["KHR_materials_emissive_strength"]
 lamp["materials"][0]["extensions"] = {"KHR_materials_emissive_strength": {"emissiveStrength": 4}}
 write("emissive_strength.gltf", lamp)
+
+# The same as a binary glTF: JSON chunk (buffer 0 without uri) and BIN chunk (glTF 2.0 §4.4).
+glb_doc = json.loads(json.dumps(lamp))
+raw = base64.b64decode(glb_doc["buffers"][0].pop("uri").split(",", 1)[1])
+raw += b"\0" * (-len(raw) % 4)
+glb_doc["buffers"][0]["byteLength"] = len(raw)
+text = json.dumps(glb_doc, separators=(",", ":")).encode()
+text += b" " * (-len(text) % 4)
+with open(os.path.join(HERE, "emissive_strength.glb"), "wb") as f:
+    f.write(b"glTF" + struct.pack("<II", 2, 12 + 8 + len(text) + 8 + len(raw)))
+    f.write(struct.pack("<I", len(text)) + b"JSON" + text)
+    f.write(struct.pack("<I", len(raw)) + b"BIN\0" + raw)

@@ -903,7 +903,7 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   for (size_t i = 0; i < scene.triangles.size() && !emitter; ++i)
     emitter = scene.materials[size_t(scene.triangles[i].material)].type == PF_MAT_EMITTER;
   if (!emitter)
-    throw input_error(file, "no light: no emissive material (Ke > 0) and no point light",
+    throw input_error(file, "no light: no emissive material (Ke > 0) and no point, spot or directional light",
                       "give a surface an emissive colour or add a point light");
 
   scene.compute_bounds();
