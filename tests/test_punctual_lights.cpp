@@ -343,20 +343,21 @@ double block_luminance(const Image& img, int x0, int y0, int x1, int y1) {
 
 }  // namespace
 
-TEST_CASE("punctual lights: path tracing, SPPM and PPM agree on a spot and a directional light",
+TEST_CASE("punctual lights: path tracing, SPPM, PPPM, PPM and classic PM agree on a spot and a directional light",
           "[lights][pathtrace][sppm][ppm]") {
   // A floor with a box lit by a spot, a directional and a point light (delta lights: the path
   // tracer's next-event estimation is their only strategy; SPPM sees them through photons only,
-  // PPM with shadow rays through the eye pass's direct light). Image means within 2%, 8×8 blocks
-  // within 10% (SPPM's and PPM's finite radius blurs the spot's edge and the box's shadows, and
-  // the dim far floor is noisy; observed: means within 0.6% (SPPM) and 1.9% (PPM), blocks within
-  // 6.4% and 5.7%). A falloff of 1 in the cone brightens the spot's blocks by over 30%, a wrong
-  // disc area or cone pdf moves the mean by far more than 2%.
+  // PPM, PPPM and classic photon mapping with shadow rays through the eye pass's direct light).
+  // Image means within 2%, 8×8 blocks within 10% (the photon estimators' finite radius blurs the
+  // spot's edge, the floor's edge and the box's shadows, and the dim far floor is noisy; observed
+  // with these settings: means within 0.9%, blocks within 6%). A falloff of 1 in the cone brightens
+  // the spot's blocks by over 30%, a wrong disc area or cone pdf moves the mean by far more than 2%
+  // (checked: a 0.8 disc-area factor puts SPPM 9% low, a block 20%).
   const int W = 32, H = 24;
   const Scene s = mixed_scene(W, H);
   REQUIRE(s.lights.size() == 3);
   PathTraceOptions pt;
-  pt.spp = 256;
+  pt.spp = 1024;
   const Image ref = pathtrace(s, pt);
 
   RenderOptions o;
@@ -368,7 +369,7 @@ TEST_CASE("punctual lights: path tracing, SPPM and PPM agree on a spot and a dir
   const Image sppm = synthesize(render_progressive(s, o, false, Provenance{}));
 
   EyePassOptions eo;
-  eo.spp = 16;
+  eo.spp = 64;  // the direct light picks one of three lights per shadow sample: noise
   eo.radius = 0.03f;
   eo.direct = DirectMode::ShadowRays;
   HitpointSet hp = make_hitpoint_set(trace_hitpoints(s, eo), eo.direct, s.scene_id);
@@ -381,10 +382,26 @@ TEST_CASE("punctual lights: path tracing, SPPM and PPM agree on a spot and a dir
   }
   const Image ppm_img = synthesize(hp);
 
+  RenderOptions pp = o;  // PPPM with shadow rays: the direct light of every eye pass by NEE
+  pp.estimator = Estimator::Pppm;
+  pp.passes = 32;
+  pp.eye.direct = DirectMode::ShadowRays;
+  const Image pppm = synthesize(render_pppm(s, pp, false, Provenance{}));
+
+  // Classic photon mapping: one map of 400,000 photons, k nearest, shadow rays for direct light.
+  HitpointSet cl = make_hitpoint_set(trace_hitpoints(s, eo), eo.direct, s.scene_id);
+  PhotonPassOptions big;
+  big.photons = 400000;
+  const PhotonPassResult map = trace_photons(s, 0, big);
+  classic_estimate(s, cl, map.photons, map.emitted, ClassicOptions{});
+  const Image classic = synthesize(cl);
+
   const double m_pt = block_luminance(ref, 0, 0, W, H);
   REQUIRE(m_pt > 0.01);
   for (const auto& [name, img] : {std::pair<const char*, const Image*>{"sppm", &sppm},
-                                  std::pair<const char*, const Image*>{"ppm", &ppm_img}}) {
+                                  std::pair<const char*, const Image*>{"ppm", &ppm_img},
+                                  std::pair<const char*, const Image*>{"pppm", &pppm},
+                                  std::pair<const char*, const Image*>{"classic", &classic}}) {
     const double m = block_luminance(*img, 0, 0, W, H);
     double worst = 0;
     for (int by = 0; by < H; by += 8)
