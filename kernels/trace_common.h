@@ -52,6 +52,7 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
 #include "photonflow/intersect_shared.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling_shared.h"
+#include "photonflow/light_shared.h"
 
 struct pf_trace_hit_s {
   pf_ray_hit hit; /* first */

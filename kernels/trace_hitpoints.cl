@@ -60,6 +60,13 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
       const float cos_x = pf_dot3(w, ns);
       if (cos_l <= 0.0f || cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
       g = cos_x * cos_l * l->area / d2;
+    } else if (l->type != PF_LIGHT_POINT) { /* spot, directional (light_shared.h) */
+      const float lp[3] = {l->position[0], l->position[1], l->position[2]};
+      const float ld[3] = {l->direction[0], l->direction[1], l->direction[2]};
+      const float f = pf_punctual_incident(l->type, lp, ld, l->cos_inner, l->cos_outer, p, w, q);
+      const float cos_x = pf_dot3(w, ns);
+      if (!(f > 0.0f) || cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
+      g = cos_x * f;
     } else {
       for (int k = 0; k < 3; ++k) q[k] = l->position[k];
       for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];

@@ -65,6 +65,16 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
       o[k] = p[k] + n[k] * eps;
       flux[k] = l->radiance[k] * f;
     }
+  } else if (l->type != PF_LIGHT_POINT) { /* spot, directional (light_shared.h) */
+    const float lp[3] = {l->position[0], l->position[1], l->position[2]};
+    const float ld[3] = {l->direction[0], l->direction[1], l->direction[2]};
+    const float f = pf_punctual_emit(l->type, lp, ld, l->cos_inner, l->cos_outer, l->area, u1,
+                                     u2, o, d) / p_light;
+    if (!(f > 0.0f)) {
+      stored[local_i] = 0;
+      return;
+    }
+    for (int k = 0; k < 3; ++k) flux[k] = l->radiance[k] * f;
   } else {
     pf_sample_uniform_sphere(u1, u2, d);
     const float f = 4.0f * PF_S_PI / p_light;

@@ -125,7 +125,8 @@ class EyeTracer {
 };
 
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with
-// shadow rays (`samples` per call; rng streams of (seed, pass, index)). Exposed for tests.
+// shadow rays (`samples` per call; rng streams of (seed, pass, index)): area, point, spot and
+// directional lights (light_shared.h). Exposed for tests.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
                   const pf_material& m, int samples, uint32_t seed, uint32_t pass, uint32_t index);
 // The same estimator (the same draws and shadow rays) at a PF_MAT_PBR point: L_direct =

@@ -25,7 +25,9 @@
 // integral, eq. 8.3 there): at every diffuse vertex x one light is picked in proportion to power
 // (Scene::pick_light, probability p_l) and one point y on it (uniform on its triangle, 1/A):
 //   L_direct ≈ f_r · L_e(y → x) · V(x, y) · cos θ_x · cos θ_y / |x − y|² · A / p_l,
-// and point lights (intensity I) give f_r · I · V · cos θ_x / |x − y|² / p_l. Emission found by the
+// and point lights (intensity I) give f_r · I · V · cos θ_x / |x − y|² / p_l, spot lights the same
+// times the KHR_lights_punctual falloff, directional lights (irradiance E) f_r · E · V · cos θ_x / p_l
+// (light_shared.h; delta lights, never hit by a path). Emission found by the
 // path itself is then counted only where NEE could not have found it: on the camera ray and right
 // after a mirror or glass bounce (specular chains: L S* E paths). After a diffuse bounce a hit
 // emitter adds nothing (MisMode::Off), or — with multiple importance sampling (MisMode::Power,

@@ -15,12 +15,18 @@ namespace pf {
 
 constexpr const char* kSceneFormat = "photonflow.scene";
 // 5: metallic-roughness materials (PF_MAT_PBR; materials metallic, roughness, transmission;
-// materials/metallic_roughness_texture) and alpha cut-outs (materials/alpha_cutoff, alpha_factor,
-// alpha_texture; only when some material is masked); 4: the thin-lens camera (camera aperture,
-// focus_distance); 3: base-colour textures (textures/*, materials/texture, geometry/uvs); 2: names
-// as fixed-length strings; 1: variable-length names. Versions 1 to 4 are still read (no PBR
-// fields: read as 0; opaque; versions 1-3 a pinhole camera; versions 1 and 2 without textures).
+// materials/metallic_roughness_texture), alpha cut-outs (materials/alpha_cutoff, alpha_factor,
+// alpha_texture; only when some material is masked) and spot and directional lights (lights
+// direction, cos_inner, cos_outer); 4: the thin-lens camera (camera aperture, focus_distance);
+// 3: base-colour textures (textures/*, materials/texture, geometry/uvs); 2: names as fixed-length
+// strings; 1: variable-length names. Versions 1 to 4 are still read (no PBR fields: read as 0;
+// opaque; lights all area or point through h5_type_light_v4; versions 1-3 a pinhole camera;
+// versions 1 and 2 without textures).
 constexpr int kSceneFormatVersion = 5;
+
+// A directional light's emitting disc lies this many bounding-sphere radii before the bounds'
+// centre, against the light (> 1: outside the bounds; derive_lights).
+constexpr float kDirectionalDiscMargin = 1.01f;
 
 // Largest side of a texture, and most texels of all of a scene's textures together (each texel is
 // 4 floats: 2^26 texels are 1 GiB in memory and in scene.h5). scene-bake refuses a larger image,
@@ -144,9 +150,11 @@ struct Scene {
 // scene id. scene-bake calls it after importing; tests call it on scenes built in memory.
 void finish_scene(Scene& scene, const KdBuildParams& kd = {});
 
-// The lights and their CDF that compute_light_cdf makes from triangles, materials and the point
-// lights among `given` (kept in their order): area lights of emitter triangles first, in triangle
-// order, then the point lights; load_scene compares a file's lights and CDF with them.
+// The lights and their CDF that compute_light_cdf makes from triangles, materials and the point,
+// spot and directional lights among `given` (kept in their order): area lights of emitter
+// triangles first, in triangle order, then the others, their power derived (a directional light's
+// disc too, from the triangles' bounds: shared_types.h); load_scene compares a file's lights and
+// CDF with them.
 void derive_lights(const std::vector<pf_triangle>& triangles,
                    const std::vector<pf_material>& materials, const std::vector<pf_light>& given,
                    std::vector<pf_light>& lights, std::vector<float>& cdf);
@@ -185,6 +193,7 @@ const h5::Compound& h5_type_hh_triangle();
 const h5::Compound& h5_type_material();
 const h5::Compound& h5_type_material_v4();  // format versions 1-4: no metallic-roughness fields
 const h5::Compound& h5_type_light();
+const h5::Compound& h5_type_light_v4();  // format versions 1-4: no direction or cone
 const h5::Compound& h5_type_camera();
 const h5::Compound& h5_type_camera_pinhole();  // format versions 1-3: no lens fields
 const h5::Compound& h5_type_kd_node();

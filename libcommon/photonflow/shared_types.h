@@ -93,19 +93,34 @@ typedef struct {
 } pf_kd_node;
 
 /* Light types. */
-#define PF_LIGHT_AREA 0  /* one emissive triangle */
-#define PF_LIGHT_POINT 1 /* isotropic point light */
+#define PF_LIGHT_AREA 0        /* one emissive triangle */
+#define PF_LIGHT_POINT 1       /* isotropic point light */
+#define PF_LIGHT_SPOT 2        /* KHR_lights_punctual spot (format version 5; light_shared.h) */
+#define PF_LIGHT_DIRECTIONAL 3 /* KHR_lights_punctual directional (format version 5) */
 
 /* A light. Area light: triangle index, its area (m^2), radiance (W/(sr m^2)); power = π·area·L.
- * Point light: position and intensity (W/sr); power = 4π·I. `power` is the luminance-weighted
- * scalar used for sampling lights in proportion to power (rgb weights 0.2126, 0.7152, 0.0722). */
+ * Point light: position and intensity (W/sr); power = 4π·I.
+ * Spot light (version 5): position, intensity I (W/sr) on its axis `direction` (unit, the way the
+ * light travels), the cosines of the inner and outer cone half-angles, 1 ≥ cos_inner > cos_outer
+ * ≥ 0; intensity I·falloff(cos θ) (light_shared.h, the KHR_lights_punctual attenuation);
+ * power = 2π·I·∫ falloff d(cos θ) (pf_spot_cone_integral).
+ * Directional light (version 5): irradiance E (W/m^2, on a plane facing it) travelling along
+ * `direction` (unit); photons leave a disc of area `area` = π·R² (R the radius of the scene's
+ * bounding sphere) centred at `position`, outside the bounds against the light; power = E·π·R².
+ * Area and point lights have direction, cos_inner and cos_outer 0.
+ * `power` is the luminance-weighted scalar used for sampling lights in proportion to power (rgb
+ * weights 0.2126, 0.7152, 0.0722). The first five fields are the whole light of format versions
+ * 1-4 (scene.h's h5_type_light_v4). */
 typedef struct {
   pf_int type;
   pf_int triangle;
   pf_float area;
   pf_float power;
   pf_float position[3];
-  pf_float radiance[3]; /* area: radiance; point: intensity */
+  pf_float radiance[3]; /* area: radiance; point, spot: intensity; directional: irradiance */
+  pf_float direction[3];
+  pf_float cos_inner;
+  pf_float cos_outer;
 } pf_light;
 
 /* Camera: a pinhole, or a thin lens when aperture > 0 (depth of field; material/lens_shared.h).
@@ -219,7 +234,7 @@ static_assert(sizeof(pf_material) == 44, "pf_material layout");
 static_assert(sizeof(pf_triangle) == 80, "pf_triangle layout");
 static_assert(sizeof(pf_hh_triangle) == 48, "pf_hh_triangle layout");
 static_assert(sizeof(pf_kd_node) == 72, "pf_kd_node layout");
-static_assert(sizeof(pf_light) == 40, "pf_light layout");
+static_assert(sizeof(pf_light) == 60, "pf_light layout");
 static_assert(sizeof(pf_camera) == 56, "pf_camera layout");
 static_assert(sizeof(pf_hitpoint) == 84, "pf_hitpoint layout");
 static_assert(sizeof(pf_photon) == 48, "pf_photon layout");

@@ -33,10 +33,13 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
   int by_type[5] = {0, 0, 0, 0, 0};
   for (auto& m : s.materials)
     if (m.type >= 0 && m.type <= PF_MAT_PBR) ++by_type[m.type];
-  int area = 0, point = 0;
+  int area = 0, point = 0, spot = 0, directional = 0;
   double power = 0;
   for (auto& l : s.lights) {
-    (l.type == PF_LIGHT_AREA ? area : point)++;
+    (l.type == PF_LIGHT_AREA    ? area
+     : l.type == PF_LIGHT_SPOT  ? spot
+     : l.type == PF_LIGHT_POINT ? point
+                                : directional)++;
     power += l.power;
   }
   size_t leaves = 0;
@@ -61,8 +64,9 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
     for (size_t m = 0; m < s.materials.size(); ++m) mr += s.mr_texture_of(int(m)) >= 0;
     if (mr) std::printf(", %zu with a metallic-roughness texture", mr);
   }
-  std::printf("\n  lights     %zu (%d area, %d point), power %.4g W (luminance)\n",
-              s.lights.size(), area, point, power);
+  std::printf("\n  lights     %zu (%d area, %d point", s.lights.size(), area, point);
+  if (spot + directional > 0) std::printf(", %d spot, %d directional", spot, directional);
+  std::printf("), power %.4g W (luminance)\n", power);
   std::printf("  camera     eye %g,%g,%g look-at %g,%g,%g up %g,%g,%g fov %.4g deg %dx%d (%s)\n",
               c.eye[0], c.eye[1], c.eye[2], c.look_at[0], c.look_at[1], c.look_at[2], c.up[0],
               c.up[1], c.up[2], c.fov_y_deg, c.width, c.height, r.camera_source.c_str());

@@ -336,8 +336,9 @@ int TextureLoader::load(const aiScene& ai, const std::string& file, const std::s
 
 ImportedMaterial import_material(const aiScene& ai, const aiMaterial& am, const std::string& name,
                                  const std::string& file, TextureLoader& textures,
-                                 BakeReport& report, bool alpha_masked) {
+                                 BakeReport& report, bool alpha_masked, float emissive_strength) {
   MaterialValues v = read_values(am, name, file);
+  v.ke = v.ke * emissive_strength;  // KHR_materials_emissive_strength (light_import.h)
   if (alpha_masked) v.opacity = 1.f;  // the alpha is a cut-out (alpha_import.h), not a glass
   const std::optional<TextureRef> base_ref = base_color_texture(am);
   // The metallic-roughness texture belongs to the glTF factors (rule 3).

@@ -8,6 +8,7 @@
 #include "photonflow/camera.h"
 #include "photonflow/h5io.h"
 #include "photonflow/hash.h"
+#include "photonflow/light_shared.h"
 #include "photonflow/validate.h"
 
 namespace pf {
@@ -40,10 +41,11 @@ void Scene::compute_bounds() {
 void derive_lights(const std::vector<pf_triangle>& triangles,
                    const std::vector<pf_material>& materials, const std::vector<pf_light>& given,
                    std::vector<pf_light>& lights, std::vector<float>& cdf) {
-  // Keep point lights, rebuild area lights from emitter triangles.
+  // Keep point, spot and directional lights, rebuild area lights from emitter triangles.
   std::vector<pf_light> kept;
   for (auto& l : given)
-    if (l.type == PF_LIGHT_POINT) kept.push_back(l);
+    if (l.type == PF_LIGHT_POINT || l.type == PF_LIGHT_SPOT || l.type == PF_LIGHT_DIRECTIONAL)
+      kept.push_back(l);
   lights.clear();
   for (size_t i = 0; i < triangles.size(); ++i) {
     const pf_triangle& t = triangles[i];
@@ -61,8 +63,29 @@ void derive_lights(const std::vector<pf_triangle>& triangles,
     for (int k = 0; k < 3; ++k) l.radiance[k] = m.emission[k];
     lights.push_back(l);
   }
+  // A directional light's disc (format version 5): the scene's bounding sphere (centre c, radius
+  // R) seen along the light, the disc's centre R·kDirectionalDiscMargin before c against the light
+  // (outside the bounds), area π·R².
+  Bounds b;
+  for (const pf_triangle& t : triangles) {
+    b.extend(Vec3(t.v0));
+    b.extend(Vec3(t.v1));
+    b.extend(Vec3(t.v2));
+  }
+  const Vec3 centre = b.empty() ? Vec3() : (b.lo + b.hi) * 0.5f;
+  const float radius = b.empty() ? 0.f : 0.5f * length(b.hi - b.lo);
   for (auto& l : kept) {
-    l.power = 4.f * kPi * luminance(l.radiance);  // isotropic point light: Φ = 4π·I
+    if (l.type == PF_LIGHT_POINT) {
+      l.power = 4.f * kPi * luminance(l.radiance);  // isotropic point light: Φ = 4π·I
+    } else if (l.type == PF_LIGHT_SPOT) {
+      // Φ = ∫ I·falloff dω = 2π·I·∫ falloff d(cos θ) (light_shared.h)
+      l.power = float(2.0 * double(kPi) * double(luminance(l.radiance)) *
+                      pf_spot_cone_integral(l.cos_inner, l.cos_outer));
+    } else {
+      (centre - Vec3(l.direction) * (radius * kDirectionalDiscMargin)).store(l.position);
+      l.area = kPi * radius * radius;
+      l.power = luminance(l.radiance) * l.area;  // Φ = E·π·R²
+    }
     lights.push_back(l);
   }
   cdf.assign(lights.size(), 0.f);
@@ -105,7 +128,19 @@ void Scene::compute_scene_id() {
     h.update(&n, sizeof n);
     for (const pf_material& m : materials) h.update(&m, kLegacyMaterialBytes);
   }
-  feed(lights);
+  // Lights: the fields of format versions 1-4 always (the same bytes as hashing the old 40-byte
+  // lights), the spot/directional fields of version 5 only where a scene has such a light, so
+  // that a scene of area and point lights keeps its id (validate_scene requires those fields 0).
+  const uint64_t n_lights = lights.size();
+  h.update(&n_lights, sizeof n_lights);
+  bool punctual = false;
+  for (const pf_light& l : lights) {
+    h.update(&l, offsetof(pf_light, direction));
+    punctual = punctual || l.type == PF_LIGHT_SPOT || l.type == PF_LIGHT_DIRECTIONAL;
+  }
+  if (punctual)
+    for (const pf_light& l : lights)
+      h.update(&l.direction, sizeof(pf_light) - offsetof(pf_light, direction));
   // The pinhole fields always; the lens only when there is one, so that a pinhole scene keeps
   // the id it had before format version 4 added the lens.
   h.update(&camera, offsetof(pf_camera, aperture));
@@ -202,14 +237,26 @@ const h5::Compound& h5_type_material_v4() {
   return t;
 }
 
+namespace {
+// The light's fields, with the spot/directional fields of format version 5 or without (1-4).
+h5::Compound light_compound(bool punctual) {
+  h5::Compound c(sizeof(pf_light));
+  c.PF_I32(pf_light, type).PF_I32(pf_light, triangle);
+  c.PF_F32(pf_light, area, 1).PF_F32(pf_light, power, 1);
+  c.PF_F32(pf_light, position, 3).PF_F32(pf_light, radiance, 3);
+  if (punctual)
+    c.PF_F32(pf_light, direction, 3).PF_F32(pf_light, cos_inner, 1).PF_F32(pf_light, cos_outer, 1);
+  return c;
+}
+}  // namespace
+
 const h5::Compound& h5_type_light() {
-  static const h5::Compound t = [] {
-    h5::Compound c(sizeof(pf_light));
-    c.PF_I32(pf_light, type).PF_I32(pf_light, triangle);
-    c.PF_F32(pf_light, area, 1).PF_F32(pf_light, power, 1);
-    c.PF_F32(pf_light, position, 3).PF_F32(pf_light, radiance, 3);
-    return c;
-  }();
+  static const h5::Compound t = light_compound(true);
+  return t;
+}
+
+const h5::Compound& h5_type_light_v4() {
+  static const h5::Compound t = light_compound(false);
   return t;
 }
 
@@ -304,6 +351,36 @@ bool same_plane(const float* stored, const float* derived, double coordinate) {
   return nearly_equal(stored[3], derived[3], 1e-5, 1e-5 * m * coordinate);
 }
 
+// A light's format-version-5 fields (shared_types.h): a spot's unit axis and its cone, 1 >=
+// cos_inner > cos_outer >= 0 (KHR_lights_punctual: 0 <= innerConeAngle < outerConeAngle <= π/2),
+// a directional light's unit direction and no cone, all 0 for area and point lights (the scene id
+// leaves them out for such scenes: Scene::compute_scene_id).
+void check_light_cone(const pf_light& l, const Validator& v, const std::string& at) {
+  const float* f = l.direction;
+  const bool zero = f[0] == 0.f && f[1] == 0.f && f[2] == 0.f && l.cos_inner == 0.f &&
+                    l.cos_outer == 0.f;
+  if (l.type == PF_LIGHT_AREA || l.type == PF_LIGHT_POINT) {
+    if (!zero)
+      v.fail(at + ": an area or point light has a direction or cone (direction " + vec_text(f) +
+             ", cos_inner " + value_text(l.cos_inner) + ", cos_outer " + value_text(l.cos_outer) +
+             "); they must be 0");
+    return;
+  }
+  v.unit(at + ".direction", f);
+  if (l.type == PF_LIGHT_DIRECTIONAL) {
+    if (l.cos_inner != 0.f || l.cos_outer != 0.f)
+      v.fail(at + ": a directional light has a cone (cos_inner " + value_text(l.cos_inner) +
+             ", cos_outer " + value_text(l.cos_outer) + "); they must be 0");
+    return;
+  }
+  v.in_range(at + ".cos_outer", &l.cos_outer, 1, 0.0, 1.0);
+  v.in_range(at + ".cos_inner", &l.cos_inner, 1, 0.0, 1.0);
+  if (!(l.cos_inner > l.cos_outer) || !(l.cos_outer < 1.f))
+    v.fail(at + ": a spot light's cone has cos_inner " + value_text(l.cos_inner) +
+           " <= cos_outer " + value_text(l.cos_outer) +
+           " (the outer cone must be wider than the inner one and wider than 0)");
+}
+
 // The values of a scene whose arrays and indices load_scene has checked (docs/FORMATS.md,
 // "Values"): triangles, planes, materials, lights and their CDF, camera, kd-tree boxes and leaves.
 // s.bounds holds the triangles' bounds.
@@ -377,9 +454,11 @@ void check_scene_values(const Scene& s, const Validator& v) {
     v.in_range(Name(L, i, "radiance"), l.radiance, 3, 0.0, kMaxValue);
     v.in_range(Name(L, i, "area"), &l.area, 1, 0.0, kMaxValue);
     v.in_range(Name(L, i, "power"), &l.power, 1, 0.0, kMaxValue);
-    if (l.type == PF_LIGHT_POINT && l.triangle != -1)
-      v.fail(Validator::element(L, i, "triangle") + " of a point light is " +
+    if (l.type != PF_LIGHT_AREA && l.triangle != -1)
+      v.fail(Validator::element(L, i, "triangle") + " of a " +
+             (l.type == PF_LIGHT_POINT ? "point" : "spot or directional") + " light is " +
              std::to_string(l.triangle) + ", not -1");
+    check_light_cone(l, v, Validator::element(L, i));
   }
   const std::string C = "lights/cdf";
   for (size_t i = 0; i < s.light_cdf.size(); ++i)
@@ -408,10 +487,14 @@ void check_scene_values(const Scene& s, const Validator& v) {
     bool same = nearly_equal(a.area, b.area, 1e-5) && nearly_equal(a.power, b.power, 1e-5);
     for (int k = 0; k < 3; ++k)
       same = same && nearly_equal(a.position[k], b.position[k], 1e-5, reach) &&
-             nearly_equal(a.radiance[k], b.radiance[k], 1e-6);
+             nearly_equal(a.radiance[k], b.radiance[k], 1e-6) &&
+             a.direction[k] == b.direction[k];
+    same = same && a.cos_inner == b.cos_inner && a.cos_outer == b.cos_outer;
     if (!same)
       v.fail(at + " (power " + value_text(a.power) + ") differs from the light its " +
-             (b.type == PF_LIGHT_AREA ? "triangle and material give" : "radiance gives") +
+             (b.type == PF_LIGHT_AREA          ? "triangle and material give"
+              : b.type == PF_LIGHT_DIRECTIONAL ? "irradiance and the scene's bounds give"
+                                               : "intensity and cone give") +
              " (power " + value_text(b.power) + ")");
     if (!nearly_equal(s.light_cdf[i], cdf[i], 0.0, 1e-5))
       v.fail(Validator::element(C, i) + " = " + value_text(s.light_cdf[i]) +
@@ -663,8 +746,11 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
   }
 
   w.write("/lights/lights", h5_type_light(), s.lights);
-  w.describe("/lights/lights", "area: m^2, power: W (luminance), radiance: W/(sr m^2) or W/sr",
-             "type 0 area (emissive triangle), 1 point");
+  w.describe("/lights/lights",
+             "area: m^2, power: W (luminance), radiance: W/(sr m^2) (area), W/sr (point, spot) or "
+             "W/m^2 (directional), direction: unit, cos_inner/cos_outer: 1",
+             "type 0 area (emissive triangle), 1 point, 2 spot, 3 directional (format version 5: "
+             "direction, cos_inner, cos_outer; docs/FORMATS.md)");
   w.write("/lights/cdf", s.light_cdf);
   w.describe("/lights/cdf", "1", "cumulative power fraction, sampling lights by power");
 
@@ -719,7 +805,7 @@ void validate_scene(const Scene& s, const std::string& path) {
   for (size_t i = 0; i < s.lights.size(); ++i) {
     const pf_light& l = s.lights[i];
     const std::string at = Validator::element("lights/lights", i);
-    if (l.type != PF_LIGHT_AREA && l.type != PF_LIGHT_POINT)
+    if (l.type < PF_LIGHT_AREA || l.type > PF_LIGHT_DIRECTIONAL)
       v.fail(at + ": a light has unknown type " + std::to_string(l.type));
     if (l.type == PF_LIGHT_AREA && (l.triangle < 0 || size_t(l.triangle) >= s.triangles.size()))
       v.fail(at + ": an area light's triangle id is out of range (" + std::to_string(l.triangle) +
@@ -751,7 +837,8 @@ Scene load_scene(const std::string& path) {
   s.materials = r.read<pf_material>("/materials/materials",
                                     r.version() >= 5 ? h5_type_material() : h5_type_material_v4());
   s.material_names = r.read_strings("/materials/names");
-  s.lights = r.read<pf_light>("/lights/lights", h5_type_light());
+  // Format version 5 added the spot/directional fields; older lights have them 0 (area, point).
+  s.lights = r.read<pf_light>("/lights/lights", r.version() >= 5 ? h5_type_light() : h5_type_light_v4());
   s.light_cdf = r.read<float>("/lights/cdf");
   if (r.count("/camera") != 1) throw input_error(path, "/camera must hold exactly one camera");
   // Format version 4 added the thin lens (aperture, focus_distance); older files are pinholes.

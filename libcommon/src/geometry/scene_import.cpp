@@ -65,6 +65,8 @@
 #include "photonflow/isolate.h"
 #include "photonflow/memory_cap.h"
 #include "photonflow/provenance.h"
+#include "photonflow/texture_image.h"
+#include "light_import.h"
 #include "material_import.h"
 
 namespace pf {
@@ -217,7 +219,7 @@ class Flattener {
             TextureLoader& textures)
       : ai_(ai), file_(file), scene_(scene), report_(report), textures_(textures),
         material_map_(ai.mNumMaterials, -1), uv_channel_(ai.mNumMaterials, 0),
-        checked_(ai.mNumMeshes, false) {}
+        checked_(ai.mNumMeshes, false), emissive_strength_(gltf_emissive_strengths(file)) {}
 
   // Flattens the whole node graph into `out`, each triangle's texture coordinates into `uvs`
   // (zero where the mesh has none). Mesh names get `prefix` in front; material ≥ 0 replaces the
@@ -241,7 +243,8 @@ class Flattener {
       const AlphaImport alpha =
           read_alpha(am, file_, name, lower_extension(file_) == ".obj", report_.warnings);
       const ImportedMaterial m = import::import_material(ai_, am, name, file_, textures_, report_,
-                                                         alpha.masked() && alpha.base_texture_alpha);
+                                                         alpha.masked() && alpha.base_texture_alpha,
+                                                         i < emissive_strength_.size() ? emissive_strength_[i] : 1.f);
       uv_channel_[i] = m.uv_channel;
       scene_.materials.push_back(m.material);
       scene_.material_names.push_back(name);
@@ -413,41 +416,12 @@ class Flattener {
   std::vector<int> material_map_;
   std::vector<unsigned> uv_channel_;  // per file material: the UV channel of its texture
   std::vector<bool> checked_;
+  std::vector<float> emissive_strength_;  // glTF materials' emissiveStrength (light_import.h)
   std::string prefix_;
   int material_override_ = -1;
   std::vector<pf_triangle>* out_ = nullptr;
   std::vector<TriangleUV>* uvs_ = nullptr;
 };
-
-// Point lights of the file, placed by their nodes. Other light kinds are ignored with a warning.
-void add_point_lights(const aiScene& ai, const std::string& file, Scene& scene,
-                      BakeReport& report) {
-  for (unsigned i = 0; i < ai.mNumLights; ++i) {
-    const aiLight& l = *ai.mLights[i];
-    std::string name = l.mName.C_Str();
-    if (l.mType != aiLightSource_POINT) {
-      report.warnings.push_back(file + ": light '" + name +
-                                "' ignored (only point lights and emissive surfaces are used)");
-      continue;
-    }
-    const aiNode* node = ai.mRootNode->FindNode(l.mName);
-    const Vec3 pos = to_vec((node ? global_transform(node) : aiMatrix4x4()) * l.mPosition);
-    const Vec3 intensity = to_vec(l.mColorDiffuse);
-    if (!finite(pos) || !finite(intensity))
-      throw input_error(file, "light '" + name + "' has a non-finite position or colour",
-                        "fix the light");
-    if (black(intensity)) {
-      report.warnings.push_back(file + ": light '" + name + "' ignored (zero intensity)");
-      continue;
-    }
-    pf_light pl{};
-    pl.type = PF_LIGHT_POINT;
-    pl.triangle = -1;
-    pos.store(pl.position);
-    clamp3(intensity, INFINITY).store(pl.radiance);  // power is set by compute_light_cdf
-    scene.lights.push_back(pl);
-  }
-}
 
 // The first camera of a file in world space.
 struct FileCamera {
@@ -670,7 +644,7 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
                                 " of zero area, " + std::to_string(report.primitives_skipped) +
                                 " points or lines)",
                       "the scene needs triangle or polygon meshes");
-  add_point_lights(*ai, file, scene, report);
+  add_lights(*ai, file, scene, report);  // light_import.cpp
   const std::optional<FileCamera> file_camera = read_camera(*ai, file, report);
   report.camera_from_file = file_camera.has_value();
   report.camera_source = camera_sources(options, file_camera);
@@ -707,7 +681,7 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   for (size_t i = 0; i < scene.triangles.size() && !emitter; ++i)
     emitter = scene.materials[size_t(scene.triangles[i].material)].type == PF_MAT_EMITTER;
   if (!emitter)
-    throw input_error(file, "no light: no emissive material (Ke > 0) and no point light",
+    throw input_error(file, "no light: no emissive material (Ke > 0) and no point, spot or directional light",
                       "give a surface an emissive colour or add a point light");
 
   scene.compute_bounds();

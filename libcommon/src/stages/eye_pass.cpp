@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "photonflow/camera.h"
+#include "photonflow/light_shared.h"
 #include "photonflow/options.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
@@ -87,6 +88,17 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
       float cos_x = dot(w, ns);
       if (cos_l <= 0.f || cos_x <= 0.f || dot(w, ng) <= 0.f) continue;
       g = cos_x * cos_l * l.area / d2;  // pdf_area = 1 / area
+      contrib = Vec3(l.radiance);
+    } else if (l.type != PF_LIGHT_POINT) {  // spot or directional (light_shared.h)
+      const float fp[3] = {p.x, p.y, p.z};
+      float w[3], fq[3];
+      const float f = pf_punctual_incident(l.type, l.position, l.direction, l.cos_inner,
+                                           l.cos_outer, fp, w, fq);
+      const Vec3 wv(w);
+      const float cos_x = dot(wv, ns);
+      if (!(f > 0.f) || cos_x <= 0.f || dot(wv, ng) <= 0.f) continue;
+      q = Vec3(fq);
+      g = cos_x * f;
       contrib = Vec3(l.radiance);
     } else {
       q = Vec3(l.position);

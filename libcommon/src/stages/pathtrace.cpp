@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "photonflow/camera.h"
+#include "photonflow/light_shared.h"
 #include "photonflow/error.h"
 #include "photonflow/text_file.h"
 #include "photonflow/provenance.h"
@@ -204,6 +205,16 @@ class PathTracer {
       const float pdf = p_light * d2 / (l.area * cos_l);  // per unit solid angle at p
       g = cos_x / pdf;
       if (opt_.mis == MisMode::Power) w = power_heuristic(pdf, pdf_cosine_hemisphere(cos_x));
+    } else if (l.type != PF_LIGHT_POINT) {  // spot or directional (light_shared.h): delta lights
+      const float fp[3] = {p.x, p.y, p.z};
+      float w[3], fq[3];
+      const float f = pf_punctual_incident(l.type, l.position, l.direction, l.cos_inner,
+                                           l.cos_outer, fp, w, fq);
+      const Vec3 wl(w);
+      const float cos_x = dot(wl, n);
+      if (!(f > 0.f) || cos_x <= 0.f || dot(wl, ng) <= 0.f) return {};
+      q = Vec3(fq);
+      g = cos_x * f / p_light;
     } else {
       q = Vec3(l.position);
       Vec3 wl = q - p;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "photonflow/error.h"
+#include "photonflow/light_shared.h"
 #include "photonflow/options.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
@@ -42,9 +43,16 @@ bool emit(const Scene& scene, const std::vector<LightInfo>& info, pf_rng& rng, R
     ray = Ray{p + t.n * eps, d};
     // Φ = L · A · π for a one-sided Lambertian emitter (cosine sampling: L·cos/pdf = L·π).
     flux = Vec3(l.radiance) * (l.area * kPi / p_light);
-  } else {
+  } else if (l.type == PF_LIGHT_POINT) {
     ray = Ray{Vec3(l.position), sample_uniform_sphere(u1, u2)};
     flux = Vec3(l.radiance) * (4.f * kPi / p_light);  // Φ = 4π · I
+  } else {  // spot or directional (light_shared.h; the kernel's twin in trace_photons.cl)
+    float o[3], d[3];
+    const float f = pf_punctual_emit(l.type, l.position, l.direction, l.cos_inner, l.cos_outer,
+                                     l.area, u1, u2, o, d);
+    if (!(f > 0.f)) return false;
+    ray = Ray{Vec3(o), Vec3(d)};
+    flux = Vec3(l.radiance) * (f / p_light);
   }
   return true;
 }
