@@ -826,19 +826,17 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
       }
       m.unmap();
     }
-    {  // the PBR sites of the pass's visible points, by pixel (sppm_sites' placement)
+    if (scene_has_pbr(scene_)) {  // the PBR sites of the pass's visible points, by pixel
       check_pbr_table(scene_, eye.hitpoints.size(), eye.bsdf.size());
-      std::vector<int32_t>& at = sppm_pbr_order_;
-      at.assign(nh, -1);
+      std::vector<int32_t>& at = sppm_pbr_order_;  // (sppm_sites' placement)
+      at.assign(nh, 0);  // a pixel without a visible point: entry 0, never read (material −1)
       for (size_t i = 0; i < eye.hitpoints.size(); ++i)
         at[size_t(eye.hitpoints[i].pixel_y) * size_t(h_.width) + size_t(eye.hitpoints[i].pixel_x)] =
             int32_t(i);
-      if (scene_has_pbr(scene_)) {  // pixels without a visible point (−1) take entry 0, unread
-        for (int32_t& j : at) j = std::max(j, 0);
-        if (eye.hitpoints.empty()) at.clear();
-      }
-      pbr_sites(dev_, scene_, "", eye.hitpoints.data(), eye.bsdf.data(),
-                at.empty() ? nullptr : at.data(), at.empty() ? 0 : nh, &pbr_);
+      pbr_sites(dev_, scene_, "", eye.hitpoints.data(), eye.bsdf.data(), at.data(),
+                eye.hitpoints.empty() ? 0 : nh, &pbr_);
+    } else {  // the one-element stand-in, made once
+      pbr_sites(dev_, scene_, "", nullptr, nullptr, nullptr, 0, &pbr_);
     }
     if (np > 0) {
       rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, pbr_, nh,
