@@ -628,6 +628,16 @@ TEST_CASE("PBR visible points: SPPM and PPPM traced as they gather equal the sta
                     staged.bsdf.size() * sizeof(pf_pbr_point)) == 0);
   CHECK(ps.sum == pt.sum);
   CHECK(test::gathered_hitpoints(staged.hitpoints) > staged.hitpoints.size() / 2);
+  // An eye pass of a PBR scene without its table (as a device that does not make one) is
+  // refused before the parallel gather, not gathered with a guess (nor a crash there).
+  {
+    const Pass in = pass_inputs(s, 3, mode, r0);
+    EyePassResult bare = trace_hitpoints(s, in.eye);
+    bare.bsdf.clear();
+    CHECK_THROWS_AS(sppm_pass(s, staged, bare, in.grid, in.emitted, ppm), InputError);
+    CHECK_THROWS_AS(pppm_pass(s, ps, bare, in.grid, in.emitted, ppm), InputError);
+    CHECK(staged.passes == 3);
+  }
   // The SPPM state (a checkpoint) round-trips with its table.
   save_hitpoints(staged, tmp / "state.h5", Provenance{});
   const HitpointSet st = load_hitpoints(tmp / "state.h5");

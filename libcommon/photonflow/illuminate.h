@@ -110,6 +110,12 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
 const pf_pbr_point* pbr_of(const Scene& scene, const pf_hitpoint& hp,
                            const std::vector<pf_pbr_point>& table, size_t i);
 
+// InputError (before any parallel gather, where an exception cannot travel) unless every
+// hitpoint on a PF_MAT_PBR material has its entry in `table` (parallel to `hitpoints`); free
+// when the table has one entry per hitpoint or the scene has no PBR material.
+void require_bsdf_table(const Scene& scene, const std::vector<pf_hitpoint>& hitpoints,
+                        const std::vector<pf_pbr_point>& table);
+
 // Whether a PBR point gathers photons from both sides of its surface (its BSDF transmits).
 inline bool pbr_two_sided_gather(const pf_pbr_point* pbr) {
   return pbr && pbr->params.metallic < 1.f && pbr->params.transmission > 0.f;

@@ -16,6 +16,11 @@
 //         L̄_k = (1/k) Σ L_i (KZ11 eq. 8). The passes are independent, so sums over disjoint
 //         pass ranges merge exactly (pass_sums.h).
 //
+// Visible points on PF_MAT_PBR surfaces (the glTF BSDF) gather τ_M = β_i Σ f(x_i, ω_o, ω_p) Φ_p
+// with the BSDF evaluated per photon (HJ09 eq. 10–11; illuminate.h): the eye pass's BSDF table
+// (EyePassResult::bsdf) gives f's parameters; an SPPM state of a PBR scene keeps each pixel's
+// last visible point's entry in HitpointSet::bsdf, as it keeps its geometry.
+//
 // Both take the pass index p (0-based) for their eye pass (EyePassOptions::pass: streams of
 // (seed, pass, pixel)) and their photon pass, so a pass is the same wherever it runs. The gather
 // is illuminate.h's rule and order (gather_site), the photons those of trace_photons pass p, with

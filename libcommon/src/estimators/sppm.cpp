@@ -174,6 +174,7 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
   const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
   const int64_t count = int64_t(eye.hitpoints.size());
   const bool pbr = scene_has_pbr(scene);
+  require_bsdf_table(scene, eye.hitpoints, eye.bsdf);  // not in the workers: no exceptions there
   if (state.bsdf.empty() && pbr)  // made here, not by the workers
     state.bsdf.assign(state.hitpoints.size(), pf_pbr_point{});
 #pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
@@ -305,6 +306,7 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
   const bool skip = sums.direct_mode == DirectMode::ShadowRays;
   const int64_t count = int64_t(eye.hitpoints.size());
   const bool pbr = scene_has_pbr(scene);
+  require_bsdf_table(scene, eye.hitpoints, eye.bsdf);  // not in the workers: no exceptions there
   // The calling thread's buffer, kept from pass to pass (no allocation per pass); the workers
   // write it through `out` (a thread_local named inside the region would be each worker's own).
   thread_local std::vector<float> tau_beta;

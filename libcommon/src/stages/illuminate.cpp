@@ -13,6 +13,7 @@
 
 #include "photonflow/ppm.h"
 #include "photonflow/sampling.h"
+#include "photonflow/surface.h"
 #include "photonflow/threads.h"
 
 namespace pf {
@@ -189,6 +190,12 @@ const pf_pbr_point* pbr_of(const Scene& scene, const pf_hitpoint& hp,
   return &table[i];
 }
 
+void require_bsdf_table(const Scene& scene, const std::vector<pf_hitpoint>& hitpoints,
+                        const std::vector<pf_pbr_point>& table) {
+  if (table.size() == hitpoints.size() || !scene_has_pbr(scene)) return;
+  for (size_t i = 0; i < hitpoints.size(); ++i) pbr_of(scene, hitpoints[i], table, i);
+}
+
 int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
                 bool skip_direct, float slab, float tau_m[3], const pf_pbr_point* pbr) {
   tau_m[0] = tau_m[1] = tau_m[2] = 0.f;
@@ -341,6 +348,7 @@ void ppm_pass_grid_prechecked(const Scene& scene, HitpointSet& h, const PhotonGr
                               uint64_t emitted, const PpmOptions& opt) {
   check_alpha(opt.alpha);
   require_sphere(opt.slab);
+  require_bsdf_table(scene, h.hitpoints, h.bsdf);
   const bool skip_direct = h.direct_mode == DirectMode::ShadowRays;
   const float alpha = opt.alpha;
   const int64_t count = int64_t(h.hitpoints.size());
