@@ -4,8 +4,10 @@
  * (Table 7.3), plus a hashed grid. gather_method.h lists them; cl_gather.cpp launches them.
  *
  * Every kernel selects exactly the photons illuminate.h's rule selects (same mesh; not
- * PF_PHOTON_DIRECT when direct light came from shadow rays; dot(photon.dir, normal) < 0;
- * pf_ppm_in_radius(pf_ppm_dist2(x, x_p), R)) and adds m and Σ f_r·Φ_p (eq. 3.17) into
+ * PF_PHOTON_DIRECT when direct light came from shadow rays; dot(photon.dir, normal) < 0, except
+ * at a transmissive PF_MAT_PBR point; pf_ppm_in_radius(pf_ppm_dist2(x, x_p), R)) and adds m and
+ * Σ f_r·Φ_p (eq. 3.17; at a PBR hitpoint Σ f(x, ω_o, ω_p)·Φ_p per photon, HJ09 eq. 10–11, from
+ * the kernel's `pbr` table of pf_pbr_site, pbr_point_shared.h) into
  * per-hitpoint accumulators acc_m / acc_tau (double where the device has fp64, PF_FP64);
  * ppm_apply then applies eq. 3.14, 3.16, 3.18 once per pass (gather_hash_grid, where one
  * work-item owns a hitpoint for the whole pass, applies them itself with the same arithmetic).
@@ -158,7 +160,7 @@ static inline void pf_gather_photon(pf_gather_hp* h, float px, float py, float p
                                     float f2, const int skip_direct, const int builtin) {
   if (mesh != h->mesh) return;
   if (skip_direct && (flags & PF_PHOTON_DIRECT)) return;
-  if (!h->both && !(dx * h->nx + dy * h->ny + dz * h->nz < 0.0f)) return;
+  if (!(dx * h->nx + dy * h->ny + dz * h->nz < 0.0f) && !h->both) return;
   if (!pf_in_radius(h, px, py, pz, builtin)) return;
   pf_gather_add(h, dx, dy, dz, f0, f1, f2);
 }
@@ -180,7 +182,7 @@ static inline void pf_gather_local(pf_gather_hp* h, __local const pf_photon* p,
 /* The rest of the rule for a photon whose key and distance passed: the direction, then the sums
  * (from its payload, hash_grid.h). */
 static inline void pf_gather_payload(pf_gather_hp* h, __global const pf_photon_payload* p) {
-  if (!h->both && !(p->dir[0] * h->nx + p->dir[1] * h->ny + p->dir[2] * h->nz < 0.0f)) return;
+  if (!(p->dir[0] * h->nx + p->dir[1] * h->ny + p->dir[2] * h->nz < 0.0f) && !h->both) return;
   pf_gather_add(h, p->dir[0], p->dir[1], p->dir[2], p->flux[0], p->flux[1], p->flux[2]);
 }
 

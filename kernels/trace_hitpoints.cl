@@ -1,8 +1,9 @@
 /*
  * trace_hitpoints.cl — the eye pass of progressive photon mapping on an OpenCL device (thesis
  * ch. 7.2 "ray tracing" block; CPU twin: eye_pass.cpp). One work-item per pixel; each loops over
- * its eye samples and follows mirror/glass bounces iteratively (no recursion) to the first diffuse
- * surface, where it stores a hitpoint. Rays are traced by the stackless kd-tree traversal with
+ * its eye samples and follows mirror/glass bounces iteratively (no recursion) to the first
+ * non-delta surface (diffuse or PF_MAT_PBR), where it stores a hitpoint — and, in a scene with a
+ * PBR material (has_pbr), the point's pf_pbr_point in the slot beside it (zeros at a diffuse one). Rays are traced by the stackless kd-tree traversal with
  * ropes (intersect_shared.h) — the spatial index the thesis's GPU tracer did not have.
  *
  * Random numbers: stream (seed, kEyeStream + pass, pixel·spp + s) for jitter (pixel_sampler.h)

@@ -5,11 +5,12 @@
  *
  * Random numbers: photon i of pass p uses the counter-based stream (seed, p, i) in the CPU's
  * dimension order (light choice, 2 position, 2 direction; then per bounce: Russian roulette and
- * two direction numbers at a diffuse hit, one Fresnel choice at glass), so both backends trace the
- * same paths (thesis ch. 7.2 kept LCG seeds per photon; a counter-based generator needs none).
+ * two direction numbers at a diffuse hit, u1, u2, u3 for pf_pbr_scatter then the roulette's at a
+ * PF_MAT_PBR hit, one Fresnel choice at glass), so both backends trace the same paths (thesis
+ * ch. 7.2 kept LCG seeds per photon; a counter-based generator needs none).
  *
- * Storage: each photon owns max_bounces + 1 slots (one stored photon per diffuse hit at most per
- * bounce) and a count; the host concatenates the used slots in photon order, which is the CPU's
+ * Storage: each photon owns max_bounces + 1 slots (one stored photon per diffuse or PBR hit, at
+ * most one per bounce) and a count; the host concatenates the used slots in photon order, which is the CPU's
  * order (photon index, then bounce). Slots are stored slot-major — slot k of batch photon i at
  * [k·count + i] — so that neighbouring work-items write neighbouring photons (dense cache lines;
  * most photons use only their first slots).
@@ -121,9 +122,9 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
       pf_sample_cosine_hemisphere(n, b1, b2, d);
       specular_only = 0;
     } else if (m->type == PF_MAT_PBR) {
-      /* glTF metallic-roughness (photon_pass.cpp): stored as at a diffuse hit, then continued by
-       * sampling the adjoint BSDF (PF_TRANSPORT_IMPORTANCE) in the local frame of the outside
-       * shading normal, times Veach's shading-normal correction; draws u1, u2, u3, then u_rr. */
+      /* glTF metallic-roughness (photon_pass.cpp, photon_pass.h): stored as at a diffuse hit,
+       * then continued by pf_pbr_scatter (importance mode, the front shading frame, Veach's
+       * shading-normal adjoint; pbr_scatter_shared.h); draws u1, u2, u3, then u_rr. */
       pf_photon ph;
       for (int k = 0; k < 3; ++k) {
         ph.position[k] = sh.p[k];

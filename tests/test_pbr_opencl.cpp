@@ -13,6 +13,7 @@
 
 #include "photonflow/cl_backend.h"
 #include "photonflow/cl_gather.h"
+#include "photonflow/error.h"
 #include "photonflow/eye_pass.h"
 #include "photonflow/gather_method.h"
 #include "photonflow/illuminate.h"
@@ -288,6 +289,13 @@ TEST_CASE("OpenCL PBR: every device gather evaluates the BSDF per photon as the 
     CHECK(count_differ == 0);
     CHECK(worst <= 1e-5);
   }
+  // PBR hitpoints without their BSDF entries are refused before any kernel runs.
+  HitpointSet bare = h0;
+  bare.bsdf.clear();
+  PpmOptions hash;
+  hash.method = GatherMethod::HashGrid;
+  CHECK_THROWS_AS(ppm_pass(s, bare, ph.photons, ph.emitted, hash, *dev), InputError);
+  CHECK(bare.passes == 0);
 }
 
 TEST_CASE("OpenCL PBR: the render driver's SPPM, PPPM and PPM device routes give the CPU's images",

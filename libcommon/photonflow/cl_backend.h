@@ -4,11 +4,13 @@
 // driver switches backends with one pointer.
 //
 //   trace_hitpoints — kernels/trace_hitpoints.cl: one work-item per pixel, iterative specular
-//                     chain, stackless kd-tree traversal with ropes (intersect_shared.h);
+//                     chain, stackless kd-tree traversal with ropes (intersect_shared.h); a PBR
+//                     scene's BSDF table (EyePassResult::bsdf) compacted with the hitpoints;
 //   trace_photons   — kernels/trace_photons.cl: one work-item per photon, fixed bounce limit,
 //                     per-photon slots compacted on the host into the CPU's order (or, by
 //                     trace_photons_device, on the device, for a pass gathered there);
-//   ppm_pass        — kernels/illuminate_methods.cl (cl_gather.cpp): the naive gather (every
+//   ppm_pass        — kernels/illuminate_methods.cl (cl_gather.cpp; f per photon at PF_MAT_PBR
+//                     hitpoints, HitpointSet::bsdf, MATERIALS.md): the naive gather (every
 //                     hitpoint loops over all photons; thesis Table 7.1 "Hitpoint Illumination",
 //                     the CPU's summation order) and the accelerated variants of thesis ch. 7.3
 //                     (gather_method.h), all with the CPU's acceptance rule;

@@ -485,23 +485,15 @@ void count_pass(HitpointSet& h, uint64_t emitted) {
   h.estimator = "ppm";
 }
 
-// A state's pf_pbr_point table must cover its hitpoints when the scene has a PBR material (the
-// gathers read entry i of hitpoint i; pbr_point_shared.h).
-void check_pbr_table(const Scene& scene, size_t hitpoints, size_t table) {
-  if (scene_has_pbr(scene) && table != hitpoints)
-    throw input_error("", "the hitpoints (" + std::to_string(hitpoints) + ") of a scene with PBR "
-                              "materials come with " + std::to_string(table) +
-                              " BSDF records (hitpoints.h5 /hitpoints/bsdf)",
-                      "remake the hitpoints with trace-hitpoints");
-}
-
 // The gathers' pf_pbr_site table (pbr_point_shared.h) of n hitpoints: entry i from hitpoint
-// hps[order[i]] and its record pbr[order[i]] (hps[i], pbr[i] without an order), ω_o = −dir, in
-// the scratch buffer `name` (or `own`, a resident state's buffer, grown as needed). A scene
-// without PBR material gets a one-element stand-in the kernels never read, and costs nothing more.
+// j = order[i] (first + i without an order) of `hps` and its record table[j] (zeros where the
+// table ends: require_bsdf_table has checked that no PBR hitpoint lies there), ω_o = −dir, in the
+// scratch buffer `name` (or `own`, a resident state's buffer, grown as needed). A scene without
+// PBR material gets a one-element stand-in the kernels never read, and costs nothing more.
 const ClBuffer& pbr_sites(ClContext& dev, const Scene& scene, const std::string& name,
-                          const pf_hitpoint* hps, const pf_pbr_point* pbr, const int32_t* order,
-                          size_t n, ClBuffer* own = nullptr) {
+                          const std::vector<pf_hitpoint>& hps,
+                          const std::vector<pf_pbr_point>& table, const int32_t* order,
+                          size_t first, size_t n, ClBuffer* own = nullptr) {
   const bool has = scene_has_pbr(scene) && n > 0;
   const size_t bytes = (has ? n : 1) * sizeof(pf_pbr_site);
   const ClBuffer* b;
@@ -515,9 +507,9 @@ const ClBuffer& pbr_sites(ClContext& dev, const Scene& scene, const std::string&
   ClMapping map(dev, *b, bytes, ClMapping::Mode::Write);
   pf_pbr_site* out = map.as<pf_pbr_site>();
   for (size_t i = 0; i < n; ++i) {
-    const size_t j = order ? size_t(order[i]) : i;
+    const size_t j = order ? size_t(order[i]) : first + i;
     pf_pbr_site site{};
-    site.pt = pbr[j];
+    if (j < table.size()) site.pt = table[j];
     for (int a = 0; a < 3; ++a) site.wo[a] = -hps[j].dir[a];
     out[i] = site;
   }
@@ -584,7 +576,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   check_pass(opt, nh, np);
   require_sphere(opt.slab);
   check_against_scene("", h, scene);  // the kernels index materials by hitpoint, unchecked
-  check_pbr_table(scene, nh, h.bsdf.size());
+  require_bsdf_table(scene, h.hitpoints, h.bsdf);  // (MATERIALS.md: the gathers read it)
   const int mesh_count = int(scene.mesh_names.size());
   const cl_int skip_direct = h.direct_mode == DirectMode::ShadowRays ? 1 : 0;
   const size_t acc = dev.info().fp64 ? sizeof(double) : sizeof(float);
@@ -600,8 +592,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       const SplitHitpoints hps{&dev.scratch("ppm.sites", nh * sizeof(pf_gather_site)),
                                &dev.scratch("ppm.states", nh * sizeof(pf_ppm_state))};
       write_split(dev, hps, h.hitpoints.data(), nullptr, nh);
-      const ClBuffer& pbr =
-          pbr_sites(dev, scene, "ppm.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh);
+      const ClBuffer& pbr = pbr_sites(dev, scene, "ppm.pbr", h.hitpoints, h.bsdf, nullptr, 0, nh);
       hash_grid_pass(scene, hps, mats, pbr, nh, h.direct_mode, max_radius(h),
                      PassPhotons{photons.data(), nullptr, np}, opt, dev, times);
       read_split_states(dev, hps, h.hitpoints.data(), nullptr, nh);
@@ -619,9 +610,8 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       for (size_t hoff = 0; hoff < nh; hoff += hb) {
         const cl_int hcount = cl_int(std::min(hb, nh - hoff));
         dev.write(hps, size_t(hcount) * sizeof(pf_hitpoint), &h.hitpoints[hoff]);
-        const ClBuffer& pbr = pbr_sites(dev, scene, "ppm.pbr", &h.hitpoints[hoff],
-                                        h.bsdf.empty() ? nullptr : &h.bsdf[hoff], nullptr,
-                                        size_t(hcount));
+        const ClBuffer& pbr =
+            pbr_sites(dev, scene, "ppm.pbr", h.hitpoints, h.bsdf, nullptr, hoff, size_t(hcount));
         dev.fill_zero(acc_m, size_t(hcount) * sizeof(cl_int));
         dev.fill_zero(acc_tau, size_t(hcount) * 3 * acc);
         for (size_t poff = 0; poff < np; poff += pb) {
@@ -648,8 +638,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       const ClBuffer& acc_tau = dev.scratch("ppm.acc_tau", nh * 3 * acc);
       const ClBuffer& phs = dev.scratch("ppm.photons", np * sizeof(pf_photon));
       dev.write(hps, nh * sizeof(pf_hitpoint), h.hitpoints.data());
-      const ClBuffer& pbr =
-          pbr_sites(dev, scene, "ppm.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh);
+      const ClBuffer& pbr = pbr_sites(dev, scene, "ppm.pbr", h.hitpoints, h.bsdf, nullptr, 0, nh);
       dev.write(phs, np * sizeof(pf_photon), photons.data());
       dev.fill_zero(acc_m, nh * sizeof(cl_int));
       dev.fill_zero(acc_tau, nh * 3 * acc);
@@ -826,19 +815,17 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
       }
       m.unmap();
     }
-    {  // the PBR sites of the pass's visible points, by pixel (sppm_sites' placement)
-      check_pbr_table(scene_, eye.hitpoints.size(), eye.bsdf.size());
-      std::vector<int32_t>& at = sppm_pbr_order_;
-      at.assign(nh, -1);
+    if (scene_has_pbr(scene_)) {  // the PBR sites of the pass's visible points, by pixel
+      require_bsdf_table(scene_, eye.hitpoints, eye.bsdf);
+      std::vector<int32_t>& at = sppm_pbr_order_;  // (sppm_sites' placement)
+      at.assign(nh, 0);  // a pixel without a visible point: entry 0, never read (material −1)
       for (size_t i = 0; i < eye.hitpoints.size(); ++i)
         at[size_t(eye.hitpoints[i].pixel_y) * size_t(h_.width) + size_t(eye.hitpoints[i].pixel_x)] =
             int32_t(i);
-      if (scene_has_pbr(scene_)) {  // pixels without a visible point (−1) take entry 0, unread
-        for (int32_t& j : at) j = std::max(j, 0);
-        if (eye.hitpoints.empty()) at.clear();
-      }
-      pbr_sites(dev_, scene_, "", eye.hitpoints.data(), eye.bsdf.data(),
-                at.empty() ? nullptr : at.data(), at.empty() ? 0 : nh, &pbr_);
+      pbr_sites(dev_, scene_, "", eye.hitpoints, eye.bsdf, at.data(), 0,
+                eye.hitpoints.empty() ? 0 : nh, &pbr_);
+    } else {  // the one-element stand-in, made once
+      pbr_sites(dev_, scene_, "", eye.hitpoints, eye.bsdf, nullptr, 0, 0, &pbr_);
     }
     if (np > 0) {
       rmax_ = hash_grid_pass(scene_, SplitHitpoints{&sites_, &states_}, mats_, pbr_, nh,
@@ -883,9 +870,8 @@ std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& e
   dev.write(weights, nh * 3 * sizeof(float), beta.data());
   const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
   dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
-  check_pbr_table(scene, nh, eye.bsdf.size());
-  const ClBuffer& pbr =
-      pbr_sites(dev, scene, "pppm.pbr", eye.hitpoints.data(), eye.bsdf.data(), nullptr, nh);
+  require_bsdf_table(scene, eye.hitpoints, eye.bsdf);
+  const ClBuffer& pbr = pbr_sites(dev, scene, "pppm.pbr", eye.hitpoints, eye.bsdf, nullptr, 0, nh);
   GatherTimes times;
   hash_grid_pass(scene, hps, mats, pbr, nh, direct, radius,
                  PassPhotons{nullptr, photons.photons, np}, o, dev, times, &weights);
@@ -917,9 +903,9 @@ void DevicePpmState::upload() {
     write_split(dev_, SplitHitpoints{&sites_, &states_}, h_.hitpoints.data(),
                 order_.empty() ? nullptr : order_.data(), nh);
     if (!is_sppm_state(h_)) {  // (SPPM's come with each pass's visible points)
-      check_pbr_table(scene_, nh, h_.bsdf.size());
-      pbr_sites(dev_, scene_, "", h_.hitpoints.data(), h_.bsdf.data(),
-                order_.empty() ? nullptr : order_.data(), nh, &pbr_);
+      require_bsdf_table(scene_, h_.hitpoints, h_.bsdf);
+      pbr_sites(dev_, scene_, "", h_.hitpoints, h_.bsdf, order_.empty() ? nullptr : order_.data(),
+                0, nh, &pbr_);
     }
   }
   device_current_ = true;
@@ -954,8 +940,8 @@ GridGatherTimer::GridGatherTimer(const Scene& scene, const HitpointSet& h,
   dev.write(*mats_, scene.materials.size() * sizeof(pf_material), scene.materials.data());
   hps_ = &dev.scratch("timer.hitpoints", nh1 * sizeof(pf_hitpoint));
   dev.write(*hps_, nh_ * sizeof(pf_hitpoint), h.hitpoints.data());
-  check_pbr_table(scene, nh_, h.bsdf.size());
-  pbr_ = &pbr_sites(dev, scene, "timer.pbr", h.hitpoints.data(), h.bsdf.data(), nullptr, nh_);
+  require_bsdf_table(scene, h.hitpoints, h.bsdf);
+  pbr_ = &pbr_sites(dev, scene, "timer.pbr", h.hitpoints, h.bsdf, nullptr, 0, nh_);
   acc_m_ = &dev.scratch("timer.acc_m", nh1 * sizeof(cl_int));
   acc_tau_ = &dev.scratch("timer.acc_tau", nh1 * 3 * acc_bytes_);
   dev.fill_zero(*acc_m_, nh1 * sizeof(cl_int));
