@@ -1,23 +1,9 @@
 // The showcase scene of data/ (issue 32 item 8): data/make_showcase.py writes exactly the committed
 // files, and scene-bake reads them as expected.
-//
-// Three other features of issue 32 were in flight on their own branches when this scene was
-// written (the glTF metallic-roughness BSDF: branch ggx; alpha MASK cut-outs: alpha-wire;
-// KHR_lights_punctual spot lights and KHR_materials_emissive_strength: lights). The file is
-// written to the glTF 2.0 specification, so it imports correctly once they land; until then
-// scene-bake ignores those parts of it. The checks that depend on them switch with the three
-// macros below: 0 checks what main imports today (the parts ignored), 1 checks the feature.
-// THE LEAD: set each to 1 when its branch is merged (and adjust a field name if the branch chose
-// another one).
-#ifndef PF_SHOWCASE_AFTER_GGX
-#define PF_SHOWCASE_AFTER_GGX 0  // metallic/roughness/transmission/ior, metallicRoughnessTexture
-#endif
-#ifndef PF_SHOWCASE_AFTER_ALPHA
-#define PF_SHOWCASE_AFTER_ALPHA 0  // alphaMode MASK: rays pass the fence's holes
-#endif
-#ifndef PF_SHOWCASE_AFTER_LIGHTS
-#define PF_SHOWCASE_AFTER_LIGHTS 0  // spot light imported, emissive strength applied
-#endif
+// It uses every feature of issue 32: base-colour and metallic-roughness textures, the glTF
+// metallic-roughness BSDF (PF_MAT_PBR, rough metal and rough glass), an alpha MASK fence,
+// KHR_lights_punctual (a spot) and KHR_materials_emissive_strength, and depth of field from its
+// bake options.
 
 #include <catch2/catch.hpp>
 
@@ -167,11 +153,10 @@ TEST_CASE("scene-bake reads the showcase: geometry, materials, textures, lights,
   CHECK(strength > 1.f);
   for (int c = 0; c < 3; ++c)
     CHECK(light.emission[c] == Approx(m_light.at("emissiveFactor").at(size_t(c)).get<float>() *
-                                      (PF_SHOWCASE_AFTER_LIGHTS ? strength : 1.f)));
+                                      strength));
   const int metal = material_index(s, "gold, glossy metal");
   const int glass = material_index(s, "rough glass");
   const int striped = material_index(s, "striped metal and plastic");
-#if PF_SHOWCASE_AFTER_GGX
   // The glTF metallic-roughness BSDF (issue 32 item 2): field names of branch ggx (pf_material
   // metallic, roughness, transmission, ior; Scene::mr_texture_of).
   CHECK(s.materials[size_t(metal)].type == PF_MAT_PBR);
@@ -187,17 +172,10 @@ TEST_CASE("scene-bake reads the showcase: geometry, materials, textures, lights,
   CHECK(s.texture_names[size_t(s.mr_texture_of(striped))].find("showcase_mr.png") !=
         std::string::npos);
   CHECK(s.textures[size_t(s.mr_texture_of(striped))].filter == PF_TEX_FILTER_NEAREST);
-#else
-  // Today: metallic, roughness and transmission are ignored, so both spheres and the striped box
-  // are diffuse with their base colour (clamped below 1).
-  for (int m : {metal, glass, striped}) CHECK(s.materials[size_t(m)].type == PF_MAT_DIFFUSE);
-  CHECK(s.materials[size_t(metal)].color[1] == Approx(0.766f));
-  CHECK(run.err.find("'rough glass': albedo 1,1,1 clamped") != std::string::npos);
-#endif
 
-  // Base-colour textures: the tiled floor (REPEAT) and the fence (clamped, with alpha); the
-  // metallic-roughness map only with the GGX import.
-  CHECK(s.textures.size() == (PF_SHOWCASE_AFTER_GGX ? 3u : 2u));
+  // Base-colour textures: the tiled floor (REPEAT) and the fence (clamped, with alpha); and the
+  // metallic-roughness map.
+  CHECK(s.textures.size() == 3u);
   const int floor = material_index(s, "floor tiles"), fence = material_index(s, "fence");
   REQUIRE(s.texture_of(floor) >= 0);
   REQUIRE(s.texture_of(fence) >= 0);
@@ -231,14 +209,15 @@ TEST_CASE("scene-bake reads the showcase: geometry, materials, textures, lights,
   CHECK(double(holes) / double(lattice_texels) > 0.3);
   CHECK(double(holes) / double(lattice_texels) < 0.8);
 
-  // Lights: the ceiling quad (2 area lights); the spot light once KHR_lights_punctual spots are
-  // imported (today a warning names it).
+  // Lights: the ceiling quad (2 area lights) and the KHR_lights_punctual spot.
   size_t area = 0;
   for (const pf_light& l : s.lights) area += l.type == PF_LIGHT_AREA;
   CHECK(area == 2);
-  CHECK(s.lights.size() == (PF_SHOWCASE_AFTER_LIGHTS ? 3u : 2u));
-  CHECK((run.err.find("light 'spot light' ignored") != std::string::npos) ==
-        !PF_SHOWCASE_AFTER_LIGHTS);
+  CHECK(s.lights.size() == 3u);
+  size_t spots = 0;
+  for (const pf_light& l : s.lights) spots += l.type == PF_LIGHT_SPOT;
+  CHECK(spots == 1);
+  CHECK(run.err.find("light 'spot light' ignored") == std::string::npos);
 
   // Camera: the file's (node translation, yfov), 512 × 512 from its aspect ratio 1, and the lens
   // of the bake options focused on the metal sphere's centre.
@@ -307,7 +286,7 @@ TEST_CASE("the showcase's fence: rays through a hole of its lattice, none throug
   };
   CHECK(shoot(sx, sy) == fence);
   const int white = material_index(s, "white");  // the back wall behind the fence
-  CHECK(shoot(hx, hy) == (PF_SHOWCASE_AFTER_ALPHA ? white : fence));
+  CHECK(shoot(hx, hy) == white);
 }
 
 TEST_CASE("the showcase and its caustics variant render without error", "[showcase]") {
