@@ -4,12 +4,20 @@ averaged, until a wall-clock budget is reached (Mitsuba's own timeout does not b
 Benchmark-only; never used by photonflow or its tests.
 
   mi_render.py scene.xml out.exr --time S [--spp-per-pass K] [--seed-base B] [--streams N]
-      [--variant llvm_ad_rgb] [--threads 2]
+      [--sampler independent|multijitter|ldsampler|stratified] [--variant llvm_ad_rgb] [--threads 2]
 
---streams N: N independent averages from disjoint seeds (pass i goes to stream i mod N), each written
-to out-s<j>.exr after every pass (checkpoints: a partial run stays usable); with N = 1 the image is
-out.exr. With N >= 2 the reference's own error is printed: RMSE(a-b)/sqrt(2) per stream, /2 for the
-mean of two (written to out.exr).
+Pass i renders K spp with seed B + i (an independent estimate: Mitsuba's samplers are randomised
+per seed) and goes to stream i mod N. The run stops after the first complete round of N passes
+that ends at or after S seconds of rendering (scene loading not counted; the first pass includes
+Dr.Jit's kernel compilation unless DRJIT_CACHE_DIR holds it already, so equal-time runs warm the
+cache first, bench/mitsuba/equal_time.sh).
+
+--streams N: N independent averages from disjoint seeds, each written to out-s<j>.exr after every
+round (checkpoints: a partial or killed run stays usable, and --resume continues it), with the run
+record out.json (passes, spp, seconds, load average) rewritten after them; with N = 1 the image is
+out.exr. With
+N >= 2 the record also holds the reference's own error: RMSE(a-b)/sqrt(2) per stream, /2 for the
+mean of two, which is written to out.exr.
 DRJIT_LIBLLVM_PATH must name libLLVM 19 for llvm_ad_rgb (../shared/toolchain.md).
 """
 import argparse
@@ -26,8 +34,12 @@ ap.add_argument("--time", type=float, required=True)
 ap.add_argument("--spp-per-pass", type=int, default=16)
 ap.add_argument("--seed-base", type=int, default=1000)
 ap.add_argument("--streams", type=int, default=1)
+ap.add_argument("--sampler", default="independent")
 ap.add_argument("--variant", default="llvm_ad_rgb")
 ap.add_argument("--threads", type=int, default=2)
+ap.add_argument("--resume", action="store_true",
+                help="continue the streams of out.json (same scene, sampler, spp per pass, seed base, "
+                     "streams): their images are read back and the seeds go on where they stopped")
 a = ap.parse_args()
 
 import drjit as dr
@@ -36,11 +48,25 @@ import mitsuba as mi
 mi.set_variant(a.variant)
 dr.set_thread_count(a.threads)
 t0 = time.time()
-scene = mi.load_file(a.scene, spp=a.spp_per_pass)
+scene = mi.load_file(a.scene, spp=a.spp_per_pass, sampler=a.sampler)
 t_load = time.time() - t0
 sums = [None] * a.streams
 npass = [0] * a.streams
 base = os.path.splitext(a.output)[0]
+load_start = os.getloadavg()[0]
+done_seconds = 0.0
+if a.resume and os.path.exists(base + ".json"):
+    old = json.load(open(base + ".json"))
+    for k in ("sampler", "spp_per_pass", "seed_base", "variant"):
+        if old[k] != getattr(a, k):
+            raise SystemExit("mi_render.py: --resume: %s.json has %s %r, this run %r" % (base, k, old[k], getattr(a, k)))
+    if len(old["passes"]) != a.streams or len(set(old["passes"])) != 1:
+        raise SystemExit("mi_render.py: --resume: %s.json has passes %r for %d streams" % (base, old["passes"], a.streams))
+    for j in range(a.streams):
+        b = mi.Bitmap(a.output if a.streams == 1 else "%s-s%d.exr" % (base, j))
+        npass[j] = old["passes"][j]
+        sums[j] = np.array(b, dtype=np.float64)[:, :, :3] * npass[j]
+    done_seconds = old["render_seconds"]
 
 
 def path(j):
@@ -52,27 +78,37 @@ def write(img, p):
     os.replace(p + ".tmp.exr", p)
 
 
+def record(el, final):
+    rec = {"scene": os.path.abspath(a.scene), "variant": a.variant, "sampler": a.sampler, "threads": a.threads,
+           "spp_per_pass": a.spp_per_pass, "passes": npass, "spp": [p * a.spp_per_pass for p in npass],
+           "render_seconds": el + done_seconds, "load_seconds": t_load, "seed_base": a.seed_base, "final": final,
+           "loadavg_1min_start": load_start, "loadavg_1min_now": os.getloadavg()[0],
+           "mitsuba": mi.__version__, "drjit": dr.__version__}
+    if a.streams >= 2:
+        m = [s / n for s, n in zip(sums, npass)]
+        d = np.sqrt(np.mean((m[0] - m[1]) ** 2))
+        rec["own_rmse_each"] = d / np.sqrt(2)
+        rec["own_rmse_mean_of_two"] = d / 2
+        write((m[0] + m[1]) / 2, a.output)
+    with open(base + ".json.tmp", "w") as o:
+        json.dump(rec, o, indent=1)
+    os.replace(base + ".json.tmp", base + ".json")
+    return rec
+
+
 t1 = time.time()
-i = 0
+i = sum(npass)
 while True:
     j = i % a.streams
     img = np.array(mi.render(scene, seed=a.seed_base + i, spp=a.spp_per_pass), dtype=np.float64)[:, :, :3]
     sums[j] = img if sums[j] is None else sums[j] + img
     npass[j] += 1
-    write(sums[j] / npass[j], path(j))
     i += 1
     el = time.time() - t1
-    if el >= a.time and j == a.streams - 1:
-        break
-rec = {"variant": a.variant, "threads": a.threads, "spp_per_pass": a.spp_per_pass, "passes": npass,
-       "spp": [p * a.spp_per_pass for p in npass], "render_seconds": el, "load_seconds": t_load,
-       "seed_base": a.seed_base}
-if a.streams >= 2:
-    m = [s / n for s, n in zip(sums, npass)]
-    d = np.sqrt(np.mean((m[0] - m[1]) ** 2))
-    rec["own_rmse_each"] = d / np.sqrt(2)
-    rec["own_rmse_mean_of_two"] = d / 2
-    write((m[0] + m[1]) / 2, a.output)
-print(json.dumps(rec))
-with open(base + ".json", "w") as o:
-    json.dump(rec, o, indent=1)
+    if (i % a.streams) == 0:  # a round: every stream has the same passes; checkpoint them
+        for k in range(a.streams):
+            write(sums[k] / npass[k], path(k))
+        if el >= a.time:
+            break
+        record(el, False)
+print(json.dumps(record(el, True)))
