@@ -7,7 +7,9 @@ Benchmark-only; never used by photonflow or its tests.
       [--sampler independent|multijitter|ldsampler|stratified] [--variant llvm_ad_rgb] [--threads 2]
 
 Pass i renders K spp with seed B + i (an independent estimate: Mitsuba's samplers are randomised
-per seed) and goes to stream i mod N. The run stops after the first complete round of N passes
+per seed) and goes to stream i mod N; a stream's image is its passes' mean weighted by their spp.
+With one stream the passes after the first are sized to the time left (at most K spp), so that the
+run ends at most about one spp after the budget. The run stops after the first complete round of N passes
 that ends at or after S seconds of rendering (scene loading not counted; the first pass includes
 Dr.Jit's kernel compilation unless DRJIT_CACHE_DIR holds it already, so equal-time runs warm the
 cache first, bench/mitsuba/equal_time.sh).
@@ -22,6 +24,7 @@ DRJIT_LIBLLVM_PATH must name libLLVM 19 for llvm_ad_rgb (../shared/toolchain.md)
 """
 import argparse
 import json
+import math
 import os
 import time
 
@@ -50,8 +53,9 @@ dr.set_thread_count(a.threads)
 t0 = time.time()
 scene = mi.load_file(a.scene, spp=a.spp_per_pass, sampler=a.sampler)
 t_load = time.time() - t0
-sums = [None] * a.streams
+sums = [None] * a.streams  # per stream: sum of pass image x pass spp
 npass = [0] * a.streams
+nspp = [0] * a.streams
 base = os.path.splitext(a.output)[0]
 load_start = os.getloadavg()[0]
 done_seconds = 0.0
@@ -64,8 +68,8 @@ if a.resume and os.path.exists(base + ".json"):
         raise SystemExit("mi_render.py: --resume: %s.json has passes %r for %d streams" % (base, old["passes"], a.streams))
     for j in range(a.streams):
         b = mi.Bitmap(a.output if a.streams == 1 else "%s-s%d.exr" % (base, j))
-        npass[j] = old["passes"][j]
-        sums[j] = np.array(b, dtype=np.float64)[:, :, :3] * npass[j]
+        npass[j], nspp[j] = old["passes"][j], old["spp"][j]
+        sums[j] = np.array(b, dtype=np.float64)[:, :, :3] * nspp[j]
     done_seconds = old["render_seconds"]
 
 
@@ -80,12 +84,12 @@ def write(img, p):
 
 def record(el, final):
     rec = {"scene": os.path.abspath(a.scene), "variant": a.variant, "sampler": a.sampler, "threads": a.threads,
-           "spp_per_pass": a.spp_per_pass, "passes": npass, "spp": [p * a.spp_per_pass for p in npass],
+           "spp_per_pass": a.spp_per_pass, "passes": npass, "spp": nspp,
            "render_seconds": el + done_seconds, "load_seconds": t_load, "seed_base": a.seed_base, "final": final,
            "loadavg_1min_start": load_start, "loadavg_1min_now": os.getloadavg()[0],
            "mitsuba": mi.__version__, "drjit": dr.__version__}
     if a.streams >= 2:
-        m = [s / n for s, n in zip(sums, npass)]
+        m = [s / n for s, n in zip(sums, nspp)]
         d = np.sqrt(np.mean((m[0] - m[1]) ** 2))
         rec["own_rmse_each"] = d / np.sqrt(2)
         rec["own_rmse_mean_of_two"] = d / 2
@@ -98,16 +102,25 @@ def record(el, final):
 
 t1 = time.time()
 i = sum(npass)
+k = a.spp_per_pass
 while True:
     j = i % a.streams
-    img = np.array(mi.render(scene, seed=a.seed_base + i, spp=a.spp_per_pass), dtype=np.float64)[:, :, :3]
+    tp = time.time()
+    img = np.array(mi.render(scene, seed=a.seed_base + i, spp=k), dtype=np.float64)[:, :, :3] * k
     sums[j] = img if sums[j] is None else sums[j] + img
     npass[j] += 1
+    nspp[j] += k
     i += 1
     el = time.time() - t1
+    if a.streams == 1 and a.time > el:
+        # Equal-time runs: size the next pass to the time left (at the last pass's seconds per
+        # spp), so that the run ends at most about one spp after the budget, as photonflow's runs
+        # end after the pass that reaches it.
+        per_spp = (time.time() - tp) / k
+        k = int(min(a.spp_per_pass, max(1, math.ceil((a.time - el) / per_spp))))
     if (i % a.streams) == 0:  # a round: every stream has the same passes; checkpoint them
-        for k in range(a.streams):
-            write(sums[k] / npass[k], path(k))
+        for q in range(a.streams):
+            write(sums[q] / nspp[q], path(q))
         if el >= a.time:
             break
         record(el, False)
