@@ -23,7 +23,9 @@
 # every one with --threads THREADS (the machine's size, not a rendering choice) and seed r. Each run
 # records the 1-minute load average before and after it. The error of each image:
 #   imgcompare IMG ref-s0.exr ref-s1.exr [--mask mask.exr] --json    (all pixels; away from the lights)
-# against the mean of the two references (its own error, "reference_rmse", printed beside);
+# against the mean of the two references (its own error, "reference_rmse", printed beside, and the
+# RMSE net of it, sqrt(MSE - reference MSE): the references are independent of the runs, so the
+# net figure estimates the error against the exact image without the references' noise);
 # mask.exr = emitter-mask --spp MASK_SPP (the pixels that see an emitter directly or through mirrors
 # and glass, dilated by one pixel, left out). The summary (OUT/summary.md) gives per method the
 # median RMSE over the runs, the median rendering seconds, and the ratios to Mitsuba.
@@ -60,7 +62,7 @@ done
 load() { cut -d' ' -f1 /proc/loadavg; }
 mkdir -p "$OUT"
 TSV=$OUT/runs.tsv
-[ -f "$TSV" ] || printf 'scene\tmethod\trun\tseconds\tpasses_or_spp\trmse_all\trmse_masked\tref_rmse_all\tref_rmse_masked\tload_before\tload_after\tstarted_utc\n' > "$TSV"
+[ -f "$TSV" ] || printf 'scene\tmethod\trun\tseconds\tpasses_or_spp\trmse_all\trmse_masked\tref_rmse_all\tref_rmse_masked\trmse_net_all\trmse_net_masked\tload_before\tload_after\tstarted_utc\n' > "$TSV"
 
 for s in $SCENES; do
   D=$REFS/$s
@@ -112,7 +114,8 @@ else:                                           # photonflow --stats: the last i
     work = ("%d spp" % im["samples"]) if "samples" in im else ("%d passes" % im["passes"])
 A, M = json.load(open(fa)), json.load(open(fm))
 print("\t".join(str(x) for x in (s, m, r, "%.2f" % sec, work, "%.6f" % A["rmse"], "%.6f" % M["rmse"],
-                                 "%.6f" % A["reference_rmse"], "%.6f" % M["reference_rmse"], l0, l1, t0)))
+                                 "%.6f" % A["reference_rmse"], "%.6f" % M["reference_rmse"],
+                                 "%.6f" % A["rmse_net"], "%.6f" % M["rmse_net"], l0, l1, t0)))
 EOF
       tail -1 "$TSV"
     done
