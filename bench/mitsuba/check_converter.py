@@ -19,7 +19,8 @@ depends on it. For one scene source it bakes scene.h5, converts it, renders
           the pixel's centre and four corners through Mitsuba's ray caster, so only interior
           pixels count), mi against pt with the same tolerance, and mi against sppm within 3 %
           (SPPM's bias at 64 passes and its correlated noise: reported, the limit generous);
-  rmse    RMSE(mi - pt) against the one the seeds' own noise predicts (within 10 %): a
+  rmse    RMSE(mi - pt) against the one the seeds' own noise predicts (at most 10 % above it; a
+          model difference only adds to it, a ratio below 1 is the noise of the estimate): a
           difference confined to a few pixels (the camera, a flipped normal) shows here.
 
   check_converter.py --scene data/cornell-box.dae [--build build] [--out DIR] [--size 512]
@@ -54,6 +55,8 @@ ap.add_argument("--mutate", choices=["fov", "emitter-side", "swap-walls"], defau
 a = ap.parse_args()
 
 name = os.path.splitext(os.path.basename(a.scene))[0]
+if name == "scene":  # a baked REFS/<name>/scene.h5
+    name = os.path.basename(os.path.dirname(os.path.abspath(a.scene)))
 out = a.out or os.path.join("out", "mitsuba-check", name)
 os.makedirs(out, exist_ok=True)
 B = os.path.join(a.build, "bin")
@@ -224,7 +227,7 @@ print("%-24s %7d px" % ("edge pixels (mixed)", np.sum(region == -2)))
 d = np.sqrt(np.mean((MI - PT) ** 2))
 pred = np.sqrt(np.mean(V))
 print("rmse    RMSE(mi - pt) %.5f, predicted from the seeds' spread %.5f, ratio %.3f  %s"
-      % (d, pred, d / pred, verdict(abs(d / pred - 1) <= 0.1)))
+      % (d, pred, d / pred, verdict(d / pred <= 1.1)))
 print("rmse    RMSE(sppm - mi) %.5f (all), %.5f (no emitter seen)"
       % (np.sqrt(np.mean((sppm - MI) ** 2)), np.sqrt(np.mean(((sppm - MI) ** 2)[mask >= 0.5]))))
 print("%s: %s" % (name, "all checks PASS" if ok else "some checks FAIL"))
