@@ -7,7 +7,8 @@ Benchmark-only; never used by photonflow or its tests.
       [--sampler independent|multijitter|ldsampler|stratified] [--variant llvm_ad_rgb] [--threads 2]
 
 Pass i renders K spp with seed B + i (an independent estimate: Mitsuba's samplers are randomised
-per seed) and goes to stream i mod N; a stream's image is its passes' mean weighted by their spp.
+per seed) and goes to stream i mod N; a stream's image is its passes' mean weighted by their spp
+(the spp the sampler actually took: multijitter rounds K up to a product of its grid, 128 to 132).
 With one stream the passes after the first are sized to the time left (at most K spp), so that the
 run ends at most about one spp after the budget. The run stops after the first complete round of N passes
 that ends at or after S seconds of rendering (scene loading not counted; the first pass includes
@@ -53,6 +54,7 @@ dr.set_thread_count(a.threads)
 t0 = time.time()
 scene = mi.load_file(a.scene, spp=a.spp_per_pass, sampler=a.sampler)
 t_load = time.time() - t0
+sampler = scene.sensors()[0].sampler()
 sums = [None] * a.streams  # per stream: sum of pass image x pass spp
 npass = [0] * a.streams
 nspp = [0] * a.streams
@@ -106,17 +108,19 @@ k = a.spp_per_pass
 while True:
     j = i % a.streams
     tp = time.time()
-    img = np.array(mi.render(scene, seed=a.seed_base + i, spp=k), dtype=np.float64)[:, :, :3] * k
+    img = np.array(mi.render(scene, seed=a.seed_base + i, spp=k), dtype=np.float64)[:, :, :3]
+    k_done = sampler.sample_count()  # multijitter rounds k up to a product of its grid (128 -> 132)
+    img *= k_done
     sums[j] = img if sums[j] is None else sums[j] + img
     npass[j] += 1
-    nspp[j] += k
+    nspp[j] += k_done
     i += 1
     el = time.time() - t1
     if a.streams == 1 and a.time > el:
         # Equal-time runs: size the next pass to the time left (at the last pass's seconds per
         # spp), so that the run ends at most about one spp after the budget, as photonflow's runs
         # end after the pass that reaches it.
-        per_spp = (time.time() - tp) / k
+        per_spp = (time.time() - tp) / k_done
         k = int(min(a.spp_per_pass, max(1, math.ceil((a.time - el) / per_spp))))
     if (i % a.streams) == 0:  # a round: every stream has the same passes; checkpoint them
         for q in range(a.streams):
