@@ -95,7 +95,7 @@ for s in $SCENES; do
         pt)       "$BIN/pathtrace" --scene "$D/scene.h5" -o "$img" --time "$TIME" --spp 1000000 --seed "$r" \
                     --threads "$THREADS" --png none --stats "$rec" | tail -1 ;;
         mi-*)     "$PY" "$HERE/mi_render.py" "$D/mi/scene.xml" "$img" --time "$TIME" --spp-per-pass "$MI_SPP" \
-                    --sampler "${m#mi-}" --seed-base $((r * 1000000)) --threads "$THREADS" | tail -1 ;;
+                    --sampler "${m#mi-}" --seed-base $((100000000 + r * 100000)) --threads "$THREADS" | tail -1 ;;
         *) echo "equal_time.sh: unknown method $m" >&2; exit 2 ;;
       esac
       l1=$(load)
