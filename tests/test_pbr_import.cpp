@@ -188,9 +188,21 @@ std::string version4_scene_id(const Scene& s) {
     h.update(&n, sizeof n);
     if (n) h.update(v.data(), n * sizeof(v[0]));
   };
+  // The version-4 light: the first 40 bytes of pf_light (version 5 appended the spot/directional
+  // fields; an area or point light has them 0 and the id does not cover them).
+  struct Light4 {
+    unsigned char bytes[40];
+  };
+  static_assert(offsetof(pf_light, direction) == sizeof(Light4), "the version-4 light");
+  std::vector<Light4> lights;
+  for (const pf_light& l : s.lights) {
+    Light4 o;
+    std::memcpy(o.bytes, &l, sizeof o.bytes);
+    lights.push_back(o);
+  }
   feed(s.triangles);
   feed(materials);
-  feed(s.lights);
+  feed(lights);
   h.update(&s.camera, offsetof(pf_camera, aperture));
   if (s.camera.aperture > 0.f) {
     h.update(&s.camera.aperture, sizeof s.camera.aperture);

@@ -610,7 +610,11 @@ TEST_CASE("punctual lights: scene.h5 version 5 keeps spot and directional lights
       if (n) h.update(p, n * size);
     };
     feed(a.triangles.data(), a.triangles.size(), sizeof(pf_triangle));
-    feed(a.materials.data(), a.materials.size(), sizeof(pf_material));
+    // The version-4 material: the first 32 bytes of pf_material (version 5 appended the
+    // metallic-roughness fields, hashed only where a material is PF_MAT_PBR).
+    const uint64_t nm = a.materials.size();
+    h.update(&nm, sizeof nm);
+    for (const pf_material& m : a.materials) h.update(&m, offsetof(pf_material, metallic));
     const uint64_t nl = a.lights.size();
     h.update(&nl, sizeof nl);
     for (const pf_light& l : a.lights) h.update(&l, 40);

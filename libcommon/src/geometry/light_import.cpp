@@ -160,7 +160,7 @@ std::string gltf_json_text(const std::string& file) {
 
 }  // namespace
 
-std::vector<float> gltf_emissive_strengths(const std::string& file) {
+std::map<std::string, float> gltf_emissive_strengths(const std::string& file) {
   if (!is_gltf(file)) return {};
   nlohmann::json doc;
   try {
@@ -169,7 +169,7 @@ std::vector<float> gltf_emissive_strengths(const std::string& file) {
     throw input_error(file, std::string("its glTF JSON cannot be read: ") + e.what(),
                       "check that the file is valid glTF");
   }
-  std::vector<float> out;
+  std::map<std::string, float> out;
   const auto mats = doc.find("materials");
   if (mats == doc.end() || !mats->is_array()) return out;
   for (size_t i = 0; i < mats->size(); ++i) {
@@ -190,7 +190,16 @@ std::vector<float> gltf_emissive_strengths(const std::string& file) {
         strength = float(d);
       }
     }
-    out.push_back(strength);
+    // assimp names an unnamed glTF material "" as well; such materials share the entry "".
+    const std::string name =
+        m.is_object() && m.contains("name") && m["name"].is_string() ? m["name"].get<std::string>()
+                                                                      : std::string();
+    const auto [it, added] = out.emplace(name, strength);
+    if (!added && it->second != strength)
+      throw input_error(file, "materials named '" + name + "' have different " +
+                                  "KHR_materials_emissive_strength values (" + num(it->second) +
+                                  " and " + num(strength) + ")",
+                        "give the materials distinct names");
   }
   return out;
 }

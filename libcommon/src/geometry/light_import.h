@@ -3,6 +3,7 @@
 // directional lights) and glTF's KHR_materials_emissive_strength, which assimp 5.2.5 drops and
 // which is read from the file's JSON here.
 #pragma once
+#include <map>
 #include <string>
 #include <vector>
 
@@ -21,11 +22,12 @@ namespace pf {
 // direction or intensity, a negative intensity, or a cone outside 0 <= inner < outer <= π/2.
 void add_lights(const aiScene& ai, const std::string& file, Scene& scene, BakeReport& report);
 
-// KHR_materials_emissive_strength's emissiveStrength of each material of a .gltf or .glb file
-// (materials[i], the index assimp's glTF importer keeps), 1 where a material has none; empty for
-// other formats. Throws InputError for a value that is not a finite number >= 0, or a file whose
-// JSON cannot be read.
-std::vector<float> gltf_emissive_strengths(const std::string& file);
+// KHR_materials_emissive_strength's emissiveStrength of each material of a .gltf or .glb file,
+// by the material's name (assimp 5.2.5's glTF importer does not keep the file's material order,
+// so the names match them; 1 where a material has none); empty for other formats. Throws
+// InputError for a value that is not a finite number >= 0, for two materials of one name with
+// different strengths (they could not be told apart), or a file whose JSON cannot be read.
+std::map<std::string, float> gltf_emissive_strengths(const std::string& file);
 
 // True for a .gltf or .glb file name.
 bool is_gltf(const std::string& file);

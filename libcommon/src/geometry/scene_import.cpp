@@ -244,7 +244,7 @@ class Flattener {
           read_alpha(am, file_, name, lower_extension(file_) == ".obj", report_.warnings);
       const ImportedMaterial m = import::import_material(ai_, am, name, file_, textures_, report_,
                                                          alpha.masked() && alpha.base_texture_alpha,
-                                                         i < emissive_strength_.size() ? emissive_strength_[i] : 1.f);
+                                                         emissive_strength_of(am));
       uv_channel_[i] = m.uv_channel;
       scene_.materials.push_back(m.material);
       scene_.material_names.push_back(name);
@@ -416,7 +416,12 @@ class Flattener {
   std::vector<int> material_map_;
   std::vector<unsigned> uv_channel_;  // per file material: the UV channel of its texture
   std::vector<bool> checked_;
-  std::vector<float> emissive_strength_;  // glTF materials' emissiveStrength (light_import.h)
+  std::map<std::string, float> emissive_strength_;  // glTF emissiveStrength by name (light_import.h)
+  // The emissiveStrength of material `am` (1 where the file gives none).
+  float emissive_strength_of(const aiMaterial& am) const {
+    const auto it = emissive_strength_.find(am.GetName().C_Str());
+    return it == emissive_strength_.end() ? 1.f : it->second;
+  }
   std::string prefix_;
   int material_override_ = -1;
   std::vector<pf_triangle>* out_ = nullptr;

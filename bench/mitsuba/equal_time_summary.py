@@ -1,0 +1,56 @@
+#!/usr/bin/env python3
+"""Summary of bench/mitsuba/equal_time.sh's runs.tsv: per scene and method the median RMSE over the
+runs (all pixels, away from the lights), the median seconds, the reference's own error beside, and
+the ratios the targets of issue 34 item 2 are stated in. Plain Python (no third-party modules).
+
+  equal_time_summary.py runs.tsv TIME THREADS > summary.md
+"""
+import csv
+import statistics
+import sys
+
+tsv, budget, threads = sys.argv[1], sys.argv[2], sys.argv[3]
+
+
+def ratio(a, b):
+    return "%.2f" % (a / b) if b > 0 else "n/a (reference noise larger)"
+
+
+rows = list(csv.DictReader(open(tsv), delimiter="\t"))
+scenes = list(dict.fromkeys(r["scene"] for r in rows))
+print("Equal time %s s, %s threads; median over runs (n = runs); RMSE against the mean of two Mitsuba "
+      "references, whose own error is the `ref` column. Load: 1-minute load average before/after "
+      "the runs (min–max). net = sqrt(MSE − the reference's MSE), the error against the exact image "
+      "estimated without the references' own noise (0 where the run is within it).\n" % (budget, threads))
+for s in scenes:
+    R = [r for r in rows if r["scene"] == s]
+    methods = list(dict.fromkeys(r["method"] for r in R))
+    med = {}
+    print("**%s**\n" % s)
+    print("| method | n | seconds | work (last run) | RMSE all | net | ref all | RMSE away from lights | net | ref away | load |")
+    print("|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---|")
+    for m in methods:
+        M = [r for r in R if r["method"] == m]
+        f = lambda k: statistics.median(float(r[k]) for r in M)  # noqa: E731
+        med[m] = (f("rmse_all"), f("rmse_masked"), f("rmse_net_all"), f("rmse_net_masked"))
+        loads = [float(r[k]) for r in M for k in ("load_before", "load_after")]
+        print("| %s | %d | %.1f | %s | %.5f | %.5f | %.5f | %.5f | %.5f | %.5f | %.1f–%.1f |"
+              % (m, len(M), f("seconds"), M[-1]["passes_or_spp"], med[m][0], med[m][2], f("ref_rmse_all"),
+                 med[m][1], med[m][3], f("ref_rmse_masked"), min(loads), max(loads)))
+    mis = [m for m in methods if m.startswith("mi-")]
+    if mis:
+        best = min(mis, key=lambda m: med[m][0])
+        print("\nRatios to Mitsuba (%s, the lower of its samplers over all pixels; issue 34 item 2: all pixels "
+              "≤ 0.5×, away from the lights ≤ 1× on the diffuse box; both ≤ 0.5× on the ≥ 200k-triangle scene):\n"
+              % best)
+        print("| method | all pixels / mitsuba | away from lights / mitsuba | the same, net of the references' noise |")
+        print("|---|---:|---:|---|")
+        for m in methods:
+            print("| %s | %.2f | %.2f | %s, %s |" % (m, med[m][0] / med[best][0], med[m][1] / med[best][1],
+                                                   ratio(med[m][2], med[best][2]), ratio(med[m][3], med[best][3])))
+    if "pppm" in med and "defaults" in med:
+        print("\ndefaults / pppm (the mirror-and-glass box's target: ≤ 0.75 all pixels, ≤ 0.72 away from the "
+              "lights): %.2f, %.2f; net of the references' noise %s, %s"
+              % (med["defaults"][0] / med["pppm"][0], med["defaults"][1] / med["pppm"][1],
+                 ratio(med["defaults"][2], med["pppm"][2]), ratio(med["defaults"][3], med["pppm"][3])))
+    print()
