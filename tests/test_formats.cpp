@@ -147,9 +147,9 @@ TEST_CASE("hitpoints, photons and grid files round-trip every dataset", "[format
   h.direct_mode = DirectMode::Photons;
   save_hitpoints(h, tmp / "hp2.h5", prov_for("hp"));
   CHECK(load_hitpoints(tmp / "hp2.h5").direct_mode == DirectMode::Photons);
-  CHECK(h5::Reader(tmp / "hp2.h5", kHitpointsFormat, 1).attr_string("/", "direct_mode") ==
+  CHECK(h5::Reader(tmp / "hp2.h5", kHitpointsFormat, 2).attr_string("/", "direct_mode") ==
         "photons");
-  CHECK(h5::Reader(tmp / "hp.h5", kHitpointsFormat, 1).attr_string("/", "direct_mode") ==
+  CHECK(h5::Reader(tmp / "hp.h5", kHitpointsFormat, 2).attr_string("/", "direct_mode") ==
         "shadow-rays");
 
   PhotonSet p;

@@ -238,6 +238,6 @@ TEST_CASE("OpenCL tools: without an OpenCL driver, opencl is refused and auto ru
   REQUIRE(run_tool("trace-hitpoints", "--estimator ppm --direct photons --scene " + sc + " -o " + cpu + " --device cpu", tmp)
               .exit_code == 0);
   CHECK(same_hitpoints(load_hitpoints(hp).hitpoints, load_hitpoints(cpu).hitpoints));
-  CHECK(h5::Reader(hp, kHitpointsFormat, 1).attr_string("/provenance/parameters", "backend") ==
+  CHECK(h5::Reader(hp, kHitpointsFormat, 2).attr_string("/provenance/parameters", "backend") ==
         "cpu");
 }

@@ -351,7 +351,7 @@ TEST_CASE("a killed render resumes to the uninterrupted image", "[tools][resume]
   CHECK_FALSE(same_pixels(read_exr(tmp / "five.exr"), read_exr(tmp / "resumed5.exr")));
   // The checkpoint records the wall-clock seconds of the run so far (it once said 0).
   {
-    const Provenance p = read_provenance(h5::Reader(ck, kHitpointsFormat, 1));
+    const Provenance p = read_provenance(h5::Reader(ck, kHitpointsFormat, 2));
     CHECK(p.tool == "render");
     CHECK(p.wall_time_s > 0.0);
   }
