@@ -24,6 +24,12 @@ BASE_ESTIMATORS=${BASE_ESTIMATORS:-}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 $B/scene-bake data/cornell-box.dae -o "$T/box.h5" --width 512 --height 512 > /dev/null
+# The base build bakes its own copy (an older build may not read this build's scene format).
+BASE_SCENE="$T/box.h5"
+if [ -n "$BASE" ]; then
+  BASE_SCENE="$T/box-base.h5"
+  "$BASE/bin/scene-bake" data/cornell-box.dae -o "$BASE_SCENE" --width 512 --height 512 > /dev/null
+fi
 total=$((PASSES + 1))
 for r in $(seq 1 "$RUNS"); do
   for e in ppm sppm pppm; do
@@ -32,12 +38,12 @@ for r in $(seq 1 "$RUNS"); do
       --threads "$THREADS" > /dev/null
   done
   if [ -n "$BASE" ] && [ -z "$BASE_ESTIMATORS" ]; then  # a base before --estimator: PPM only
-    "$BASE/bin/render" --scene "$T/box.h5" --passes $total --photons 262144 \
+    "$BASE/bin/render" --scene "$BASE_SCENE" --passes $total --photons 262144 \
       --snapshot-at 1 --snapshot "$T/base-{pass}.exr" -o "$T/base.exr" --stats "$T/ppm@base-$r.json" \
       --threads "$THREADS" > /dev/null
   fi
   for e in $BASE_ESTIMATORS; do
-    "$BASE/bin/render" --scene "$T/box.h5" --estimator "$e" --direct photons --passes $total \
+    "$BASE/bin/render" --scene "$BASE_SCENE" --estimator "$e" --direct photons --passes $total \
       --photons 262144 --snapshot-at 1 --snapshot "$T/base-{pass}.exr" -o "$T/base.exr" \
       --stats "$T/$e@base-$r.json" --threads "$THREADS" > /dev/null
   done
