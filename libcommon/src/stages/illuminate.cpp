@@ -51,22 +51,21 @@ inline void sum_flux(const Vec3& fr, size_t m, PhotonAt&& photon, float tau_m[3]
   tau_m[2] = float(tau[2]);
 }
 
-// sum_flux's sum in the order given, when it is exact: then it equals the sum in every order,
-// sum_flux's included, bit for bit. Each term is a float, a multiple of its ulp 2^(e−23) where
+// The sum of m float terms term(k, c), per channel c, in the order given (sum_flux's terms fr·Φ_p,
+// sum_terms' f·Φ_p), when it is exact: then it equals the sum in every order,
+// the plain sums' included, bit for bit. Each term is a float, a multiple of its ulp 2^(e−23) where
 // 2^e is its binade; every partial sum of m terms is then a multiple of the smallest ulp and below
 // m · 2^(E+1) for the largest binade 2^E, so it is exact in double's 53 bits when
 // E − e_min + 24 + ⌈log2 m⌉ <= 53 (zero terms add nothing; the biased exponent field of a
 // subnormal counts as 1, as its ulp does). Returns false, tau_m unset, otherwise — for a channel
 // whose terms span more binades than that, or one that is not finite.
-template <class PhotonAt>
-inline bool sum_flux_if_exact(const Vec3& fr, size_t m, PhotonAt&& photon, float tau_m[3]) {
+template <class TermAt>
+inline bool sum_if_exact(size_t m, TermAt&& term, float tau_m[3]) {
   double tau[3] = {0, 0, 0};
   uint32_t lo[3] = {255, 255, 255}, hi[3] = {0, 0, 0};
-  const float f[3] = {fr.x, fr.y, fr.z};
   for (size_t k = 0; k < m; ++k) {
-    const pf_photon& p = photon(k);
     for (int c = 0; c < 3; ++c) {
-      const float t = f[c] * p.flux[c];
+      const float t = term(k, c);
       tau[c] += double(t);
       uint32_t bits;
       std::memcpy(&bits, &t, 4);
@@ -82,6 +81,13 @@ inline bool sum_flux_if_exact(const Vec3& fr, size_t m, PhotonAt&& photon, float
     if (hi[c] >= 255u || (hi[c] >= lo[c] && hi[c] - lo[c] + 24u + log2m > 53u)) return false;
   for (int c = 0; c < 3; ++c) tau_m[c] = float(tau[c]);
   return true;
+}
+
+// sum_flux's terms fr·Φ_p through sum_if_exact.
+template <class PhotonAt>
+inline bool sum_flux_if_exact(const Vec3& fr, size_t m, PhotonAt&& photon, float tau_m[3]) {
+  const float f[3] = {fr.x, fr.y, fr.z};
+  return sum_if_exact(m, [&](size_t k, int c) { return f[c] * photon(k).flux[c]; }, tau_m);
 }
 
 // Eq. 3.17 (sum_flux), then eq. 3.14, 3.16, 3.18.
@@ -112,27 +118,9 @@ inline void sum_terms(const float* terms, size_t m, float tau_m[3]) {
   for (int c = 0; c < 3; ++c) tau_m[c] = float(tau[c]);
 }
 
-// sum_terms when that sum is exact (the argument of sum_flux_if_exact), false otherwise.
+// sum_terms when that sum is exact (the argument of sum_if_exact), false otherwise.
 inline bool sum_terms_if_exact(const float* terms, size_t m, float tau_m[3]) {
-  double tau[3] = {0, 0, 0};
-  uint32_t lo[3] = {255, 255, 255}, hi[3] = {0, 0, 0};
-  for (size_t k = 0; k < m; ++k)
-    for (int c = 0; c < 3; ++c) {
-      const float t = terms[3 * k + size_t(c)];
-      tau[c] += double(t);
-      uint32_t bits;
-      std::memcpy(&bits, &t, 4);
-      const uint32_t e = std::max<uint32_t>((bits >> 23) & 0xffu, 1u);
-      if ((bits & 0x7fffffffu) == 0) continue;  // ±0
-      lo[c] = std::min(lo[c], e);
-      hi[c] = std::max(hi[c], e);
-    }
-  uint32_t log2m = 0;
-  while ((size_t(1) << log2m) < m) ++log2m;
-  for (int c = 0; c < 3; ++c)
-    if (hi[c] >= 255u || (hi[c] >= lo[c] && hi[c] - lo[c] + 24u + log2m > 53u)) return false;
-  for (int c = 0; c < 3; ++c) tau_m[c] = float(tau[c]);
-  return true;
+  return sum_if_exact(m, [&](size_t k, int c) { return terms[3 * k + size_t(c)]; }, tau_m);
 }
 
 // Sorts distinct keys ascending. The lists are short (tens of photons) and made of a few
