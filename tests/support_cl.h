@@ -5,6 +5,11 @@
 #include <memory>
 
 #include "photonflow/cl_runtime.h"
+#include "photonflow/gather_method.h"
+#include "photonflow/provenance.h"
+#include "photonflow/render_driver.h"
+#include "photonflow/synthesize.h"
+#include "support.h"
 
 namespace pf::test {
 
@@ -18,6 +23,36 @@ inline std::unique_ptr<ClContext> test_device() {
   DeviceOptions o;
   o.device = "opencl";
   return open_device(o, "test");
+}
+
+// Renders `s` with estimator `e` through the render driver on the CPU and then on `dev` (its gather
+// `device_method`), `passes` passes of `photons` photons, shadow-ray direct light, PPM with
+// strata and SPPM/PPPM with Sobol pixel samples, and checks that the CPU image is not black and
+// that the device's equals it up to float rounding (relative RMSE ≤ 1e-3).
+inline void check_device_route(const Scene& s, Estimator e, GatherMethod device_method,
+                               int passes, uint32_t photons, ClContext& dev) {
+  RenderOptions opt;
+  opt.estimator = e;
+  opt.passes = passes;
+  opt.photons.photons = photons;
+  opt.eye.sampler = e == Estimator::Ppm ? PixelSampler::Strata : PixelSampler::Sobol;
+  opt.eye.direct = DirectMode::ShadowRays;
+  const Provenance prov;
+  auto image = [&]() {
+    return e == Estimator::Pppm ? synthesize(render_pppm(s, opt, false, prov))
+                                : synthesize(render_progressive(s, opt, false, prov));
+  };
+  const Image cpu = image();
+  opt.device = &dev;
+  opt.ppm.method = device_method;
+  const Image gpu = image();
+  double sum = 0;
+  for (float v : cpu.rgb) sum += double(v);
+  const double rmse = relative_rmse(gpu, cpu);
+  INFO(estimator_name(e) << " (" << gather_method_name(device_method)
+                         << "): relative RMSE opencl vs cpu " << rmse);
+  CHECK(sum > 0);
+  CHECK(rmse <= 1e-3);
 }
 
 }  // namespace pf::test

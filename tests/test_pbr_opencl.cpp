@@ -306,35 +306,8 @@ TEST_CASE("OpenCL PBR: the render driver's SPPM, PPPM and PPM device routes give
   auto dev = test::test_device();
   if (!dev) return;
   const Scene s = pbr_room(40, 30);
-  struct Route {
-    Estimator e;
-    GatherMethod device_method;
-  };
-  for (const Route r : {Route{Estimator::Sppm, GatherMethod::HashGrid},
-                        Route{Estimator::Pppm, GatherMethod::HashGrid},
-                        Route{Estimator::Ppm, GatherMethod::HashGrid},
-                        Route{Estimator::Ppm, GatherMethod::GridKmeans}}) {
-    RenderOptions opt;
-    opt.estimator = r.e;
-    opt.passes = 4;
-    opt.photons.photons = 6000;
-    opt.eye.sampler = r.e == Estimator::Ppm ? PixelSampler::Strata : PixelSampler::Sobol;
-    opt.eye.direct = DirectMode::ShadowRays;
-    const Provenance prov;
-    auto image = [&]() {
-      return r.e == Estimator::Pppm ? synthesize(render_pppm(s, opt, false, prov))
-                                    : synthesize(render_progressive(s, opt, false, prov));
-    };
-    const Image cpu = image();
-    opt.device = dev.get();
-    opt.ppm.method = r.device_method;
-    const Image gpu = image();
-    double sum = 0;
-    for (float v : cpu.rgb) sum += double(v);
-    const double rmse = test::relative_rmse(gpu, cpu);
-    INFO(estimator_name(r.e) << " (" << gather_method_name(r.device_method)
-                             << "): relative RMSE opencl vs cpu " << rmse);
-    CHECK(sum > 0);
-    CHECK(rmse <= 1e-3);
-  }
+  test::check_device_route(s, Estimator::Sppm, GatherMethod::HashGrid, 4, 6000, *dev);
+  test::check_device_route(s, Estimator::Pppm, GatherMethod::HashGrid, 4, 6000, *dev);
+  test::check_device_route(s, Estimator::Ppm, GatherMethod::HashGrid, 4, 6000, *dev);
+  test::check_device_route(s, Estimator::Ppm, GatherMethod::GridKmeans, 4, 6000, *dev);
 }

@@ -19,10 +19,6 @@
 #include "photonflow/raycast.h"
 #include "photonflow/scene.h"
 #include "photonflow/texture_image.h"
-#include "photonflow/gather_method.h"
-#include "photonflow/provenance.h"
-#include "photonflow/render_driver.h"
-#include "photonflow/synthesize.h"
 #include "support.h"
 #include "support_cl.h"
 
@@ -336,33 +332,7 @@ TEST_CASE("the showcase renders the same on the CPU and in OpenCL with every est
   REQUIRE(s.has_pbr());
   REQUIRE(s.has_alpha_masks());
   REQUIRE(s.camera.aperture > 0.f);
-  struct Route {
-    Estimator e;
-    GatherMethod device_method;
-  };
-  for (const Route r : {Route{Estimator::Sppm, GatherMethod::HashGrid},
-                        Route{Estimator::Pppm, GatherMethod::HashGrid},
-                        Route{Estimator::Ppm, GatherMethod::HashGrid}}) {
-    RenderOptions opt;
-    opt.estimator = r.e;
-    opt.passes = 3;
-    opt.photons.photons = 8000;
-    opt.eye.sampler = r.e == Estimator::Ppm ? PixelSampler::Strata : PixelSampler::Sobol;
-    opt.eye.direct = DirectMode::ShadowRays;
-    const Provenance prov;
-    auto image = [&]() {
-      return r.e == Estimator::Pppm ? synthesize(render_pppm(s, opt, false, prov))
-                                    : synthesize(render_progressive(s, opt, false, prov));
-    };
-    const Image cpu = image();
-    opt.device = dev.get();
-    opt.ppm.method = r.device_method;
-    const Image gpu = image();
-    double sum = 0;
-    for (float v : cpu.rgb) sum += double(v);
-    const double rmse = test::relative_rmse(gpu, cpu);
-    INFO(estimator_name(r.e) << ": relative RMSE opencl vs cpu " << rmse);
-    CHECK(sum > 0);
-    CHECK(rmse <= 1e-3);
-  }
+  test::check_device_route(s, Estimator::Sppm, GatherMethod::HashGrid, 3, 8000, *dev);
+  test::check_device_route(s, Estimator::Pppm, GatherMethod::HashGrid, 3, 8000, *dev);
+  test::check_device_route(s, Estimator::Ppm, GatherMethod::HashGrid, 3, 8000, *dev);
 }
