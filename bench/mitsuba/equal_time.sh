@@ -13,6 +13,13 @@
 #
 #   defaults  render --time T                          (DEFAULTS ONLY: sppm, shadow rays, auto photons and radius)
 #   pppm      render --time T --estimator pppm
+#   pppm-issue render --time T --estimator pppm --direct photons --photons 100000   (the baseline the
+#             mirror-and-glass box's target is stated against: "today's --estimator pppm" when issue
+#             34 was filed, i.e. render's defaults then, 18c2973^, beside pppm; the radius rule is
+#             the same then and now)
+#   <name>    with FLAGS_<name> set in the environment (a shell identifier): render --time T
+#             $FLAGS_<name>, for trying settings under the same harness, e.g.
+#             FLAGS_ss2="--shadow-samples 2" METHODS="defaults ss2"
 #   pt        pathtrace --time T --spp 1000000         (photonflow's path tracer; --spp only lifts its 64-spp cap)
 #   mi-<S>    mi_render.py --time T --sampler S        (Mitsuba llvm_ad_rgb, path, max_depth -1, passes of
 #             MI_SPP spp with new seeds averaged by spp, the last ones sized to the time left; S:
@@ -92,11 +99,18 @@ for s in $SCENES; do
                     --stats "$rec" | tail -1 ;;
         pppm)     "$BIN/render" --scene "$D/scene.h5" -o "$img" --time "$TIME" --seed "$r" --threads "$THREADS" \
                     --estimator pppm --stats "$rec" | tail -1 ;;
+        pppm-issue) "$BIN/render" --scene "$D/scene.h5" -o "$img" --time "$TIME" --seed "$r" --threads "$THREADS" \
+                    --estimator pppm --direct photons --photons 100000 --stats "$rec" | tail -1 ;;
         pt)       "$BIN/pathtrace" --scene "$D/scene.h5" -o "$img" --time "$TIME" --spp 1000000 --seed "$r" \
                     --threads "$THREADS" --png none --stats "$rec" | tail -1 ;;
         mi-*)     "$PY" "$HERE/mi_render.py" "$D/mi/scene.xml" "$img" --time "$TIME" --spp-per-pass "$MI_SPP" \
                     --sampler "${m#mi-}" --seed-base $((100000000 + r * 100000)) --threads "$THREADS" | tail -1 ;;
-        *) echo "equal_time.sh: unknown method $m" >&2; exit 2 ;;
+        *) v=FLAGS_$m
+           [[ $m =~ ^[A-Za-z_][A-Za-z0-9_]*$ && -n ${!v:-} ]] || {
+             echo "equal_time.sh: unknown method $m (built in: defaults pppm pppm-issue pt mi-<sampler>; or set FLAGS_$m)" >&2; exit 2; }
+           # shellcheck disable=SC2086 # FLAGS_<name> is a list of options
+           "$BIN/render" --scene "$D/scene.h5" -o "$img" --time "$TIME" --seed "$r" --threads "$THREADS" \
+             ${!v} --stats "$rec" | tail -1 ;;
       esac
       l1=$(load)
       "$BIN/imgcompare" "$img" "$D/ref/ref-s0.exr" "$D/ref/ref-s1.exr" --json "$O/$m-r$r.all.json" > /dev/null
