@@ -95,10 +95,9 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
     float n[3];
     for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
     float c[3] = {m->color[0], m->color[1], m->color[2]};
-    if (pf_is_diffuse(m)) {
-      float tf[3]; /* the textured albedo (photon_pass.cpp's diffuse_color) */
-      if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf))
-        for (int k = 0; k < 3; ++k) c[k] = c[k] * tf[k];
+    const int diffuse = pf_is_diffuse(m);
+    if (diffuse || m->type == PF_MAT_PBR) {
+      /* stored at every non-delta hit, diffuse or PF_MAT_PBR (photon_pass.cpp) */
       pf_photon ph;
       for (int k = 0; k < 3; ++k) {
         ph.position[k] = sh.p[k];
@@ -111,58 +110,49 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
                  (!first_hit && specular_only ? PF_PHOTON_CAUSTIC : 0);
       slots[(size_t)n_stored * (size_t)count + (size_t)local_i] = ph;
       ++n_stored;
-      /* Russian roulette by albedo: p = std::max(c0, std::max(c1, c2)) */
-      const float m12 = c[1] < c[2] ? c[2] : c[1];
-      const float p = c[0] < m12 ? m12 : c[0];
-      if (pf_rng_next(&rng) >= p) break;
-      const float inv_p = 1.0f / p;
-      for (int k = 0; k < 3; ++k) flux[k] = flux[k] * c[k] * inv_p;
-      const float b1 = pf_rng_next(&rng);
-      const float b2 = pf_rng_next(&rng);
-      pf_sample_cosine_hemisphere(n, b1, b2, d);
-      specular_only = 0;
-    } else if (m->type == PF_MAT_PBR) {
-      /* glTF metallic-roughness (photon_pass.cpp, photon_pass.h): stored as at a diffuse hit,
-       * then continued by pf_pbr_scatter (importance mode, the front shading frame, Veach's
-       * shading-normal adjoint; pbr_scatter_shared.h); draws u1, u2, u3, then u_rr. */
-      pf_photon ph;
-      for (int k = 0; k < 3; ++k) {
-        ph.position[k] = sh.p[k];
-        ph.dir[k] = d[k];
-        ph.flux[k] = flux[k];
-      }
-      ph.mesh = sh.mesh;
-      ph.pass = (int)pass;
-      ph.flags = (first_hit ? PF_PHOTON_DIRECT : 0) |
-                 (!first_hit && specular_only ? PF_PHOTON_CAUSTIC : 0);
-      slots[(size_t)n_stored * (size_t)count + (size_t)local_i] = ph;
-      ++n_stored;
-      /* photon_pass.h: u1, u2, u3 for pf_pbr_scatter, then u_rr (always drawn) */
-      const float u1 = pf_rng_next(&rng);
-      const float u2 = pf_rng_next(&rng);
-      const float u3 = pf_rng_next(&rng);
-      pf_bsdf_params bp;
-      pf_pbr_params_hit(textures, texels, mat_tex, uvs, mr_tex, s.mats, sh.material, &h, &bp);
-      const float wo[3] = {-d[0], -d[1], -d[2]};
-      float wi[3], w[3], pdf;
-      const int ok = pf_pbr_scatter(&bp, sh.ns, sh.ng, wo, u1, u2, u3, PF_TRANSPORT_IMPORTANCE,
-                                    wi, w, &pdf);
-      const float u_rr = pf_rng_next(&rng);
-      if (!ok) break;
-      /* Russian roulette on the throughput: q = min(1, max_c Φ'_c / max_c Φ_c), Φ' = Φ·w */
-      float next[3];
-      for (int k = 0; k < 3; ++k) next[k] = flux[k] * w[k];
-      const float b12 = flux[1] < flux[2] ? flux[2] : flux[1];
-      const float before = flux[0] < b12 ? b12 : flux[0];
-      const float a12 = next[1] < next[2] ? next[2] : next[1];
-      const float after = next[0] < a12 ? a12 : next[0];
-      const float r = after / before;
-      const float q = r < 1.0f ? r : 1.0f; /* std::min(1.f, r) */
-      if (!(q > 0.0f) || u_rr >= q) break;
-      const float inv_q = 1.0f / q;
-      for (int k = 0; k < 3; ++k) {
-        flux[k] = next[k] * inv_q;
-        d[k] = wi[k];
+      if (diffuse) {
+        float tf[3]; /* the textured albedo (photon_pass.cpp's diffuse_color) */
+        if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf))
+          for (int k = 0; k < 3; ++k) c[k] = c[k] * tf[k];
+        /* Russian roulette by albedo: p = std::max(c0, std::max(c1, c2)) */
+        const float m12 = c[1] < c[2] ? c[2] : c[1];
+        const float p = c[0] < m12 ? m12 : c[0];
+        if (pf_rng_next(&rng) >= p) break;
+        const float inv_p = 1.0f / p;
+        for (int k = 0; k < 3; ++k) flux[k] = flux[k] * c[k] * inv_p;
+        const float b1 = pf_rng_next(&rng);
+        const float b2 = pf_rng_next(&rng);
+        pf_sample_cosine_hemisphere(n, b1, b2, d);
+      } else {
+        /* glTF metallic-roughness (photon_pass.cpp, photon_pass.h): continued by pf_pbr_scatter
+         * (importance mode, the front shading frame, Veach's shading-normal adjoint;
+         * pbr_scatter_shared.h); draws u1, u2, u3 for it, then u_rr (always drawn). */
+        const float u1 = pf_rng_next(&rng);
+        const float u2 = pf_rng_next(&rng);
+        const float u3 = pf_rng_next(&rng);
+        pf_bsdf_params bp;
+        pf_pbr_params_hit(textures, texels, mat_tex, uvs, mr_tex, s.mats, sh.material, &h, &bp);
+        const float wo[3] = {-d[0], -d[1], -d[2]};
+        float wi[3], w[3], pdf;
+        const int ok = pf_pbr_scatter(&bp, sh.ns, sh.ng, wo, u1, u2, u3, PF_TRANSPORT_IMPORTANCE,
+                                      wi, w, &pdf);
+        const float u_rr = pf_rng_next(&rng);
+        if (!ok) break;
+        /* Russian roulette on the throughput: q = min(1, max_c Φ'_c / max_c Φ_c), Φ' = Φ·w */
+        float next[3];
+        for (int k = 0; k < 3; ++k) next[k] = flux[k] * w[k];
+        const float b12 = flux[1] < flux[2] ? flux[2] : flux[1];
+        const float before = flux[0] < b12 ? b12 : flux[0];
+        const float a12 = next[1] < next[2] ? next[2] : next[1];
+        const float after = next[0] < a12 ? a12 : next[0];
+        const float r = after / before;
+        const float q = r < 1.0f ? r : 1.0f; /* std::min(1.f, r) */
+        if (!(q > 0.0f) || u_rr >= q) break;
+        const float inv_q = 1.0f / q;
+        for (int k = 0; k < 3; ++k) {
+          flux[k] = next[k] * inv_q;
+          d[k] = wi[k];
+        }
       }
       specular_only = 0;
     } else if (m->type == PF_MAT_MIRROR) {

@@ -126,4 +126,41 @@ PF_INLINE float pf_punctual_incident(int type, const float* position, const floa
   return 1.0f;
 }
 
+/* One light sample for next-event estimation at point p, for every light type (thesis eq. 3.7's
+ * L_direct; Hachisuka & Jensen 2009 section 4, direct light by ray tracing), so that the eye
+ * pass's diffuse and PBR points (eye_pass.cpp, trace_hitpoints.cl) and the path tracer
+ * (pathtrace.cpp) sample each light the same way. The light: its type and fields (shared_types.h
+ * pf_light), and for PF_LIGHT_AREA its triangle's corners v0, v1, v2 and unit front normal nl
+ * (light leaves along +nl; unused for the other types). u1, u2: the sample's two numbers. Writes
+ * w, the unit direction from p towards the light, and q, the end of the shadow ray, and returns
+ * G, the light's side of the geometry term over the sample's density, with
+ *   L_direct ≈ L_e · f(ω_o, w) · |cos θ_x| · G / p_light      (p_light: the light's pick chance)
+ *   area:        q uniform on the triangle (pdf_A = 1/area), G = cos θ_l · area / |q − p|²;
+ *                its density per unit solid angle at p is p_light / G (for MIS);
+ *   point:       q = position, G = 1 / |q − p|²;
+ *   spot:        q = position, G = falloff / |q − p|² (pf_punctual_incident);
+ *   directional: q on the emitting disc's plane, G = 1 (parallel light).
+ * Returns 0 (nothing lit) for p on the light, the back of a one-sided area light, a point outside
+ * a spot's cone or behind a directional light's disc. */
+PF_INLINE float pf_light_incident(int type, const float* position, const float* direction,
+                                  float cos_inner, float cos_outer, float area, const float* v0,
+                                  const float* v1, const float* v2, const float* nl,
+                                  const float* p, float u1, float u2, float* w, float* q) {
+  if (type == PF_LIGHT_SPOT || type == PF_LIGHT_DIRECTIONAL)
+    return pf_punctual_incident(type, position, direction, cos_inner, cos_outer, p, w, q);
+  if (type == PF_LIGHT_AREA) {
+    pf_sample_triangle(v0, v1, v2, u1, u2, q);
+  } else {
+    for (int k = 0; k < 3; ++k) q[k] = position[k];
+  }
+  for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
+  const float d2 = pf_dot3(w, w);
+  if (!(d2 > 0.0f)) return 0.0f;
+  const float dl = PF_S_SQRT(d2);
+  for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
+  if (type != PF_LIGHT_AREA) return 1.0f / d2;
+  const float cos_l = -pf_dot3(w, nl); /* one-sided emitter: light leaves along +nl */
+  return cos_l > 0.0f ? cos_l * area / d2 : 0.0f;
+}
+
 #endif /* PHOTONFLOW_LIGHT_SHARED_H */

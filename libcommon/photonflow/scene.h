@@ -97,6 +97,11 @@ struct Scene {
   // Builds lights[] and light_cdf[] from emissive triangles (area lights) plus point lights
   // already in lights[] (kept), sampled in proportion to power.
   void compute_light_cdf();
+  // One next-event sample of light `li` at point p from two uniform numbers (light_shared.h
+  // pf_light_incident, the one sampling of every light type for host and kernels): writes w (unit,
+  // p → light) and q (the shadow ray's end) and returns G, with L_direct ≈ L_e·f·|cos θ_x|·G /
+  // p_light; 0 when the light sends nothing to p.
+  float light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& w, Vec3& q) const;
   // Picks a light in proportion to power for a uniform u in [0, 1): the first i with
   // u < light_cdf[i]. Sets p_light to its probability. The scene must have lights.
   size_t pick_light(float u, float& p_light) const {

@@ -105,6 +105,27 @@ void Scene::compute_light_cdf() {
   derive_lights(triangles, materials, given, lights, light_cdf);
 }
 
+float Scene::light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& w,
+                           Vec3& q) const {
+  const pf_light& l = lights[li];
+  const float fp[3] = {p.x, p.y, p.z};
+  float fw[3], fq[3], nl[3] = {0.f, 0.f, 0.f};
+  const float none[3] = {0.f, 0.f, 0.f};
+  const float *v0 = none, *v1 = none, *v2 = none;
+  if (l.type == PF_LIGHT_AREA) {
+    const pf_triangle& t = triangles[size_t(l.triangle)];
+    v0 = t.v0;
+    v1 = t.v1;
+    v2 = t.v2;
+    normal_of(size_t(l.triangle)).store(nl);
+  }
+  const float g = pf_light_incident(l.type, l.position, l.direction, l.cos_inner, l.cos_outer,
+                                    l.area, v0, v1, v2, nl, fp, u1, u2, fw, fq);
+  w = Vec3(fw);
+  q = Vec3(fq);
+  return g;
+}
+
 size_t Scene::pick_light_search(float u) const {
   return size_t(std::upper_bound(light_cdf.begin(), light_cdf.end(), u) - light_cdf.begin());
 }

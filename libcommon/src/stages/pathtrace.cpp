@@ -190,41 +190,14 @@ class PathTracer {
     const size_t li = scene_.pick_light(ul, p_light);
     if (!(p_light > 0.f)) return {};
     const pf_light& l = scene_.lights[li];
-    Vec3 q;
-    float g, w = 1.f;  // cos θ_x / density (solid angle), without visibility; MIS weight
-    if (l.type == PF_LIGHT_AREA) {
-      const pf_triangle& t = scene_.triangles[size_t(l.triangle)];
-      q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
-      Vec3 wl = q - p;
-      const float d2 = dot(wl, wl);
-      if (!(d2 > 0.f)) return {};
-      wl = wl / std::sqrt(d2);
-      const float cos_l = -dot(wl, light_normal_[li]);  // one-sided: light leaves along +n_l
-      const float cos_x = dot(wl, n);
-      if (cos_l <= 0.f || cos_x <= 0.f || dot(wl, ng) <= 0.f) return {};
-      const float pdf = p_light * d2 / (l.area * cos_l);  // per unit solid angle at p
-      g = cos_x / pdf;
-      if (opt_.mis == MisMode::Power) w = power_heuristic(pdf, pdf_cosine_hemisphere(cos_x));
-    } else if (l.type != PF_LIGHT_POINT) {  // spot or directional (light_shared.h): delta lights
-      const float fp[3] = {p.x, p.y, p.z};
-      float w[3], fq[3];
-      const float f = pf_punctual_incident(l.type, l.position, l.direction, l.cos_inner,
-                                           l.cos_outer, fp, w, fq);
-      const Vec3 wl(w);
-      const float cos_x = dot(wl, n);
-      if (!(f > 0.f) || cos_x <= 0.f || dot(wl, ng) <= 0.f) return {};
-      q = Vec3(fq);
-      g = cos_x * f / p_light;
-    } else {
-      q = Vec3(l.position);
-      Vec3 wl = q - p;
-      const float d2 = dot(wl, wl);
-      if (!(d2 > 0.f)) return {};
-      wl = wl / std::sqrt(d2);
-      const float cos_x = dot(wl, n);
-      if (cos_x <= 0.f || dot(wl, ng) <= 0.f) return {};
-      g = cos_x / (d2 * p_light);  // a delta light: NEE is its only strategy
-    }
+    Vec3 wl, q;
+    const float G = scene_.light_incident(li, p, u1, u2, wl, q);  // light_shared.h
+    const float cos_x = dot(wl, n);
+    if (!(G > 0.f) || cos_x <= 0.f || dot(wl, ng) <= 0.f) return {};
+    const float g = cos_x * G / p_light;  // cos θ_x / density, without visibility
+    float w = 1.f;                        // MIS weight; delta lights: NEE is their only strategy
+    if (l.type == PF_LIGHT_AREA && opt_.mis == MisMode::Power)
+      w = power_heuristic(p_light / G, pdf_cosine_hemisphere(cos_x));  // solid-angle densities
     const Vec3 o = p + ng * eps_;
     ++rays;
     if (caster_.any(Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
@@ -235,7 +208,8 @@ class PathTracer {
   // its shadow ray, with f(wo, w_l) of the BSDF instead of ρ/π and |cos θ_x| at the shading
   // normal; a light behind the surface counts where the BSDF transmits (the shadow ray leaves on
   // its side). Area lights are MIS-weighted against the BSDF's density pf_bsdf_pdf (power
-  // heuristic); point lights are NEE's alone. Returns f·L_e·|cos θ_x|·w / density.
+  // heuristic); point, spot and directional lights are NEE's alone. Returns
+  // f·L_e·|cos θ_x|·w / density.
   struct PbrFrame {
     float ns[3], ng[3], wo[3];  // front shading and geometric normals, direction to the eye
   };
@@ -247,37 +221,17 @@ class PathTracer {
     const size_t li = scene_.pick_light(ul, p_light);
     if (!(p_light > 0.f)) return {};
     const pf_light& l = scene_.lights[li];
-    Vec3 q, wl;
-    float g, w = 1.f;
-    float d2;
-    if (l.type == PF_LIGHT_AREA) {
-      const pf_triangle& t = scene_.triangles[size_t(l.triangle)];
-      q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
-      wl = q - p;
-      d2 = dot(wl, wl);
-      if (!(d2 > 0.f)) return {};
-      wl = wl / std::sqrt(d2);
-      const float cos_l = -dot(wl, light_normal_[li]);
-      if (cos_l <= 0.f) return {};
-      const float pdf = p_light * d2 / (l.area * cos_l);
-      g = std::fabs(dot(wl, Vec3(fr.ns))) / pdf;
-      if (opt_.mis == MisMode::Power) {
-        float wv[3];
-        wl.store(wv);
-        w = power_heuristic(pdf, pf_pbr_pdf_world(&params, fr.ns, fr.ng, fr.wo, wv));
-      }
-    } else {
-      q = Vec3(l.position);
-      wl = q - p;
-      d2 = dot(wl, wl);
-      if (!(d2 > 0.f)) return {};
-      wl = wl / std::sqrt(d2);
-      g = std::fabs(dot(wl, Vec3(fr.ns))) / (d2 * p_light);
-    }
+    Vec3 wl, q;
+    const float G = scene_.light_incident(li, p, u1, u2, wl, q);  // light_shared.h
+    if (!(G > 0.f)) return {};
     float wv[3], f[3];
     wl.store(wv);
     pf_pbr_eval_world(&params, fr.ns, fr.ng, fr.wo, wv, f);
     if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) return {};
+    const float g = std::fabs(dot(wl, Vec3(fr.ns))) * G / p_light;
+    float w = 1.f;
+    if (l.type == PF_LIGHT_AREA && opt_.mis == MisMode::Power)
+      w = power_heuristic(p_light / G, pf_pbr_pdf_world(&params, fr.ns, fr.ng, fr.wo, wv));
     const Vec3 o = p + ng_front * (dot(wl, ng_front) >= 0.f ? eps_ : -eps_);
     ++rays;
     if (caster_.any(Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
