@@ -21,8 +21,36 @@
 #define PF_EYE_STREAM 0xE7E0000u
 #define PF_SHADOW_STREAM 0x5AD0000u
 
-/* eye_pass.cpp's direct_light: irradiance-weighted direct radiance at a diffuse point by light
- * sampling with shadow rays. Adds weight · L_direct to `direct`. */
+/* Scene::light_incident on the device: one next-event sample of light li at p (light_shared.h
+ * pf_light_incident, the host's sampling of every light type). Writes w and q, returns G. */
+static float pf_light_incident_at(const pf_scene_view* s, int li, const float* p, float u1,
+                                  float u2, float* w, float* q) {
+  __global const pf_light* l = &s->lights[li];
+  float v0[3] = {0.0f, 0.0f, 0.0f}, v1[3] = {0.0f, 0.0f, 0.0f}, v2[3] = {0.0f, 0.0f, 0.0f};
+  float nl[3] = {0.0f, 0.0f, 0.0f};
+  if (l->type == PF_LIGHT_AREA) {
+    __global const pf_triangle* t = &s->tris[l->triangle];
+    for (int k = 0; k < 3; ++k) {
+      v0[k] = t->v0[k];
+      v1[k] = t->v1[k];
+      v2[k] = t->v2[k];
+    }
+    float e1[3], e2[3];
+    for (int k = 0; k < 3; ++k) {
+      e1[k] = v1[k] - v0[k];
+      e2[k] = v2[k] - v0[k];
+    }
+    pf_cross3(e1, e2, nl); /* face_normal (scene.h) */
+    pf_normalize3(nl);
+  }
+  const float lp[3] = {l->position[0], l->position[1], l->position[2]};
+  const float ld[3] = {l->direction[0], l->direction[1], l->direction[2]};
+  return pf_light_incident(l->type, lp, ld, l->cos_inner, l->cos_outer, l->area, v0, v1, v2, nl,
+                           p, u1, u2, w, q);
+}
+
+/* eye_pass.cpp's direct_light: L_direct = (1/n) Σ ρ/π·L_e·cos θ_x·G/p_light at a diffuse point by
+ * light sampling with shadow rays. Adds weight · L_direct to `direct`. */
 static void pf_direct_light(const pf_scene_view* s, const float* p, const float* ng,
                             const float* ns, __global const pf_material* m, int samples,
                             uint seed, uint pass, uint index, float eps, const float* weight,
@@ -36,56 +64,18 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     const float u2 = pf_rng_next(&rng);
     float p_light;
     const int li = pf_pick_light(s, ul, &p_light);
-    __global const pf_light* l = &s->lights[li];
     if (p_light <= 0.0f) continue;
-    float q[3], w[3], g;
-    if (l->type == PF_LIGHT_AREA) {
-      __global const pf_triangle* t = &s->tris[l->triangle];
-      const float v0[3] = {t->v0[0], t->v0[1], t->v0[2]};
-      const float v1[3] = {t->v1[0], t->v1[1], t->v1[2]};
-      const float v2[3] = {t->v2[0], t->v2[1], t->v2[2]};
-      pf_sample_triangle(v0, v1, v2, u1, u2, q);
-      float e1[3], e2[3], nl[3];
-      for (int k = 0; k < 3; ++k) {
-        e1[k] = v1[k] - v0[k];
-        e2[k] = v2[k] - v0[k];
-      }
-      pf_cross3(e1, e2, nl);
-      pf_normalize3(nl);
-      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
-      const float d2 = pf_dot3(w, w);
-      if (d2 <= 0.0f) continue;
-      const float dl = sqrt(d2);
-      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
-      const float cos_l = -pf_dot3(w, nl);
-      const float cos_x = pf_dot3(w, ns);
-      if (cos_l <= 0.0f || cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
-      g = cos_x * cos_l * l->area / d2;
-    } else if (l->type != PF_LIGHT_POINT) { /* spot, directional (light_shared.h) */
-      const float lp[3] = {l->position[0], l->position[1], l->position[2]};
-      const float ld[3] = {l->direction[0], l->direction[1], l->direction[2]};
-      const float f = pf_punctual_incident(l->type, lp, ld, l->cos_inner, l->cos_outer, p, w, q);
-      const float cos_x = pf_dot3(w, ns);
-      if (!(f > 0.0f) || cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
-      g = cos_x * f;
-    } else {
-      for (int k = 0; k < 3; ++k) q[k] = l->position[k];
-      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
-      const float d2 = pf_dot3(w, w);
-      if (d2 <= 0.0f) continue;
-      const float dl = sqrt(d2);
-      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
-      const float cos_x = pf_dot3(w, ns);
-      if (cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
-      g = cos_x / d2;
-    }
+    float q[3], w[3];
+    const float g = pf_light_incident_at(s, li, p, u1, u2, w, q);
+    const float cos_x = pf_dot3(w, ns);
+    if (!(g > 0.0f) || cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
     float o[3], sd[3];
     for (int k = 0; k < 3; ++k) o[k] = p[k] + ng[k] * eps;
     for (int k = 0; k < 3; ++k) sd[k] = q[k] - o[k];
     pf_ray_hit hit;
     if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
-    const float f = g / p_light;
-    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + l->radiance[k] * f;
+    const float f = cos_x * g / p_light;
+    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + s->lights[li].radiance[k] * f;
   }
   const float inv = 1.0f / (float)samples;
   for (int k = 0; k < 3; ++k)
@@ -109,39 +99,10 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
     const float u2 = pf_rng_next(&rng);
     float p_light;
     const int li = pf_pick_light(s, ul, &p_light);
-    __global const pf_light* l = &s->lights[li];
     if (p_light <= 0.0f) continue;
-    float q[3], w[3], g;
-    if (l->type == PF_LIGHT_AREA) {
-      __global const pf_triangle* t = &s->tris[l->triangle];
-      const float v0[3] = {t->v0[0], t->v0[1], t->v0[2]};
-      const float v1[3] = {t->v1[0], t->v1[1], t->v1[2]};
-      const float v2[3] = {t->v2[0], t->v2[1], t->v2[2]};
-      pf_sample_triangle(v0, v1, v2, u1, u2, q);
-      float e1[3], e2[3], nl[3];
-      for (int k = 0; k < 3; ++k) {
-        e1[k] = v1[k] - v0[k];
-        e2[k] = v2[k] - v0[k];
-      }
-      pf_cross3(e1, e2, nl);
-      pf_normalize3(nl);
-      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
-      const float d2 = pf_dot3(w, w);
-      if (d2 <= 0.0f) continue;
-      const float dl = sqrt(d2);
-      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
-      const float cos_l = -pf_dot3(w, nl);
-      if (cos_l <= 0.0f) continue;
-      g = fabs(pf_dot3(w, ns)) * cos_l * l->area / d2;
-    } else {
-      for (int k = 0; k < 3; ++k) q[k] = l->position[k];
-      for (int k = 0; k < 3; ++k) w[k] = q[k] - p[k];
-      const float d2 = pf_dot3(w, w);
-      if (d2 <= 0.0f) continue;
-      const float dl = sqrt(d2);
-      for (int k = 0; k < 3; ++k) w[k] = w[k] / dl;
-      g = fabs(pf_dot3(w, ns)) / d2;
-    }
+    float q[3], w[3];
+    const float g = pf_light_incident_at(s, li, p, u1, u2, w, q);
+    if (!(g > 0.0f)) continue;
     float f[3];
     pf_pbr_eval_world(bp, ns, ng, wo, w, f); /* 0 for a pair the normals disagree on */
     if (!(f[0] > 0.0f || f[1] > 0.0f || f[2] > 0.0f)) continue;
@@ -151,8 +112,8 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
     for (int k = 0; k < 3; ++k) sd[k] = q[k] - o[k];
     pf_ray_hit hit;
     if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
-    const float gp = g / p_light;
-    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + f[k] * l->radiance[k] * gp;
+    const float gp = fabs(pf_dot3(w, ns)) * g / p_light;
+    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + f[k] * s->lights[li].radiance[k] * gp;
   }
   const float inv = 1.0f / (float)samples;
   for (int k = 0; k < 3; ++k) direct[k] = direct[k] + weight[k] * (sum[k] * inv);
@@ -166,7 +127,8 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
                               __global const float* cam,
                               int width, int height,
                               int spp, int columns, int max_depth, int shadow_rays,
-                              int shadow_samples, float radius, uint seed, uint pass,
+                              int shadow_samples, float radius, float glossy_threshold,
+                              uint seed, uint pass,
                               int sampler, float eps,
                               int pixel_offset, int pixel_count, __global pf_hitpoint* slots,
                               __global int* used, __global float* emitted_out,
@@ -232,6 +194,25 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
           pf_pbr_params_hit(textures, texels, mat_tex, uvs, mr_tex, s.mats, sh.material, &h,
                             &pt.params);
           pt.outside = sh.front ? 1 : 0;
+          if (pf_pbr_eye_continues(&pt.params, glossy_threshold)) {
+            /* eye_pass.cpp: on by the BSDF's sample (radiance mode, u1, u2, u3 from the eye
+             * stream), as through a mirror; the visible point sits further on */
+            float wo[3] = {d[0], d[1], d[2]};
+            if (depth > 0) pf_normalize3(wo); /* the camera ray's is unit already */
+            for (int k = 0; k < 3; ++k) wo[k] = -wo[k];
+            const float u1 = pf_rng_next(&rng);
+            const float u2 = pf_rng_next(&rng);
+            const float u3 = pf_rng_next(&rng);
+            float wi[3], wt[3], pdf;
+            if (!pf_pbr_scatter(&pt.params, sh.ns, sh.ng, wo, u1, u2, u3, PF_TRANSPORT_RADIANCE,
+                                wi, wt, &pdf))
+              break;
+            for (int k = 0; k < 3; ++k) T[k] = T[k] * wt[k];
+            if (pf_luminance3(T) <= 0.0f) break;
+            for (int k = 0; k < 3; ++k) d[k] = wi[k];
+            pf_offset_origin(&sh, d, eps, o);
+            continue;
+          }
         } else if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf)) {
           for (int k = 0; k < 3; ++k) T[k] = T[k] * tf[k];
         }

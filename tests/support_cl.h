@@ -30,8 +30,10 @@ inline std::unique_ptr<ClContext> test_device() {
 // strata and SPPM/PPPM with Sobol pixel samples, and checks that the CPU image is not black and
 // that the device's equals it up to float rounding (relative RMSE ≤ 1e-3).
 inline void check_device_route(const Scene& s, Estimator e, GatherMethod device_method,
-                               int passes, uint32_t photons, ClContext& dev) {
+                               int passes, uint32_t photons, ClContext& dev,
+                               float glossy_threshold = 0.f) {
   RenderOptions opt;
+  opt.eye.glossy_threshold = glossy_threshold;
   opt.estimator = e;
   opt.passes = passes;
   opt.photons.photons = photons;

@@ -469,7 +469,7 @@ TEST_CASE("glossy room: SPPM, PPPM and the path tracer agree within their noise"
   INFO((glass ? "rough glass ball" : "plastic ball"));
   const Scene s = glossy_room(20, 15, glass);
   const int seeds = 6;
-  std::vector<std::vector<double>> pt, sppm, pppm, sppm_half;
+  std::vector<std::vector<double>> pt, sppm, pppm, sppm_half, sppm_through;
   for (uint32_t seed = 1; seed <= uint32_t(seeds); ++seed) {
     PathTraceOptions po;
     po.spp = 24;
@@ -478,20 +478,28 @@ TEST_CASE("glossy room: SPPM, PPPM and the path tracer agree within their noise"
     RenderOptions so = render_options(Estimator::Sppm, 8, 12000, 0.04f, seed);
     so.eye.direct = DirectMode::ShadowRays;
     sppm.push_back(region_means(render_image(s, so)));
+    // Eye paths through the gold block and the glass ball (both below the threshold 1, neither
+    // with a diffuse base): visible points beyond them (eye_pass.h glossy_threshold).
+    RenderOptions through = so;
+    through.eye.glossy_threshold = 1.f;
+    sppm_through.push_back(region_means(render_image(s, through)));
     so.eye.radius = 0.02f;
     sppm_half.push_back(region_means(render_image(s, so)));
     const RenderOptions qo = render_options(Estimator::Pppm, 8, 12000, 0.04f, seed);
     pppm.push_back(region_means(render_image(s, qo)));
   }
-  const RegionStats a = stats(pt), b = stats(sppm), c = stats(pppm), d = stats(sppm_half);
+  const RegionStats a = stats(pt), b = stats(sppm), c = stats(pppm), d = stats(sppm_half),
+                    e = stats(sppm_through);
   for (size_t r = 0; r < a.mean.size(); ++r) {
     const double bias = std::fabs(b.mean[r] - d.mean[r]) + 2 * std::hypot(b.se[r], d.se[r]);
     INFO("region " << r << ": path tracer " << a.mean[r] << " ± " << a.se[r] << ", sppm "
                    << b.mean[r] << " ± " << b.se[r] << ", pppm " << c.mean[r] << " ± " << c.se[r]
-                   << ", sppm at R/2 " << d.mean[r] << ", bias allowance " << bias);
+                   << ", sppm at R/2 " << d.mean[r] << ", sppm through glossy " << e.mean[r]
+                   << " ± " << e.se[r] << ", bias allowance " << bias);
     CHECK(a.mean[r] > 0.0);
     CHECK(std::fabs(a.mean[r] - b.mean[r]) <= 5 * std::hypot(a.se[r], b.se[r]) + bias);
     CHECK(std::fabs(a.mean[r] - c.mean[r]) <= 5 * std::hypot(a.se[r], c.se[r]) + bias);
+    CHECK(std::fabs(a.mean[r] - e.mean[r]) <= 5 * std::hypot(a.se[r], e.se[r]) + bias);
   }
 }
 
@@ -562,9 +570,11 @@ struct Pass {
   PhotonGrid grid;
   uint64_t emitted = 0;
 };
-Pass pass_inputs(const Scene& s, uint32_t pass, DirectMode mode, float radius0) {
+Pass pass_inputs(const Scene& s, uint32_t pass, DirectMode mode, float radius0,
+                 float glossy_threshold = 0.f) {
   Pass p;
   p.eye.pass = pass;
+  p.eye.glossy_threshold = glossy_threshold;
   p.eye.direct = mode;
   p.eye.sampler = PixelSampler::Sobol;
   p.eye.radius = radius0;
@@ -588,7 +598,9 @@ TEST_CASE("PBR visible points: SPPM and PPPM traced as they gather equal the sta
   // gathered from its entry in another route's order.
   const Scene s = glossy_room(20, 14, true);
   const DirectMode mode = GENERATE(DirectMode::Photons, DirectMode::ShadowRays);
-  INFO(direct_mode_name(mode));
+  // 1: eye paths through the rough glass ball and the gold block (eye_pass.h glossy_threshold).
+  const float threshold = GENERATE(0.f, 1.f);
+  INFO(direct_mode_name(mode) << ", glossy threshold " << threshold);
   const float r0 = 0.05f;
   HitpointSet staged = make_sppm_state(s, r0, mode), traced = staged, filed = staged;
   REQUIRE(staged.bsdf.size() == staged.hitpoints.size());
@@ -597,7 +609,7 @@ TEST_CASE("PBR visible points: SPPM and PPPM traced as they gather equal the sta
   ppm.slab = kDefaultSlab;
   test::TempDir tmp("glossy-sppm");
   for (uint32_t pass = 0; pass < 3; ++pass) {
-    const Pass in = pass_inputs(s, pass, mode, r0);
+    const Pass in = pass_inputs(s, pass, mode, r0, threshold);
     const EyePassResult eye = trace_hitpoints(s, in.eye);
     REQUIRE(eye.bsdf.size() == eye.hitpoints.size());
     sppm_pass(s, staged, eye, in.grid, in.emitted, ppm);

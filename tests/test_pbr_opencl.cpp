@@ -310,4 +310,62 @@ TEST_CASE("OpenCL PBR: the render driver's SPPM, PPPM and PPM device routes give
   test::check_device_route(s, Estimator::Pppm, GatherMethod::HashGrid, 4, 6000, *dev);
   test::check_device_route(s, Estimator::Ppm, GatherMethod::HashGrid, 4, 6000, *dev);
   test::check_device_route(s, Estimator::Ppm, GatherMethod::GridKmeans, 4, 6000, *dev);
+  // Eye paths through the glass sphere and the metal block (glossy_threshold above their
+  // roughness: eye_pass.h) on both backends.
+  test::check_device_route(s, Estimator::Sppm, GatherMethod::HashGrid, 4, 6000, *dev, 0.5f);
+}
+
+TEST_CASE("OpenCL PBR: eye paths continue through glossy metal and glass below the glossy "
+          "threshold as on the CPU",
+          "[pbr][opencl][glossy-threshold]") {
+  // glossy_threshold 0.5: the rough glass sphere (0.3, transmission 1) and the metal block (0.35,
+  // metallic 1) have no visible point of their own; the eye paths go on by the BSDF's sample to
+  // the walls and the box (partly metallic: a diffuse base, so its visible points stay). The
+  // device's hitpoints equal the CPU's one for one (the same draws from the eye stream).
+  auto dev = test::test_device();
+  if (!dev) return;
+  const Scene s = pbr_room(48, 36);
+  EyePassOptions eo;
+  eo.direct = DirectMode::ShadowRays;
+  eo.seed = 3;
+  eo.pass = 2;
+  eo.sampler = PixelSampler::Sobol;
+  const EyePassResult stop = trace_hitpoints(s, eo);
+  eo.glossy_threshold = 0.5f;
+  const EyePassResult cpu = trace_hitpoints(s, eo);
+  const EyePassResult gpu = trace_hitpoints(s, eo, *dev);
+  REQUIRE(cpu.hitpoints.size() == gpu.hitpoints.size());
+  REQUIRE(gpu.bsdf.size() == gpu.hitpoints.size());
+  const float tol = 1e-4f * length(s.bounds.extent());
+  size_t same = 0, on_glossy = 0, stopped_glossy = 0;
+  for (const pf_hitpoint& h : stop.hitpoints)
+    stopped_glossy += h.material == kSphere || h.material == kBlock;
+  for (size_t i = 0; i < cpu.hitpoints.size(); ++i) {
+    const pf_hitpoint &a = cpu.hitpoints[i], &b = gpu.hitpoints[i];
+    on_glossy += a.material == kSphere || a.material == kBlock || b.material == kSphere ||
+                 b.material == kBlock;
+    bool ok = a.pixel_x == b.pixel_x && a.pixel_y == b.pixel_y && a.material == b.material;
+    for (int c = 0; c < 3; ++c)
+      ok = ok && std::fabs(a.position[c] - b.position[c]) <= tol &&
+           close(a.weight[c], b.weight[c], 1e-4f);
+    same += ok;
+  }
+  INFO("hitpoints " << cpu.hitpoints.size() << ", of which the same on the device " << same
+                    << "; without the threshold " << stopped_glossy << " on the sphere and block");
+  CHECK(stopped_glossy > 40);
+  CHECK(on_glossy == 0);
+  CHECK(same >= cpu.hitpoints.size() * 995 / 1000);
+  double se = 0, ref = 0;
+  for (size_t i = 0; i < cpu.direct.size(); ++i) {
+    se += (double(cpu.direct[i]) - double(gpu.direct[i])) * (double(cpu.direct[i]) - double(gpu.direct[i]));
+    ref += double(cpu.direct[i]) * double(cpu.direct[i]);
+  }
+  REQUIRE(ref > 0);
+  CHECK(std::sqrt(se / ref) <= 1e-3);
+  double se_e = 0, ref_e = 0;  // light seen through the glass and in the metal, if any
+  for (size_t i = 0; i < cpu.emitted.size(); ++i) {
+    se_e += (double(cpu.emitted[i]) - double(gpu.emitted[i])) * (double(cpu.emitted[i]) - double(gpu.emitted[i]));
+    ref_e += double(cpu.emitted[i]) * double(cpu.emitted[i]);
+  }
+  CHECK(std::sqrt(se_e) <= 1e-3 * std::sqrt(ref_e));  // (the light is not in view here)
 }

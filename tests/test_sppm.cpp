@@ -18,6 +18,7 @@
 #include "photonflow/pixel_sampler.h"
 #include "photonflow/render_driver.h"
 #include "photonflow/sampling.h"
+#include "photonflow/render_defaults.h"
 #include "photonflow/sppm.h"
 #include "photonflow/synthesize.h"
 #include "h5edit.h"
@@ -658,6 +659,46 @@ TEST_CASE("slab: photons of another face of the same mesh are left out, the site
   CHECK(state_parameters(ppm).count("slab") == 0);
   ppm.ppm.slab = 0.25f;
   CHECK_THROWS_AS(check_options(ppm), InputError);
+}
+
+TEST_CASE("glossy threshold option: auto by estimator, checked, recorded only where eye paths use it, "
+          "and read back from the staged eye pass",
+          "[sppm][glossy-threshold]") {
+  CHECK(parse_glossy_threshold("auto", Estimator::Sppm) == kDefaultGlossyThreshold);
+  CHECK(parse_glossy_threshold("auto", Estimator::Pppm) == kDefaultGlossyThreshold);
+  CHECK(parse_glossy_threshold("auto", Estimator::Ppm) == 0.f);  // its one sample never converges
+  CHECK(parse_glossy_threshold("0.4", Estimator::Ppm) == 0.4f);
+  for (const std::string text : {"", "x", "0.3r", "--1"}) {
+    INFO("'" << text << "'");
+    CHECK_THROWS_AS(parse_glossy_threshold(text, Estimator::Sppm), InputError);
+  }
+  EyePassOptions eo;
+  for (float bad : {-0.1f, 1.5f, std::nanf("")}) {
+    eo.glossy_threshold = bad;
+    CHECK_THROWS_AS(check_options(eo), InputError);
+  }
+  // A state records the threshold when it is used, so that a checkpoint or pppm part of another
+  // one is not continued or merged with it; runs without it keep the parameters they had.
+  RenderOptions a = options(Estimator::Pppm, 1, 100, 0.f), b = a;
+  CHECK(state_parameters(a).count("glossy-threshold") == 0);
+  a.eye.glossy_threshold = 0.5f;
+  CHECK(state_parameters(a).at("glossy-threshold") == "0.5");
+  CHECK(state_parameters(a) != state_parameters(b));
+  // The staged route (trace-hitpoints records it when it is used) gives render's parameters.
+  Provenance eye, photons;
+  eye.parameters = {{"spp", "1"}, {"max-depth", "16"}, {"direct", "photons"},
+                    {"shadow-samples", "4"}, {"radius", "0"}, {"seed", "1"},
+                    {"pixel-sampler", "sobol"}};
+  photons.parameters = {{"photons", "100"}, {"max-bounces", "16"}, {"seed", "1"}};
+  a.eye.direct = b.eye.direct = DirectMode::Photons;
+  a.eye.sampler = b.eye.sampler = PixelSampler::Sobol;
+  const auto staged = [&](const Provenance& e) {
+    return staged_state_parameters(Estimator::Pppm, e, "eye.h5", photons, "photons.h5",
+                                   b.ppm.alpha, b.ppm.slab);
+  };
+  CHECK(staged(eye) == state_parameters(b));
+  eye.parameters["glossy-threshold"] = "0.5";
+  CHECK(staged(eye) == state_parameters(a));
 }
 
 TEST_CASE("trace_hitpoints_into: reused buffers give trace_hitpoints' result, pass after pass",

@@ -48,6 +48,12 @@ struct EyePassOptions {
   // (seed, 0x5AD0000 + p, same index)); PPM's one eye pass is pass 0.
   uint32_t pass = 0;
   PixelSampler sampler = PixelSampler::Strata;
+  // Roughness below which an eye path continues through a PF_MAT_PBR point without a diffuse
+  // base (a metal, or glass that transmits fully) by sampling its BSDF, instead of making its
+  // visible point there (pf_pbr_eye_continues, pbr_scatter_shared.h); 0 = never (the visible
+  // point at the first non-delta vertex). A fixed eye pass (PPM) keeps 0: its one sample of the
+  // lobe would never converge. render's and trace-hitpoints' default: render_defaults.h.
+  float glossy_threshold = 0.f;
 };
 
 struct EyePassResult {

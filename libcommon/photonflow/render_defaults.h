@@ -46,6 +46,12 @@ namespace pf {
 constexpr Estimator kDefaultEstimator = Estimator::Sppm;
 constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
 
+// Roughness below which SPPM's and PPPM's eye paths continue through a glossy point without a
+// diffuse base (a metal, or glass that transmits fully) by sampling its BSDF rather than making
+// their visible point there (EyePassOptions::glossy_threshold, pf_pbr_eye_continues); PPM's fixed
+// eye pass keeps 0. Measured on the showcase scenes: docs/RESULTS.md section 9.
+constexpr float kDefaultGlossyThreshold = 0.f;
+
 // The eye pass of one pixel (one eye sample, its shadow rays and its gather: render's default
 // estimator and direct light) costs as much time as this many photons (each emitted, traced and
 // sorted into the pass's grid). Measured with
@@ -89,6 +95,10 @@ RenderDefaults choose_defaults(const Scene& scene);
 // --photons of render and trace-photons: "auto" (returns 0: choose_defaults decides once the
 // scene is read) or a count in [1, 2^32); InputError naming --photons otherwise.
 uint32_t parse_photons_option(const std::string& text);
+// --glossy-threshold of render and trace-hitpoints: "auto" (kDefaultGlossyThreshold for sppm and
+// pppm, 0 for ppm) or a number (its range is check_options' of eye_pass.h); InputError naming
+// --glossy-threshold for what is not a number.
+float parse_glossy_threshold(const std::string& text, Estimator e);
 // --radius of render: "auto" or 0 (returns 0: default_radius) or a length (its range is
 // check_options' of eye_pass.h); InputError naming --radius for what is not a number.
 float parse_radius_option(const std::string& text);

@@ -48,6 +48,11 @@ int main(int argc, char** argv) {
        cxxopts::value<int>()->default_value("0"))
       ("sums", "pppm: write the partial result (per-pixel sums of the passes, for merge) here",
        cxxopts::value<std::string>()->default_value(""))
+      ("glossy-threshold", "roughness below which eye paths continue through a metal or a "
+       "fully transmissive glass by sampling its BSDF instead of making the visible point there "
+       "(0 = never), or auto: " + pf::default_text(pf::kDefaultGlossyThreshold) +
+       " for sppm and pppm, 0 for ppm (render_defaults.h)",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("pixel-sampler", "where eye samples go in their pixel: auto (strata for ppm, sobol "
        "otherwise) | strata | random | sobol", cxxopts::value<std::string>()->default_value("auto"))
       ("photons", "photons emitted per pass, or " + pf::auto_photons_rule(),
@@ -128,6 +133,8 @@ int main(int argc, char** argv) {
     opt.eye.radius = pf::parse_radius_option(a["radius"].as<std::string>());
     opt.eye.seed = seed;
     opt.eye.threads = threads;
+    opt.eye.glossy_threshold =
+        pf::parse_glossy_threshold(a["glossy-threshold"].as<std::string>(), opt.estimator);
     opt.eye.sampler = sampler == "auto" ? (opt.estimator == pf::Estimator::Ppm
                                                ? pf::PixelSampler::Strata
                                                : pf::PixelSampler::Sobol)

@@ -42,6 +42,10 @@ int main(int argc, char** argv) {
        cxxopts::value<std::string>()->default_value(pf::estimator_name(pf::kDefaultEstimator)))
       ("pass", "sppm/pppm: which eye pass (0-based; the photon pass it meets has the same index)",
        cxxopts::value<int>()->default_value("0"))
+      ("glossy-threshold", "roughness below which eye paths continue through a metal or a "
+       "fully transmissive glass by sampling its BSDF instead of stopping there (0 = never), or "
+       "auto: " + pf::default_text(pf::kDefaultGlossyThreshold) + " for sppm and pppm, 0 for ppm",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("pixel-sampler", "where samples go in their pixel: auto (strata for ppm, sobol otherwise) "
        "| strata | random | sobol", cxxopts::value<std::string>()->default_value("auto"))
       ("seed", "random seed (jitter, glass choices, light samples)",
@@ -83,6 +87,7 @@ int main(int argc, char** argv) {
     opt.sampler = sampler != "auto" ? pf::parse_pixel_sampler(sampler)
                   : estimator == pf::Estimator::Ppm ? pf::PixelSampler::Strata
                                                     : pf::PixelSampler::Sobol;
+    opt.glossy_threshold = pf::parse_glossy_threshold(a["glossy-threshold"].as<std::string>(), estimator);
     pf::check_options(opt);
 
     pf::Stopwatch clock;
@@ -101,6 +106,10 @@ int main(int argc, char** argv) {
     prov.parameters["estimator_auto"] = estimator_auto ? "true" : "false";
     prov.parameters["direct_auto"] = a.count("direct") ? "false" : "true";
     prov.parameters["pixel-sampler"] = pf::pixel_sampler_name(opt.sampler);  // auto resolved
+    // auto resolved; only where it is used (render_driver.cpp state_parameters reads it back)
+    prov.parameters.erase("glossy-threshold");
+    if (opt.glossy_threshold > 0.f)
+      prov.parameters["glossy-threshold"] = pf::default_text(opt.glossy_threshold);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);

@@ -58,6 +58,21 @@ uint32_t parse_photons_option(const std::string& text) {
   return uint32_t(n);
 }
 
+float parse_glossy_threshold(const std::string& text, Estimator e) {
+  if (text == "auto") return e == Estimator::Ppm ? 0.f : kDefaultGlossyThreshold;
+  size_t used = 0;
+  float t = 0.f;
+  try {
+    t = std::stof(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size())
+    throw input_error("", "--glossy-threshold must be a roughness in [0, 1] or auto, got '" +
+                              text + "'");
+  return t;
+}
+
 float parse_radius_option(const std::string& text) {
   if (text == "auto") return 0.f;
   size_t used = 0;

@@ -227,6 +227,9 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
     p["pixel-sampler"] = pixel_sampler_name(opt.eye.sampler);
     p["slab"] = default_text(opt.ppm.slab);
   }
+  // Only where eye paths continue through glossy points (eye_pass.h): the states and sums of
+  // runs without it, and those written before it existed, keep their parameters.
+  if (opt.eye.glossy_threshold > 0.f) p["glossy-threshold"] = default_text(opt.eye.glossy_threshold);
   return p;
 }
 
@@ -258,6 +261,8 @@ std::map<std::string, std::string> staged_state_parameters(
   o.eye.radius = float(number(eye, eye_path, "radius"));
   o.eye.seed = uint32_t(number(eye, eye_path, "seed"));
   o.eye.sampler = parse_pixel_sampler(text(eye, eye_path, "pixel-sampler"));
+  if (eye.parameters.count("glossy-threshold"))  // absent from files made before it existed
+    o.eye.glossy_threshold = float(number(eye, eye_path, "glossy-threshold"));
   o.photons.photons = uint32_t(number(photons, photons_path, "photons"));
   o.photons.max_bounces = int(number(photons, photons_path, "max-bounces"));
   o.photons.seed = uint32_t(number(photons, photons_path, "seed"));

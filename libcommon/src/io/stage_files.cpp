@@ -156,9 +156,11 @@ void check_state_counts(const HitpointSet& h, const Validator& v) {
   // background finds no diffuse surface, and its image is the emitted and direct layers.
 }
 
-// One hitpoint's values (validate.h): directions, weight in [0, 1] (the specular chain's
-// throughput times the pixel filter weight), R, N and τ of eq. 3.14–3.18, and its radiance of
-// eq. 3.19 finite. A fresh state has R = R0, N = 0, τ = 0; an SPPM pixel without a diffuse
+// One hitpoint's values (validate.h): directions, weight finite and ≥ 0 (the eye path's
+// throughput times the pixel filter weight: at most 1 through mirrors and glass, but a BSDF's
+// sampled continuation through a glossy point (EyePassOptions::glossy_threshold) weighs
+// f·|cos|/pdf, which may exceed 1), R, N and τ of eq. 3.14–3.18, and its radiance of eq. 3.19
+// finite. A fresh state has R = R0, N = 0, τ = 0; an SPPM pixel without a diffuse
 // surface (no_surface) has N = 0 and τ = 0 and no normal.
 void check_hitpoint_values(const HitpointSet& h, size_t i, bool no_surface, const Validator& v) {
   const pf_hitpoint& hp = h.hitpoints[i];
@@ -171,7 +173,7 @@ void check_hitpoint_values(const HitpointSet& h, size_t i, bool no_surface, cons
     v.unit(Name(H, i, "normal"), hp.normal);
     v.unit(Name(H, i, "dir"), hp.dir);
   }
-  v.in_range(Name(H, i, "weight"), hp.weight, 3, 0.0, 1.0 + 1e-5);
+  v.in_range(Name(H, i, "weight"), hp.weight, 3, 0.0, kMaxValue);
   v.in_range(Name(H, i, "n_photons"), &hp.n_photons, 1, 0.0, kMaxValue);
   v.in_range(Name(H, i, "flux"), hp.flux, 3, 0.0, kMaxValue);
   // Every pixel's R, reached or not, is a gather radius: R0 until its first visible point, and the

@@ -174,7 +174,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
              sb.light_cdf, sb.light_count, sb.textures, sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex,
              sb.alpha_mats, sb.alpha_on, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
-             cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps, cl_int(off),
+             opt.glossy_threshold, cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps, cl_int(off),
              count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr);
     dev.run(k, size_t(count));
     const size_t nslots = size_t(count) * size_t(spp);

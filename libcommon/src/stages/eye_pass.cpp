@@ -10,6 +10,7 @@
 
 #include "photonflow/camera.h"
 #include "photonflow/light_shared.h"
+#include "photonflow/material/pbr_scatter_shared.h"
 #include "photonflow/options.h"
 #include "photonflow/rng.h"
 #include "photonflow/sampling.h"
@@ -62,63 +63,35 @@ bool is_diffuse(const pf_material& m) {
 }
 }  // namespace
 
+// L_direct at a diffuse point (thesis eq. 3.7; HJ09 section 4): (1/n) Σ ρ/π · L_e · cos θ_x · G /
+// p_light over n light samples (Scene::light_incident), each behind an unblocked shadow ray; a
+// light below the shading or the geometric normal sends nothing.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
                   const pf_material& m, int samples, uint32_t seed, uint32_t pass,
                   uint32_t index) {
   if (scene.lights.empty() || samples <= 0) return {};
   pf_rng rng = pf_rng_start(seed, kShadowStream + pass, index);
-  float eps = ray_epsilon(scene);
+  const float eps = ray_epsilon(scene);
   Vec3 sum;
   for (int s = 0; s < samples; ++s) {
-    float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+    const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
     float p_light;
-    const pf_light& l = scene.lights[scene.pick_light(ul, p_light)];
+    const size_t li = scene.pick_light(ul, p_light);
     if (p_light <= 0.f) continue;
-    Vec3 q, contrib;
-    float g;  // geometry term / pdf, without visibility
-    if (l.type == PF_LIGHT_AREA) {
-      const pf_triangle& t = scene.triangles[size_t(l.triangle)];
-      q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
-      const Vec3 nl = scene.normal_of(size_t(l.triangle));
-      Vec3 w = q - p;
-      float d2 = dot(w, w);
-      if (d2 <= 0.f) continue;
-      w = w / std::sqrt(d2);
-      float cos_l = -dot(w, nl);  // one-sided emitter: light leaves along +nl
-      float cos_x = dot(w, ns);
-      if (cos_l <= 0.f || cos_x <= 0.f || dot(w, ng) <= 0.f) continue;
-      g = cos_x * cos_l * l.area / d2;  // pdf_area = 1 / area
-      contrib = Vec3(l.radiance);
-    } else if (l.type != PF_LIGHT_POINT) {  // spot or directional (light_shared.h)
-      const float fp[3] = {p.x, p.y, p.z};
-      float w[3], fq[3];
-      const float f = pf_punctual_incident(l.type, l.position, l.direction, l.cos_inner,
-                                           l.cos_outer, fp, w, fq);
-      const Vec3 wv(w);
-      const float cos_x = dot(wv, ns);
-      if (!(f > 0.f) || cos_x <= 0.f || dot(wv, ng) <= 0.f) continue;
-      q = Vec3(fq);
-      g = cos_x * f;
-      contrib = Vec3(l.radiance);
-    } else {
-      q = Vec3(l.position);
-      Vec3 w = q - p;
-      float d2 = dot(w, w);
-      if (d2 <= 0.f) continue;
-      w = w / std::sqrt(d2);
-      float cos_x = dot(w, ns);
-      if (cos_x <= 0.f || dot(w, ng) <= 0.f) continue;
-      g = cos_x / d2;
-      contrib = Vec3(l.radiance);
-    }
-    Vec3 o = p + ng * eps;
-    Ray shadow{o, q - o, 0.f, 1.f - 1e-4f};
-    if (intersect_any(scene, shadow)) continue;
-    sum += contrib * (g / p_light);
+    Vec3 w, q;
+    const float g = scene.light_incident(li, p, u1, u2, w, q);
+    const float cos_x = dot(w, ns);
+    if (!(g > 0.f) || cos_x <= 0.f || dot(w, ng) <= 0.f) continue;
+    const Vec3 o = p + ng * eps;
+    if (intersect_any(scene, Ray{o, q - o, 0.f, 1.f - 1e-4f})) continue;
+    sum += Vec3(scene.lights[li].radiance) * (cos_x * g / p_light);
   }
   return mat_color(m) * kInvPi * sum * (1.f / float(samples));
 }
 
+// The same draws, light samples and shadow rays at a PF_MAT_PBR point: f(wo, w_l) of the BSDF
+// in radiance mode instead of ρ/π and |cos θ_x| at the shading normal; a light behind the surface
+// counts where the BSDF transmits (the shadow ray leaves on its side).
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
                       int samples, uint32_t seed, uint32_t pass, uint32_t index) {
@@ -130,41 +103,22 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
   ng_front.store(ng);
   wo.store(o);
   Vec3 sum;
-  for (int s = 0; s < samples; ++s) {  // direct_light's draws, light choice and point
-    float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+  for (int s = 0; s < samples; ++s) {
+    const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
     float p_light;
-    const pf_light& l = scene.lights[scene.pick_light(ul, p_light)];
+    const size_t li = scene.pick_light(ul, p_light);
     if (p_light <= 0.f) continue;
-    Vec3 q, w;
-    float g;  // |cos θ_x| · geometry / pdf, without visibility
-    float d2;
-    if (l.type == PF_LIGHT_AREA) {
-      const pf_triangle& t = scene.triangles[size_t(l.triangle)];
-      q = sample_triangle(Vec3(t.v0), Vec3(t.v1), Vec3(t.v2), u1, u2);
-      const Vec3 nl = scene.normal_of(size_t(l.triangle));
-      w = q - p;
-      d2 = dot(w, w);
-      if (d2 <= 0.f) continue;
-      w = w / std::sqrt(d2);
-      const float cos_l = -dot(w, nl);  // one-sided emitter: light leaves along +nl
-      if (cos_l <= 0.f) continue;
-      g = std::fabs(dot(w, ns_front)) * cos_l * l.area / d2;  // pdf_area = 1 / area
-    } else {
-      q = Vec3(l.position);
-      w = q - p;
-      d2 = dot(w, w);
-      if (d2 <= 0.f) continue;
-      w = w / std::sqrt(d2);
-      g = std::fabs(dot(w, ns_front)) / d2;
-    }
+    Vec3 w, q;
+    const float g = scene.light_incident(li, p, u1, u2, w, q);
+    if (!(g > 0.f)) continue;
     float wl[3], f[3];
     w.store(wl);
     pf_pbr_eval_world(&params, ns, ng, o, wl, f);  // 0 for a pair the normals disagree on
     if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) continue;
     const Vec3 origin = p + ng_front * (dot(w, ng_front) >= 0.f ? eps : -eps);
-    Ray shadow{origin, q - origin, 0.f, 1.f - 1e-4f};
-    if (intersect_any(scene, shadow)) continue;
-    sum += Vec3(f) * Vec3(l.radiance) * (g / p_light);
+    if (intersect_any(scene, Ray{origin, q - origin, 0.f, 1.f - 1e-4f})) continue;
+    sum += Vec3(f) * Vec3(scene.lights[li].radiance) *
+           (std::fabs(dot(w, ns_front)) * g / p_light);
   }
   return sum * (1.f / float(samples));
 }
@@ -179,6 +133,11 @@ void check_options(const EyePassOptions& opt) {
     throw input_error("", "--shadow-samples must be at most " + std::to_string(kMaxShadowSamples) +
                               ", got " + std::to_string(opt.shadow_samples),
                       "run more passes instead");
+  // A perceptual roughness (glTF: [0, 1]); above 1 every metal and clear glass would continue.
+  if (!(opt.glossy_threshold >= 0.f && opt.glossy_threshold <= 1.f))
+    throw input_error("", "--glossy-threshold must be a roughness in [0, 1], got " +
+                              value_text(opt.glossy_threshold),
+                      "0 keeps every visible point at the first non-delta vertex");
   // R0² must stay a normal float (validate.h kMinRadius): 1e-23 squared is 0 in float, and
   // every radiance of eq. 3.19 would divide by it.
   if (!(opt.radius == 0.f || (opt.radius >= kMinRadius && opt.radius <= kMaxRadius)))
@@ -268,11 +227,31 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       return true;
     }
     if (m.type == PF_MAT_PBR) {
+      const Vec3 d = depth > 0 ? normalize(ray.d) : ray.d;  // camera rays are unit
+      const pf_pbr_point pt = pbr_point_at(scene_, m, sh);
+      if (pf_pbr_eye_continues(&pt.params, opt_.glossy_threshold)) {
+        // A near-specular point without a diffuse base (pbr_scatter_shared.h): the path goes on
+        // by the BSDF's sample in radiance mode (u1, u2, u3 from the eye stream, after the
+        // glass choices before it), T ·= f·|cos θ|/pdf, as through a mirror; an emitter it then
+        // hits adds its light (L G E, as L S E above) and the visible point sits further on.
+        float ns[3], ng[3], wo[3], wi[3], wt[3], pdf;
+        sh.ns.store(ns);
+        sh.ng.store(ng);
+        (-d).store(wo);
+        const float u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng), u3 = pf_rng_next(&rng);
+        if (!pf_pbr_scatter(&pt.params, ns, ng, wo, u1, u2, u3, PF_TRANSPORT_RADIANCE, wi, wt,
+                            &pdf))
+          return false;
+        T = T * Vec3(wt);
+        if (luminance(T) <= 0.f) return false;
+        const Vec3 dir(wi);
+        ray = Ray{offset_origin(sh, dir, eps_), dir};
+        continue;
+      }
       // A glossy visible point (HJ09 section 4): the hitpoint as at a diffuse surface, its weight
       // the throughput alone, the BSDF's textured parameters beside it; every gather evaluates f
       // per photon (pbr_point_shared.h). No random number is drawn here.
       const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
-      const Vec3 d = depth > 0 ? normalize(ray.d) : ray.d;  // camera rays are unit
       hp = pf_hitpoint{};
       sh.p.store(hp.position);
       n.store(hp.normal);
@@ -283,7 +262,6 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       hp.pixel_y = y;
       hp.mesh = sh.mesh;
       hp.material = sh.material;
-      const pf_pbr_point pt = pbr_point_at(scene_, m, sh);
       if (pbr) *pbr = pt;
       if (opt_.direct == DirectMode::ShadowRays)
         direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
