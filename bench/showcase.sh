@@ -20,14 +20,18 @@
 #                 (each part's noise), e / √2 the mean's (what the figures below are compared with;
 #                 imgcompare's "reference RMSE" estimates the same from the parts' spread).
 #   pt.exr        pathtrace --time TIME, seed SEED (its defaults otherwise)
-#   sppm.exr      render --time TIME, seed SEED: render's defaults (sppm, shadow rays, photons per
-#                 pass and radius automatic; render_defaults.h)
+#   <m>.exr       render --time TIME, seed SEED, for each method m of METHODS:
+#                   defaults   render's defaults (render_defaults.h: estimator, shadow rays,
+#                              photons per pass, radius and glossy threshold automatic)
+#                   sppm, pppm --estimator sppm / pppm (the rest automatic)
+#                   <name>     render $FLAGS_<name> (a shell identifier; e.g.
+#                              FLAGS_sppm_g1="--estimator sppm --glossy-threshold 1")
 # and prints, all pixels and masked: each method's RMSE against the mean reference, the same net
-# of the reference's noise (imgcompare "RMSE net"), SPPM / pt, and the reference's own error.
+# of the reference's noise (imgcompare "RMSE net"), method / pt, and the reference's own error.
 # The timed runs go one after another, each with the load average before and after it
 # (<scene>/load.txt): run on a machine with no other job.
 #
-# Environment (defaults): SCENES="showcase showcase-caustics" W=512 H=512 TIME=30 REF_TIME=600
+# Environment (defaults): SCENES="showcase showcase-caustics" METHODS=defaults W=512 H=512 TIME=30 REF_TIME=600
 # SEED=1 REF_SEED=1001 MASK_SPP=256 THREADS=0 (all cores; the timed runs and the references)
 # OUT=out/showcase-bench. KEEP=1 keeps finished images whose settings are unchanged: e.g.
 # `KEEP=1 REF_TIME=2400 bench/showcase.sh` after a run re-renders the references alone (the mask,
@@ -37,6 +41,19 @@ set -euo pipefail
 BUILD=${1:-build}
 B=$BUILD/bin
 SCENES=${SCENES:-showcase showcase-caustics}
+METHODS=${METHODS:-defaults}
+# flags_of M: render's options of method M (above); exits 2 for an unknown one.
+flags_of() {
+  case $1 in
+    defaults) echo "" ;;
+    sppm|pppm) echo "--estimator $1" ;;
+    *) local v=FLAGS_$1
+       [[ $1 =~ ^[A-Za-z_][A-Za-z0-9_]*$ && -n ${!v:-} ]] || {
+         echo "showcase.sh: unknown method $1 (defaults, sppm, pppm, or set FLAGS_$1)" >&2; exit 2; }
+       echo "${!v}" ;;
+  esac
+}
+for m in $METHODS; do flags_of "$m" > /dev/null; done
 W=${W:-512}
 H=${H:-512}
 TIME=${TIME:-30}
@@ -90,15 +107,19 @@ for s in $SCENES; do
       --seed "$SEED" --stats "$D/pt.json" --threads "$THREADS" | tail -1
     load pt-after
   fi
-  if need "$D/sppm.exr" "$W $H $TIME $SEED $THREADS $opts"; then
-    load sppm-before
-    $B/render --scene "$D/scene.h5" -o "$D/sppm.exr" --time "$TIME" --passes 1000000 \
-      --seed "$SEED" --stats "$D/sppm.json" --threads "$THREADS" | tail -1
-    load sppm-after
-  fi
+  for m in $METHODS; do
+    flags=$(flags_of "$m")
+    if need "$D/$m.exr" "$W $H $TIME $SEED $THREADS $opts $flags"; then
+      load "$m-before"
+      # shellcheck disable=SC2086  # the flags are words
+      $B/render --scene "$D/scene.h5" -o "$D/$m.exr" --time "$TIME" --passes 1000000 \
+        --seed "$SEED" --stats "$D/$m.json" --threads "$THREADS" $flags | tail -1
+      load "$m-after"
+    fi
+  done
   # Metrics: every run against the two-part reference, all pixels and masked; the parts against
   # each other (the reference's own error).
-  for m in pt sppm; do
+  for m in pt $METHODS; do
     $B/imgcompare "$D/$m.exr" "$D/ref1.exr" "$D/ref2.exr" --json "$D/$m-all.cmp.json" > /dev/null
     $B/imgcompare "$D/$m.exr" "$D/ref1.exr" "$D/ref2.exr" --mask "$D/mask.exr" \
       --json "$D/$m-masked.cmp.json" > /dev/null
@@ -107,33 +128,35 @@ for s in $SCENES; do
   $B/imgcompare "$D/ref1.exr" "$D/ref2.exr" --mask "$D/mask.exr" --json "$D/refs-masked.cmp.json" > /dev/null
 done
 
-"$PY" - "$OUT" "$SETTINGS" $SCENES <<'PY' | tee "$OUT/showcase.md"
+"$PY" - "$OUT" "$SETTINGS" "$METHODS" $SCENES <<'PY' | tee "$OUT/showcase.md"
 import json, math, sys
-out, settings, scenes = sys.argv[1], sys.argv[2], sys.argv[3:]
+out, settings, methods, scenes = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4:]
 def js(path):
     with open(path) as f:
         return json.load(f)
-print("# bench/showcase.sh: SPPM (render's defaults) against the path tracer at equal time\n")
-print("Settings: " + settings + "\n")
-print("| scene | pixels | pt RMSE (net) | sppm RMSE (net) | sppm / pt (net) | ref. part e | ref. mean e = e/√2 | ref. mean / sppm |")
-print("|---|---|---:|---:|---:|---:|---:|---:|")
+print("# bench/showcase.sh: photon mapping (render) against the path tracer at equal time\n")
+print("Settings: " + settings + "; methods: " + " ".join(methods) + "\n")
+print("| scene | pixels | method | RMSE (net) | pt RMSE (net) | method / pt (net) | ref. part e | ref. mean e = e/√2 | ref. mean / method |")
+print("|---|---|---|---:|---:|---:|---:|---:|---:|")
 for s in scenes:
     d = f"{out}/{s}"
     for which in ("all", "masked"):
-        pt, sp = js(f"{d}/pt-{which}.cmp.json"), js(f"{d}/sppm-{which}.cmp.json")
+        pt = js(f"{d}/pt-{which}.cmp.json")
         e_part = js(f"{d}/refs-{which}.cmp.json")["rmse"] / math.sqrt(2)
         e_mean = e_part / math.sqrt(2)
-        ratio = sp["rmse"] / pt["rmse"] if pt["rmse"] > 0 else float("nan")
-        net = sp["rmse_net"] / pt["rmse_net"] if pt["rmse_net"] > 0 else float("nan")
-        print(f"| {s} | {which} ({sp['pixels'] - sp['masked_out']}) | {pt['rmse']:.5f} ({pt['rmse_net']:.5f}) "
-              f"| {sp['rmse']:.5f} ({sp['rmse_net']:.5f}) | **{ratio:.2f}** ({net:.2f}) | {e_part:.5f} "
-              f"| {e_mean:.5f} | {e_mean / sp['rmse']:.2f} |")
+        for m in methods:
+            sp = js(f"{d}/{m}-{which}.cmp.json")
+            ratio = sp["rmse"] / pt["rmse"] if pt["rmse"] > 0 else float("nan")
+            net = sp["rmse_net"] / pt["rmse_net"] if pt["rmse_net"] > 0 else float("nan")
+            print(f"| {s} | {which} ({sp['pixels'] - sp['masked_out']}) | {m} | {sp['rmse']:.5f} ({sp['rmse_net']:.5f}) "
+                  f"| {pt['rmse']:.5f} ({pt['rmse_net']:.5f}) | **{ratio:.2f}** ({net:.2f}) | {e_part:.5f} "
+                  f"| {e_mean:.5f} | {e_mean / sp['rmse']:.2f} |")
 print("\nRuns (from the run records):\n")
 print("| scene | run | seconds | samples per pixel / passes |")
 print("|---|---|---:|---:|")
 for s in scenes:
     d = f"{out}/{s}"
-    for run in ("pt", "sppm", "ref1", "ref2"):
+    for run in ["pt"] + methods + ["ref1", "ref2"]:
         last = js(f"{d}/{run}.json")["images"][-1]  # rendering seconds (start and writes excluded)
         work = f"{last['passes']} passes" if "passes" in last else f"{last['samples']} spp"
         print(f"| {s} | {run} | {last['seconds']:.1f} | {work} |")
