@@ -35,3 +35,35 @@ TEST_CASE("emitter mask: a lamp of one colour channel is left out like a white l
     CHECK(one.mask.rgb == white.mask.rgb);
   }
 }
+
+TEST_CASE("emitter mask: more samples leave out a superset of pixels, one pass of samples at a "
+          "time",
+          "[emitter-mask]") {
+  // spp samples of a pixel are the first spp points of its (0,2)-sequence, traced one eye pass
+  // at a time (memory for one pass): the samples of spp 4 are among those of spp 32, so every
+  // pixel left out at 4 is left out at 32, and 32 finds outline pixels that 4 misses. One
+  // sample is the pixel's first point alone.
+  Scene s = test::room_scene(PF_MAT_DIFFUSE, 40, 40);
+  s.camera = pf_camera{{0.5f, 0.3f, 0.5f}, {0.5f, 1.f, 0.5f}, {0, 0, 1}, 60.f, 40, 40};
+  finish_scene(s);
+  EmitterMaskOptions o;
+  o.dilate = 0;
+  o.spp = 1;
+  const EmitterMask one = emitter_mask(s, o);
+  o.spp = 4;
+  const EmitterMask few = emitter_mask(s, o);
+  o.spp = 32;
+  const EmitterMask many = emitter_mask(s, o);
+  REQUIRE(one.seeing > 10);
+  size_t not_kept = 0;
+  for (size_t i = 0; i < few.mask.rgb.size(); ++i) {
+    not_kept += few.mask.rgb[i] == 0.f && many.mask.rgb[i] != 0.f;
+    not_kept += one.mask.rgb[i] == 0.f && few.mask.rgb[i] != 0.f;
+  }
+  CHECK(not_kept == 0);
+  INFO("pixels seeing the lamp: 1 spp " << one.seeing << ", 4 spp " << few.seeing << ", 32 spp "
+                                        << many.seeing);
+  CHECK(few.seeing >= one.seeing);
+  CHECK(many.seeing > few.seeing);
+  CHECK(many.excluded == many.seeing);  // dilate 0
+}

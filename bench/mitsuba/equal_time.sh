@@ -39,8 +39,9 @@
 #
 # Environment: BUILD (build), REFS (/work/refs/mitsuba-acc), OUT (out/mitsuba-equal-time),
 # TIME (30), THREADS (2), RUNS (3), METHODS (defaults pppm pt mi-independent mi-multijitter),
-# MI_SPP (16), MASK_SPP (64: emitter-mask keeps every eye sample's hitpoint, 2.6 GB at 512x512 x 64;
-# with the default dilation of one pixel more samples change little), PY (.venv-mitsuba/bin/python), DRJIT_LIBLLVM_PATH (default
+# MI_SPP (16), MASK_SPP (64: the masks of RESULTS section 8 were made when emitter-mask kept every
+# eye sample's hitpoint, 2.6 GB at 512x512 x 64; it now holds one sample per pixel at a time; with
+# the default dilation of one pixel more samples change little), PY (.venv-mitsuba/bin/python), DRJIT_LIBLLVM_PATH (default
 # .llvm19/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1), DRY=1: 3 s, 1 run (proves the script, no figures).
 set -euo pipefail
 BUILD=${BUILD:-build}

@@ -9,7 +9,8 @@
 // handful of outline pixels would dominate the RMSE of the whole image. The speed–accuracy
 // pipeline (pipelines/accuracy.mk) therefore compares images on the pixels that see no emitter.
 //
-// A pixel sees an emitter when any of `spp` stratified eye samples reaches the front of an
+// A pixel sees an emitter when any of `spp` eye samples (the first spp points of the pixel's
+// (0,2)-sequence, traced one per eye pass so that memory holds one pass) reaches the front of an
 // emitting surface along the eye pass's specular chain (eye_pass.h: the `emitted` layer, which
 // follows mirrors and picks reflection or refraction at glass by the Fresnel probability). The
 // excluded set is then grown by `dilate` pixels (a (2·dilate+1)² square), so that the outline
@@ -24,7 +25,7 @@
 namespace pf {
 
 struct EmitterMaskOptions {
-  int spp = 16;        // eye samples per pixel (stratified, eye_pass.h)
+  int spp = 16;        // eye samples per pixel (stratified: pixel_sampler.h's sobol, one per pass)
   int dilate = 1;      // pixels added around the excluded set, in each direction
   int max_depth = 16;  // specular bounces followed
   uint32_t seed = 1;

@@ -13,20 +13,30 @@ EmitterMask emitter_mask(const Scene& scene, const EmitterMaskOptions& opt) {
   if (opt.spp < 1) throw input_error("", "spp must be >= 1, got " + std::to_string(opt.spp));
   if (opt.dilate < 0)
     throw input_error("", "dilate must be >= 0, got " + std::to_string(opt.dilate));
+  // One eye sample per pixel and pass, `spp` passes: pass p's sample of a pixel is point p of
+  // the pixel's scrambled (0,2)-sequence (pixel_sampler.h), so the first spp of them are
+  // stratified as spp samples of one pass would be, while memory holds one pass's visible points
+  // (W·H, not W·H·spp: 512² × 1024 samples no longer need tens of GB).
   EyePassOptions eye;
-  eye.spp = opt.spp;
+  eye.spp = 1;
+  eye.sampler = PixelSampler::Sobol;
   eye.max_depth = opt.max_depth;
   eye.seed = opt.seed;
   eye.threads = opt.threads;
-  const EyePassResult r = trace_hitpoints(scene, eye);
-  const int W = r.width, H = r.height;
+  const int W = scene.camera.width, H = scene.camera.height;
   std::vector<uint8_t> sees(size_t(W) * size_t(H), 0);
-  EmitterMask out;
-  for (size_t p = 0; p < sees.size(); ++p) {
-    const float* e = &r.emitted[3 * p];
-    sees[p] = (e[0] > 0.f || e[1] > 0.f || e[2] > 0.f) ? 1 : 0;
-    out.seeing += sees[p];
+  EyePassResult r;
+  EyePassWork work;
+  for (int pass = 0; pass < opt.spp; ++pass) {
+    eye.pass = uint32_t(pass);
+    trace_hitpoints_into(scene, eye, r, work);
+    for (size_t p = 0; p < sees.size(); ++p) {
+      const float* e = &r.emitted[3 * p];
+      if (e[0] > 0.f || e[1] > 0.f || e[2] > 0.f) sees[p] = 1;
+    }
   }
+  EmitterMask out;
+  for (uint8_t v : sees) out.seeing += v;
   out.mask = Image(W, H);
   const int d = opt.dilate;
   for (int y = 0; y < H; ++y)
