@@ -1,7 +1,7 @@
 # render.mk — the default render's stage DAG; intermediates under $(OUT)/$(SCENE_NAME)/: SCENE is
 # a name in data/ or a path to any scene file scene-bake reads (pipelines/scene.mk).
 #
-# ESTIMATOR=sppm (the default) or pppm: a new eye pass every pass (sppm.h), so light outlines,
+# ESTIMATOR=auto (render's default, pppm), sppm or pppm: a new eye pass every pass (sppm.h), so light outlines,
 # edges and glass converge. Their state is per pixel and their passes are short, so the DAG is
 #
 #   scene-bake → render --estimator sppm|pppm (every pass: eye pass, photons, gather)
@@ -34,9 +34,10 @@ OUT        ?= out
 WIDTH      ?= 512
 HEIGHT     ?= 512
 # ESTIMATOR, DIRECT, PHOTONS and RADIUS default to render's own defaults (render_defaults.h, chosen
-# by measurement: docs/RESULTS.md "Defaults"): sppm, shadow-rays, and the photons per pass and
-# initial radius chosen from the scene (auto, 0), by render and trace-photons alike.
-ESTIMATOR  ?= sppm
+# by measurement: docs/RESULTS.md "Defaults"): ESTIMATOR=auto passes no --estimator, so render
+# uses its own (pppm); shadow-rays, and the photons per pass and initial radius chosen from the
+# scene (auto, 0), by render and trace-photons alike.
+ESTIMATOR  ?= auto
 PASSES     ?= $(if $(filter ppm,$(ESTIMATOR)),16,200)
 PHOTONS    ?= auto
 ALPHA      ?= 0.7
@@ -123,8 +124,9 @@ $(DIR)/image.exr: $(DIR)/state.h5 $(BIN)/synthesize $(call param_stamp,$(DIR)/sy
 # sppm and pppm gather through the CPU grid of each pass (DEVICE=opencl traces their eye and
 # photon passes on the device), so they take no --method.
 DRIVER_ILL_P := $(if $(filter ppm,$(ESTIMATOR)),$(ILL_P),--alpha $(ALPHA) --max-bins $(MAX_BINS) --device $(DEVICE))
-DRIVER_P := $(EYE_P) --estimator $(ESTIMATOR) --passes $(PASSES) --photons $(PHOTONS) $(DRIVER_ILL_P) $(SYN_P)
-STATE_P  := $(EYE_P) --estimator $(ESTIMATOR) --photons $(PHOTONS) --alpha $(ALPHA)
+ESTIMATOR_P := $(if $(filter auto,$(ESTIMATOR)),,--estimator $(ESTIMATOR))
+DRIVER_P := $(EYE_P) $(ESTIMATOR_P) --passes $(PASSES) --photons $(PHOTONS) $(DRIVER_ILL_P) $(SYN_P)
+STATE_P  := $(EYE_P) $(ESTIMATOR_P) --photons $(PHOTONS) --alpha $(ALPHA)
 CHECKPOINT := $(DIR)/render-checkpoint.h5
 $(DIR)/render.exr: $(DIR)/scene.h5 $(BIN)/render $(call param_stamp,$(DIR)/render.params,$(DRIVER_P)) \
                    $(call param_stamp,$(DIR)/render-state.params,$(STATE_P))

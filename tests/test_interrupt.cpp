@@ -186,7 +186,7 @@ TEST_CASE("interrupts: render and cluster's GA stop after the step in progress, 
     // 100 000 passes: far more than the run gets to before the signal.
     const Interrupted r = interrupt_once(
         "render",
-        "--scene " + scene + " -o " + out + " --photons 200 --passes 100000" + " --checkpoint " +
+        "--scene " + scene + " -o " + out + " --estimator sppm --photons 200 --passes 100000" + " --checkpoint " +
             ck + " --checkpoint-every 100000 --snapshot-at 1" + " --snapshot " + snap +
             " --stats " + stats,
         tmp / "s-000001.exr", tmp);

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "photonflow/options.h"
+#include "photonflow/pass_sums.h"
 #include "photonflow/render_defaults.h"
 #include "photonflow/stage_files.h"
 #include "support.h"
@@ -77,7 +78,7 @@ TEST_CASE("the automatic photon count follows its rule: share, measured ratio, p
   CHECK(rule.find("183296 at 512x512") != std::string::npos);
 }
 
-TEST_CASE("choose_defaults: sppm with shadow rays, photons from the image, radius from the "
+TEST_CASE("choose_defaults: pppm with shadow rays, photons from the image, radius from the "
           "scene's extent and the pixel footprint",
           "[render_defaults]") {
   // Two scenes of different extent and camera: a unit-sphere furnace seen from its centre and the
@@ -85,7 +86,7 @@ TEST_CASE("choose_defaults: sppm with shadow rays, photons from the image, radiu
   const Scene furnace = test::furnace_scene(0.5f, 1.f, 64);
   const Scene room = test::room_scene(PF_MAT_GLASS, 800, 600);
   const RenderDefaults a = choose_defaults(furnace), b = choose_defaults(room);
-  CHECK(a.estimator == Estimator::Sppm);
+  CHECK(a.estimator == Estimator::Pppm);
   CHECK(a.direct == DirectMode::ShadowRays);
   CHECK(a.photons == kMinAutoPhotons);  // 64 × 64 = 4096 pixels: below the floor
   CHECK(b.photons == 335872);           // 800 × 600 × 0.7 = 336000 → 328 steps of 1024
@@ -121,7 +122,7 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
 
   const auto help = test::run_tool("render", "--help", tmp);
   REQUIRE(help.exit_code == 0);
-  CHECK(help_of(help.out, "estimator").find("(default: sppm)") != std::string::npos);
+  CHECK(help_of(help.out, "estimator").find("(default: pppm)") != std::string::npos);
   CHECK(help_of(help.out, "direct").find("(default: shadow-rays)") != std::string::npos);
   CHECK(help_of(help.out, "photons").find(auto_photons_rule()) != std::string::npos);
   CHECK(help_of(help.out, "photons").find("(default: auto)") != std::string::npos);
@@ -136,7 +137,7 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
     const auto p = record_parameters(tmp / "a.json");
-    CHECK(p.at("estimator") == "sppm");
+    CHECK(p.at("estimator") == "pppm");
     CHECK(p.at("estimator_auto") == "true");
     CHECK(p.at("direct") == "shadow-rays");
     CHECK(p.at("direct_auto") == "true");
@@ -148,7 +149,7 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     const nlohmann::json j = nlohmann::json::parse(test::file_bytes(tmp / "a.json"));
     CHECK(j.at("images").back().at("photons_emitted").get<uint64_t>() == 2ull * photons);
     INFO(r.out);
-    CHECK(r.out.find("sppm (auto), direct shadow-rays (auto), " + std::to_string(photons) +
+    CHECK(r.out.find("pppm (auto), direct shadow-rays (auto), " + std::to_string(photons) +
                      " photons/pass (auto), R0 " + default_text(default_radius(scene)) +
                      " (auto)") != std::string::npos);
   }
@@ -233,8 +234,8 @@ TEST_CASE("make render, the staged route and render without options give one ima
           "defaults come from one place",
           "[render_defaults][dag]") {
   test::TempDir tmp("render-defaults-routes");
-  // make render with no estimator, direct light or photon count: render.mk passes render's
-  // defaults (ESTIMATOR=sppm, DIRECT=shadow-rays, PHOTONS=auto, RADIUS=0).
+  // make render with no estimator, direct light or photon count: render.mk leaves them to
+  // render (ESTIMATOR=auto, DIRECT=shadow-rays, PHOTONS=auto, RADIUS=0).
   const std::string make = "make -s --no-print-directory -C " + test::source_dir() +
                            " -f pipelines/render.mk BIN=" + test::bin_dir() + " OUT=" +
                            tmp.dir.string() + " WIDTH=40 HEIGHT=30 PASSES=2 render > " +
@@ -259,7 +260,7 @@ TEST_CASE("make render, the staged route and render without options give one ima
   for (int p = 0; p < 2; ++p) {
     const std::string eye = tmp / ("eye" + std::to_string(p) + ".h5");
     const std::string ph = tmp / ("ph" + std::to_string(p) + ".h5");
-    const std::string next = tmp / ("sppm" + std::to_string(p) + ".h5");
+    const std::string next = tmp / ("sums" + std::to_string(p) + ".h5");  // pppm's pass sums
     REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) +
                                                   (p > 0 ? " --pass " + std::to_string(p) : "") +
                                                   " -o " + q(eye),
@@ -277,7 +278,7 @@ TEST_CASE("make render, the staged route and render without options give one ima
                 .exit_code == 0);
     state = next;
   }
-  REQUIRE(test::run_tool("synthesize", "--hitpoints " + q(state) + " -o " + q(tmp / "staged.exr"),
+  REQUIRE(test::run_tool("synthesize", "--sums " + q(state) + " -o " + q(tmp / "staged.exr"),
                          tmp)
               .exit_code == 0);
   CHECK(read_exr(tmp / "staged.exr").rgb == plain.rgb);
@@ -296,7 +297,7 @@ TEST_CASE("trace-hitpoints and illuminate: --help and the run record say render'
   REQUIRE(eye.exit_code == 0);
   REQUIRE(ill.exit_code == 0);
   const std::string est_default = "(default: " + est + ")", dir_default = "(default: " + dir + ")";
-  CHECK(est == "sppm");
+  CHECK(est == "pppm");
   CHECK(dir == "shadow-rays");
   CHECK(help_of(render.out, "estimator").find(est_default) != std::string::npos);
   CHECK(help_of(render.out, "direct").find(dir_default) != std::string::npos);
@@ -325,15 +326,15 @@ TEST_CASE("trace-hitpoints and illuminate: --help and the run record say render'
   CHECK(e.parameters.at("estimator_auto") == "true");
   CHECK(e.parameters.at("direct") == dir);
   CHECK(e.parameters.at("direct_auto") == "true");
-  CHECK(e.parameters.at("pixel-sampler") == "sobol");  // sppm's sampler, as render's
+  CHECK(e.parameters.at("pixel-sampler") == "sobol");  // pppm's sampler, as render's
   CHECK(load_hitpoints(hp).direct_mode == kDefaultDirect);
-  const Provenance i = load_hitpoints_provenance(st);
+  const Provenance i = load_pass_sums_provenance(st);  // pppm writes its pass sums
   CHECK(i.parameters.at("estimator") == est);
   CHECK(i.parameters.at("estimator_auto") == "true");
-  const HitpointSet state = load_hitpoints(st);
-  CHECK(is_sppm_state(state));
-  CHECK(state.passes == 1);
-  CHECK(state.direct_mode == kDefaultDirect);
+  const PassSums sums = load_pass_sums(st);
+  CHECK(sums.first_pass == 0);
+  CHECK(sums.passes == 1);
+  CHECK(sums.direct_mode == kDefaultDirect);
 
   // Named, they are used and recorded as given.
   REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) + " -o " + q(tmp / "hp2.h5") +
@@ -355,14 +356,6 @@ TEST_CASE("trace-hitpoints and illuminate: --help and the run record say render'
   CHECK(i2.parameters.at("estimator_auto") == "false");
 
   // What belongs to ppm alone, under the default, is refused with one line that names the way.
-  const auto spp = test::run_tool("trace-hitpoints", "--scene " + q(scene) + " -o " +
-                                                         q(tmp / "x.h5") + " --spp 2",
-                                  tmp);
-  CHECK(spp.exit_code == 2);
-  CHECK(spp.err.find("(the default)") != std::string::npos);
-  CHECK(spp.err.find("--estimator ppm") != std::string::npos);
-  CHECK(std::count(spp.err.begin(), spp.err.end(), '\n') == 1);
-  CHECK_FALSE(std::filesystem::exists(tmp / "x.h5"));
   const auto cont = test::run_tool("illuminate", "--scene " + q(scene) + " --hitpoints " +
                                                      q(tmp / "st2.h5") + " --photons " + q(ph) +
                                                      " -o " + q(tmp / "x.h5"),

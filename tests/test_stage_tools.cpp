@@ -464,17 +464,20 @@ TEST_CASE("the Make DAG's render driver restarts after a state option changed, r
   make_ok("ESTIMATOR=ppm PASSES=5 ALPHA=0.5");
   CHECK(same_pixels(read_exr(dir + "/render.exr"),
                     fresh("--estimator ppm --direct shadow-rays --passes 5 --alpha 0.5", "b.exr")));
-  // The default estimator, SPPM: the driver at any pass count, restarted after the estimator
-  // changed, resumed after more passes.
+  // The default estimator (render's, PPPM): the driver at any pass count, restarted after the
+  // estimator changed, resumed after more passes.
   make_ok("PASSES=3 ALPHA=0.5");
   CHECK(same_pixels(read_exr(dir + "/render.exr"),
-                    fresh("--estimator sppm --passes 3 --alpha 0.5", "c.exr")));
+                    fresh("--estimator pppm --passes 3 --alpha 0.5", "c.exr")));
   make_ok("PASSES=4 ALPHA=0.5");
   CHECK(same_pixels(read_exr(dir + "/render.exr"),
-                    fresh("--estimator sppm --passes 4 --alpha 0.5", "d.exr")));
-  make_ok("ESTIMATOR=pppm PASSES=2 ALPHA=0.5");
+                    fresh("--estimator pppm --passes 4 --alpha 0.5", "d.exr")));
+  make_ok("ESTIMATOR=sppm PASSES=2 ALPHA=0.5");
   CHECK(same_pixels(read_exr(dir + "/render.exr"),
-                    fresh("--estimator pppm --passes 2 --alpha 0.5", "e.exr")));
+                    fresh("--estimator sppm --passes 2 --alpha 0.5", "e.exr")));
+  make_ok("ESTIMATOR=sppm PASSES=3 ALPHA=0.5");
+  CHECK(same_pixels(read_exr(dir + "/render.exr"),
+                    fresh("--estimator sppm --passes 3 --alpha 0.5", "f.exr")));
 }
 
 TEST_CASE("illuminate and build-grid: inputs that were ignored or misnamed are refused",

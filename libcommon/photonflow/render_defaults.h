@@ -4,10 +4,13 @@
 // trace-photons --photons, illuminate --estimator) and pipelines/render.mk (which passes "auto")
 // take them from here, so a run without flags gets the same numbers by either route.
 //
-//   estimator   sppm (a new eye pass every pass; RESULTS.md section 6, 512×512, 30 s: 7.9–14.6×
-//               less RMSE than ppm on the three scenes of data/; pppm was 9–11 % below sppm on two
-//               of them and 5 % above on the third, with direct light from photons; the shadow-ray
-//               gain below was measured with sppm only, so sppm until pppm is measured with it)
+//   estimator   pppm (a new eye pass every pass, independent passes with a global radius
+//               schedule; mergeable). RESULTS.md section 6 (512×512, 30 s): sppm and pppm 7.9–14.6×
+//               less RMSE than ppm on the three scenes of data/. Section 8 (the same, with shadow
+//               rays, against Mitsuba references, medians of 3 runs): pppm below sppm on all
+//               three scenes measured there, by 9 % (diffuse box), 1–2 % (mirror and glass
+//               balls) and 5 % (the 205,663-triangle box) over all pixels and 4–10 % away from
+//               the lights; section 9 has the glossy showcase scenes)
 //   direct      shadow-rays (issue 34's side-by-side runs with sppm, 512×512, 30 s, 262,144
 //               photons: diffuse box 0.0080 → 0.0066 RMSE over all pixels, 0.0076 → 0.0056 away
 //               from the lights; 200k-triangle box 0.0132 → 0.0123 and 0.0120 → 0.0096)
@@ -43,7 +46,7 @@ namespace pf {
 
 // The estimator and direct light of a run that does not name them (render --estimator, --direct;
 // trace-hitpoints --estimator, --direct; illuminate --estimator).
-constexpr Estimator kDefaultEstimator = Estimator::Sppm;
+constexpr Estimator kDefaultEstimator = Estimator::Pppm;
 constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
 
 // Roughness below which SPPM's and PPPM's eye paths continue through a glossy point without a
