@@ -85,21 +85,23 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
 /* eye_pass.cpp's direct_light_pbr: the same draws and shadow rays at a PF_MAT_PBR point, L_direct
  * = (1/n) Σ f(wo, w_l)·L_e·|cos θ_x|·G/p with the BSDF in radiance mode (pf_pbr_eval_world: front
  * shading normal ns, front geometric normal ng); light from behind counts where the BSDF
- * transmits, and the shadow ray leaves on w_l's side. Adds weight · L_direct to `direct`. */
+ * transmits, and the shadow ray leaves on w_l's side. Adds weight · L_direct to `direct`. The
+ * numbers come from `rng` (the shadow stream at a visible point, the eye stream at a glossy point
+ * an eye path goes through); delta_only: a sample that picks an area light adds nothing. */
 static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const float* ng,
                                 const float* ns, const pf_bsdf_params* bp, const float* wo,
-                                int samples, uint seed, uint pass, uint index, float eps,
+                                int samples, pf_rng* rng, int delta_only, float eps,
                                 const float* weight, float* direct) {
   if (s->light_count <= 0 || samples <= 0) return;
-  pf_rng rng = pf_rng_start(seed, PF_SHADOW_STREAM + pass, index);
   float sum[3] = {0.0f, 0.0f, 0.0f};
   for (int smp = 0; smp < samples; ++smp) {
-    const float ul = pf_rng_next(&rng);
-    const float u1 = pf_rng_next(&rng);
-    const float u2 = pf_rng_next(&rng);
+    const float ul = pf_rng_next(rng);
+    const float u1 = pf_rng_next(rng);
+    const float u2 = pf_rng_next(rng);
     float p_light;
     const int li = pf_pick_light(s, ul, &p_light);
     if (p_light <= 0.0f) continue;
+    if (delta_only && s->lights[li].type == PF_LIGHT_AREA) continue;
     float q[3], w[3];
     const float g = pf_light_incident_at(s, li, p, u1, u2, w, q);
     if (!(g > 0.0f)) continue;
@@ -200,6 +202,10 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
             float wo[3] = {d[0], d[1], d[2]};
             if (depth > 0) pf_normalize3(wo); /* the camera ray's is unit already */
             for (int k = 0; k < 3; ++k) wo[k] = -wo[k];
+            /* point, spot and directional lights by next-event estimation first (the sample
+             * never hits them), from the eye stream; area lights by the sample's hit */
+            pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &rng, 1,
+                                eps, T, direct);
             const float u1 = pf_rng_next(&rng);
             const float u2 = pf_rng_next(&rng);
             const float u3 = pf_rng_next(&rng);
@@ -244,8 +250,9 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
         }
         if (shadow_rays && pbr) {
           const float wo[3] = {-nd[0], -nd[1], -nd[2]};
-          pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, seed, pass,
-                              index, eps, T, direct);
+          pf_rng srng = pf_rng_start(seed, PF_SHADOW_STREAM + pass, index);
+          pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &srng, 0,
+                              eps, T, direct);
         } else if (shadow_rays) {
           float ng[3];
           for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];

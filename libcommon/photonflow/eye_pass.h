@@ -15,6 +15,7 @@
 #include "photonflow/material/pbr_point_shared.h"
 #include "photonflow/pixel_sampler.h"
 #include "photonflow/raycast.h"
+#include "photonflow/rng.h"
 #include "photonflow/scene.h"
 
 namespace pf {
@@ -142,5 +143,11 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
                       int samples, uint32_t seed, uint32_t pass, uint32_t index);
+// The same sum with `samples` light samples drawn from `rng` (ul, u1, u2 each); with delta_only a
+// sample that picks an area light adds nothing (eye paths through glossy points: the BSDF's
+// sample finds area lights, next-event estimation the point, spot and directional ones).
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, pf_rng& rng, bool delta_only);
 
 }  // namespace pf

@@ -94,9 +94,8 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
 // counts where the BSDF transmits (the shadow ray leaves on its side).
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, uint32_t seed, uint32_t pass, uint32_t index) {
+                      int samples, pf_rng& rng, bool delta_only) {
   if (scene.lights.empty() || samples <= 0) return {};
-  pf_rng rng = pf_rng_start(seed, kShadowStream + pass, index);
   const float eps = ray_epsilon(scene);
   float ns[3], ng[3], o[3];
   ns_front.store(ns);
@@ -108,6 +107,7 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
     float p_light;
     const size_t li = scene.pick_light(ul, p_light);
     if (p_light <= 0.f) continue;
+    if (delta_only && scene.lights[li].type == PF_LIGHT_AREA) continue;
     Vec3 w, q;
     const float g = scene.light_incident(li, p, u1, u2, w, q);
     if (!(g > 0.f)) continue;
@@ -121,6 +121,13 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
            (std::fabs(dot(w, ns_front)) * g / p_light);
   }
   return sum * (1.f / float(samples));
+}
+
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, uint32_t seed, uint32_t pass, uint32_t index) {
+  pf_rng rng = pf_rng_start(seed, kShadowStream + pass, index);
+  return direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, rng, false);
 }
 
 void check_options(const EyePassOptions& opt) {
@@ -234,6 +241,12 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         // by the BSDF's sample in radiance mode (u1, u2, u3 from the eye stream, after the
         // glass choices before it), T ·= f·|cos θ|/pdf, as through a mirror; an emitter it then
         // hits adds its light (L G E, as L S E above) and the visible point sits further on.
+        // The sample never hits a point, spot or directional light, so their light reflected
+        // here is next-event estimated first, with shadow_samples light samples from the eye
+        // stream (ul, u1, u2 each); a sample that picks an area light adds nothing, the BSDF's
+        // sample finding those (one strategy per light type: nothing counted twice, no MIS).
+        direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
+                                       opt_.shadow_samples, rng, true);
         float ns[3], ng[3], wo[3], wi[3], wt[3], pdf;
         sh.ns.store(ns);
         sh.ng.store(ng);
