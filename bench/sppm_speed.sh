@@ -12,7 +12,11 @@
 # today's SPPM with the SPPM of the commit before a feature), each printed as "<e>@base" and
 # compared with the same estimator of BUILD.
 #
-#   bench/sppm_speed.sh [BUILD]        (PASSES=20 RUNS=5 THREADS=0 by default)
+# DEVICE=opencl runs every render (this build's and the base's) with --device opencl: the device
+# route's eye and photon passes and gathers (PoCL on a CPU machine; its kernel compilation falls in
+# the first pass, which the rate leaves out).
+#
+#   bench/sppm_speed.sh [BUILD]        (PASSES=20 RUNS=5 THREADS=0 DEVICE=cpu by default)
 set -euo pipefail
 BUILD=${1:-build}
 B=$BUILD/bin
@@ -21,6 +25,7 @@ RUNS=${RUNS:-5}
 THREADS=${THREADS:-0}
 BASE=${BASE:-}
 BASE_ESTIMATORS=${BASE_ESTIMATORS:-}
+DEVICE=${DEVICE:-cpu}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 $B/scene-bake data/cornell-box.dae -o "$T/box.h5" --width 512 --height 512 > /dev/null
@@ -35,7 +40,7 @@ for r in $(seq 1 "$RUNS"); do
   for e in ppm sppm pppm; do
     $B/render --scene "$T/box.h5" --estimator "$e" --direct photons --passes $total --photons 262144 \
       --snapshot-at 1 --snapshot "$T/$e-{pass}.exr" -o "$T/$e.exr" --stats "$T/$e-$r.json" \
-      --threads "$THREADS" > /dev/null
+      --threads "$THREADS" --device "$DEVICE" > /dev/null
   done
   if [ -n "$BASE" ] && [ -z "$BASE_ESTIMATORS" ]; then  # a base before --estimator: PPM only
     "$BASE/bin/render" --scene "$BASE_SCENE" --passes $total --photons 262144 \
@@ -45,7 +50,7 @@ for r in $(seq 1 "$RUNS"); do
   for e in $BASE_ESTIMATORS; do
     "$BASE/bin/render" --scene "$BASE_SCENE" --estimator "$e" --direct photons --passes $total \
       --photons 262144 --snapshot-at 1 --snapshot "$T/base-{pass}.exr" -o "$T/base.exr" \
-      --stats "$T/$e@base-$r.json" --threads "$THREADS" > /dev/null
+      --stats "$T/$e@base-$r.json" --threads "$THREADS" --device "$DEVICE" > /dev/null
   done
 done
 /usr/bin/python3 - "$T" "$RUNS" "$PASSES" "$BASE" "$BASE_ESTIMATORS" <<'PY'

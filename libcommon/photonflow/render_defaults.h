@@ -55,7 +55,7 @@ constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
 // eye pass keeps 0. 0 (never) by measurement, docs/RESULTS.md section 9: on the showcase scenes at
 // equal time, thresholds 0.5 and 1 raised the RMSE 1.5–1.9× on data/showcase.gltf (rare, very
 // bright samples through the rough-glass sphere, e.g. one pass adding ~10^4 to a pixel) and
-// 1.05–1.07× on showcase-caustics; the option stays for scenes of smooth metal.
+// 1.03–1.08× on showcase-caustics; the option stays for scenes of smooth metal.
 constexpr float kDefaultGlossyThreshold = 0.f;
 
 // The eye pass of one pixel (one eye sample, its shadow rays and its gather: render's default
