@@ -397,6 +397,18 @@ Scene mixed_scene(int W, int H, const pf_material* floor_material = nullptr) {
   return s;
 }
 
+// SPPM as the agreement tests below run it: 64 passes of 50,000 photons, Sobol pixel samples,
+// R0 0.05 (the automatic R0, 4 pixel footprints, is 0.7 here and blurs the floor's edge).
+RenderOptions agreement_options() {
+  RenderOptions o;
+  o.estimator = Estimator::Sppm;
+  o.passes = 64;
+  o.photons.photons = 50000;
+  o.eye.sampler = PixelSampler::Sobol;
+  o.eye.radius = 0.05f;
+  return o;
+}
+
 // Checks that `img` agrees with the path-traced `ref`: image means within `mean_tol`, every 8×8
 // block within `block_tol` (relative, luminance).
 void check_agrees(const char* name, const Image& ref, const Image& img, double mean_tol,
@@ -438,12 +450,7 @@ TEST_CASE("punctual lights: path tracing, SPPM, PPPM, PPM and classic PM agree o
   pt.spp = 1024;
   const Image ref = pathtrace(s, pt);
 
-  RenderOptions o;
-  o.estimator = Estimator::Sppm;
-  o.passes = 64;
-  o.photons.photons = 50000;
-  o.eye.sampler = PixelSampler::Sobol;
-  o.eye.radius = 0.05f;  // the automatic R0 (4 pixel footprints: 0.7 here) blurs the floor's edge
+  const RenderOptions o = agreement_options();
   const Image sppm = synthesize(render_progressive(s, o, false, Provenance{}));
 
   EyePassOptions eo;
@@ -505,12 +512,7 @@ TEST_CASE("punctual lights: path tracing, SPPM and PPPM agree on a glossy floor 
   pt.spp = 1024;
   const Image ref = pathtrace(s, pt);
 
-  RenderOptions o;
-  o.estimator = Estimator::Sppm;
-  o.passes = 64;
-  o.photons.photons = 50000;
-  o.eye.sampler = PixelSampler::Sobol;
-  o.eye.radius = 0.05f;
+  RenderOptions o = agreement_options();
   o.eye.direct = DirectMode::Photons;
   const Image sppm = synthesize(render_progressive(s, o, false, Provenance{}));
   RenderOptions pp = o;

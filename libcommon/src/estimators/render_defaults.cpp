@@ -58,16 +58,23 @@ uint32_t parse_photons_option(const std::string& text) {
   return uint32_t(n);
 }
 
+namespace {
+// `text` as a float when all of it is one (std::stof alone accepts a number's prefix: "0.3r").
+bool whole_float(const std::string& text, float& out) {
+  size_t used = 0;
+  try {
+    out = std::stof(text, &used);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return used != 0 && used == text.size();
+}
+}  // namespace
+
 float parse_glossy_threshold(const std::string& text, Estimator e) {
   if (text == "auto") return e == Estimator::Ppm ? 0.f : kDefaultGlossyThreshold;
-  size_t used = 0;
   float t = 0.f;
-  try {
-    t = std::stof(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size())
+  if (!whole_float(text, t))
     throw input_error("", "--glossy-threshold must be a roughness in [0, 1] or auto, got '" +
                               text + "'");
   return t;
@@ -75,14 +82,8 @@ float parse_glossy_threshold(const std::string& text, Estimator e) {
 
 float parse_radius_option(const std::string& text) {
   if (text == "auto") return 0.f;
-  size_t used = 0;
   float r = 0.f;
-  try {
-    r = std::stof(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size())
+  if (!whole_float(text, r))
     throw input_error("", "--radius must be a length in world units or auto, got '" + text + "'");
   return r;
 }
