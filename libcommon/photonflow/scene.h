@@ -102,6 +102,16 @@ struct Scene {
   // p → light) and q (the shadow ray's end) and returns G, with L_direct ≈ L_e·f·|cos θ_x|·G /
   // p_light; 0 when the light sends nothing to p.
   float light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& w, Vec3& q) const;
+  // One next-event light sample at p from three uniform numbers: the light picked in proportion
+  // to power (pick_light, ul), then its light_incident (u1, u2). False when the scene has no
+  // light, the pick's probability is 0 or the light sends nothing to p (G = 0).
+  struct LightSample {
+    size_t light = 0;
+    float p_light = 0.f;  // the pick's probability
+    float g = 0.f;        // light_incident's G
+    Vec3 w, q;            // unit direction to the light, the shadow ray's end
+  };
+  bool sample_light(float ul, float u1, float u2, const Vec3& p, LightSample& s) const;
   // Picks a light in proportion to power for a uniform u in [0, 1): the first i with
   // u < light_cdf[i]. Sets p_light to its probability. The scene must have lights.
   size_t pick_light(float u, float& p_light) const {

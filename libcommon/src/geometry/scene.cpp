@@ -126,6 +126,14 @@ float Scene::light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& 
   return g;
 }
 
+bool Scene::sample_light(float ul, float u1, float u2, const Vec3& p, LightSample& s) const {
+  if (lights.empty()) return false;
+  s.light = pick_light(ul, s.p_light);
+  if (!(s.p_light > 0.f)) return false;
+  s.g = light_incident(s.light, p, u1, u2, s.w, s.q);
+  return s.g > 0.f;
+}
+
 size_t Scene::pick_light_search(float u) const {
   return size_t(std::upper_bound(light_cdf.begin(), light_cdf.end(), u) - light_cdf.begin());
 }

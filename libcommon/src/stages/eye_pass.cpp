@@ -75,16 +75,13 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
   Vec3 sum;
   for (int s = 0; s < samples; ++s) {
     const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
-    float p_light;
-    const size_t li = scene.pick_light(ul, p_light);
-    if (p_light <= 0.f) continue;
-    Vec3 w, q;
-    const float g = scene.light_incident(li, p, u1, u2, w, q);
-    const float cos_x = dot(w, ns);
-    if (!(g > 0.f) || cos_x <= 0.f || dot(w, ng) <= 0.f) continue;
+    Scene::LightSample ls;
+    if (!scene.sample_light(ul, u1, u2, p, ls)) continue;
+    const float cos_x = dot(ls.w, ns);
+    if (cos_x <= 0.f || dot(ls.w, ng) <= 0.f) continue;
     const Vec3 o = p + ng * eps;
-    if (intersect_any(scene, Ray{o, q - o, 0.f, 1.f - 1e-4f})) continue;
-    sum += Vec3(scene.lights[li].radiance) * (cos_x * g / p_light);
+    if (intersect_any(scene, Ray{o, ls.q - o, 0.f, 1.f - 1e-4f})) continue;
+    sum += Vec3(scene.lights[ls.light].radiance) * (cos_x * ls.g / ls.p_light);
   }
   return mat_color(m) * kInvPi * sum * (1.f / float(samples));
 }
@@ -104,21 +101,17 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
   Vec3 sum;
   for (int s = 0; s < samples; ++s) {
     const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
-    float p_light;
-    const size_t li = scene.pick_light(ul, p_light);
-    if (p_light <= 0.f) continue;
-    if (delta_only && scene.lights[li].type == PF_LIGHT_AREA) continue;
-    Vec3 w, q;
-    const float g = scene.light_incident(li, p, u1, u2, w, q);
-    if (!(g > 0.f)) continue;
+    Scene::LightSample ls;
+    if (!scene.sample_light(ul, u1, u2, p, ls)) continue;
+    if (delta_only && scene.lights[ls.light].type == PF_LIGHT_AREA) continue;
     float wl[3], f[3];
-    w.store(wl);
+    ls.w.store(wl);
     pf_pbr_eval_world(&params, ns, ng, o, wl, f);  // 0 for a pair the normals disagree on
     if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) continue;
-    const Vec3 origin = p + ng_front * (dot(w, ng_front) >= 0.f ? eps : -eps);
-    if (intersect_any(scene, Ray{origin, q - origin, 0.f, 1.f - 1e-4f})) continue;
-    sum += Vec3(f) * Vec3(scene.lights[li].radiance) *
-           (std::fabs(dot(w, ns_front)) * g / p_light);
+    const Vec3 origin = p + ng_front * (dot(ls.w, ng_front) >= 0.f ? eps : -eps);
+    if (intersect_any(scene, Ray{origin, ls.q - origin, 0.f, 1.f - 1e-4f})) continue;
+    sum += Vec3(f) * Vec3(scene.lights[ls.light].radiance) *
+           (std::fabs(dot(ls.w, ns_front)) * ls.g / ls.p_light);
   }
   return sum * (1.f / float(samples));
 }

@@ -185,22 +185,18 @@ class PathTracer {
   Vec3 sample_light(const Vec3& p, const Vec3& n, const Vec3& ng, pf_rng& rng,
                     uint64_t& rays) const {
     const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
-    if (scene_.lights.empty()) return {};
-    float p_light;
-    const size_t li = scene_.pick_light(ul, p_light);
-    if (!(p_light > 0.f)) return {};
-    const pf_light& l = scene_.lights[li];
-    Vec3 wl, q;
-    const float G = scene_.light_incident(li, p, u1, u2, wl, q);  // light_shared.h
-    const float cos_x = dot(wl, n);
-    if (!(G > 0.f) || cos_x <= 0.f || dot(wl, ng) <= 0.f) return {};
-    const float g = cos_x * G / p_light;  // cos θ_x / density, without visibility
-    float w = 1.f;                        // MIS weight; delta lights: NEE is their only strategy
-    if (l.type == PF_LIGHT_AREA && opt_.mis == MisMode::Power)
-      w = power_heuristic(p_light / G, pdf_cosine_hemisphere(cos_x));  // solid-angle densities
+    Scene::LightSample ls;
+    if (!scene_.sample_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
+    const pf_light& l = scene_.lights[ls.light];
+    const float cos_x = dot(ls.w, n);
+    if (cos_x <= 0.f || dot(ls.w, ng) <= 0.f) return {};
+    const float g = cos_x * ls.g / ls.p_light;  // cos θ_x / density, without visibility
+    float w = 1.f;  // MIS weight; delta lights: NEE is their only strategy
+    if (l.type == PF_LIGHT_AREA && opt_.mis == MisMode::Power)  // solid-angle densities
+      w = power_heuristic(ls.p_light / ls.g, pdf_cosine_hemisphere(cos_x));
     const Vec3 o = p + ng * eps_;
     ++rays;
-    if (caster_.any(Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
+    if (caster_.any(Ray{o, ls.q - o, 0.f, 1.f - 1e-4f})) return {};
     return Vec3(l.radiance) * (g * w);
   }
 
@@ -216,25 +212,20 @@ class PathTracer {
   Vec3 sample_light_pbr(const Vec3& p, const Vec3& ng_front, const pf_bsdf_params& params,
                         const PbrFrame& fr, pf_rng& rng, uint64_t& rays) const {
     const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
-    if (scene_.lights.empty()) return {};
-    float p_light;
-    const size_t li = scene_.pick_light(ul, p_light);
-    if (!(p_light > 0.f)) return {};
-    const pf_light& l = scene_.lights[li];
-    Vec3 wl, q;
-    const float G = scene_.light_incident(li, p, u1, u2, wl, q);  // light_shared.h
-    if (!(G > 0.f)) return {};
+    Scene::LightSample ls;
+    if (!scene_.sample_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
+    const pf_light& l = scene_.lights[ls.light];
     float wv[3], f[3];
-    wl.store(wv);
+    ls.w.store(wv);
     pf_pbr_eval_world(&params, fr.ns, fr.ng, fr.wo, wv, f);
     if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) return {};
-    const float g = std::fabs(dot(wl, Vec3(fr.ns))) * G / p_light;
+    const float g = std::fabs(dot(ls.w, Vec3(fr.ns))) * ls.g / ls.p_light;
     float w = 1.f;
     if (l.type == PF_LIGHT_AREA && opt_.mis == MisMode::Power)
-      w = power_heuristic(p_light / G, pf_pbr_pdf_world(&params, fr.ns, fr.ng, fr.wo, wv));
-    const Vec3 o = p + ng_front * (dot(wl, ng_front) >= 0.f ? eps_ : -eps_);
+      w = power_heuristic(ls.p_light / ls.g, pf_pbr_pdf_world(&params, fr.ns, fr.ng, fr.wo, wv));
+    const Vec3 o = p + ng_front * (dot(ls.w, ng_front) >= 0.f ? eps_ : -eps_);
     ++rays;
-    if (caster_.any(Ray{o, q - o, 0.f, 1.f - 1e-4f})) return {};
+    if (caster_.any(Ray{o, ls.q - o, 0.f, 1.f - 1e-4f})) return {};
     return Vec3(f) * Vec3(l.radiance) * (g * w);
   }
 
