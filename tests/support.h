@@ -297,16 +297,27 @@ inline Scene room_scene(int sphere_material_type, int width, int height) {
   return s;
 }
 
-// RMSE of a against the reference b over all RGB values, relative to b's RMS.
-inline double relative_rmse(const Image& a, const Image& b) {
+// Σ v² over all values of a layer (> 0: the layer is not black).
+inline double sum_squares(const std::vector<float>& v) {
+  double s = 0;
+  for (float x : v) s += double(x) * double(x);
+  return s;
+}
+
+// RMSE of the values a against the reference b, relative to b's RMS (b black: the plain root of
+// the summed squared differences).
+inline double relative_rmse(const std::vector<float>& a, const std::vector<float>& b) {
   double se = 0, ref = 0;
-  for (size_t i = 0; i < a.rgb.size(); ++i) {
-    double d = double(a.rgb[i]) - double(b.rgb[i]);
+  for (size_t i = 0; i < a.size(); ++i) {
+    double d = double(a[i]) - double(b[i]);
     se += d * d;
-    ref += double(b.rgb[i]) * double(b.rgb[i]);
+    ref += double(b[i]) * double(b[i]);
   }
   return ref > 0 ? std::sqrt(se / ref) : std::sqrt(se);
 }
+
+// The same over all RGB values of two images.
+inline double relative_rmse(const Image& a, const Image& b) { return relative_rmse(a.rgb, b.rgb); }
 
 // The same clusters, byte for byte: records and order array.
 inline bool same_clusters(const ClusterSet& a, const ClusterSet& b) {

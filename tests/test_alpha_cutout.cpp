@@ -447,14 +447,8 @@ TEST_CASE("alpha: OpenCL hitpoints, direct light and photons equal the CPU's on 
   }
   CHECK(same >= cpu.hitpoints.size() * 999 / 1000);
   CHECK(floor > cpu.hitpoints.size() / 8);  // eye rays went through
-  double se = 0, ref = 0;
-  for (size_t i = 0; i < cpu.direct.size(); ++i) {
-    const double d = double(cpu.direct[i]) - double(gpu.direct[i]);
-    se += d * d;
-    ref += double(cpu.direct[i]) * double(cpu.direct[i]);
-  }
-  REQUIRE(ref > 0);
-  CHECK(std::sqrt(se / ref) <= 1e-3);
+  REQUIRE(test::sum_squares(cpu.direct) > 0);
+  CHECK(test::relative_rmse(gpu.direct, cpu.direct) <= 1e-3);
 
   // The ray casts themselves, ray by ray (kernels/raycast.cl).
   std::vector<float> rays;

@@ -590,15 +590,10 @@ TEST_CASE("punctual lights: OpenCL photons and direct light equal the CPU's", "[
   eo.seed = 3;
   const EyePassResult ce = trace_hitpoints(s, eo);
   const EyePassResult ge = trace_hitpoints(s, eo, *dev);
-  double se = 0, ref = 0;
-  for (size_t i = 0; i < ce.direct.size(); ++i) {
-    const double d = double(ce.direct[i]) - double(ge.direct[i]);
-    se += d * d;
-    ref += double(ce.direct[i]) * double(ce.direct[i]);
-  }
-  REQUIRE(ref > 0);
-  INFO("direct light: relative RMS difference " << std::sqrt(se / ref));
-  CHECK(std::sqrt(se / ref) <= 1e-4);
+  REQUIRE(test::sum_squares(ce.direct) > 0);
+  const double direct_diff = test::relative_rmse(ge.direct, ce.direct);
+  INFO("direct light: relative RMS difference " << direct_diff);
+  CHECK(direct_diff <= 1e-4);
 }
 
 TEST_CASE("punctual lights: import of a glTF spot, directional light and emissive strength",
