@@ -31,6 +31,7 @@
 #include "photonflow/ppm.h"
 #include "photonflow/grid_shared.h"
 #include "photonflow/material/pbr_point_shared.h"
+#include "scene_features.h" /* PF_SCENE_PBR = 0: a scene without PBR gathers as before PBR */
 
 #if defined(PF_FP64) && PF_FP64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -53,8 +54,10 @@ typedef struct {
   pf_acc t0, t1, t2;
   int pbr;         /* a PF_MAT_PBR hitpoint: f per photon from pt (HJ09 eq. 10–11) */
   int both;        /* a transmissive PBR point gathers from both sides (illuminate.h) */
+#if PF_SCENE_PBR
   pf_pbr_point pt; /* read only when pbr */
   float wo[3];     /* ω_o = −hp.dir, only when pbr */
+#endif
 } pf_gather_hp;
 
 /* A hitpoint's gather state from its fields, with zero accumulators (the loaders below call it
@@ -82,8 +85,9 @@ static inline void pf_gather_start(pf_gather_hp* h, __global const float* positi
   h->t0 = 0;
   h->t1 = 0;
   h->t2 = 0;
-  h->pbr = material >= 0 && mat->type == PF_MAT_PBR;
+  h->pbr = PF_SCENE_PBR && material >= 0 && mat->type == PF_MAT_PBR;
   h->both = 0;
+#if PF_SCENE_PBR
   if (h->pbr) {
     __global const pf_pbr_site* ps = &pbr[hi];
     h->pt = ps->pt;
@@ -93,6 +97,7 @@ static inline void pf_gather_start(pf_gather_hp* h, __global const float* positi
     /* illuminate.h pbr_two_sided_gather: the BSDF transmits at the point */
     h->both = h->pt.params.metallic < 1.0f && h->pt.params.transmission > 0.0f;
   }
+#endif
 }
 
 /* Adds an accepted photon (direction d, flux f): f_r·Φ (eq. 3.17) at a diffuse hitpoint, at a PBR
@@ -101,6 +106,7 @@ static inline void pf_gather_start(pf_gather_hp* h, __global const float* positi
 static inline void pf_gather_add(pf_gather_hp* h, float dx, float dy, float dz, float f0, float f1,
                                  float f2) {
   h->m += 1;
+#if PF_SCENE_PBR
   if (h->pbr) {
     const float n[3] = {h->nx, h->ny, h->nz};
     const float wi[3] = {-dx, -dy, -dz};
@@ -111,6 +117,7 @@ static inline void pf_gather_add(pf_gather_hp* h, float dx, float dy, float dz, 
     h->t2 += (pf_acc)(f[2] * f2);
     return;
   }
+#endif
   h->t0 += (pf_acc)(h->fr0 * f0);
   h->t1 += (pf_acc)(h->fr1 * f1);
   h->t2 += (pf_acc)(h->fr2 * f2);

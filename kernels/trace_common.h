@@ -12,6 +12,7 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
+#include "scene_features.h"
 #include "photonflow/shared_types.h"
 #include "photonflow/material/texture_shared.h"
 #include "photonflow/material/pbr_point_shared.h"
@@ -110,7 +111,7 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
       if (!in[k] || !(st_[k] <= adet_[k] * best_t)) continue;
       if (!(t[k] > tmin && t[k] <= best_t)) continue;
       if (t[k] == best_t && best_tri >= 0 && tri[k] > best_tri) continue;
-      if (alpha && pf_alpha_hit_cut_away(alpha->mats, alpha->tris, alpha->textures,
+      if (PF_SCENE_ALPHA && alpha && pf_alpha_hit_cut_away(alpha->mats, alpha->tris, alpha->textures,
                                          alpha->texels, alpha->uvs, tri[k], u[k], v[k]))
         continue; /* a cut-away point: the ray passes (alpha_shared.h) */
       best_t = t[k];
@@ -194,7 +195,7 @@ static inline int pf_trace(const pf_scene_view* s, const float* o, const float* 
   th.hit.tri = -1;
   th.hit.u = 0.0f;
   th.hit.v = 0.0f;
-  th.alpha = s->alpha_on ? &s->alpha : 0;
+  th.alpha = PF_SCENE_ALPHA && s->alpha_on ? &s->alpha : 0;
   /* PF_KD_LEAF_TEST = pf_leaf_test4: the groups travel in the leaf_tris / hh arguments */
   const int r = pf_kd_traverse_ropes(s->nodes, s->node_count, s->group_of_first,
                                      (__global const pf_hh_triangle*)s->leaf_groups, o, d, tmin,
@@ -251,10 +252,11 @@ static inline void pf_surface_at(const pf_scene_view* s, const float* o, const f
 
 /* The texture factor of a diffuse colour at hit h (Scene::texture_value: the UV interpolated by
  * the barycentrics in the host's order, then pf_tex_sample): 1 and f = the texel value when
- * `material` has a texture, else 0 and f untouched. */
+ * `material` has a texture, else 0 and f untouched (always 0 in a PF_SCENE_TEXTURES = 0 build). */
 static inline int pf_texture_factor(__global const pf_texture* textures, __global const float* texels,
                                     __global const pf_int* mat_tex, __global const float* uvs,
                                     int material, const pf_ray_hit* h, float* f) {
+  if (!PF_SCENE_TEXTURES) return 0; /* a scene without textures (scene_features.h) */
   const int ti = mat_tex[material];
   if (ti < 0) return 0;
   const pf_texture t = textures[ti];

@@ -184,7 +184,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
         for (int k = 0; k < 3; ++k) emitted[k] = emitted[k] + T[k] * m->emission[k];
       float n[3];
       for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
-      const int pbr = m->type == PF_MAT_PBR;
+      const int pbr = PF_SCENE_PBR && m->type == PF_MAT_PBR; /* scene_features.h */
       if (pbr || pf_is_diffuse(m)) {
         /* Diffuse: the texture's value joins the weight (eye_pass.cpp): the gathers' f_r =
          * color/π. PBR (non-delta, the visible point sits here): the weight carries no texture
@@ -240,7 +240,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
         hp.material = sh.material;
         slots[slot] = hp;
         used[slot] = 1;
-        if (has_pbr) {
+        if (PF_SCENE_PBR && has_pbr) {
           if (!pbr) { /* a diffuse hitpoint's entry: zeros, never read */
             for (int k = 0; k < 3; ++k) pt.params.base_color[k] = 0.0f;
             pt.params.metallic = pt.params.roughness = pt.params.transmission = pt.params.ior = 0.0f;

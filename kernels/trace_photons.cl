@@ -96,7 +96,7 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
     for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
     float c[3] = {m->color[0], m->color[1], m->color[2]};
     const int diffuse = pf_is_diffuse(m);
-    if (diffuse || m->type == PF_MAT_PBR) {
+    if (diffuse || (PF_SCENE_PBR && m->type == PF_MAT_PBR)) { /* scene_features.h */
       /* stored at every non-delta hit, diffuse or PF_MAT_PBR (photon_pass.cpp) */
       pf_photon ph;
       for (int k = 0; k < 3; ++k) {
@@ -110,7 +110,7 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
                  (!first_hit && specular_only ? PF_PHOTON_CAUSTIC : 0);
       slots[(size_t)n_stored * (size_t)count + (size_t)local_i] = ph;
       ++n_stored;
-      if (diffuse) {
+      if (diffuse || !PF_SCENE_PBR) {
         float tf[3]; /* the textured albedo (photon_pass.cpp's diffuse_color) */
         if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf))
           for (int k = 0; k < 3; ++k) c[k] = c[k] * tf[k];

@@ -24,6 +24,7 @@
 // per array.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "photonflow/cl_gather.h"
@@ -36,6 +37,14 @@
 #include "photonflow/stage_files.h"
 
 namespace pf {
+
+// The build options of the tracing and gather kernels for `scene` (kernels/scene_features.h):
+// " -DPF_SCENE_PBR=0" where no material is PF_MAT_PBR, " -DPF_SCENE_TEXTURES=0" without
+// textures, " -DPF_SCENE_ALPHA=0" without alpha masks; "" for a scene that has all three. Passed
+// as ClContext::kernel's variant, so a diffuse scene runs kernels without the branches of the
+// materials it lacks (issue 32 item 9), with the same results. "" too where dev has scene
+// variants off (ClContext::scene_variants).
+std::string scene_kernel_variant(const Scene& scene, const ClContext& dev);
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClContext& dev);
 

@@ -28,6 +28,7 @@
 // allocation).
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "photonflow/cl_runtime.h"
@@ -188,6 +189,7 @@ class GridGatherTimer {
  private:
   ClContext& dev_;
   const HitpointSet& h_;
+  std::string variant_;  // the scene's kernel variant (scene_kernel_variant)
   size_t nh_ = 0, np_ = 0;
   int mesh_count_ = 0;
   int skip_direct_ = 0;

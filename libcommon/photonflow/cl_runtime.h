@@ -105,8 +105,18 @@ class ClContext {
   cl_command_queue queue() const { return queue_; }
 
   // Kernel `kernel` of kernels/<program>.cl; the program is built on first use (InputError with a
-  // saved build log on failure) and cached.
-  cl_kernel kernel(const std::string& program, const std::string& kernel);
+  // saved build log on failure) and cached. `variant`: extra build options (" -DNAME=value ..."),
+  // each variant a program of its own — the scene variants of the tracing and gather kernels
+  // (scene_kernel_variant, cl_backend.h; kernels/scene_features.h) compile away the branches of
+  // materials a scene does not have.
+  cl_kernel kernel(const std::string& program, const std::string& kernel,
+                   const std::string& variant = "");
+  // Whether the stages build scene variants of their kernels (scene_kernel_variant, cl_backend.h):
+  // on by default; off (PF_CL_SCENE_VARIANTS=0, or set_scene_variants(false) before the first
+  // kernel) every scene runs the kernels with every feature compiled in — the same results,
+  // which tests check, at the cost the variants save.
+  bool scene_variants() const { return scene_variants_; }
+  void set_scene_variants(bool on) { scene_variants_ = on; }
   // Builds every embedded program now (benchmarks time this apart from the work).
   void build_all();
   double build_seconds() const { return build_seconds_; }
@@ -188,14 +198,14 @@ class ClContext {
   void set_arg(cl_kernel k, cl_uint i, const ClLocal& l) { set_raw(k, i, l.bytes, nullptr); }
   template <class T> void set_arg(cl_kernel k, cl_uint i, const T& v) { set_raw(k, i, sizeof(T), &v); }
   void set_raw(cl_kernel k, cl_uint i, size_t size, const void* v);
-  cl_program build(const std::string& program);
+  cl_program build(const std::string& program, const std::string& variant = "");
   size_t local_size(cl_kernel k);
   void check_local(cl_kernel k, size_t wg);
 
   ClDeviceInfo info_;
   cl_context ctx_ = nullptr;
   cl_command_queue queue_ = nullptr;
-  std::map<std::string, cl_program> programs_;
+  std::map<std::string, cl_program> programs_;  // by program name + variant
   std::string defines_;  // define(): " -DNAME=value" each
   bool wait_each_ = true;
   uint64_t host_waits_ = 0;
@@ -206,6 +216,7 @@ class ClContext {
   int work_group_ = kDefaultWorkGroup;
   double build_seconds_ = 0, kernel_seconds_ = 0;
   bool profile_ = false;                                     // PF_CL_PROFILE
+  bool scene_variants_ = true;                               // PF_CL_SCENE_VARIANTS
   std::map<std::string, std::pair<uint64_t, double>> profile_times_;  // name → calls, seconds
 };
 

@@ -132,6 +132,15 @@ std::vector<float> camera_frame(const pf_camera& c) {
 
 }  // namespace
 
+std::string scene_kernel_variant(const Scene& scene, const ClContext& dev) {
+  std::string v;
+  if (!dev.scene_variants()) return v;
+  if (!scene_has_pbr(scene)) v += " -DPF_SCENE_PBR=0";
+  if (scene.textures.empty()) v += " -DPF_SCENE_TEXTURES=0";
+  if (!scene.has_alpha_masks()) v += " -DPF_SCENE_ALPHA=0";
+  return v;
+}
+
 // ---- eye pass ----------------------------------------------------------------------------------
 
 EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClContext& dev) {
@@ -152,7 +161,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
   ClSceneBuffers& sb = scene_buffers(scene, dev);
   std::vector<float> frame = camera_frame(scene.camera);
   ClBuffer cam = dev.buffer(frame.size() * sizeof(float), frame.data(), CL_MEM_READ_ONLY);
-  cl_kernel k = dev.kernel("trace_hitpoints", "trace_hitpoints");
+  cl_kernel k = dev.kernel("trace_hitpoints", "trace_hitpoints",
+                           scene_kernel_variant(scene, dev));
 
   // Batches of pixels: the slot array (spp hitpoints per pixel) is the largest buffer.
   const size_t batch = dev.batch_items(size_t(spp) * sizeof(pf_hitpoint), npix);
@@ -220,7 +230,8 @@ void trace_photon_batch(const Scene& scene, uint32_t pass, const PhotonPassOptio
                         size_t first, size_t count, const ClBuffer& slots, const ClBuffer& stored,
                         ClContext& dev) {
   ClSceneBuffers& sb = scene_buffers(scene, dev);
-  cl_kernel k = dev.kernel("trace_photons", "trace_photons");
+  cl_kernel k = dev.kernel("trace_photons", "trace_photons",
+                           scene_kernel_variant(scene, dev));
   dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
            sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.textures,
            sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, sb.alpha_mats, sb.alpha_on, cl_uint(opt.seed),
@@ -282,7 +293,8 @@ DevicePhotons trace_photons_device(const Scene& scene, uint32_t pass, const Phot
   dev.read(start, sizeof total, &total, n * sizeof(cl_int));
   out.count = size_t(total);
   out.photons = &dev.scratch("photon.compact", std::max<size_t>(out.count, 1) * sizeof(pf_photon));
-  cl_kernel k = dev.kernel("trace_photons", "compact_photons");
+  cl_kernel k = dev.kernel("trace_photons", "compact_photons",
+                           scene_kernel_variant(scene, dev));
   dev.args(k, slots, start, cl_int(n), *out.photons);
   dev.run(k, n);
   return out;
@@ -400,7 +412,7 @@ std::vector<ClRayHit> cast_rays(const Scene& scene, const std::vector<float>& ra
   std::vector<ClRayHit> hits(n);
   if (n == 0) return hits;
   ClSceneBuffers& sb = scene_buffers(scene, dev);
-  cl_kernel k = dev.kernel("raycast", "cast_rays");
+  cl_kernel k = dev.kernel("raycast", "cast_rays", scene_kernel_variant(scene, dev));
   const size_t batch = dev.batch_items(8 * sizeof(float), n);
   const ClBuffer& rb = dev.scratch("cast.rays", batch * 8 * sizeof(float));
   const ClBuffer& hb = dev.scratch("cast.hits", batch * sizeof(ClRayHit));

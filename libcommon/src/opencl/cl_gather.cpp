@@ -438,7 +438,8 @@ float hash_grid_pass(const Scene& scene, const SplitHitpoints& hps, const ClBuff
   dev.fill_zero(next, sizeof(cl_int));
   const size_t L = size_t(dev.work_group());
   const double t0 = dev.kernel_seconds();
-  cl_kernel k = dev.kernel("illuminate_methods", "gather_hash_grid");
+  cl_kernel k =
+      dev.kernel("illuminate_methods", "gather_hash_grid", scene_kernel_variant(scene, dev));
   dev.args(k, *hps.sites, *hps.states, cl_int(nh), *d.payload, *d.keys, *d.slot_start, g.origin[0],
            g.origin[1], g.origin[2], g.cell, cl_int(g.n[0]), cl_int(g.n[1]), cl_int(g.n[2]),
            cl_uint(g.mask), cl_int(g.unique), mats, pbr,
@@ -585,7 +586,8 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
   if (nh > 0 && np > 0) {
     const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
     dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
-    cl_kernel apply = dev.kernel("illuminate_methods", "ppm_apply");
+    const std::string variant = scene_kernel_variant(scene, dev);  // kernels/scene_features.h
+    cl_kernel apply = dev.kernel("illuminate_methods", "ppm_apply", variant);
 
     if (opt.method == GatherMethod::HashGrid) {
       require_one_buffer(dev, nh, sizeof(pf_gather_site), "hitpoints", opt.method);
@@ -599,7 +601,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
     } else if (opt.method == GatherMethod::Naive) {
       // Batches of hitpoints × batches of photons under the allocation limit, photons in index
       // order: the CPU's summation order, so the result equals the CPU gathers bit for bit.
-      cl_kernel gather = dev.kernel("illuminate_methods", "gather_naive");
+      cl_kernel gather = dev.kernel("illuminate_methods", "gather_naive", variant);
       const size_t hb = dev.batch_items(std::max(sizeof(pf_hitpoint), 3 * acc), nh);
       const size_t pb = dev.batch_items(sizeof(pf_photon), np);
       const ClBuffer& hps = dev.scratch("ppm.hitpoints", hb * sizeof(pf_hitpoint));
@@ -646,7 +648,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
       const GatherMethod m = opt.method;
       if (m == GatherMethod::LocalMemory) {
         require_local(dev, L * sizeof(pf_photon), L, "pass a smaller --work-group");
-        cl_kernel k = dev.kernel("illuminate_methods", "gather_local_memory");
+        cl_kernel k = dev.kernel("illuminate_methods", "gather_local_memory", variant);
         dev.args(k, hps, cl_int(nh), phs, cl_int(np), mats, pbr, skip_direct, acc_m, acc_tau,
                  ClLocal{L * sizeof(pf_photon)});
         dev.run(k, nh);
@@ -657,7 +659,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
         times.order = since(dev, t0);
         t0 = dev.kernel_seconds();
         if (m == GatherMethod::PhotonSort) {
-          cl_kernel k = dev.kernel("illuminate_methods", "gather_photon_sort");
+          cl_kernel k = dev.kernel("illuminate_methods", "gather_photon_sort", variant);
           dev.args(k, hps, cl_int(nh), *s.sorted, *s.mesh_start, cl_int(mesh_count), mats, pbr,
                    skip_direct, acc_m, acc_tau);
           dev.run(k, nh);
@@ -670,7 +672,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
           const char* name = m == GatherMethod::HitpointSort        ? "gather_hitpoint_sort"
                              : m == GatherMethod::HitpointSortLocal ? "gather_hitpoint_sort_local"
                                                                     : "gather_manual_distance";
-          cl_kernel k = dev.kernel("illuminate_methods", name);
+          cl_kernel k = dev.kernel("illuminate_methods", name, variant);
           if (m == GatherMethod::HitpointSort)
             dev.args(k, hps, ob, cl_int(order.size()), *s.sorted, *s.mesh_start,
                      cl_int(mesh_count), mats, pbr, skip_direct, acc_m, acc_tau);
@@ -702,7 +704,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
           t0 = dev.kernel_seconds();
           require_local(dev, tile.bytes + scan.bytes, dc.wg,
                         "make clusters with a smaller --wg-size");
-          cl_kernel k = dev.kernel("illuminate_methods", "gather_clusters");
+          cl_kernel k = dev.kernel("illuminate_methods", "gather_clusters", variant);
           dev.args(k, hps, *dc.order, *dc.groups, *dc.clusters, *s.sorted, *s.mesh_start,
                    cl_int(mesh_count), mats, pbr, skip_direct, acc_m, acc_tau, tile, scan);
           dev.run(k, dc.items, dc.wg);
@@ -710,7 +712,7 @@ GatherTimes ppm_pass(const Scene& scene, HitpointSet& h, const std::vector<pf_ph
           DeviceGrid g = device_grid(dev, phs, np, mesh_count, ppm_grid_params(h, opt));
           times.order = since(dev, t0);
           t0 = dev.kernel_seconds();
-          cl_kernel k = dev.kernel("illuminate_methods", "gather_grid_clusters");
+          cl_kernel k = dev.kernel("illuminate_methods", "gather_grid_clusters", variant);
           dev.args(k, hps, *dc.order, *dc.groups, *dc.clusters, *g.sorted, *g.mesh_grid,
                    *g.cell_start, cl_int(mesh_count), mats, pbr, skip_direct, acc_m, acc_tau);
           dev.run(k, dc.items, dc.wg);
@@ -925,7 +927,7 @@ void DevicePpmState::sync() {
 GridGatherTimer::GridGatherTimer(const Scene& scene, const HitpointSet& h,
                                  const std::vector<pf_photon>& photons, const PpmOptions& opt,
                                  ClContext& dev)
-    : dev_(dev), h_(h) {
+    : dev_(dev), h_(h), variant_(scene_kernel_variant(scene, dev)) {
   nh_ = h.hitpoints.size();
   np_ = photons.size();
   check_sizes(nh_, np_);
@@ -959,7 +961,7 @@ double GridGatherTimer::time(const ClusterSet& c, int runs) {
   ClusterSet cs = c;
   update_cluster_radii(cs, h_);
   const DeviceClusters dc = upload_clusters(dev_, cs, "timer");
-  cl_kernel k = dev_.kernel("illuminate_methods", "gather_grid_clusters");
+  cl_kernel k = dev_.kernel("illuminate_methods", "gather_grid_clusters", variant_);
   double best = INFINITY;
   for (int r = 0; r < std::max(1, runs); ++r) {
     dev_.fill_zero(*acc_m_, nh_ * sizeof(cl_int));

@@ -268,6 +268,8 @@ ClContext::ClContext(const ClDeviceInfo& dev, int work_group) : info_(dev) {
   }
   const char* prof = std::getenv("PF_CL_PROFILE");
   profile_ = prof && *prof;
+  const char* variants = std::getenv("PF_CL_SCENE_VARIANTS");
+  scene_variants_ = !(variants && std::string(variants) == "0");
 }
 
 ClContext::~ClContext() {
@@ -306,8 +308,9 @@ void ClContext::define(const std::string& macro, long value) {
   defines_ += " -D" + macro + "=" + std::to_string(value);
 }
 
-cl_program ClContext::build(const std::string& name) {
-  auto it = programs_.find(name);
+cl_program ClContext::build(const std::string& name, const std::string& variant) {
+  const std::string key = name + variant;
+  auto it = programs_.find(key);
   if (it != programs_.end()) return it->second;
   std::string source, includes;
   if (const char* dir = std::getenv("PHOTONFLOW_KERNEL_DIR"); dir && *dir) {
@@ -327,7 +330,7 @@ cl_program ClContext::build(const std::string& name) {
   cl_program prog = clCreateProgramWithSource(ctx_, 1, &src, nullptr, &err);
   cl_check(err, "clCreateProgramWithSource");
   std::string options = "-cl-std=CL1.2 -DPF_FP64=" + std::string(info_.fp64 ? "1" : "0");
-  options += " -DPF_DEVICE_CPU=" + std::string(info_.type == "CPU" ? "1" : "0") + defines_;
+  options += " -DPF_DEVICE_CPU=" + std::string(info_.type == "CPU" ? "1" : "0") + defines_ + variant;
   options += cl_float_options(info_.device_id);
   options += includes;
   if (const char* extra = std::getenv("PF_CL_BUILD_OPTIONS")) options += std::string(" ") + extra;
@@ -349,7 +352,7 @@ cl_program ClContext::build(const std::string& name) {
     throw input_error("", "OpenCL kernel build of " + name + ".cl failed on " + info_.device_name +
                               " (" + cl_error_name(err) + "; build log: " + path + ")");
   }
-  programs_[name] = prog;
+  programs_[key] = prog;
   return prog;
 }
 
@@ -357,11 +360,12 @@ void ClContext::build_all() {
   for (const std::string& n : embedded_kernel_names()) build(n);
 }
 
-cl_kernel ClContext::kernel(const std::string& program, const std::string& kernel) {
-  std::string key = program + "/" + kernel;
+cl_kernel ClContext::kernel(const std::string& program, const std::string& kernel,
+                            const std::string& variant) {
+  std::string key = program + variant + "/" + kernel;
   auto it = kernels_.find(key);
   if (it != kernels_.end()) return it->second;
-  cl_program p = build(program);
+  cl_program p = build(program, variant);
   cl_int err = CL_SUCCESS;
   cl_kernel k = clCreateKernel(p, kernel.c_str(), &err);
   cl_check(err, ("clCreateKernel " + kernel).c_str());
