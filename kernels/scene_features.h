@@ -5,7 +5,8 @@
  *   macro              1 (default)                          0 (scene_kernel_variant, cl_backend.h)
  *   PF_SCENE_PBR       PF_MAT_PBR materials are handled     no material is PF_MAT_PBR
  *   PF_SCENE_TEXTURES  texture lookups are made             the scene has no textures
- *   PF_SCENE_ALPHA     the leaf test skips cut-away points  no material is alpha-masked
+ *   PF_SCENE_ALPHA     cut-away points are skipped (leaf    no material is alpha-masked
+ *                      test) and emit nothing (light samples)
  *
  * The host builds a kernel with a macro at 0 only for a scene that lacks the feature (the
  * program variant's options, ClContext::kernel), so every variant takes the same paths and

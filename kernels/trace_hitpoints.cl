@@ -22,7 +22,8 @@
 #define PF_SHADOW_STREAM 0x5AD0000u
 
 /* Scene::light_incident on the device: one next-event sample of light li at p (light_shared.h
- * pf_light_incident, the host's sampling of every light type). Writes w and q, returns G. */
+ * pf_light_incident, the host's sampling of every light type; 0 from a cut-away texel of a masked
+ * emitter). Writes w and q, returns G. */
 static float pf_light_incident_at(const pf_scene_view* s, int li, const float* p, float u1,
                                   float u2, float* w, float* q) {
   __global const pf_light* l = &s->lights[li];
@@ -45,8 +46,14 @@ static float pf_light_incident_at(const pf_scene_view* s, int li, const float* p
   }
   const float lp[3] = {l->position[0], l->position[1], l->position[2]};
   const float ld[3] = {l->direction[0], l->direction[1], l->direction[2]};
-  return pf_light_incident(l->type, lp, ld, l->cos_inner, l->cos_outer, l->area, v0, v1, v2, nl,
-                           p, u1, u2, w, q);
+  const float g = pf_light_incident(l->type, lp, ld, l->cos_inner, l->cos_outer, l->area, v0, v1,
+                                    v2, nl, p, u1, u2, w, q);
+  /* Scene::light_incident: a cut-away texel of a masked emitter sends nothing */
+  if (g > 0.0f && PF_SCENE_ALPHA && s->alpha_on && l->type == PF_LIGHT_AREA &&
+      pf_alpha_light_point_cut_away(s->alpha.mats, s->tris, s->alpha.textures, s->alpha.texels,
+                                    s->alpha.uvs, l->triangle, u1, u2))
+    return 0.0f;
+  return g;
 }
 
 /* eye_pass.cpp's direct_light: L_direct = (1/n) Σ ρ/π·L_e·cos θ_x·G/p_light at a diffuse point by

@@ -48,6 +48,12 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
   }
   float o[3], d[3], flux[3];
   if (l->type == PF_LIGHT_AREA) {
+    if (PF_SCENE_ALPHA && s.alpha_on &&
+        pf_alpha_light_point_cut_away(alpha_mats, tris, textures, texels, uvs, l->triangle, u1,
+                                      u2)) {
+      stored[local_i] = 0; /* a cut-away texel emits nothing (photon_pass.cpp) */
+      return;
+    }
     __global const pf_triangle* t = &s.tris[l->triangle];
     const float v0[3] = {t->v0[0], t->v0[1], t->v0[2]};
     const float v1[3] = {t->v1[0], t->v1[1], t->v1[2]};

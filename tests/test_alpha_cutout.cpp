@@ -29,6 +29,7 @@
 #include "photonflow/raycast.h"
 #include "photonflow/scene.h"
 #include "photonflow/scene_import.h"
+#include "photonflow/surface.h"
 #include "support.h"
 #include "support_cl.h"
 
@@ -153,13 +154,14 @@ MeanSe pixel_mean(const std::vector<float>& rgb) {
   return m;
 }
 
-// |a/b − kOpen| within 4 standard errors of the ratio plus the edge bias.
-void check_ratio(const MeanSe& a, const MeanSe& b, const char* what) {
+// |a/b − expected| within 4 standard errors of the ratio plus the edge bias (expected: kOpen, or
+// 1 − kOpen for a masked emitter).
+void check_ratio(const MeanSe& a, const MeanSe& b, const char* what, double expected = kOpen) {
   REQUIRE(b.mean > 0);
   const double r = a.mean / b.mean;
   const double se = r * std::sqrt(std::pow(a.se / a.mean, 2) + std::pow(b.se / b.mean, 2));
-  INFO(what << ": ratio " << r << " (expected " << kOpen << "), standard error " << se);
-  CHECK(std::fabs(r - kOpen) <= 4 * se + kEdgeBias);
+  INFO(what << ": ratio " << r << " (expected " << expected << "), standard error " << se);
+  CHECK(std::fabs(r - expected) <= 4 * se + kEdgeBias);
   CHECK(se < 0.1 * kOpen);  // precise enough to tell kOpen from 0 or from 1 − kOpen
 }
 
@@ -674,4 +676,126 @@ TEST_CASE("alpha import: OBJ map_d is a mask at 0.5 on the map's value, its own 
   test::TempDir out("alpha-obj-h5");
   save_scene(s, out / "s.h5", prov());
   CHECK(load_scene(out / "s.h5").material_alpha[leaf].texture == a.texture);
+}
+
+// ---- a masked emitter: its cut-away texels emit nothing ---------------------------------------
+
+namespace {
+
+// The floor under the 2×2 m light without the plane; `masked`: the light's material carries the
+// plane's mask (UVs by plane_uv: 100 periods across the light), so 1 − kOpen of it is left.
+Scene masked_light_scene(bool masked, const Vec3& eye = Vec3(0, 0.5f, 0), int size = 16) {
+  Scene s = masked_scene(false, eye, size);
+  const pf_alpha_material opaque{PF_ALPHA_OPAQUE, 1.f, -1, 0};
+  s.material_alpha = {opaque, opaque, masked ? pf_alpha_material{0.5f, 1.f, 0, 0} : opaque};
+  for (size_t i = 0; i < s.triangles.size(); ++i) {
+    const pf_triangle& t = s.triangles[i];
+    if (t.material != kLight) continue;
+    const float* v[3] = {t.v0, t.v1, t.v2};
+    for (int k = 0; k < 3; ++k) plane_uv(v[k][0], v[k][2], s.uvs[i].uv[2 * k], s.uvs[i].uv[2 * k + 1]);
+  }
+  return s;
+}
+
+// The photons' first hits of scene s traced back to where they left the light (y = 2 − ε: the
+// ray's origin is offset by ray_epsilon below the sampled point, which at grazing angles moves it
+// by a sizeable part of a texel): `cut` counts those that left a cut-away texel, `total` those
+// clear of a texel edge.
+void light_origins(const Scene& s, const std::vector<pf_photon>& photons, size_t& cut,
+                   size_t& total) {
+  cut = total = 0;
+  const double y0 = 2.0 - double(ray_epsilon(s));
+  for (const pf_photon& p : photons) {
+    if (!(p.flags & PF_PHOTON_DIRECT) || !(p.dir[1] < 0.f)) continue;
+    const float t = float((y0 - double(p.position[1])) / -double(p.dir[1]));
+    float u, v;
+    plane_uv(p.position[0] - p.dir[0] * t, p.position[2] - p.dir[2] * t, u, v);
+    const int c = cut_at(u, v);
+    if (c < 0) continue;
+    ++total;
+    cut += c;
+  }
+}
+
+}  // namespace
+
+TEST_CASE("alpha: a masked emitter's cut-away texels send no photons", "[alpha][emitter]") {
+  PhotonPassOptions po;
+  po.photons = 100000;
+  po.seed = 12;
+  po.threads = 2;
+  const Scene sm = masked_light_scene(true), so = masked_light_scene(false);
+  const PhotonPassResult masked = trace_photons(sm, 1, po);
+  const PhotonPassResult open = trace_photons(so, 1, po);
+  size_t cut_m, total_m, cut_o, total_o;
+  light_origins(sm, masked.photons, cut_m, total_m);
+  light_origins(so, open.photons, cut_o, total_o);
+  INFO("masked: " << cut_m << " of " << total_m << " from cut-away texels; open: " << cut_o
+                  << " of " << total_o);
+  REQUIRE(total_o > po.photons / 2);
+  CHECK(cut_o > total_o / 5);  // the test sees cut-away texels where the light is open
+  CHECK(cut_m == 0);
+  // the rest leave as before: 1 − kOpen of the open light's photons (binomial)
+  const double f = double(total_m) / double(total_o);
+  const double se = std::sqrt(kOpen * (1 - kOpen) / double(total_o));
+  CHECK(std::fabs(f - (1 - kOpen)) <= 4 * se + kEdgeBias);
+  CHECK(masked.emitted == open.emitted);  // the power per emitted photon is unchanged
+}
+
+TEST_CASE("alpha: shadow rays and the path tracer see 1 - the cut-away fraction of a masked "
+          "emitter",
+          "[alpha][emitter]") {
+  EyePassOptions eo;
+  eo.spp = 4;
+  eo.direct = DirectMode::ShadowRays;
+  eo.shadow_samples = 16;
+  eo.seed = 6;
+  eo.threads = 2;
+  const EyePassResult masked = trace_hitpoints(masked_light_scene(true, Vec3(0, 0.5f, 0), 32), eo);
+  const EyePassResult open = trace_hitpoints(masked_light_scene(false, Vec3(0, 0.5f, 0), 32), eo);
+  check_ratio(pixel_mean(masked.direct), pixel_mean(open.direct), "shadow-ray direct light",
+              1 - kOpen);
+  PathTraceOptions o;
+  o.spp = 64;
+  o.seed = 3;
+  o.threads = 2;
+  const Image pm = pathtrace(masked_light_scene(true, Vec3(0, 0.5f, 0), 24), o);
+  const Image po = pathtrace(masked_light_scene(false, Vec3(0, 0.5f, 0), 24), o);
+  check_ratio(pixel_mean(pm.rgb), pixel_mean(po.rgb), "path tracer", 1 - kOpen);
+}
+
+TEST_CASE("alpha: OpenCL photons and shadow rays leave a masked emitter as on the CPU",
+          "[alpha][emitter][opencl]") {
+  auto dev = test::test_device();
+  if (!dev) return;
+  const Scene s = masked_light_scene(true, Vec3(0, 0.5f, 0), 32);
+  PhotonPassOptions po;
+  po.photons = 50000;
+  po.seed = 3;
+  const PhotonPassResult pc = trace_photons(s, 1, po);
+  const PhotonPassResult pg = trace_photons(s, 1, po, *dev);
+  size_t cut, total;
+  light_origins(s, pg.photons, cut, total);
+  CHECK(cut == 0);
+  REQUIRE(!pc.photons.empty());
+  const float tol = 1e-4f * length(s.bounds.extent());
+  size_t matched = 0;
+  const size_t n = std::min(pc.photons.size(), pg.photons.size());
+  for (size_t i = 0; i < n; ++i) {
+    const pf_photon &a = pc.photons[i], &b = pg.photons[i];
+    bool ok = a.mesh == b.mesh && a.flags == b.flags;
+    for (int c = 0; c < 3; ++c) ok = ok && std::fabs(a.position[c] - b.position[c]) <= tol;
+    matched += ok;
+  }
+  CHECK(matched >= pc.photons.size() * 99 / 100);
+  CHECK(pg.photons.size() == Approx(double(pc.photons.size())).epsilon(0.01));
+  EyePassOptions eo;
+  eo.spp = 2;
+  eo.direct = DirectMode::ShadowRays;
+  eo.shadow_samples = 8;
+  eo.seed = 5;
+  const EyePassResult cpu = trace_hitpoints(s, eo);
+  const EyePassResult gpu = trace_hitpoints(s, eo, *dev);
+  REQUIRE(test::sum_squares(cpu.direct) > 0);
+  CHECK(test::relative_rmse(gpu.direct, cpu.direct) <= 1e-3);
 }

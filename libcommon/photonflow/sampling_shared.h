@@ -80,6 +80,14 @@ PF_INLINE void pf_sample_triangle(const float* a, const float* b, const float* c
   for (int k = 0; k < 3; ++k) out[k] = a[k] * wa + b[k] * wb + c[k] * wc;
 }
 
+/* The barycentric weights of b and c (the (u, v) of a hit) of pf_sample_triangle's point for
+ * (u1, u2), by the same expressions: the texture coordinates of a sampled light point. */
+PF_INLINE void pf_sample_triangle_weights(float u1, float u2, float* wb, float* wc) {
+  const float su = PF_S_SQRT(u1);
+  *wb = su * (1.0f - u2);
+  *wc = su * u2;
+}
+
 /* Tangent t and bitangent b completing unit normal n to a right-handed orthonormal basis
  * (Duff et al. 2017, JCGT 6(1)). */
 PF_INLINE void pf_orthonormal_basis(const float* n, float* t, float* b) {

@@ -102,6 +102,11 @@ struct Scene {
   // p → light) and q (the shadow ray's end) and returns G, with L_direct ≈ L_e·f·|cos θ_x|·G /
   // p_light; 0 when the light sends nothing to p.
   float light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& w, Vec3& q) const;
+  // True when area light li's point for (u1, u2) (sample_triangle's) lies on a cut-away texel of
+  // its alpha-masked material (pf_alpha_light_point_cut_away): no light leaves it, so
+  // light_incident gives 0 there and photon emission sends nothing. False in a scene without
+  // masks and for other light types.
+  bool light_point_cut_away(size_t li, float u1, float u2) const;
   // One next-event light sample at p from three uniform numbers: the light picked in proportion
   // to power (pick_light, ul), then its light_incident (u1, u2). False when the scene has no
   // light, the pick's probability is 0 or the light sends nothing to p (G = 0).

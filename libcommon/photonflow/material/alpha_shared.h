@@ -24,6 +24,7 @@
 
 #include "photonflow/cl_compat.h"
 #include "photonflow/material/texture_shared.h"
+#include "photonflow/sampling_shared.h"
 
 #define PF_ALPHA_OPAQUE (-1.0f)
 #define PF_ALPHA_DEFAULT_CUTOFF 0.5f /* glTF 2.0 alphaCutoff default */
@@ -84,6 +85,23 @@ PF_INLINE int pf_alpha_hit_cut_away(PF_GLOBAL const pf_alpha_material* mats,
     alpha = pf_alpha_at(&t, texels, uvs + 6 * (long)tri, u, v, a.factor);
   }
   return pf_alpha_cut_away(alpha, a.cutoff);
+}
+
+/* An emitter's cut-away texels emit nothing (the eye sees through them, so light may not leave
+ * them either): 1 when the point pf_sample_triangle(u1, u2) picks on area light triangle `tri`
+ * is cut away. Photon emission then sends no photon and next-event estimation adds nothing for
+ * that sample; both stay unbiased, as the light's sampling density over the whole triangle is
+ * still the one used (light_cdf weighs the whole triangle's power: a mostly cut-away emitter
+ * wastes samples, never energy). */
+PF_INLINE int pf_alpha_light_point_cut_away(PF_GLOBAL const pf_alpha_material* mats,
+                                            PF_GLOBAL const pf_triangle* tris,
+                                            PF_GLOBAL const pf_texture* textures,
+                                            PF_GLOBAL const float* texels,
+                                            PF_GLOBAL const float* uvs, int tri, float u1,
+                                            float u2) {
+  float u, v;
+  pf_sample_triangle_weights(u1, u2, &u, &v);
+  return pf_alpha_hit_cut_away(mats, tris, textures, texels, uvs, tri, u, v);
 }
 
 #endif /* PHOTONFLOW_MATERIAL_ALPHA_SHARED_H */

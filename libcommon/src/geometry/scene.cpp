@@ -123,7 +123,15 @@ float Scene::light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& 
                                     l.area, v0, v1, v2, nl, fp, u1, u2, fw, fq);
   w = Vec3(fw);
   q = Vec3(fq);
-  return g;
+  return g > 0.f && light_point_cut_away(li, u1, u2) ? 0.f : g;
+}
+
+bool Scene::light_point_cut_away(size_t li, float u1, float u2) const {
+  const pf_light& l = lights[li];
+  if (!has_alpha_masks() || l.type != PF_LIGHT_AREA) return false;
+  return pf_alpha_light_point_cut_away(material_alpha.data(), triangles.data(), textures.data(),
+                                       texels.data(), uvs.empty() ? nullptr : uvs[0].uv,
+                                       l.triangle, u1, u2) != 0;
 }
 
 bool Scene::sample_light(float ul, float u1, float u2, const Vec3& p, LightSample& s) const {

@@ -37,6 +37,7 @@ bool emit(const Scene& scene, const std::vector<LightInfo>& info, pf_rng& rng, R
   const pf_light& l = scene.lights[li];
   if (p_light <= 0.f) return false;
   if (l.type == PF_LIGHT_AREA) {
+    if (scene.light_point_cut_away(li, u1, u2)) return false;  // a cut-away texel emits nothing
     const LightInfo& t = info[li];
     Vec3 p = sample_triangle(t.v0, t.v1, t.v2, u1, u2);
     Vec3 d = sample_cosine_hemisphere(t.n, u3, u4);
