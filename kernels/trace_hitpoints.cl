@@ -128,6 +128,74 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
   for (int k = 0; k < 3; ++k) direct[k] = direct[k] + weight[k] * (sum[k] * inv);
 }
 
+/* CameraFrame::ray: the ray through image point (px, py) (pixels, y down) and, for a thin lens
+ * (cam[14] > 0), lens point (u1, u2); cam as trace_hitpoints' below. */
+static void pf_camera_ray(__global const float* cam, int width, int height, float px, float py,
+                          float u1, float u2, float* o, float* d) {
+  const float eye[3] = {cam[0], cam[1], cam[2]};
+  /* CameraFrame::direction */
+  const float sx = (2.0f * px / (float)width - 1.0f) * cam[12];
+  const float sy = (1.0f - 2.0f * py / (float)height) * cam[13];
+  for (int k = 0; k < 3; ++k) {
+    o[k] = eye[k];
+    d[k] = cam[3 + k] + cam[6 + k] * sx + cam[9 + k] * sy;
+  }
+  pf_normalize3(d);
+  if (cam[14] > 0.0f) {
+    float pd[3], fw[3], rt[3], upv[3];
+    for (int k = 0; k < 3; ++k) {
+      pd[k] = d[k];
+      fw[k] = cam[3 + k];
+      rt[k] = cam[6 + k];
+      upv[k] = cam[9 + k];
+    }
+    pf_thin_lens_ray(eye, pd, rt, upv, fw, cam[14], cam[15], u1, u2, o, d);
+  }
+}
+
+/* EyeTracer::emission_sample: emission sample k of K of pixel pix (pixel_sampler.h
+ * PF_EMISSION_STREAM), followed through mirrors and glass; adds the emitter fronts it meets times
+ * the throughput to L (unweighted). */
+static void pf_emission_sample(const pf_scene_view* s, __global const float* cam, int width,
+                               int height, int pix, int k, int K, uint seed, uint pass,
+                               int max_depth, float eps, float* L) {
+  pf_rng rng = pf_rng_start(seed, PF_EMISSION_STREAM + pass, (uint)pix * (uint)K + (uint)k);
+  float jx, jy;
+  pf_sobol_pixel_sample_keyed(pf_emission_sobol_key(seed), (uint)pix, pass * (uint)K + (uint)k,
+                              &jx, &jy);
+  float u1 = 0.5f, u2 = 0.5f;
+  if (cam[14] > 0.0f) {
+    u1 = pf_rng_next(&rng);
+    u2 = pf_rng_next(&rng);
+  }
+  float o[3], d[3];
+  pf_camera_ray(cam, width, height, (float)(pix % width) + jx, (float)(pix / width) + jy, u1, u2,
+                o, d);
+  float T[3] = {1.0f, 1.0f, 1.0f};
+  for (int depth = 0; depth <= max_depth; ++depth) {
+    pf_ray_hit h;
+    if (!pf_trace(s, o, d, 0.0f, INFINITY, 0, &h)) break;
+    pf_surface sh;
+    pf_surface_at(s, o, d, &h, &sh);
+    __global const pf_material* m = &s->mats[sh.material];
+    if (m->type == PF_MAT_EMITTER && sh.front)
+      for (int c = 0; c < 3; ++c) L[c] = L[c] + T[c] * m->emission[c];
+    if (m->type != PF_MAT_MIRROR && m->type != PF_MAT_GLASS) break;
+    float n[3];
+    for (int c = 0; c < 3; ++c) n[c] = sh.front ? sh.ns[c] : -sh.ns[c];
+    pf_normalize3(d);
+    if (m->type == PF_MAT_MIRROR) {
+      for (int c = 0; c < 3; ++c) T[c] = T[c] * m->color[c];
+      pf_reflect(d, n, d);
+    } else {
+      const float u = pf_rng_next(&rng);
+      pf_glass_bounce(m, &sh, n, u, d, T);
+    }
+    if (pf_luminance3(T) <= 0.0f) break;
+    pf_offset_origin(&sh, d, eps, o);
+  }
+}
+
 /* cam: eye[3], forward[3], right[3], up[3], tan_half_x, tan_half_y, aperture, focus_distance
  * (camera.h's CameraFrame; aperture > 0: a thin lens, lens_shared.h, as CameraFrame::ray).
  * Pixels pixel_offset .. pixel_offset + pixel_count − 1 (row-major) form this batch; outputs are
@@ -142,14 +210,14 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
                               int pixel_offset, int pixel_count, __global pf_hitpoint* slots,
                               __global int* used, __global float* emitted_out,
                               __global float* direct_out, int has_pbr,
-                              __global pf_pbr_point* pbr_slots) {
+                              __global pf_pbr_point* pbr_slots,
+                              __global const uchar* emit_pixels, int emission_spp) {
   const int local_pix = (int)get_global_id(0);
   if (local_pix >= pixel_count) return;
   PF_SCENE_VIEW(s);
   PF_ALPHA_VIEW(s);
   const int pix = pixel_offset + local_pix;
   const int x = pix % width, y = pix / width;
-  const float eye[3] = {cam[0], cam[1], cam[2]};
   float emitted[3] = {0.0f, 0.0f, 0.0f}, direct[3] = {0.0f, 0.0f, 0.0f};
   for (int smp = 0; smp < spp; ++smp) {
     const uint index = (uint)pix * (uint)spp + (uint)smp;
@@ -158,37 +226,25 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
     pf_rng rng = pf_rng_start(seed, PF_EYE_STREAM + pass, index);
     float jx, jy;
     pf_eye_jitter(sampler, seed, pass, (uint)pix, smp, spp, columns, &rng, &jx, &jy);
-    /* CameraFrame::direction */
-    const float px = (float)x + jx, py = (float)y + jy;
-    const float sx = (2.0f * px / (float)width - 1.0f) * cam[12];
-    const float sy = (1.0f - 2.0f * py / (float)height) * cam[13];
-    float o[3], d[3];
-    for (int k = 0; k < 3; ++k) {
-      o[k] = eye[k];
-      d[k] = cam[3 + k] + cam[6 + k] * sx + cam[9 + k] * sy;
-    }
-    pf_normalize3(d);
-    if (cam[14] > 0.0f) { /* thin lens: its point is drawn after the jitter (pixel_sampler.h) */
-      float u1, u2, pd[3], fw[3], rt[3], upv[3];
+    /* thin lens: its point is drawn after the jitter (pixel_sampler.h) */
+    float u1 = 0.5f, u2 = 0.5f;
+    if (cam[14] > 0.0f)
       pf_eye_lens_keyed(sampler, pf_sobol_key(seed), pass, (uint)pix, smp, spp, &rng, &u1, &u2);
-      for (int k = 0; k < 3; ++k) {
-        pd[k] = d[k];
-        fw[k] = cam[3 + k];
-        rt[k] = cam[6 + k];
-        upv[k] = cam[9 + k];
-      }
-      pf_thin_lens_ray(eye, pd, rt, upv, fw, cam[14], cam[15], u1, u2, o, d);
-    }
+    float o[3], d[3];
+    pf_camera_ray(cam, width, height, (float)x + jx, (float)y + jy, u1, u2, o, d);
     const float w0 = 1.0f / (float)spp;
     float T[3] = {w0, w0, w0};
+    int glossy = 0; /* the path went on through a glossy point: its emitters go to `direct` */
     for (int depth = 0; depth <= max_depth; ++depth) {
       pf_ray_hit h;
       if (!pf_trace(&s, o, d, 0.0f, INFINITY, 0, &h)) break;
       pf_surface sh;
       pf_surface_at(&s, o, d, &h, &sh);
       __global const pf_material* m = &s.mats[sh.material];
-      if (m->type == PF_MAT_EMITTER && sh.front)
-        for (int k = 0; k < 3; ++k) emitted[k] = emitted[k] + T[k] * m->emission[k];
+      if (m->type == PF_MAT_EMITTER && sh.front) {
+        float* layer = glossy ? direct : emitted;
+        for (int k = 0; k < 3; ++k) layer[k] = layer[k] + T[k] * m->emission[k];
+      }
       float n[3];
       for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
       const int pbr = PF_SCENE_PBR && m->type == PF_MAT_PBR; /* scene_features.h */
@@ -224,6 +280,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
             if (pf_luminance3(T) <= 0.0f) break;
             for (int k = 0; k < 3; ++k) d[k] = wi[k];
             pf_offset_origin(&sh, d, eps, o);
+            glossy = 1;
             continue;
           }
         } else if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf)) {
@@ -280,6 +337,14 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
       if (pf_luminance3(T) <= 0.0f) break;
       pf_offset_origin(&sh, d, eps, o);
     }
+  }
+  if (emission_spp > 0 && emit_pixels[pix]) { /* EyeTracer::emitted_layer */
+    float sum[3] = {0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < emission_spp; ++k)
+      pf_emission_sample(&s, cam, width, height, pix, k, emission_spp, seed, pass, max_depth, eps,
+                         sum);
+    const float inv = 1.0f / (float)(spp + emission_spp);
+    for (int k = 0; k < 3; ++k) emitted[k] = emitted[k] * ((float)spp * inv) + sum[k] * inv;
   }
   for (int k = 0; k < 3; ++k) {
     emitted_out[3 * (size_t)local_pix + k] = emitted[k];

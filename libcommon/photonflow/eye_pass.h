@@ -55,7 +55,32 @@ struct EyePassOptions {
   // point at the first non-delta vertex). A fixed eye pass (PPM) keeps 0: its one sample of the
   // lobe would never converge. render's and trace-hitpoints' default: render_defaults.h.
   float glossy_threshold = 0.f;
+  // Emission samples: in each pixel that emission_pixels marks, this many eye paths more per pass
+  // that only follow mirrors and glass to the emitters they see (no visible point, shadow ray or
+  // gather), averaged with the pass's spp eye samples into the emitted layer:
+  //   emitted = (Σ_s L_e,s + Σ_k L_e,k) / (spp + emission_spp)                (box filter)
+  // Every sample is an unbiased estimate of the pixel's emitted light, and the marks depend on
+  // the scene and camera only, so the layer stays unbiased; the samples of a pixel over the passes
+  // form one (0,2)-sequence (pixel_sampler.h). Pixels that see a lamp's outline, or a lamp through
+  // glass or in a mirror, converge with the eye samples (docs/RESULTS.md section 8: half the
+  // mirror-and-glass box's squared error sat in them); these samples cost one specular chain
+  // each, in about 1 % of the pixels of the scenes measured. 0: none (the eye samples alone).
+  // render's and trace-hitpoints' default: render_defaults.h kDefaultEmissionSpp.
+  int emission_spp = 0;
+  // emission_pixels(scene), kept by a caller that traces many eye passes (render); nullptr: the
+  // eye pass computes it (when emission_spp > 0).
+  const std::vector<uint8_t>* emission_pixels = nullptr;
 };
+
+// --emission-spp at most: more do not pay for their chains in any scene measured.
+constexpr int kMaxEmissionSpp = 1024;
+
+// The pixels that take emission samples: those whose centre ray reaches the front of an emitter
+// directly or through mirrors and glass (both branches at glass: reflection and refraction,
+// up to 8 bounces), and their eight neighbours (a lamp's outline may cover a pixel whose centre
+// misses it). Row-major, width × height, 1 = marked. A deterministic function of the scene and its
+// camera, so every eye pass and both routes (render, trace-hitpoints) mark the same pixels.
+std::vector<uint8_t> emission_pixels(const Scene& scene);
 
 struct EyePassResult {
   std::vector<pf_hitpoint> hitpoints;  // sorted by pixel (row-major), then sample
@@ -108,16 +133,23 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
 // section 4, SPPM's visible points). At a PBR visible point `pbr` (when given) receives the BSDF
 // there (pbr_point_at, surface.h) and the hitpoint's weight is the throughput alone (the texture
 // is inside the parameters); at any other it is set to all zeros. No random number is drawn at
-// the visible point, PBR or not. sample() adds the emitted light the path sees (times its throughput and the box filter
-// weight 1/spp) to `emitted` and, with DirectMode::ShadowRays, the direct light at its visible
-// point to `direct`; it returns whether the path found a visible point, written to `hp` (radius
-// R0 = radius()). The estimators that gather as they trace (sppm_pass_traced) call it pixel by
-// pixel; the bits are those of trace_hitpoints_into.
+// the visible point, PBR or not. sample() adds the emitted light the path sees through mirrors
+// and glass (times its throughput and the box filter weight 1/spp) to `emitted` and, with
+// DirectMode::ShadowRays, the direct light at its visible point to `direct`; light from an
+// emitter found after a glossy continuation (glossy_threshold) goes to `direct` too, beside the
+// next-event estimate made there, since emission samples stand in only for the mirror-and-glass
+// part (emitted_layer). It returns whether the path found a visible point, written to `hp`
+// (radius R0 = radius()). The estimators that gather as they trace (sppm_pass_traced) call it
+// pixel by pixel, then emitted_layer; the bits are those of trace_hitpoints_into.
 class EyeTracer {
  public:
   EyeTracer(const Scene& scene, const EyePassOptions& opt);
   bool sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct,
               pf_pbr_point* pbr = nullptr) const;
+  // The pixel's emitted layer from its eye samples' sum `emitted` (each weighted 1/spp, as
+  // sample() adds them): in a pixel with emission samples (EyePassOptions::emission_spp),
+  // (spp · emitted + Σ_k L_e,k) / (spp + emission_spp); elsewhere `emitted` unchanged.
+  Vec3 emitted_layer(int x, int y, const Vec3& emitted) const;
   float radius() const { return radius_; }
   int spp() const { return spp_; }
 
@@ -127,8 +159,12 @@ class EyeTracer {
   int spp_, columns_;
   float radius_, eps_;
   pf_uint eye_key_, sobol_key_;  // the pass's eye stream key, the run's scrambling key
+  pf_uint emission_key_;         // the emission samples' scrambling key
   CameraFrame cam_;
   RayCaster caster_;
+  std::vector<uint8_t> own_pixels_;          // emission_pixels, when the caller gave none
+  const std::vector<uint8_t>* emit_pixels_;  // the marks in use (nullptr: no emission samples)
+  Vec3 emission_sample(int x, int y, int k) const;
 };
 
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with

@@ -72,6 +72,15 @@ PF_INLINE pf_uint pf_owen_scramble(pf_uint x, pf_uint seed) {
  * renderer draws from); the seeds of a pixel's two dimensions are hashes of (key, pixel, dim). */
 PF_INLINE pf_uint pf_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B0000U); }
 
+/* Emission samples (eye_pass.h, EyePassOptions::emission_spp): eye paths that only follow
+ * mirrors and glass to the emitters a pixel sees. Sample k of K of pixel `pixel` in pass `pass`
+ * jitters by point pass·K + k of a second scrambled (0,2)-sequence of the pixel (key
+ * pf_emission_sobol_key, pass slot 0x50B1000), so a pixel's emission samples of all passes
+ * together are one low-discrepancy sequence, and draws its lens point and glass choices from
+ * stream (seed, PF_EMISSION_STREAM + pass, pixel·K + k). */
+#define PF_EMISSION_STREAM 0xE3E0000U
+PF_INLINE pf_uint pf_emission_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B1000U); }
+
 /* Sample i of pixel `pixel`'s scrambled (0,2)-sequence, in [0, 1)² with 24-bit resolution, under
  * the run's key pf_sobol_key(seed) (computed once by callers that draw many). */
 PF_INLINE void pf_sobol_pixel_sample_keyed(pf_uint key, pf_uint pixel, pf_uint i, pf_float* jx,

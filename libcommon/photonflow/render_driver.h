@@ -77,6 +77,8 @@ class ProgressiveRenderer {
  private:
   const Scene& scene_;
   RenderOptions opt_;
+  // emission_pixels, once per run; opt_.eye points at it (on the heap: stays put when moved)
+  std::shared_ptr<const std::vector<uint8_t>> emission_marks_;
   HitpointSet state_;
   uint64_t photons_stored_ = 0;
   // Per-pass work space, reused by every pass (the memory of a run does not grow with passes):
@@ -117,6 +119,8 @@ class PppmRenderer {
  private:
   const Scene& scene_;
   RenderOptions opt_;
+  // emission_pixels, once per run; opt_.eye points at it (on the heap: stays put when moved)
+  std::shared_ptr<const std::vector<uint8_t>> emission_marks_;
   PassSums sums_;
   uint64_t photons_stored_ = 0;
   EyePassResult eye_;  // the device's eye pass

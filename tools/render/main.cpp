@@ -53,6 +53,10 @@ int main(int argc, char** argv) {
        "(0 = never), or auto: " + pf::default_text(pf::kDefaultGlossyThreshold) +
        " for sppm and pppm, 0 for ppm (render_defaults.h)",
        cxxopts::value<std::string>()->default_value("auto"))
+      ("emission-spp", "eye paths more per pass, through mirrors and glass only, in the pixels "
+       "that see an emitter that way or directly (their emitted light converges faster; 0 = "
+       "none), or auto: " + std::to_string(pf::kDefaultEmissionSpp) + " (render_defaults.h)",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("pixel-sampler", "where eye samples go in their pixel: auto (strata for ppm, sobol "
        "otherwise) | strata | random | sobol", cxxopts::value<std::string>()->default_value("auto"))
       ("photons", "photons emitted per pass, or " + pf::auto_photons_rule(),
@@ -135,6 +139,7 @@ int main(int argc, char** argv) {
     opt.eye.threads = threads;
     opt.eye.glossy_threshold =
         pf::parse_glossy_threshold(a["glossy-threshold"].as<std::string>(), opt.estimator);
+    opt.eye.emission_spp = pf::parse_emission_spp(a["emission-spp"].as<std::string>());
     opt.eye.sampler = sampler == "auto" ? (opt.estimator == pf::Estimator::Ppm
                                                ? pf::PixelSampler::Strata
                                                : pf::PixelSampler::Sobol)

@@ -46,6 +46,10 @@ int main(int argc, char** argv) {
        "fully transmissive glass by sampling its BSDF instead of stopping there (0 = never), or "
        "auto: " + pf::default_text(pf::kDefaultGlossyThreshold) + " for sppm and pppm, 0 for ppm",
        cxxopts::value<std::string>()->default_value("auto"))
+      ("emission-spp", "eye paths more per pass, through mirrors and glass only, in the pixels "
+       "that see an emitter that way or directly (their emitted light converges faster; 0 = "
+       "none), or auto: " + std::to_string(pf::kDefaultEmissionSpp) + " (render_defaults.h)",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("pixel-sampler", "where samples go in their pixel: auto (strata for ppm, sobol otherwise) "
        "| strata | random | sobol", cxxopts::value<std::string>()->default_value("auto"))
       ("seed", "random seed (jitter, glass choices, light samples)",
@@ -88,6 +92,7 @@ int main(int argc, char** argv) {
                   : estimator == pf::Estimator::Ppm ? pf::PixelSampler::Strata
                                                     : pf::PixelSampler::Sobol;
     opt.glossy_threshold = pf::parse_glossy_threshold(a["glossy-threshold"].as<std::string>(), estimator);
+    opt.emission_spp = pf::parse_emission_spp(a["emission-spp"].as<std::string>());
     pf::check_options(opt);
 
     pf::Stopwatch clock;
@@ -110,6 +115,8 @@ int main(int argc, char** argv) {
     prov.parameters.erase("glossy-threshold");
     if (opt.glossy_threshold > 0.f)
       prov.parameters["glossy-threshold"] = pf::default_text(opt.glossy_threshold);
+    prov.parameters.erase("emission-spp");  // likewise: auto resolved, only where used
+    if (opt.emission_spp > 0) prov.parameters["emission-spp"] = std::to_string(opt.emission_spp);
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);

@@ -80,6 +80,21 @@ float parse_glossy_threshold(const std::string& text, Estimator e) {
   return t;
 }
 
+int parse_emission_spp(const std::string& text) {
+  if (text == "auto") return kDefaultEmissionSpp;
+  size_t used = 0;
+  long v = -1;
+  try {
+    v = std::stol(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || v < 0 || v > kMaxEmissionSpp)
+    throw input_error("", "--emission-spp must be auto or a count in [0, " +
+                              std::to_string(kMaxEmissionSpp) + "], got '" + text + "'");
+  return int(v);
+}
+
 float parse_radius_option(const std::string& text) {
   if (text == "auto") return 0.f;
   float r = 0.f;

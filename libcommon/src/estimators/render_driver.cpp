@@ -25,6 +25,15 @@ float initial_radius(const Scene& scene, const EyePassOptions& eye) {
   return eye.radius > 0.f ? eye.radius : default_radius(scene);
 }
 
+// The pixels with emission samples, computed once for the run's passes (eye_pass.h): `marks`
+// receives them and opt.eye points at it.
+void keep_emission_pixels(const Scene& scene, RenderOptions& opt,
+                          std::shared_ptr<const std::vector<uint8_t>>& marks) {
+  if (opt.eye.emission_spp <= 0 || opt.eye.emission_pixels) return;
+  marks = std::make_shared<const std::vector<uint8_t>>(emission_pixels(scene));
+  opt.eye.emission_pixels = marks.get();
+}
+
 HitpointSet fresh_state(const Scene& scene, const RenderOptions& opt) {
   if (opt.estimator == Estimator::Sppm)
     return make_sppm_state(scene, initial_radius(scene, opt.eye), opt.eye.direct);
@@ -50,12 +59,14 @@ uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
     : scene_(scene), opt_(opt), state_(fresh_state(scene, opt)) {
   check_against_scene("", state_, scene_);
+  keep_emission_pixels(scene_, opt_, emission_marks_);
 }
 
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt,
                                          HitpointSet state, const std::string& path)
     : scene_(scene), opt_(opt), state_(std::move(state)) {
   check_against_scene(path, state_, scene_);
+  keep_emission_pixels(scene_, opt_, emission_marks_);
   if (is_sppm_state(state_) &&
       state_.hitpoints.size() != size_t(state_.width) * size_t(state_.height))
     throw input_error(path, "is an SPPM state without one hitpoint per pixel",
@@ -132,11 +143,14 @@ PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt)
       opt_(opt),
       sums_(make_pass_sums(scene.camera.width, scene.camera.height, opt.first_pass,
                            initial_radius(scene, opt.eye), opt.ppm.alpha, opt.eye.direct,
-                           scene.scene_id, state_parameters(opt))) {}
+                           scene.scene_id, state_parameters(opt))) {
+  keep_emission_pixels(scene_, opt_, emission_marks_);
+}
 
 PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt, PassSums sums,
                            const std::string& path)
     : scene_(scene), opt_(opt), sums_(std::move(sums)) {
+  keep_emission_pixels(scene_, opt_, emission_marks_);
   if (sums_.width != scene.camera.width || sums_.height != scene.camera.height)
     throw input_error(path, "is " + std::to_string(sums_.width) + "x" +
                                 std::to_string(sums_.height) + ", the scene's camera " +
@@ -230,6 +244,8 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
   // Only where eye paths continue through glossy points (eye_pass.h): the states and sums of
   // runs without it, and those written before it existed, keep their parameters.
   if (opt.eye.glossy_threshold > 0.f) p["glossy-threshold"] = default_text(opt.eye.glossy_threshold);
+  // Likewise only where eye passes take emission samples (files made before them have none).
+  if (opt.eye.emission_spp > 0) p["emission-spp"] = std::to_string(opt.eye.emission_spp);
   return p;
 }
 
@@ -263,6 +279,8 @@ std::map<std::string, std::string> staged_state_parameters(
   o.eye.sampler = parse_pixel_sampler(text(eye, eye_path, "pixel-sampler"));
   if (eye.parameters.count("glossy-threshold"))  // absent from files made before it existed
     o.eye.glossy_threshold = float(number(eye, eye_path, "glossy-threshold"));
+  if (eye.parameters.count("emission-spp"))  // absent from files made before it existed
+    o.eye.emission_spp = int(number(eye, eye_path, "emission-spp"));
   o.photons.photons = uint32_t(number(photons, photons_path, "photons"));
   o.photons.max_bounces = int(number(photons, photons_path, "max-bounces"));
   o.photons.seed = uint32_t(number(photons, photons_path, "seed"));

@@ -213,6 +213,7 @@ void sppm_pass_traced(const Scene& scene, HitpointSet& state, const EyePassOptio
         gather_visible_point(scene, grid, v, on_pbr ? &pt : nullptr, state, px, skip_direct,
                              opt);
       }
+      e = tracer.emitted_layer(x, y, e);  // with the pixel's emission samples (eye_pass.h)
       for (int c = 0; c < 3; ++c) {
         running_mean(state.emitted[px * 3 + size_t(c)], e[c], inv_k);
         running_mean(state.direct[px * 3 + size_t(c)], d[c], inv_k);
@@ -359,6 +360,7 @@ void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& 
         for (int c = 0; c < 3; ++c) tau_beta[size_t(visible) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
         ++visible;
       }
+      e = tracer.emitted_layer(x, y, e);  // with the pixel's emission samples (eye_pass.h)
       double* sum = &sums.sum[px * 3];
       for (int c = 0; c < 3; ++c) sum[c] += double(e[c]) + double(d[c]);  // L_d,i
       if (emitted == 0) continue;

@@ -2,6 +2,7 @@
 #include "photonflow/cl_backend.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -173,6 +174,17 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
   // The PBR table (parallel to the hitpoints) only for a scene with a PF_MAT_PBR material; else a
   // one-element stand-in the kernel never writes.
   const ClBuffer& pbr = dev.scratch("eye.pbr", (sb.has_pbr ? batch * size_t(spp) : 1) * sizeof(pf_pbr_point));
+  // The pixels with emission samples (eye_pass.h emission_pixels; computed on the host), or a
+  // one-byte stand-in the kernel never reads.
+  std::vector<uint8_t> own_marks;
+  const std::vector<uint8_t>* marks = opt.emission_pixels;
+  if (opt.emission_spp > 0 && !marks) marks = &(own_marks = emission_pixels(scene));
+  if (opt.emission_spp > 0 && marks->size() != npix)
+    throw std::invalid_argument("trace_hitpoints: emission_pixels is not the image's size");
+  const uint8_t none = 0;
+  ClBuffer emit_pixels = dev.buffer(opt.emission_spp > 0 ? npix : 1,
+                                    opt.emission_spp > 0 ? marks->data() : &none,
+                                    CL_MEM_READ_ONLY);
   std::vector<cl_int> flags;
   res.hitpoints.reserve(npix * size_t(spp));
   if (sb.has_pbr) res.bsdf.reserve(npix * size_t(spp));
@@ -185,7 +197,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
              sb.alpha_mats, sb.alpha_on, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              opt.glossy_threshold, cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps, cl_int(off),
-             count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr);
+             count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr, emit_pixels,
+             cl_int(opt.emission_spp));
     dev.run(k, size_t(count));
     const size_t nslots = size_t(count) * size_t(spp);
     flags.resize(nslots);

@@ -133,6 +133,10 @@ void check_options(const EyePassOptions& opt) {
     throw input_error("", "--shadow-samples must be at most " + std::to_string(kMaxShadowSamples) +
                               ", got " + std::to_string(opt.shadow_samples),
                       "run more passes instead");
+  if (opt.emission_spp < 0 || opt.emission_spp > kMaxEmissionSpp)
+    throw input_error("", "--emission-spp must be in [0, " + std::to_string(kMaxEmissionSpp) +
+                              "], got " + std::to_string(opt.emission_spp),
+                      "0 leaves the emitted light to the eye samples");
   // A perceptual roughness (glTF: [0, 1]); above 1 every metal and clear glass would continue.
   if (!(opt.glossy_threshold >= 0.f && opt.glossy_threshold <= 1.f))
     throw input_error("", "--glossy-threshold must be a roughness in [0, 1], got " +
@@ -174,9 +178,18 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
       eps_(ray_epsilon(scene)),
       eye_key_(pf_rng_key(opt.seed, kEyeStream + opt.pass)),
       sobol_key_(pf_sobol_key(opt.seed)),
+      emission_key_(pf_emission_sobol_key(opt.seed)),
       cam_(scene.camera),
-      caster_(scene) {
+      caster_(scene),
+      emit_pixels_(nullptr) {
   check_eye_samples(scene, opt);
+  if (opt.emission_spp > 0) {
+    const size_t n = size_t(scene.camera.width) * size_t(scene.camera.height);
+    if (opt.emission_pixels && opt.emission_pixels->size() != n)
+      throw std::invalid_argument("EyeTracer: emission_pixels is not the image's size");
+    if (!opt.emission_pixels) own_pixels_ = emission_pixels(scene);
+    emit_pixels_ = opt.emission_pixels ? opt.emission_pixels : &own_pixels_;
+  }
 }
 
 bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct,
@@ -197,12 +210,13 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
   cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
   const float w = 1.f / float(spp_);
   Vec3 T(w, w, w);  // throughput × box filter weight
+  bool glossy = false;  // the path went on through a glossy point (glossy_threshold)
   for (int depth = 0; depth <= opt_.max_depth; ++depth) {
     Hit h;
     if (!caster_.closest(ray, h)) return false;
     SurfaceHit sh = surface_at(scene_, ray, h);
     const pf_material& m = scene_.materials[size_t(sh.material)];
-    if (m.type == PF_MAT_EMITTER && sh.front) emitted += T * Vec3(m.emission);
+    if (m.type == PF_MAT_EMITTER && sh.front) (glossy ? direct : emitted) += T * Vec3(m.emission);
     if (is_diffuse(m)) {
       Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
       // A textured material's texture value at the hit joins the weight: every gather's
@@ -252,6 +266,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         if (luminance(T) <= 0.f) return false;
         const Vec3 dir(wi);
         ray = Ray{offset_origin(sh, dir, eps_), dir};
+        glossy = true;
         continue;
       }
       // A glossy visible point (HJ09 section 4): the hitpoint as at a diffuse surface, its weight
@@ -280,6 +295,97 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
     ray = Ray{offset_origin(sh, d, eps_), d};
   }
   return false;
+}
+
+// Emission sample k of pixel (x, y) (pixel_sampler.h PF_EMISSION_STREAM): the camera ray through
+// its jitter (and lens point), followed through mirrors and glass as sample() follows it (the same
+// specular_bounce), adding each emitter front it meets times the throughput. Unweighted.
+Vec3 EyeTracer::emission_sample(int x, int y, int k) const {
+  const int K = opt_.emission_spp;
+  const uint32_t pix = uint32_t(size_t(y) * size_t(scene_.camera.width) + size_t(x));
+  pf_rng rng = pf_rng_start(opt_.seed, PF_EMISSION_STREAM + opt_.pass,
+                            pix * uint32_t(K) + uint32_t(k));
+  float jx, jy;
+  pf_sobol_pixel_sample_keyed(emission_key_, pix, opt_.pass * uint32_t(K) + uint32_t(k), &jx, &jy);
+  float u1 = 0.5f, u2 = 0.5f;
+  if (cam_.lens()) {
+    u1 = pf_rng_next(&rng);
+    u2 = pf_rng_next(&rng);
+  }
+  Ray ray;
+  cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
+  Vec3 T(1.f, 1.f, 1.f), L;
+  for (int depth = 0; depth <= opt_.max_depth; ++depth) {
+    Hit h;
+    if (!caster_.closest(ray, h)) break;
+    SurfaceHit sh = surface_at(scene_, ray, h);
+    const pf_material& m = scene_.materials[size_t(sh.material)];
+    if (m.type == PF_MAT_EMITTER && sh.front) L += T * Vec3(m.emission);
+    if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) break;
+    const Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
+    if (luminance(T) <= 0.f) break;
+    ray = Ray{offset_origin(sh, d, eps_), d};
+  }
+  return L;
+}
+
+Vec3 EyeTracer::emitted_layer(int x, int y, const Vec3& emitted) const {
+  if (!emit_pixels_ || !(*emit_pixels_)[size_t(y) * size_t(scene_.camera.width) + size_t(x)])
+    return emitted;
+  const int K = opt_.emission_spp;
+  Vec3 sum;
+  for (int k = 0; k < K; ++k) sum += emission_sample(x, y, k);
+  const float inv = 1.f / float(spp_ + K);
+  return emitted * (float(spp_) * inv) + sum * inv;
+}
+
+namespace {
+// Whether a ray reaches an emitter's front through mirrors and glass, following both branches at
+// glass (emission_pixels). Recursion depth ≤ kEmissionDepth: at most 2^8 chains per pixel.
+constexpr int kEmissionDepth = 8;
+bool reaches_emitter(const Scene& scene, const RayCaster& caster, const Ray& ray, float eps,
+                     int depth) {
+  Hit h;
+  if (depth > kEmissionDepth || !caster.closest(ray, h)) return false;
+  const SurfaceHit sh = surface_at(scene, ray, h);
+  const pf_material& m = scene.materials[size_t(sh.material)];
+  if (m.type == PF_MAT_EMITTER) return sh.front;
+  if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;
+  const Vec3 d = normalize(ray.d);
+  const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the ray
+  const Vec3 r = reflect(d, n);
+  if (reaches_emitter(scene, caster, Ray{offset_origin(sh, r, eps), r}, eps, depth + 1))
+    return true;
+  if (m.type != PF_MAT_GLASS) return false;
+  Vec3 t;
+  const float eta = sh.front ? 1.f / m.ior : m.ior;
+  if (!refract(d, n, eta, t)) return false;  // total internal reflection: the branch above
+  return reaches_emitter(scene, caster, Ray{offset_origin(sh, t, eps), t}, eps, depth + 1);
+}
+}  // namespace
+
+std::vector<uint8_t> emission_pixels(const Scene& scene) {
+  const int W = scene.camera.width, H = scene.camera.height;
+  const CameraFrame cam(scene.camera);
+  const RayCaster caster(scene);
+  const float eps = ray_epsilon(scene);
+  std::vector<uint8_t> centre(size_t(W) * size_t(H), 0), marks(centre.size(), 0);
+#pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(0))
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      Ray ray;
+      cam.ray(float(x) + 0.5f, float(y) + 0.5f, 0.5f, 0.5f, ray.o, ray.d);  // the lens centre
+      centre[size_t(y) * size_t(W) + size_t(x)] = reaches_emitter(scene, caster, ray, eps, 0);
+    }
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      uint8_t m = 0;
+      for (int yy = std::max(0, y - 1); yy <= std::min(H - 1, y + 1); ++yy)
+        for (int xx = std::max(0, x - 1); xx <= std::min(W - 1, x + 1); ++xx)
+          m |= centre[size_t(yy) * size_t(W) + size_t(xx)];
+      marks[size_t(y) * size_t(W) + size_t(x)] = m;
+    }
+  return marks;
 }
 
 void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePassResult& res,
@@ -324,7 +430,7 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
         if (!tracer.sample(x, y, s, hp, emitted, direct)) row_buf.pop_back();
       }
       const size_t pix = size_t(y) * W + x;
-      emitted.store(&res.emitted[pix * 3]);
+      tracer.emitted_layer(x, y, emitted).store(&res.emitted[pix * 3]);
       direct.store(&res.direct[pix * 3]);
     }
   }
