@@ -13,7 +13,7 @@
 #
 #   defaults  render --time T                          (DEFAULTS ONLY: sppm, shadow rays, auto photons and radius)
 #   pppm      render --time T --estimator pppm
-#   pppm-issue render --time T --estimator pppm --direct photons --photons 100000   (the baseline the
+#   pppm-issue render --time T --estimator pppm --direct photons --photons 100000 --emission-spp 0 (the baseline the
 #             mirror-and-glass box's target is stated against: "today's --estimator pppm" when issue
 #             34 was filed, i.e. render's defaults then, 18c2973^, beside pppm; the radius rule is
 #             the same then and now)
@@ -101,7 +101,7 @@ for s in $SCENES; do
         pppm)     "$BIN/render" --scene "$D/scene.h5" -o "$img" --time "$TIME" --seed "$r" --threads "$THREADS" \
                     --estimator pppm --stats "$rec" | tail -1 ;;
         pppm-issue) "$BIN/render" --scene "$D/scene.h5" -o "$img" --time "$TIME" --seed "$r" --threads "$THREADS" \
-                    --estimator pppm --direct photons --photons 100000 --stats "$rec" | tail -1 ;;
+                    --estimator pppm --direct photons --photons 100000 --emission-spp 0 --stats "$rec" | tail -1 ;;
         pt)       "$BIN/pathtrace" --scene "$D/scene.h5" -o "$img" --time "$TIME" --spp 1000000 --seed "$r" \
                     --threads "$THREADS" --png none --stats "$rec" | tail -1 ;;
         mi-*)     "$PY" "$HERE/mi_render.py" "$D/mi/scene.xml" "$img" --time "$TIME" --spp-per-pass "$MI_SPP" \
