@@ -128,6 +128,8 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
   CHECK(help_of(help.out, "photons").find("(default: auto)") != std::string::npos);
   CHECK(help_of(help.out, "radius").find(auto_radius_rule()) != std::string::npos);
   CHECK(help_of(help.out, "radius").find("(default: auto)") != std::string::npos);
+  CHECK(help_of(help.out, "emission-spp").find("auto: " + std::to_string(kDefaultEmissionSpp)) !=
+        std::string::npos);
 
   SECTION("no options: the automatic choices") {
     const auto r = test::run_tool("render", "--scene " + q(tmp / "s.h5") + " -o " +
@@ -145,19 +147,22 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     CHECK(p.at("photons_auto") == "true");
     CHECK(std::stof(p.at("radius")) == Approx(default_radius(scene)).epsilon(1e-6));
     CHECK(p.at("radius_auto") == "true");
+    CHECK(p.at("emission-spp") == std::to_string(kDefaultEmissionSpp));
+    CHECK(p.at("emission-spp_auto") == "true");
     // The images: 2 passes of the automatic count emitted.
     const nlohmann::json j = nlohmann::json::parse(test::file_bytes(tmp / "a.json"));
     CHECK(j.at("images").back().at("photons_emitted").get<uint64_t>() == 2ull * photons);
     INFO(r.out);
     CHECK(r.out.find("pppm (auto), direct shadow-rays (auto), " + std::to_string(photons) +
                      " photons/pass (auto), R0 " + default_text(default_radius(scene)) +
-                     " (auto)") != std::string::npos);
+                     " (auto), " + std::to_string(kDefaultEmissionSpp) +
+                     " emission samples (auto)") != std::string::npos);
   }
   SECTION("every choice overridden") {
     const auto r = test::run_tool(
         "render", "--scene " + q(tmp / "s.h5") + " -o " + q(tmp / "b.exr") +
                       " --passes 2 --estimator ppm --direct photons --photons 777 --radius 0.05"
-                      " --stats " + q(tmp / "b.json"),
+                      " --emission-spp 2 --stats " + q(tmp / "b.json"),
         tmp);
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
@@ -170,9 +175,12 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     CHECK(p.at("photons_auto") == "false");
     CHECK(p.at("radius") == "0.05");
     CHECK(p.at("radius_auto") == "false");
+    CHECK(p.at("emission-spp") == "2");
+    CHECK(p.at("emission-spp_auto") == "false");
     const nlohmann::json j = nlohmann::json::parse(test::file_bytes(tmp / "b.json"));
     CHECK(j.at("images").back().at("photons_emitted").get<uint64_t>() == 2ull * 777);
-    CHECK(r.out.find("ppm, direct photons, 777 photons/pass, R0 0.05,") != std::string::npos);
+    CHECK(r.out.find("ppm, direct photons, 777 photons/pass, R0 0.05, 2 emission samples,") !=
+          std::string::npos);
   }
   SECTION("--photons auto and --radius auto or 0 are the automatic choices, spelled out") {
     const auto r = test::run_tool("render", "--scene " + q(tmp / "s.h5") + " -o " +

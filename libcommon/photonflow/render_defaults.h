@@ -129,12 +129,14 @@ struct RenderChoices {
   bool photons_auto = true;
   float radius = 0.f;  // the R0 used
   bool radius_auto = true;
+  int emission_spp = kDefaultEmissionSpp;  // EyePassOptions::emission_spp used
+  bool emission_spp_auto = true;
 };
-// "sppm (default), direct shadow-rays (default), 262144 photons/pass (auto), R0 0.0123 (auto)":
-// render's summary line.
+// "pppm (auto), direct shadow-rays (auto), 262144 photons/pass (auto), R0 0.0123 (auto), 8
+// emission samples (auto)": render's summary line.
 std::string describe_choices(const RenderChoices& c);
 // Writes the choices into a run record's parameters (provenance.h): the values used, and
-// "<name>_auto": "true" | "false" for estimator, direct, photons and radius.
+// "<name>_auto": "true" | "false" for estimator, direct, photons, radius and emission-spp.
 void record_choices(std::map<std::string, std::string>& parameters, const RenderChoices& c);
 
 }  // namespace pf

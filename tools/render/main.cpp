@@ -195,6 +195,8 @@ int main(int argc, char** argv) {
     chosen.photons = chosen.photons_auto ? defaults.photons : photons;
     chosen.radius_auto = !(opt.eye.radius > 0.f);
     chosen.radius = chosen.radius_auto ? defaults.radius : opt.eye.radius;
+    chosen.emission_spp = opt.eye.emission_spp;
+    chosen.emission_spp_auto = a["emission-spp"].as<std::string>() == "auto";
     opt.photons.photons = chosen.photons;
     if (opened.baked_here) {
       for (const std::string& w : pf::bake_warnings(bake, opened.report))

@@ -108,7 +108,8 @@ std::string describe_choices(const RenderChoices& c) {
   return std::string(estimator_name(c.estimator)) + how(c.estimator_auto) + ", direct " +
          direct_mode_name(c.direct) + how(c.direct_auto) + ", " + std::to_string(c.photons) +
          " photons/pass" + how(c.photons_auto) + ", R0 " + default_text(c.radius) +
-         how(c.radius_auto);
+         how(c.radius_auto) + ", " + std::to_string(c.emission_spp) + " emission samples" +
+         how(c.emission_spp_auto);
 }
 
 void record_choices(std::map<std::string, std::string>& p, const RenderChoices& c) {
@@ -121,6 +122,8 @@ void record_choices(std::map<std::string, std::string>& p, const RenderChoices& 
   p["photons_auto"] = flag(c.photons_auto);
   p["radius"] = default_text(c.radius);
   p["radius_auto"] = flag(c.radius_auto);
+  p["emission-spp"] = std::to_string(c.emission_spp);
+  p["emission-spp_auto"] = flag(c.emission_spp_auto);
 }
 
 }  // namespace pf
