@@ -180,6 +180,22 @@ void direct_counts(const std::vector<pf_photon>& photons, size_t& floor, size_t&
   }
 }
 
+// The device's photons against the CPU's, index by index (emission order): ≥ 99 % on the same
+// mesh with the same flags within `tol` of the same place, and as many of them within 1 %.
+void check_same_photons(const std::vector<pf_photon>& cpu, const std::vector<pf_photon>& dev,
+                        float tol) {
+  size_t matched = 0;
+  const size_t n = std::min(cpu.size(), dev.size());
+  for (size_t i = 0; i < n; ++i) {
+    const pf_photon &a = cpu[i], &b = dev[i];
+    bool ok = a.mesh == b.mesh && a.flags == b.flags;
+    for (int c = 0; c < 3; ++c) ok = ok && std::fabs(a.position[c] - b.position[c]) <= tol;
+    matched += ok;
+  }
+  CHECK(matched >= cpu.size() * 99 / 100);
+  CHECK(dev.size() == Approx(double(cpu.size())).epsilon(0.01));
+}
+
 // An 8-bit RGBA PNG (libpng's simplified API).
 std::string rgba_png(int w, int h, const std::vector<uint8_t>& rgba) {
   png_image img;
@@ -486,16 +502,7 @@ TEST_CASE("alpha: OpenCL hitpoints, direct light and photons equal the CPU's on 
   REQUIRE(fc > 0);
   // Photon by photon in emission order (one stored per photon: black plane, no floor bounce
   // comes back through... most do not), matched where both stored one.
-  size_t matched = 0;
-  const size_t n = std::min(pc.photons.size(), pg.photons.size());
-  for (size_t i = 0; i < n; ++i) {
-    const pf_photon &a = pc.photons[i], &b = pg.photons[i];
-    bool ok = a.mesh == b.mesh && a.flags == b.flags;
-    for (int c = 0; c < 3; ++c) ok = ok && std::fabs(a.position[c] - b.position[c]) <= tol;
-    matched += ok;
-  }
-  CHECK(matched >= pc.photons.size() * 99 / 100);
-  CHECK(pg.photons.size() == Approx(double(pc.photons.size())).epsilon(0.01));
+  check_same_photons(pc.photons, pg.photons, tol);
 }
 
 namespace {
@@ -779,16 +786,7 @@ TEST_CASE("alpha: OpenCL photons and shadow rays leave a masked emitter as on th
   CHECK(cut == 0);
   REQUIRE(!pc.photons.empty());
   const float tol = 1e-4f * length(s.bounds.extent());
-  size_t matched = 0;
-  const size_t n = std::min(pc.photons.size(), pg.photons.size());
-  for (size_t i = 0; i < n; ++i) {
-    const pf_photon &a = pc.photons[i], &b = pg.photons[i];
-    bool ok = a.mesh == b.mesh && a.flags == b.flags;
-    for (int c = 0; c < 3; ++c) ok = ok && std::fabs(a.position[c] - b.position[c]) <= tol;
-    matched += ok;
-  }
-  CHECK(matched >= pc.photons.size() * 99 / 100);
-  CHECK(pg.photons.size() == Approx(double(pc.photons.size())).epsilon(0.01));
+  check_same_photons(pc.photons, pg.photons, tol);
   EyePassOptions eo;
   eo.spp = 2;
   eo.direct = DirectMode::ShadowRays;
