@@ -159,7 +159,7 @@ static void pf_camera_ray(__global const float* cam, int width, int height, floa
 static void pf_emission_sample(const pf_scene_view* s, __global const float* cam, int width,
                                int height, int pix, int k, int K, uint seed, uint pass,
                                int max_depth, float eps, float* L) {
-  pf_rng rng = pf_rng_start(seed, PF_EMISSION_STREAM + pass, (uint)pix * (uint)K + (uint)k);
+  pf_rng rng = pf_emission_rng(seed, pass, (uint)pix, k, max_depth);
   float jx, jy;
   pf_sobol_pixel_sample_keyed(pf_emission_sobol_key(seed), (uint)pix, pass * (uint)K + (uint)k,
                               &jx, &jy);

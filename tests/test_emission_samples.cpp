@@ -15,6 +15,7 @@
 #include "photonflow/raycast.h"
 #include "photonflow/render_defaults.h"
 #include "photonflow/error.h"
+#include "photonflow/pass_sums.h"
 #include "photonflow/stage_files.h"
 #include "photonflow/surface.h"
 #include "support.h"
@@ -248,4 +249,31 @@ TEST_CASE("emission samples: --emission-spp of render and trace-hitpoints", "[em
       CHECK(it->second == (std::string(k) == "auto" ? std::to_string(kDefaultEmissionSpp) : k));
     }
   }
+}
+
+TEST_CASE("emission samples: a checkpoint records them, and one made without resumes only without",
+          "[emission][tools]") {
+  test::TempDir tmp("emission-resume");
+  save_scene(lamp_room(PF_MAT_GLASS, 24), tmp / "s.h5", Provenance{});
+  const std::string base = "--scene '" + std::string(tmp / "s.h5") + "' -o '" +
+                           std::string(tmp / "o.exr") + "' --photons 2000 --checkpoint '" +
+                           std::string(tmp / "c.h5") + "'";
+  // Made without emission samples (as before they existed: no state.emission-spp) ...
+  test::ToolRun r = test::run_tool("render", base + " --passes 2 --emission-spp 0", tmp);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(load_pass_sums_provenance(tmp / "c.h5").parameters.count("state.emission-spp") == 0);
+  // ... a resume with the default refuses in one line that names the way out ...
+  r = test::run_tool("render", base + " --passes 3 --resume", tmp);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("--emission-spp 0") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  // ... which works; a checkpoint made with the default records its count.
+  r = test::run_tool("render", base + " --passes 3 --resume --emission-spp 0", tmp);
+  CHECK(r.exit_code == 0);
+  std::filesystem::remove(tmp / "c.h5");
+  r = test::run_tool("render", base + " --passes 1", tmp);
+  REQUIRE(r.exit_code == 0);
+  CHECK(load_pass_sums_provenance(tmp / "c.h5").parameters.at("state.emission-spp") ==
+        std::to_string(kDefaultEmissionSpp));
 }

@@ -77,8 +77,8 @@ constexpr int kMaxEmissionSpp = 1024;
 
 // The pixels that take emission samples: those whose centre ray reaches the front of an emitter
 // directly or through mirrors and glass (both branches at glass: reflection and refraction,
-// up to 8 bounces), and their eight neighbours (a lamp's outline may cover a pixel whose centre
-// misses it). Row-major, width × height, 1 = marked. A deterministic function of the scene and its
+// up to 8 bounces and 32 rays a pixel), and their eight neighbours (a lamp's outline may cover
+// a pixel whose centre misses it). Row-major, width × height, 1 = marked. A deterministic function of the scene and its
 // camera, so every eye pass and both routes (render, trace-hitpoints) mark the same pixels.
 std::vector<uint8_t> emission_pixels(const Scene& scene);
 

@@ -77,9 +77,20 @@ PF_INLINE pf_uint pf_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B0000
  * jitters by point pass·K + k of a second scrambled (0,2)-sequence of the pixel (key
  * pf_emission_sobol_key, pass slot 0x50B1000), so a pixel's emission samples of all passes
  * together are one low-discrepancy sequence, and draws its lens point and glass choices from
- * stream (seed, PF_EMISSION_STREAM + pass, pixel·K + k). */
+ * pf_emission_rng. */
 #define PF_EMISSION_STREAM 0xE3E0000U
 PF_INLINE pf_uint pf_emission_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B1000U); }
+
+/* The numbers of emission sample k of pixel `pixel`: stream (seed, PF_EMISSION_STREAM + pass,
+ * pixel) from dimension k·(max_depth + 3). A sample draws at most two for the lens and one per
+ * glass bounce (max_depth + 1 bounces), so the samples of a pixel never share a number, and the
+ * stream index is the pixel's, below 2^32 for every image (no limit on K·pixels). */
+PF_INLINE pf_rng pf_emission_rng(pf_uint seed, pf_uint pass, pf_uint pixel, pf_int k,
+                                 pf_int max_depth) {
+  pf_rng r = pf_rng_start(seed, PF_EMISSION_STREAM + pass, pixel);
+  r.dim = (pf_uint)k * (pf_uint)(max_depth + 3);
+  return r;
+}
 
 /* Sample i of pixel `pixel`'s scrambled (0,2)-sequence, in [0, 1)² with 24-bit resolution, under
  * the run's key pf_sobol_key(seed) (computed once by callers that draw many). */

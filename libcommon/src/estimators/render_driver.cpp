@@ -318,7 +318,10 @@ void require_same_state(const std::string& checkpoint, const RenderOptions& opt)
     if (it == made.parameters.end())
       throw input_error(checkpoint, "records no '" + name + "' of the run that wrote it, so it "
                                     "cannot be resumed safely",
-                        "start without --resume");
+                        // options recorded only when on: an older file ran without them
+                        name == "emission-spp" || name == "glossy-threshold"
+                            ? "resume with --" + name + " 0, or start without --resume"
+                            : std::string("start without --resume"));
     if (it->second != value)
       throw input_error(checkpoint, "was made with --" + name + " " + it->second +
                                         ", this run has " + value,

@@ -303,8 +303,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
 Vec3 EyeTracer::emission_sample(int x, int y, int k) const {
   const int K = opt_.emission_spp;
   const uint32_t pix = uint32_t(size_t(y) * size_t(scene_.camera.width) + size_t(x));
-  pf_rng rng = pf_rng_start(opt_.seed, PF_EMISSION_STREAM + opt_.pass,
-                            pix * uint32_t(K) + uint32_t(k));
+  pf_rng rng = pf_emission_rng(opt_.seed, opt_.pass, pix, k, opt_.max_depth);
   float jx, jy;
   pf_sobol_pixel_sample_keyed(emission_key_, pix, opt_.pass * uint32_t(K) + uint32_t(k), &jx, &jy);
   float u1 = 0.5f, u2 = 0.5f;
@@ -341,12 +340,17 @@ Vec3 EyeTracer::emitted_layer(int x, int y, const Vec3& emitted) const {
 
 namespace {
 // Whether a ray reaches an emitter's front through mirrors and glass, following both branches at
-// glass (emission_pixels). Recursion depth ≤ kEmissionDepth: at most 2^8 chains per pixel.
+// glass, reflection first (emission_pixels): at most kEmissionDepth bounces deep and
+// kEmissionRays rays per pixel in all (`rays` counts them down), so a scene full of glass costs
+// a bounded, deterministic search; a chain past either bound counts as not reaching one.
 constexpr int kEmissionDepth = 8;
+constexpr int kEmissionRays = 32;
 bool reaches_emitter(const Scene& scene, const RayCaster& caster, const Ray& ray, float eps,
-                     int depth) {
+                     int depth, int& rays) {
   Hit h;
-  if (depth > kEmissionDepth || !caster.closest(ray, h)) return false;
+  if (depth > kEmissionDepth || rays <= 0) return false;
+  --rays;
+  if (!caster.closest(ray, h)) return false;
   const SurfaceHit sh = surface_at(scene, ray, h);
   const pf_material& m = scene.materials[size_t(sh.material)];
   if (m.type == PF_MAT_EMITTER) return sh.front;
@@ -354,13 +358,13 @@ bool reaches_emitter(const Scene& scene, const RayCaster& caster, const Ray& ray
   const Vec3 d = normalize(ray.d);
   const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the ray
   const Vec3 r = reflect(d, n);
-  if (reaches_emitter(scene, caster, Ray{offset_origin(sh, r, eps), r}, eps, depth + 1))
+  if (reaches_emitter(scene, caster, Ray{offset_origin(sh, r, eps), r}, eps, depth + 1, rays))
     return true;
   if (m.type != PF_MAT_GLASS) return false;
   Vec3 t;
   const float eta = sh.front ? 1.f / m.ior : m.ior;
   if (!refract(d, n, eta, t)) return false;  // total internal reflection: the branch above
-  return reaches_emitter(scene, caster, Ray{offset_origin(sh, t, eps), t}, eps, depth + 1);
+  return reaches_emitter(scene, caster, Ray{offset_origin(sh, t, eps), t}, eps, depth + 1, rays);
 }
 }  // namespace
 
@@ -375,7 +379,8 @@ std::vector<uint8_t> emission_pixels(const Scene& scene) {
     for (int x = 0; x < W; ++x) {
       Ray ray;
       cam.ray(float(x) + 0.5f, float(y) + 0.5f, 0.5f, 0.5f, ray.o, ray.d);  // the lens centre
-      centre[size_t(y) * size_t(W) + size_t(x)] = reaches_emitter(scene, caster, ray, eps, 0);
+      int rays = kEmissionRays;
+      centre[size_t(y) * size_t(W) + size_t(x)] = reaches_emitter(scene, caster, ray, eps, 0, rays);
     }
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
