@@ -386,26 +386,39 @@ TEST_CASE("alpha: eye rays see the floor exactly through the cut-away texels", "
   CHECK(double(on_floor) / double(checked) == Approx(kOpen).margin(0.05));
 }
 
-TEST_CASE("alpha: shadow rays pass the masked plane in the open fraction", "[alpha][eye]") {
+namespace {
+
+// The floor's shadow-ray direct light (4 eye samples, 16 light samples, 32×32) and its path-traced
+// image (64 spp, 24×24) of the scene make(true, ...) against make(false, ...): their ratios are
+// `expected` (check_ratio).
+template <class Make>
+void check_direct_ratios(Make make, double expected) {
   EyePassOptions eo;
   eo.spp = 4;
   eo.direct = DirectMode::ShadowRays;
   eo.shadow_samples = 16;
   eo.seed = 6;
   eo.threads = 2;
-  const EyePassResult masked = trace_hitpoints(masked_scene(true, Vec3(0, 0.5f, 0), 32), eo);
-  const EyePassResult open = trace_hitpoints(masked_scene(false, Vec3(0, 0.5f, 0), 32), eo);
-  check_ratio(pixel_mean(masked.direct), pixel_mean(open.direct), "shadow-ray direct light");
-}
-
-TEST_CASE("alpha: the path tracer's floor irradiance is the open fraction", "[alpha]") {
+  const EyePassResult masked = trace_hitpoints(make(true, Vec3(0, 0.5f, 0), 32), eo);
+  const EyePassResult open = trace_hitpoints(make(false, Vec3(0, 0.5f, 0), 32), eo);
+  check_ratio(pixel_mean(masked.direct), pixel_mean(open.direct), "shadow-ray direct light",
+              expected);
   PathTraceOptions o;
   o.spp = 64;
   o.seed = 3;
   o.threads = 2;
-  const Image masked = pathtrace(masked_scene(true, Vec3(0, 0.5f, 0), 24), o);
-  const Image open = pathtrace(masked_scene(false, Vec3(0, 0.5f, 0), 24), o);
-  check_ratio(pixel_mean(masked.rgb), pixel_mean(open.rgb), "path tracer");
+  const Image pm = pathtrace(make(true, Vec3(0, 0.5f, 0), 24), o);
+  const Image po = pathtrace(make(false, Vec3(0, 0.5f, 0), 24), o);
+  check_ratio(pixel_mean(pm.rgb), pixel_mean(po.rgb), "path tracer", expected);
+}
+
+}  // namespace
+
+TEST_CASE("alpha: shadow rays and the path tracer pass the masked plane in the open fraction",
+          "[alpha][eye]") {
+  check_direct_ratios([](bool plane, const Vec3& eye, int size) {
+    return masked_scene(plane, eye, size);
+  }, kOpen);
 }
 
 TEST_CASE("alpha: SPPM, PPPM and PPM render the floor at the open fraction", "[alpha]") {
@@ -752,23 +765,9 @@ TEST_CASE("alpha: a masked emitter's cut-away texels send no photons", "[alpha][
 TEST_CASE("alpha: shadow rays and the path tracer see 1 - the cut-away fraction of a masked "
           "emitter",
           "[alpha][emitter]") {
-  EyePassOptions eo;
-  eo.spp = 4;
-  eo.direct = DirectMode::ShadowRays;
-  eo.shadow_samples = 16;
-  eo.seed = 6;
-  eo.threads = 2;
-  const EyePassResult masked = trace_hitpoints(masked_light_scene(true, Vec3(0, 0.5f, 0), 32), eo);
-  const EyePassResult open = trace_hitpoints(masked_light_scene(false, Vec3(0, 0.5f, 0), 32), eo);
-  check_ratio(pixel_mean(masked.direct), pixel_mean(open.direct), "shadow-ray direct light",
-              1 - kOpen);
-  PathTraceOptions o;
-  o.spp = 64;
-  o.seed = 3;
-  o.threads = 2;
-  const Image pm = pathtrace(masked_light_scene(true, Vec3(0, 0.5f, 0), 24), o);
-  const Image po = pathtrace(masked_light_scene(false, Vec3(0, 0.5f, 0), 24), o);
-  check_ratio(pixel_mean(pm.rgb), pixel_mean(po.rgb), "path tracer", 1 - kOpen);
+  check_direct_ratios([](bool masked, const Vec3& eye, int size) {
+    return masked_light_scene(masked, eye, size);
+  }, 1 - kOpen);
 }
 
 TEST_CASE("alpha: OpenCL photons and shadow rays leave a masked emitter as on the CPU",
