@@ -25,13 +25,15 @@ float initial_radius(const Scene& scene, const EyePassOptions& eye) {
   return eye.radius > 0.f ? eye.radius : default_radius(scene);
 }
 
-// The pixels with emission samples, computed once for the run's passes (eye_pass.h): `marks`
-// receives them and opt.eye points at it.
-void keep_emission_pixels(const Scene& scene, RenderOptions& opt,
-                          std::shared_ptr<const std::vector<uint8_t>>& marks) {
-  if (opt.eye.emission_spp <= 0 || opt.eye.emission_pixels) return;
-  marks = std::make_shared<const std::vector<uint8_t>>(emission_pixels(scene));
+// The pixels with emission samples, computed once for all the run's eye passes (eye_pass.h),
+// PPM's first one included: returns them, and opt.eye points at them (null where none are needed
+// or the caller gave its own).
+std::shared_ptr<const std::vector<uint8_t>> keep_emission_pixels(const Scene& scene,
+                                                                 RenderOptions& opt) {
+  if (opt.eye.emission_spp <= 0 || opt.eye.emission_pixels) return nullptr;
+  auto marks = std::make_shared<const std::vector<uint8_t>>(emission_pixels(scene));
   opt.eye.emission_pixels = marks.get();
+  return marks;
 }
 
 HitpointSet fresh_state(const Scene& scene, const RenderOptions& opt) {
@@ -57,16 +59,20 @@ uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_
 // Both constructors check the state's ids against the scene once; a pass never changes them, so
 // the CPU grid gather of every pass skips that check (ppm_pass_grid_prechecked).
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt)
-    : scene_(scene), opt_(opt), state_(fresh_state(scene, opt)) {
+    : scene_(scene),
+      opt_(opt),
+      emission_marks_(keep_emission_pixels(scene, opt_)),
+      state_(fresh_state(scene, opt_)) {
   check_against_scene("", state_, scene_);
-  keep_emission_pixels(scene_, opt_, emission_marks_);
 }
 
 ProgressiveRenderer::ProgressiveRenderer(const Scene& scene, const RenderOptions& opt,
                                          HitpointSet state, const std::string& path)
-    : scene_(scene), opt_(opt), state_(std::move(state)) {
+    : scene_(scene),
+      opt_(opt),
+      emission_marks_(keep_emission_pixels(scene, opt_)),
+      state_(std::move(state)) {
   check_against_scene(path, state_, scene_);
-  keep_emission_pixels(scene_, opt_, emission_marks_);
   if (is_sppm_state(state_) &&
       state_.hitpoints.size() != size_t(state_.width) * size_t(state_.height))
     throw input_error(path, "is an SPPM state without one hitpoint per pixel",
@@ -141,16 +147,17 @@ void ProgressiveRenderer::run_iteration() {
 PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt)
     : scene_(scene),
       opt_(opt),
+      emission_marks_(keep_emission_pixels(scene, opt_)),
       sums_(make_pass_sums(scene.camera.width, scene.camera.height, opt.first_pass,
                            initial_radius(scene, opt.eye), opt.ppm.alpha, opt.eye.direct,
-                           scene.scene_id, state_parameters(opt))) {
-  keep_emission_pixels(scene_, opt_, emission_marks_);
-}
+                           scene.scene_id, state_parameters(opt))) {}
 
 PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt, PassSums sums,
                            const std::string& path)
-    : scene_(scene), opt_(opt), sums_(std::move(sums)) {
-  keep_emission_pixels(scene_, opt_, emission_marks_);
+    : scene_(scene),
+      opt_(opt),
+      emission_marks_(keep_emission_pixels(scene, opt_)),
+      sums_(std::move(sums)) {
   if (sums_.width != scene.camera.width || sums_.height != scene.camera.height)
     throw input_error(path, "is " + std::to_string(sums_.width) + "x" +
                                 std::to_string(sums_.height) + ", the scene's camera " +
