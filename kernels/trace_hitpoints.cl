@@ -7,8 +7,9 @@
  * ropes (intersect_shared.h) — the spatial index the thesis's GPU tracer did not have.
  *
  * Random numbers: stream (seed, kEyeStream + pass, pixel·spp + s) for jitter (pixel_sampler.h)
- * and glass choices, stream (seed, kShadowStream + pass, same index) for shadow rays — the CPU's
- * streams and dimension order. PPM's one eye pass is pass 0; SPPM and PPPM trace one per pass.
+ * and glass choices; the shadow rays' light samples by pf_light_draws (pixel_sampler.h: the
+ * pixel's Sobol points under the SOBOL sampler, stream (seed, kShadowStream + pass, same index)
+ * otherwise) — the CPU's streams and dimension order. PPM's one eye pass is pass 0; SPPM and PPPM trace one per pass.
  *
  * Output per (pixel, sample) slot: the hitpoint and a used flag; the host compacts the used slots
  * in slot order (= the CPU's order: pixel row-major, then sample).
@@ -19,7 +20,6 @@
 #include "photonflow/material/lens_shared.h"
 
 #define PF_EYE_STREAM 0xE7E0000u
-#define PF_SHADOW_STREAM 0x5AD0000u
 
 /* Scene::light_incident on the device: one next-event sample of light li at p (light_shared.h
  * pf_light_incident, the host's sampling of every light type; 0 from a cut-away texel of a masked
@@ -60,15 +60,13 @@ static float pf_light_incident_at(const pf_scene_view* s, int li, const float* p
  * light sampling with shadow rays. Adds weight · L_direct to `direct`. */
 static void pf_direct_light(const pf_scene_view* s, const float* p, const float* ng,
                             const float* ns, __global const pf_material* m, int samples,
-                            uint seed, uint pass, uint index, float eps, const float* weight,
+                            pf_light_draws* draws, float eps, const float* weight,
                             float* direct) {
   if (s->light_count <= 0 || samples <= 0) return;
-  pf_rng rng = pf_rng_start(seed, PF_SHADOW_STREAM + pass, index);
   float sum[3] = {0.0f, 0.0f, 0.0f};
   for (int smp = 0; smp < samples; ++smp) {
-    const float ul = pf_rng_next(&rng);
-    const float u1 = pf_rng_next(&rng);
-    const float u2 = pf_rng_next(&rng);
+    float ul, u1, u2;
+    pf_light_draws_next(draws, &ul, &u1, &u2);
     float p_light;
     const int li = pf_pick_light(s, ul, &p_light);
     if (p_light <= 0.0f) continue;
@@ -97,14 +95,13 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
  * an eye path goes through); delta_only: a sample that picks an area light adds nothing. */
 static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const float* ng,
                                 const float* ns, const pf_bsdf_params* bp, const float* wo,
-                                int samples, pf_rng* rng, int delta_only, float eps,
+                                int samples, pf_light_draws* draws, int delta_only, float eps,
                                 const float* weight, float* direct) {
   if (s->light_count <= 0 || samples <= 0) return;
   float sum[3] = {0.0f, 0.0f, 0.0f};
   for (int smp = 0; smp < samples; ++smp) {
-    const float ul = pf_rng_next(rng);
-    const float u1 = pf_rng_next(rng);
-    const float u2 = pf_rng_next(rng);
+    float ul, u1, u2;
+    pf_light_draws_next(draws, &ul, &u1, &u2);
     float p_light;
     const int li = pf_pick_light(s, ul, &p_light);
     if (p_light <= 0.0f) continue;
@@ -267,8 +264,10 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
             for (int k = 0; k < 3; ++k) wo[k] = -wo[k];
             /* point, spot and directional lights by next-event estimation first (the sample
              * never hits them), from the eye stream; area lights by the sample's hit */
-            pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &rng, 1,
+            pf_light_draws gd = pf_light_draws_from(rng);
+            pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &gd, 1,
                                 eps, T, direct);
+            rng = gd.rng;
             const float u1 = pf_rng_next(&rng);
             const float u2 = pf_rng_next(&rng);
             const float u3 = pf_rng_next(&rng);
@@ -314,13 +313,16 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
         }
         if (shadow_rays && pbr) {
           const float wo[3] = {-nd[0], -nd[1], -nd[2]};
-          pf_rng srng = pf_rng_start(seed, PF_SHADOW_STREAM + pass, index);
-          pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &srng, 0,
+          pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
+                                                      (uint)pix, smp, spp, shadow_samples);
+          pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws, 0,
                               eps, T, direct);
         } else if (shadow_rays) {
           float ng[3];
           for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
-          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, seed, pass, index, eps, T, direct);
+          pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
+                                                      (uint)pix, smp, spp, shadow_samples);
+          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, &draws, eps, T, direct);
         }
         break;
       }

@@ -147,6 +147,11 @@ TEST_CASE("OpenCL PBR: visible points, their BSDF table and the direct layer equ
   eo.direct = DirectMode::ShadowRays;
   eo.shadow_samples = 3;
   eo.seed = 7;
+  // The light samples: the shadow stream (strata), or the pixel's Sobol points (pixel_sampler.h
+  // pf_light_draws), in pass 5 so the points are not the sequence's first.
+  eo.sampler = GENERATE(PixelSampler::Strata, PixelSampler::Sobol);
+  eo.pass = eo.sampler == PixelSampler::Sobol ? 5 : 0;
+  INFO("sampler " << pixel_sampler_name(eo.sampler));
   const EyePassResult cpu = trace_hitpoints(s, eo);
   const EyePassResult gpu = trace_hitpoints(s, eo, *dev);
   REQUIRE(cpu.hitpoints.size() == gpu.hitpoints.size());

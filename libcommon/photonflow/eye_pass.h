@@ -45,8 +45,9 @@ struct EyePassOptions {
   uint32_t seed = 1;
   int threads = 0;         // 0 = all cores; results do not depend on it
   // Which eye pass this is: SPPM and probabilistic PPM trace a new one before every photon pass
-  // (pass p uses eye stream (seed, 0xE7E0000 + p, pixel·spp + s) and shadow stream
-  // (seed, 0x5AD0000 + p, same index)); PPM's one eye pass is pass 0.
+  // (pass p uses eye stream (seed, 0xE7E0000 + p, pixel·spp + s), and for its light samples
+  // the pixel's Sobol points under PixelSampler::Sobol or the shadow stream (seed, 0x5AD0000 + p,
+  // same index) otherwise: pixel_sampler.h pf_light_draws); PPM's one eye pass is pass 0.
   uint32_t pass = 0;
   PixelSampler sampler = PixelSampler::Strata;
   // Roughness below which an eye path continues through a PF_MAT_PBR point without a diffuse
@@ -165,11 +166,20 @@ class EyeTracer {
   std::vector<uint8_t> own_pixels_;          // emission_pixels, when the caller gave none
   const std::vector<uint8_t>* emit_pixels_;  // the marks in use (nullptr: no emission samples)
   Vec3 emission_sample(int x, int y, int k) const;
+  // The light samples of eye sample s of pixel `pix` (pixel_sampler.h pf_light_draws_start).
+  pf_light_draws light_draws(size_t pix, int s) const {
+    return pf_light_draws_start(int(opt_.sampler), opt_.seed, sobol_key_, opt_.pass,
+                                pf_uint(pix), s, spp_, opt_.shadow_samples);
+  }
 };
 
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with
-// shadow rays (`samples` per call; rng streams of (seed, pass, index)): area, point, spot and
-// directional lights (light_shared.h). Exposed for tests.
+// shadow rays (`samples` per call, each drawing (ul, u1, u2) from `draws`: pixel_sampler.h
+// pf_light_draws, Sobol points under PF_SAMPLER_SOBOL, the shadow stream otherwise): area, point,
+// spot and directional lights (light_shared.h).
+Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
+                  const pf_material& m, int samples, pf_light_draws& draws);
+// The same with the shadow stream (seed, 0x5AD0000 + pass, index): independent draws. For tests.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
                   const pf_material& m, int samples, uint32_t seed, uint32_t pass, uint32_t index);
 // The same estimator (the same draws and shadow rays) at a PF_MAT_PBR point: L_direct =
@@ -179,9 +189,14 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
                       int samples, uint32_t seed, uint32_t pass, uint32_t index);
-// The same sum with `samples` light samples drawn from `rng` (ul, u1, u2 each); with delta_only a
+// The same sum with `samples` light samples from `draws` (ul, u1, u2 each); with delta_only a
 // sample that picks an area light adds nothing (eye paths through glossy points: the BSDF's
 // sample finds area lights, next-event estimation the point, spot and directional ones).
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, pf_light_draws& draws, bool delta_only);
+// The same drawing from `rng` (a glossy point's samples come from the eye stream), which comes
+// back advanced past the draws.
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
                       int samples, pf_rng& rng, bool delta_only);

@@ -55,7 +55,7 @@ float default_radius(const Scene& scene) {
 namespace {
 // Random stream of the eye pass: pass slot 0xE7E (distinct from photon passes 0, 1, 2, ...).
 constexpr uint32_t kEyeStream = 0xE7E0000u;
-constexpr uint32_t kShadowStream = 0x5AD0000u;
+constexpr uint32_t kShadowStream = PF_SHADOW_STREAM_SLOT;
 
 Vec3 mat_color(const pf_material& m) { return Vec3(m.color); }
 bool is_diffuse(const pf_material& m) {
@@ -67,14 +67,13 @@ bool is_diffuse(const pf_material& m) {
 // p_light over n light samples (Scene::light_incident), each behind an unblocked shadow ray; a
 // light below the shading or the geometric normal sends nothing.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
-                  const pf_material& m, int samples, uint32_t seed, uint32_t pass,
-                  uint32_t index) {
+                  const pf_material& m, int samples, pf_light_draws& draws) {
   if (scene.lights.empty() || samples <= 0) return {};
-  pf_rng rng = pf_rng_start(seed, kShadowStream + pass, index);
   const float eps = ray_epsilon(scene);
   Vec3 sum;
   for (int s = 0; s < samples; ++s) {
-    const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+    float ul, u1, u2;
+    pf_light_draws_next(&draws, &ul, &u1, &u2);
     Scene::LightSample ls;
     if (!scene.sample_light(ul, u1, u2, p, ls)) continue;
     const float cos_x = dot(ls.w, ns);
@@ -86,12 +85,19 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
   return mat_color(m) * kInvPi * sum * (1.f / float(samples));
 }
 
+Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
+                  const pf_material& m, int samples, uint32_t seed, uint32_t pass,
+                  uint32_t index) {
+  pf_light_draws draws = pf_light_draws_from(pf_rng_start(seed, kShadowStream + pass, index));
+  return direct_light(scene, p, ng, ns, m, samples, draws);
+}
+
 // The same draws, light samples and shadow rays at a PF_MAT_PBR point: f(wo, w_l) of the BSDF
 // in radiance mode instead of ρ/π and |cos θ_x| at the shading normal; a light behind the surface
 // counts where the BSDF transmits (the shadow ray leaves on its side).
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_rng& rng, bool delta_only) {
+                      int samples, pf_light_draws& draws, bool delta_only) {
   if (scene.lights.empty() || samples <= 0) return {};
   const float eps = ray_epsilon(scene);
   float ns[3], ng[3], o[3];
@@ -100,7 +106,8 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
   wo.store(o);
   Vec3 sum;
   for (int s = 0; s < samples; ++s) {
-    const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+    float ul, u1, u2;
+    pf_light_draws_next(&draws, &ul, &u1, &u2);
     Scene::LightSample ls;
     if (!scene.sample_light(ul, u1, u2, p, ls)) continue;
     if (delta_only && scene.lights[ls.light].type == PF_LIGHT_AREA) continue;
@@ -119,8 +126,18 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
                       int samples, uint32_t seed, uint32_t pass, uint32_t index) {
-  pf_rng rng = pf_rng_start(seed, kShadowStream + pass, index);
-  return direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, rng, false);
+  pf_light_draws draws = pf_light_draws_from(pf_rng_start(seed, kShadowStream + pass, index));
+  return direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, draws, false);
+}
+
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, pf_rng& rng, bool delta_only) {
+  pf_light_draws draws = pf_light_draws_from(rng);
+  const Vec3 l = direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, draws,
+                                  delta_only);
+  rng = draws.rng;  // the caller's stream goes on after the draws
+  return l;
 }
 
 void check_options(const EyePassOptions& opt) {
@@ -234,9 +251,11 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       hp.pixel_y = y;
       hp.mesh = sh.mesh;
       hp.material = sh.material;
-      if (opt_.direct == DirectMode::ShadowRays)
+      if (opt_.direct == DirectMode::ShadowRays) {
+        pf_light_draws draws = light_draws(pix, s);
         direct += T * direct_light(scene_, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
-                                   opt_.shadow_samples, opt_.seed, opt_.pass, index);
+                                   opt_.shadow_samples, draws);
+      }
       if (pbr) *pbr = pf_pbr_point{};
       return true;
     }
@@ -284,9 +303,11 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       hp.mesh = sh.mesh;
       hp.material = sh.material;
       if (pbr) *pbr = pt;
-      if (opt_.direct == DirectMode::ShadowRays)
+      if (opt_.direct == DirectMode::ShadowRays) {
+        pf_light_draws draws = light_draws(pix, s);
         direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
-                                       opt_.shadow_samples, opt_.seed, opt_.pass, index);
+                                       opt_.shadow_samples, draws, false);
+      }
       return true;
     }
     if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;  // black emitter
