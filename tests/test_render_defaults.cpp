@@ -58,16 +58,16 @@ float expected_radius(const Scene& s) {
 
 TEST_CASE("the automatic photon count follows its rule: share, measured ratio, pixels",
           "[render_defaults]") {
-  // The rule with the measured constants (render_defaults.h, docs/RESULTS.md "Defaults"): 0.7
-  // photons per pixel, an even split of the pass. A change of the constants must change this
-  // test and RESULTS.md together.
-  CHECK(kAutoPhotonShare == 0.5);
+  // The rule with the measured constants (render_defaults.h, docs/RESULTS.md "Defaults"): an eye
+  // pixel costs 0.7 photons, photons take 2/3 of the pass: 1.4 photons per pixel. A change of the
+  // constants must change this test and RESULTS.md together.
+  CHECK(kAutoPhotonShare == 2.0 / 3.0);
   CHECK(kEyePixelCostInPhotons == 0.7);
-  CHECK(auto_photons(512, 512) == 183296);    // 183500.8 → 179 steps of 1024
-  CHECK(auto_photons(640, 480) == 215040);    // 215040 = 210 steps
-  CHECK(auto_photons(1280, 720) == 645120);   // 630 steps
-  // A multiple of the step, rounded to the nearest: 333 × 333 × 0.7 = 77622.3 → 75.8 steps.
-  CHECK(auto_photons(333, 333) == 76 * kAutoPhotonsStep);
+  CHECK(auto_photons(512, 512) == 366592);    // 367001.6 → 358.4 → 358 steps of 1024
+  CHECK(auto_photons(640, 480) == 430080);    // 430080 = 420 steps
+  CHECK(auto_photons(1280, 720) == 1290240);  // 1260 steps
+  // A multiple of the step, rounded to the nearest: 333 × 333 × 1.4 = 155244.6 → 151.6 steps.
+  CHECK(auto_photons(333, 333) == 152 * kAutoPhotonsStep);
   // Clamped: small images still get a useful photon map, huge ones a bounded pass.
   CHECK(auto_photons(16, 12) == kMinAutoPhotons);
   CHECK(auto_photons(100000, 100000) == kMaxAutoPhotons);
@@ -75,7 +75,7 @@ TEST_CASE("the automatic photon count follows its rule: share, measured ratio, p
   CHECK(auto_photons(512, 512) == auto_photons(512, 512));
   const std::string rule = auto_photons_rule();
   CHECK(rule.rfind("auto: ", 0) == 0);
-  CHECK(rule.find("183296 at 512x512") != std::string::npos);
+  CHECK(rule.find("366592 at 512x512") != std::string::npos);
 }
 
 TEST_CASE("choose_defaults: pppm with shadow rays, photons from the image, radius from the "
@@ -89,7 +89,7 @@ TEST_CASE("choose_defaults: pppm with shadow rays, photons from the image, radiu
   CHECK(a.estimator == Estimator::Pppm);
   CHECK(a.direct == DirectMode::ShadowRays);
   CHECK(a.photons == kMinAutoPhotons);  // 64 × 64 = 4096 pixels: below the floor
-  CHECK(b.photons == 335872);           // 800 × 600 × 0.7 = 336000 → 328 steps of 1024
+  CHECK(b.photons == 671744);           // 800 × 600 × 1.4 = 672000 → 656 steps of 1024
   CHECK(a.radius == Approx(expected_radius(furnace)).epsilon(1e-5));
   CHECK(b.radius == Approx(expected_radius(room)).epsilon(1e-5));
   CHECK(a.radius != Approx(b.radius));
@@ -118,7 +118,7 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
               .exit_code == 0);
   const Scene scene = load_scene(tmp / "s.h5");
   const uint32_t photons = auto_photons(256, 192);
-  REQUIRE(photons == 34816);  // 49152 pixels × 0.7 = 34406.4 → 34 steps of 1024
+  REQUIRE(photons == 68608);  // 49152 pixels × 1.4 = 68812.8 → 67 steps of 1024
 
   const auto help = test::run_tool("render", "--help", tmp);
   REQUIRE(help.exit_code == 0);
@@ -130,6 +130,10 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
   CHECK(help_of(help.out, "radius").find("(default: auto)") != std::string::npos);
   CHECK(help_of(help.out, "emission-spp").find("auto: " + std::to_string(kDefaultEmissionSpp)) !=
         std::string::npos);
+  CHECK(help_of(help.out, "shadow-samples")
+            .find("auto: " + std::to_string(kDefaultShadowSamples) + " for sppm and pppm") !=
+        std::string::npos);
+  CHECK(help_of(help.out, "shadow-samples").find("(default: auto)") != std::string::npos);
 
   SECTION("no options: the automatic choices") {
     const auto r = test::run_tool("render", "--scene " + q(tmp / "s.h5") + " -o " +
@@ -149,12 +153,14 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     CHECK(p.at("radius_auto") == "true");
     CHECK(p.at("emission-spp") == std::to_string(kDefaultEmissionSpp));
     CHECK(p.at("emission-spp_auto") == "true");
+    CHECK(p.at("shadow-samples") == std::to_string(kDefaultShadowSamples));
+    CHECK(p.at("shadow-samples_auto") == "true");
     // The images: 2 passes of the automatic count emitted.
     const nlohmann::json j = nlohmann::json::parse(test::file_bytes(tmp / "a.json"));
     CHECK(j.at("images").back().at("photons_emitted").get<uint64_t>() == 2ull * photons);
     INFO(r.out);
-    CHECK(r.out.find("pppm (auto), direct shadow-rays (auto), " + std::to_string(photons) +
-                     " photons/pass (auto), R0 " + default_text(default_radius(scene)) +
+    CHECK(r.out.find("pppm (auto), direct shadow-rays (auto), 1 shadow sample (auto), " +
+                     std::to_string(photons) + " photons/pass (auto), R0 " + default_text(default_radius(scene)) +
                      " (auto), " + std::to_string(kDefaultEmissionSpp) +
                      " emission samples (auto)") != std::string::npos);
   }
@@ -182,6 +188,27 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     CHECK(r.out.find("ppm, direct photons, 777 photons/pass, R0 0.05, 2 emission samples,") !=
           std::string::npos);
   }
+  SECTION("shadow samples: auto is 4 for ppm's one eye pass; a count is used and recorded") {
+    const auto r = test::run_tool("render", "--scene " + q(tmp / "s.h5") + " -o " +
+                                                q(tmp / "f.exr") + " --passes 1 --estimator ppm " +
+                                                "--stats " + q(tmp / "d.json"),
+                                  tmp);
+    REQUIRE(r.exit_code == 0);
+    auto p = record_parameters(tmp / "d.json");
+    CHECK(p.at("shadow-samples") == std::to_string(kPpmShadowSamples));
+    CHECK(p.at("shadow-samples_auto") == "true");
+    CHECK(r.out.find(std::to_string(kPpmShadowSamples) + " shadow samples (auto)") !=
+          std::string::npos);
+    const auto r3 = test::run_tool("render", "--scene " + q(tmp / "s.h5") + " -o " +
+                                                 q(tmp / "g.exr") + " --passes 1 " +
+                                                 "--shadow-samples 3 --stats " + q(tmp / "e.json"),
+                                   tmp);
+    REQUIRE(r3.exit_code == 0);
+    p = record_parameters(tmp / "e.json");
+    CHECK(p.at("shadow-samples") == "3");
+    CHECK(p.at("shadow-samples_auto") == "false");
+    CHECK(r3.out.find("shadow-rays (auto), 3 shadow samples,") != std::string::npos);
+  }
   SECTION("--photons auto and --radius auto or 0 are the automatic choices, spelled out") {
     const auto r = test::run_tool("render", "--scene " + q(tmp / "s.h5") + " -o " +
                                                 q(tmp / "c.exr") +
@@ -196,7 +223,8 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
   }
   SECTION("bad values are refused with one line naming the option") {
     for (const std::string bad : {"--photons many", "--photons 0", "--photons 12x",
-                                  "--radius big", "--radius -1"}) {
+                                  "--radius big", "--radius -1", "--shadow-samples some",
+                                  "--shadow-samples 0", "--shadow-samples 2x"}) {
       INFO(bad);
       const auto r = test::run_tool(
           "render", "--scene " + q(tmp / "s.h5") + " -o " + q(tmp / "d.exr") + " " + bad, tmp);
@@ -223,7 +251,7 @@ TEST_CASE("trace-photons takes render's automatic photon count from the same pla
               .exit_code == 0);
   const Provenance prov = load_photons_provenance(tmp / "p.h5");
   CHECK(prov.parameters.at("photons") == std::to_string(auto_photons(240, 180)));
-  CHECK(auto_photons(240, 180) == 30720);  // 43200 × 0.7 = 30240 → 30 steps
+  CHECK(auto_photons(240, 180) == 60416);  // 43200 × 1.4 = 60480 → 59 steps
   CHECK(prov.parameters.at("photons_auto") == "true");
   const PhotonSet set = load_photons(tmp / "p.h5");
   REQUIRE(set.pass_count() == 1);

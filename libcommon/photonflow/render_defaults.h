@@ -14,8 +14,12 @@
 //   direct      shadow-rays (issue 34's side-by-side runs with sppm, 512×512, 30 s, 262,144
 //               photons: diffuse box 0.0080 → 0.0066 RMSE over all pixels, 0.0076 → 0.0056 away
 //               from the lights; 200k-triangle box 0.0132 → 0.0123 and 0.0120 → 0.0096)
-//   photons     automatic, from the image size: the photons per pass at which tracing them costs
-//               as long as the pass's eye paths (kEyePixelCostInPhotons, measured; auto_photons)
+//   photons     automatic, from the image size: twice the photons per pass at which tracing them
+//               costs as long as the pass's eye paths (kEyePixelCostInPhotons, measured;
+//               kAutoPhotonShare, measured; auto_photons)
+//   shadow-samples  1 light sample per visible point and pass for sppm and pppm, whose samples
+//               are a pixel's Sobol points over the passes (pixel_sampler.h pf_light_draws); 4 for
+//               ppm, whose one eye pass keeps its samples (kDefaultShadowSamples)
 //   radius      automatic, from the pixel footprint and the scene extent (default_radius,
 //               eye_pass.h): R0 = max(scene diagonal / 200, 4 · pixel angle · look-at distance)
 //
@@ -65,6 +69,19 @@ constexpr float kDefaultGlossyThreshold = 0.f;
 // the diffuse box 0.89×, the pass rate and the error away from the lights unchanged (±2 %).
 constexpr int kDefaultEmissionSpp = 8;
 
+// Light samples per visible point and pass with shadow rays (EyePassOptions::shadow_samples;
+// render's and trace-hitpoints' --shadow-samples auto). sppm and pppm: 1, by measurement
+// (docs/RESULTS.md sections 7 and 8, "Light samples", 2026-12-04, 30 s at 512×512 against the
+// Mitsuba references, medians of 3): with the pixel's Sobol points as light samples the direct
+// light's variance falls 2.3× at 1 sample a pass (1.3× at 4) at equal passes on the diffuse box,
+// and 1 sample runs as many passes as 4 there and 6–10 % more on the 205,663-triangle box; 1
+// against 4 at equal time, both with 366,592 photons: 1.00 / 1.00 (diffuse box, all pixels /
+// away from the lights), 1.00 / 1.00 (mirror and glass balls), 0.95 / 0.95 (205,663 triangles);
+// 2 samples were worse than 1 on all three (1.02–1.05). ppm: 4 (its one eye pass keeps them: they
+// are the direct light's only samples for the whole run).
+constexpr int kDefaultShadowSamples = 1;
+constexpr int kPpmShadowSamples = 4;
+
 // The eye pass of one pixel (one eye sample, its shadow rays and its gather: render's default
 // estimator and direct light) costs as much time as this many photons (each emitted, traced and
 // sorted into the pass's grid). Measured with
@@ -75,12 +92,16 @@ constexpr int kDefaultEmissionSpp = 8;
 // median over the scenes, 0.712 / 0.722, rounded (docs/RESULTS.md section 7).
 constexpr double kEyePixelCostInPhotons = 0.7;
 // The automatic count spends this share of a pass's time tracing photons (the rest on the eye
-// pass): photons = share / (1 − share) · kEyePixelCostInPhotons · pixels. An even split bounds
-// what a wrong ratio costs: the part that is too large for its scene at most doubles the pass
-// (issue 34 measured 100,000 against 262,144 photons at 512×512 changing the error by 10–15 %,
-// better or worse by scene: the optimum is flat and scene-dependent, so the rule aims at the
-// middle of the measured ratios rather than at one scene).
-constexpr double kAutoPhotonShare = 0.5;
+// pass): photons = share / (1 − share) · kEyePixelCostInPhotons · pixels. 2/3 (twice the
+// photons of an even split) by measurement, docs/RESULTS.md section 7 (2026-12-04, with emission
+// samples; 30 s at 512×512 against the Mitsuba references, medians of 3 runs): against 1/2,
+// 0.92 / 0.90 (diffuse box, all pixels / away from the lights), 1.01 / 0.98 (mirror and glass
+// balls), 0.97 / 0.94 (205,663 triangles); 3/4 gave 0.90 / 0.87, 1.07 / 1.00, 0.94 / 0.92. Before
+// the emission samples (section 7, 2026-12-03) the pixels that see a lamp converged only with the
+// passes and an even split was best over all pixels; they now converge 9× as densely, and more
+// photons a pass pay on the rest of the image. The optimum is flat and scene-dependent (issue 34:
+// 100,000 against 262,144 photons changed the error by 10–15 %, better or worse by scene).
+constexpr double kAutoPhotonShare = 2.0 / 3.0;
 // The automatic count is a multiple of kAutoPhotonsStep within [kMinAutoPhotons, kMaxAutoPhotons].
 constexpr uint32_t kAutoPhotonsStep = 1024;
 constexpr uint32_t kMinAutoPhotons = 16384;
@@ -115,6 +136,10 @@ float parse_glossy_threshold(const std::string& text, Estimator e);
 // --emission-spp of render and trace-hitpoints: "auto" (kDefaultEmissionSpp) or a count (its range
 // is check_options' of eye_pass.h); InputError naming --emission-spp for what is not an integer.
 int parse_emission_spp(const std::string& text);
+// --shadow-samples of render and trace-hitpoints: "auto" (kDefaultShadowSamples for sppm and
+// pppm, kPpmShadowSamples for ppm) or a count (its range is check_options' of eye_pass.h);
+// InputError naming --shadow-samples for what is not an integer.
+int parse_shadow_samples(const std::string& text, Estimator e);
 // --radius of render: "auto" or 0 (returns 0: default_radius) or a length (its range is
 // check_options' of eye_pass.h); InputError naming --radius for what is not a number.
 float parse_radius_option(const std::string& text);
@@ -131,12 +156,16 @@ struct RenderChoices {
   bool radius_auto = true;
   int emission_spp = kDefaultEmissionSpp;  // EyePassOptions::emission_spp used
   bool emission_spp_auto = true;
+  int shadow_samples = kDefaultShadowSamples;  // EyePassOptions::shadow_samples used
+  bool shadow_samples_auto = true;
 };
-// "pppm (auto), direct shadow-rays (auto), 262144 photons/pass (auto), R0 0.0123 (auto), 8
-// emission samples (auto)": render's summary line.
+// "pppm (auto), direct shadow-rays (auto), 1 shadow sample (auto), 366592 photons/pass (auto),
+// R0 0.0123 (auto), 8 emission samples (auto)": render's summary line (the shadow samples only
+// with direct shadow-rays).
 std::string describe_choices(const RenderChoices& c);
 // Writes the choices into a run record's parameters (provenance.h): the values used, and
-// "<name>_auto": "true" | "false" for estimator, direct, photons, radius and emission-spp.
+// "<name>_auto": "true" | "false" for estimator, direct, shadow-samples, photons, radius and
+// emission-spp.
 void record_choices(std::map<std::string, std::string>& parameters, const RenderChoices& c);
 
 }  // namespace pf

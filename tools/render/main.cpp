@@ -74,8 +74,10 @@ int main(int argc, char** argv) {
       ("direct", "direct light: photons | shadow-rays (light sampling at the visible points; "
        "photons then carry the rest, nothing counted twice)",
        cxxopts::value<std::string>()->default_value(pf::direct_mode_name(pf::kDefaultDirect)))
-      ("shadow-samples", "light samples per hitpoint with --direct shadow-rays",
-       cxxopts::value<int>()->default_value("4"))
+      ("shadow-samples", "light samples per visible point and pass with --direct shadow-rays, "
+       "or auto: " + std::to_string(pf::kDefaultShadowSamples) + " for sppm and pppm (a pixel's "
+       "samples over the passes are Sobol points), " + std::to_string(pf::kPpmShadowSamples) +
+       " for ppm (render_defaults.h)", cxxopts::value<std::string>()->default_value("auto"))
       ("radius", "initial radius R0 in world units, or " + pf::auto_radius_rule() + " (0 is "
        "auto too)", cxxopts::value<std::string>()->default_value("auto"))
       ("seed", "random seed", cxxopts::value<uint32_t>()->default_value("1"))
@@ -133,7 +135,8 @@ int main(int argc, char** argv) {
     opt.eye.spp = a["spp"].as<int>();
     opt.eye.max_depth = a["max-depth"].as<int>();
     opt.eye.direct = direct == "photons" ? pf::DirectMode::Photons : pf::DirectMode::ShadowRays;
-    opt.eye.shadow_samples = a["shadow-samples"].as<int>();
+    opt.eye.shadow_samples =
+        pf::parse_shadow_samples(a["shadow-samples"].as<std::string>(), opt.estimator);
     opt.eye.radius = pf::parse_radius_option(a["radius"].as<std::string>());
     opt.eye.seed = seed;
     opt.eye.threads = threads;
@@ -197,6 +200,8 @@ int main(int argc, char** argv) {
     chosen.radius = chosen.radius_auto ? defaults.radius : opt.eye.radius;
     chosen.emission_spp = opt.eye.emission_spp;
     chosen.emission_spp_auto = a["emission-spp"].as<std::string>() == "auto";
+    chosen.shadow_samples = opt.eye.shadow_samples;
+    chosen.shadow_samples_auto = a["shadow-samples"].as<std::string>() == "auto";
     opt.photons.photons = chosen.photons;
     if (opened.baked_here) {
       for (const std::string& w : pf::bake_warnings(bake, opened.report))

@@ -29,8 +29,10 @@ int main(int argc, char** argv) {
        "sampling; photons then carry indirect light only); the default is render's "
        "(render_defaults.h)",
        cxxopts::value<std::string>()->default_value(pf::direct_mode_name(pf::kDefaultDirect)))
-      ("shadow-samples", "light samples per hitpoint with --direct shadow-rays",
-       cxxopts::value<int>()->default_value("4"))
+      ("shadow-samples", "light samples per visible point with --direct shadow-rays, or auto: " +
+       std::to_string(pf::kDefaultShadowSamples) + " for sppm and pppm, " +
+       std::to_string(pf::kPpmShadowSamples) + " for ppm (render's: render_defaults.h)",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("radius", "initial radius R0 in world units; 0 = automatic: max(scene diagonal / 200, "
        "4 pixel footprints at the look-at distance)",
        cxxopts::value<float>()->default_value("0"))
@@ -70,7 +72,6 @@ int main(int argc, char** argv) {
     std::string direct = a["direct"].as<std::string>();
     pf::require_choice("direct", direct, {"photons", "shadow-rays"});
     opt.direct = direct == "photons" ? pf::DirectMode::Photons : pf::DirectMode::ShadowRays;
-    opt.shadow_samples = a["shadow-samples"].as<int>();
     opt.radius = a["radius"].as<float>();
     opt.seed = a["seed"].as<uint32_t>();
     opt.threads = a["threads"].as<int>();
@@ -93,6 +94,7 @@ int main(int argc, char** argv) {
                                                     : pf::PixelSampler::Sobol;
     opt.glossy_threshold = pf::parse_glossy_threshold(a["glossy-threshold"].as<std::string>(), estimator);
     opt.emission_spp = pf::parse_emission_spp(a["emission-spp"].as<std::string>());
+    opt.shadow_samples = pf::parse_shadow_samples(a["shadow-samples"].as<std::string>(), estimator);
     pf::check_options(opt);
 
     pf::Stopwatch clock;
@@ -111,6 +113,7 @@ int main(int argc, char** argv) {
     prov.parameters["estimator_auto"] = estimator_auto ? "true" : "false";
     prov.parameters["direct_auto"] = a.count("direct") ? "false" : "true";
     prov.parameters["pixel-sampler"] = pf::pixel_sampler_name(opt.sampler);  // auto resolved
+    prov.parameters["shadow-samples"] = std::to_string(opt.shadow_samples);  // likewise
     // auto resolved; only where it is used (render_driver.cpp state_parameters reads it back)
     prov.parameters.erase("glossy-threshold");
     if (opt.glossy_threshold > 0.f)

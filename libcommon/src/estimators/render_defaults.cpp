@@ -103,10 +103,32 @@ float parse_radius_option(const std::string& text) {
   return r;
 }
 
+int parse_shadow_samples(const std::string& text, Estimator e) {
+  if (text == "auto") return e == Estimator::Ppm ? kPpmShadowSamples : kDefaultShadowSamples;
+  size_t used = 0;
+  long v = -1;
+  try {
+    v = std::stol(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || v < 1 || v > kMaxShadowSamples)
+    throw input_error("", "--shadow-samples must be auto or a count in [1, " +
+                              std::to_string(kMaxShadowSamples) + "], got '" + text + "'");
+  return int(v);
+}
+
 std::string describe_choices(const RenderChoices& c) {
   auto how = [](bool automatic) { return std::string(automatic ? " (auto)" : ""); };
+  const std::string shadow =
+      c.direct == DirectMode::ShadowRays
+          ? ", " + std::to_string(c.shadow_samples) +
+                (c.shadow_samples == 1 ? " shadow sample" : " shadow samples") +
+                how(c.shadow_samples_auto)
+          : std::string();
   return std::string(estimator_name(c.estimator)) + how(c.estimator_auto) + ", direct " +
-         direct_mode_name(c.direct) + how(c.direct_auto) + ", " + std::to_string(c.photons) +
+         direct_mode_name(c.direct) + how(c.direct_auto) + shadow + ", " +
+         std::to_string(c.photons) +
          " photons/pass" + how(c.photons_auto) + ", R0 " + default_text(c.radius) +
          how(c.radius_auto) + ", " + std::to_string(c.emission_spp) + " emission samples" +
          how(c.emission_spp_auto);
@@ -124,6 +146,8 @@ void record_choices(std::map<std::string, std::string>& p, const RenderChoices& 
   p["radius_auto"] = flag(c.radius_auto);
   p["emission-spp"] = std::to_string(c.emission_spp);
   p["emission-spp_auto"] = flag(c.emission_spp_auto);
+  p["shadow-samples"] = std::to_string(c.shadow_samples);
+  p["shadow-samples_auto"] = flag(c.shadow_samples_auto);
 }
 
 }  // namespace pf
