@@ -72,13 +72,14 @@ constexpr int kDefaultEmissionSpp = 8;
 // Light samples per visible point and pass with shadow rays (EyePassOptions::shadow_samples;
 // render's and trace-hitpoints' --shadow-samples auto). sppm and pppm: 1, by measurement
 // (docs/RESULTS.md sections 7 and 8, "Light samples", 2026-12-04, 30 s at 512×512 against the
-// Mitsuba references, medians of 3): with the pixel's Sobol points as light samples the direct
-// light's variance falls 2.3× at 1 sample a pass (1.3× at 4) at equal passes on the diffuse box,
-// and 1 sample runs as many passes as 4 there and 6–10 % more on the 205,663-triangle box; 1
-// against 4 at equal time, both with 366,592 photons: 1.00 / 1.00 (diffuse box, all pixels /
-// away from the lights), 1.00 / 1.00 (mirror and glass balls), 0.95 / 0.95 (205,663 triangles);
-// 2 samples were worse than 1 on all three (1.02–1.05). ppm: 4 (its one eye pass keeps them: they
-// are the direct light's only samples for the whole run).
+// Mitsuba references, medians of 3): with the pixel's Sobol points as light samples the variance
+// away from the lights at equal passes falls 2.3× at 1 sample a pass (1.4× at 4) on the diffuse
+// box (with 4× the photons, so that the light samples' share shows);
+// 1 sample against 4 at equal time, both with 366,592 photons: 0.99 / 0.99 (diffuse box, all
+// pixels / away from the lights), 1.00 / 1.00 (mirror and glass balls), 0.95 / 0.95 (205,663
+// triangles, where 1 sample runs 6–10 % more passes); 2 samples were worse than 1 on all three
+// (1.02–1.05). ppm: 4 (its one eye pass keeps them: they are the direct light's only samples for
+// the whole run).
 constexpr int kDefaultShadowSamples = 1;
 constexpr int kPpmShadowSamples = 4;
 
