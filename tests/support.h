@@ -82,6 +82,22 @@ inline std::vector<std::string> temporary_files(const std::filesystem::path& dir
 // The photonflow source folder: $PF_SOURCE_DIR when set (a copy of the tree somewhere else, as on
 // the GPU machine that bench/gpu.sh carries the test binaries to), else the tree this test was
 // built from.
+// Whether n = 2^k points (xs, ys) in [0, 1)² put one point in each of the 2^k cells of every
+// shape 2^a × 2^(k−a): a (0,k,2)-net (Sobol's first two dimensions, scrambled or not).
+inline bool is_net(const std::vector<float>& xs, const std::vector<float>& ys, int k) {
+  const int n = 1 << k;
+  for (int a = 0; a <= k; ++a) {
+    const int cols = 1 << a, rows = 1 << (k - a);
+    std::vector<int> hits(size_t(n), 0);
+    for (int i = 0; i < n; ++i) {
+      const float x = xs[size_t(i)], y = ys[size_t(i)];
+      if (!(x >= 0.f && x < 1.f && y >= 0.f && y < 1.f)) return false;
+      if (++hits[size_t(int(y * float(rows)) * cols + int(x * float(cols)))] > 1) return false;
+    }
+  }
+  return true;
+}
+
 inline std::string source_dir() {
   const char* s = std::getenv("PF_SOURCE_DIR");
   return s && *s ? s : std::string(PF_SOURCE_DIR);

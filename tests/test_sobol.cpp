@@ -46,22 +46,6 @@ std::vector<uint32_t> directions(int d) {
   return v;
 }
 
-// Whether n = 2^k points (x, y) put one point in each of the 2^k cells of every shape
-// 2^a × 2^(k−a): a (0,k,2)-net.
-bool is_net(const std::vector<float>& xs, const std::vector<float>& ys, int k) {
-  const int n = 1 << k;
-  for (int a = 0; a <= k; ++a) {
-    const int cols = 1 << a, rows = 1 << (k - a);
-    std::vector<int> hits(size_t(n), 0);
-    for (int i = 0; i < n; ++i) {
-      const float x = xs[size_t(i)], y = ys[size_t(i)];
-      if (!(x >= 0.f && x < 1.f && y >= 0.f && y < 1.f)) return false;
-      if (++hits[size_t(int(y * float(rows)) * cols + int(x * float(cols)))] > 1) return false;
-    }
-  }
-  return true;
-}
-
 // Whether n = 2^k values lie one in each interval [i/n, (i+1)/n).
 bool stratified_1d(const std::vector<float>& xs, int k) {
   std::vector<int> hits(size_t(1) << k, 0);
@@ -108,7 +92,7 @@ TEST_CASE("Sobol: the table is Joe and Kuo's numbers, and its points have the ne
       ys.push_back(pf_rng_unit(pf_sobol_bits(1, i)));
     }
     INFO("k " << k);
-    CHECK(is_net(xs, ys, k));
+    CHECK(test::is_net(xs, ys, k));
   }
   // The check can fail: dimensions 1 and 2 are not a (0,2)-sequence (t > 0 for that pair).
   bool all_nets = true;
@@ -118,7 +102,7 @@ TEST_CASE("Sobol: the table is Joe and Kuo's numbers, and its points have the ne
       xs.push_back(pf_rng_unit(pf_sobol_bits(1, i)));
       ys.push_back(pf_rng_unit(pf_sobol_bits(2, i)));
     }
-    all_nets = all_nets && is_net(xs, ys, k);
+    all_nets = all_nets && test::is_net(xs, ys, k);
   }
   CHECK_FALSE(all_nets);
 }
@@ -146,7 +130,7 @@ TEST_CASE("Light samples: a pixel's Sobol draws over the passes stratify the lig
             }
           }
         INFO("spp " << spp << ", samples " << samples << ", pixel " << pixel);
-        CHECK(is_net(u1, u2, k));
+        CHECK(test::is_net(u1, u2, k));
         CHECK(stratified_1d(ul, k));
       }
   // Two pixels, two different scrambles; and the other samplers draw the shadow stream, as

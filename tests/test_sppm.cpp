@@ -240,17 +240,7 @@ TEST_CASE("pixel sampler: the first 2^k samples of a pixel fill every elementary
     const int n = 1 << k;
     std::vector<float> xs(static_cast<size_t>(n)), ys(static_cast<size_t>(n));
     for (int i = 0; i < n; ++i) sample(uint32_t(i), xs[size_t(i)], ys[size_t(i)]);
-    for (int a = 0; a <= k; ++a) {
-      const int cols = 1 << a, rows = 1 << (k - a);
-      std::vector<int> hits(size_t(n), 0);
-      for (int i = 0; i < n; ++i) {
-        const float x = xs[size_t(i)], y = ys[size_t(i)];
-        if (!(x >= 0.f && x < 1.f && y >= 0.f && y < 1.f)) return false;
-        const int cx = int(x * float(cols)), cy = int(y * float(rows));
-        if (++hits[size_t(cy * cols + cx)] > 1) return false;
-      }
-    }
-    return true;
+    return test::is_net(xs, ys, k);
   };
   for (uint32_t seed : {1u, 77u})
     for (uint32_t pixel : {0u, 1u, 513u, 262143u}) {

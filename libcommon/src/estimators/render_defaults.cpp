@@ -80,8 +80,10 @@ float parse_glossy_threshold(const std::string& text, Estimator e) {
   return t;
 }
 
-int parse_emission_spp(const std::string& text) {
-  if (text == "auto") return kDefaultEmissionSpp;
+namespace {
+// "auto" (returns auto_value) or a whole count in [lo, hi]; InputError naming --<option> otherwise.
+int count_or_auto(const std::string& text, const char* option, long lo, long hi, int auto_value) {
+  if (text == "auto") return auto_value;
   size_t used = 0;
   long v = -1;
   try {
@@ -89,10 +91,16 @@ int parse_emission_spp(const std::string& text) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used == 0 || used != text.size() || v < 0 || v > kMaxEmissionSpp)
-    throw input_error("", "--emission-spp must be auto or a count in [0, " +
-                              std::to_string(kMaxEmissionSpp) + "], got '" + text + "'");
+  if (used == 0 || used != text.size() || v < lo || v > hi)
+    throw input_error("", std::string("--") + option + " must be auto or a count in [" +
+                              std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + text +
+                              "'");
   return int(v);
+}
+}  // namespace
+
+int parse_emission_spp(const std::string& text) {
+  return count_or_auto(text, "emission-spp", 0, kMaxEmissionSpp, kDefaultEmissionSpp);
 }
 
 float parse_radius_option(const std::string& text) {
@@ -104,18 +112,8 @@ float parse_radius_option(const std::string& text) {
 }
 
 int parse_shadow_samples(const std::string& text, Estimator e) {
-  if (text == "auto") return e == Estimator::Ppm ? kPpmShadowSamples : kDefaultShadowSamples;
-  size_t used = 0;
-  long v = -1;
-  try {
-    v = std::stol(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || v < 1 || v > kMaxShadowSamples)
-    throw input_error("", "--shadow-samples must be auto or a count in [1, " +
-                              std::to_string(kMaxShadowSamples) + "], got '" + text + "'");
-  return int(v);
+  return count_or_auto(text, "shadow-samples", 1, kMaxShadowSamples,
+                       e == Estimator::Ppm ? kPpmShadowSamples : kDefaultShadowSamples);
 }
 
 std::string describe_choices(const RenderChoices& c) {
