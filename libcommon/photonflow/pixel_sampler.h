@@ -167,11 +167,10 @@ PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint
  * Seeds: pf_rng_bits(sobol_key, pixel, 5) for the index, 6, 7, 8 for the three dimensions (0–4
  * serve the pixel position and the lens). */
 typedef struct {
-  pf_rng rng;      /* STRATA, RANDOM: the shadow stream */
-  pf_uint sobol;   /* 1: Sobol points (SOBOL) */
-  pf_uint key;     /* SOBOL: the run's scrambling key (pf_sobol_key) */
-  pf_uint pixel;   /* SOBOL: the pixel (row-major index) */
-  pf_uint next;    /* SOBOL: the next point's index j */
+  pf_rng rng;        /* STRATA, RANDOM: the shadow stream */
+  pf_uint sobol;     /* 1: Sobol points (SOBOL) */
+  pf_uint next;      /* SOBOL: the next point's index j */
+  pf_uint seeds[4];  /* SOBOL: the pixel's seeds for the index, u1, u2, ul (computed once) */
 } pf_light_draws;
 
 /* Random stream of the shadow rays: pass slot 0x5AD (eye_pass.cpp kShadowStream). */
@@ -183,9 +182,9 @@ PF_INLINE pf_light_draws pf_light_draws_start(pf_int sampler, pf_uint seed, pf_u
   pf_light_draws d;
   d.rng = pf_rng_start(seed, PF_SHADOW_STREAM_SLOT + pass, pixel * (pf_uint)spp + (pf_uint)s);
   d.sobol = sampler == PF_SAMPLER_SOBOL ? 1U : 0U;
-  d.key = sobol_key;
-  d.pixel = pixel;
   d.next = (pass * (pf_uint)spp + (pf_uint)s) * (pf_uint)samples;
+  for (pf_uint k = 0U; k < 4U; ++k)
+    d.seeds[k] = d.sobol ? pf_rng_bits(sobol_key, pixel, 5U + k) : 0U;
   return d;
 }
 
@@ -194,9 +193,8 @@ PF_INLINE pf_light_draws pf_light_draws_from(pf_rng rng) {
   pf_light_draws d;
   d.rng = rng;
   d.sobol = 0U;
-  d.key = 0U;
-  d.pixel = 0U;
   d.next = 0U;
+  for (pf_uint k = 0U; k < 4U; ++k) d.seeds[k] = 0U;
   return d;
 }
 
@@ -208,11 +206,11 @@ PF_INLINE void pf_light_draws_next(pf_light_draws* d, pf_float* ul, pf_float* u1
     *u2 = pf_rng_next(&d->rng);
     return;
   }
-  const pf_uint j = pf_owen_scramble(d->next, pf_rng_bits(d->key, d->pixel, 5U));
+  const pf_uint j = pf_owen_scramble(d->next, d->seeds[0]);
   d->next += 1U;
-  *u1 = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(0U, j), pf_rng_bits(d->key, d->pixel, 6U)));
-  *u2 = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(1U, j), pf_rng_bits(d->key, d->pixel, 7U)));
-  *ul = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(2U, j), pf_rng_bits(d->key, d->pixel, 8U)));
+  *u1 = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(0U, j), d->seeds[1]));
+  *u2 = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(1U, j), d->seeds[2]));
+  *ul = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(2U, j), d->seeds[3]));
 }
 
 #endif /* PHOTONFLOW_PIXEL_SAMPLER_H */

@@ -115,11 +115,20 @@ PF_INLINE pf_uint pf_reverse_bits32(pf_uint x) {
   return (x >> 16) | (x << 16);
 }
 
-/* Point i of Sobol dimension d (d < PF_SOBOL_DIMS) as 32 fraction bits. */
+/* Point i of Sobol dimension d (d < PF_SOBOL_DIMS) as 32 fraction bits: the XOR of the columns
+ * of the set bits of i (dimension 0 in closed form, the bit reversal). The host visits only the
+ * set bits (count-trailing-zeros); the kernels test every bit up to the highest; the XOR is the
+ * same in any order, so both give the same bits. */
 PF_INLINE pf_uint pf_sobol_bits(pf_uint d, pf_uint i) {
+  if (d == 0U) return pf_reverse_bits32(i);
   pf_uint r = 0U;
+#ifdef __OPENCL_VERSION__
   for (pf_uint k = d * 32U; i != 0U; i >>= 1, ++k)
     if (i & 1U) r ^= pf_sobol_matrix[k];
+#else
+  for (const pf_uint* m = pf_sobol_matrix + d * 32U; i != 0U; i &= i - 1U)
+    r ^= m[__builtin_ctz(i)];
+#endif
   return r;
 }
 
