@@ -9,7 +9,8 @@
  * Random numbers: stream (seed, kEyeStream + pass, pixel·spp + s) for jitter (pixel_sampler.h)
  * and glass choices; the shadow rays' light samples by pf_light_draws (pixel_sampler.h: the
  * pixel's Sobol points under the SOBOL sampler, stream (seed, kShadowStream + pass, same index)
- * otherwise) — the CPU's streams and dimension order. PPM's one eye pass is pass 0; SPPM and PPPM trace one per pass.
+ * otherwise) — the CPU's streams and dimension order. PPM's one eye pass is pass 0; SPPM and
+ * PPPM trace one per pass.
  *
  * Output per (pixel, sample) slot: the hitpoint and a used flag; the host compacts the used slots
  * in slot order (= the CPU's order: pixel row-major, then sample).
