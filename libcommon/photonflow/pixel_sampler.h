@@ -180,8 +180,11 @@ PF_INLINE pf_light_draws pf_light_draws_start(pf_int sampler, pf_uint seed, pf_u
                                               pf_uint pass, pf_uint pixel, pf_int s, pf_int spp,
                                               pf_int samples) {
   pf_light_draws d;
-  d.rng = pf_rng_start(seed, PF_SHADOW_STREAM_SLOT + pass, pixel * (pf_uint)spp + (pf_uint)s);
   d.sobol = sampler == PF_SAMPLER_SOBOL ? 1U : 0U;
+  /* Only the draws in use are keyed: the shadow stream, or the pixel's four seeds. */
+  d.rng.key = d.rng.index = d.rng.dim = 0U;
+  if (!d.sobol)
+    d.rng = pf_rng_start(seed, PF_SHADOW_STREAM_SLOT + pass, pixel * (pf_uint)spp + (pf_uint)s);
   d.next = (pass * (pf_uint)spp + (pf_uint)s) * (pf_uint)samples;
   for (pf_uint k = 0U; k < 4U; ++k)
     d.seeds[k] = d.sobol ? pf_rng_bits(sobol_key, pixel, 5U + k) : 0U;
