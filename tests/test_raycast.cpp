@@ -665,22 +665,237 @@ TEST_CASE("the AVX leaf test (eight triangles at a time) gives the SSE one's hit
   INFO("leaves of up to " << params.max_leaf_size << " triangles at least");
   for (const pf::Scene* s : {static_cast<const pf::Scene*>(&big), &room()}) {
     const auto rays = random_rays(*s, 50000, 11);
-    std::vector<pf::Hit> sse, avx;
-    std::vector<uint8_t> sse_any, avx_any;
-    REQUIRE(pf::set_kd_leaf_avx(false));
-    pf::intersect_closest_batch(*s, rays, sse, pf::Traversal::Stack);
-    pf::intersect_any_batch(*s, rays, sse_any, pf::Traversal::Stack);
-    REQUIRE(pf::set_kd_leaf_avx(true));
-    pf::intersect_closest_batch(*s, rays, avx, pf::Traversal::Stack);
-    pf::intersect_any_batch(*s, rays, avx_any, pf::Traversal::Stack);
-    size_t differ = 0, hits = 0;
-    for (size_t i = 0; i < rays.size(); ++i) {
-      const pf::Hit &a = sse[i], &b = avx[i];
-      hits += a.hit() ? 1 : 0;
-      differ += a.tri == b.tri && a.t == b.t && a.u == b.u && a.v == b.v ? 0 : 1;
+    // Both traversals take the AVX test (the rope loop for leaves of more than four).
+    for (pf::Traversal trav : {pf::Traversal::Stack, pf::Traversal::Ropes}) {
+      INFO(pf::traversal_name(trav));
+      std::vector<pf::Hit> sse, avx;
+      std::vector<uint8_t> sse_any, avx_any;
+      REQUIRE(pf::set_kd_leaf_avx(false));
+      pf::intersect_closest_batch(*s, rays, sse, trav);
+      pf::intersect_any_batch(*s, rays, sse_any, trav);
+      REQUIRE(pf::set_kd_leaf_avx(true));
+      pf::intersect_closest_batch(*s, rays, avx, trav);
+      pf::intersect_any_batch(*s, rays, avx_any, trav);
+      size_t differ = 0, hits = 0;
+      for (size_t i = 0; i < rays.size(); ++i) {
+        const pf::Hit &a = sse[i], &b = avx[i];
+        hits += a.hit() ? 1 : 0;
+        differ += a.tri == b.tri && a.t == b.t && a.u == b.u && a.v == b.v ? 0 : 1;
+      }
+      CHECK(differ == 0);
+      CHECK(sse_any == avx_any);
+      CHECK(hits > rays.size() / 5);  // the soup is open: a quarter of its rays hit
     }
+  }
+}
+
+namespace {
+
+// The compact rope copy of a scene's tree, as the host builds it (raycast.cpp): its leaf records
+// are numbered as Hit::leaf and Ray::leaf number them.
+struct CompactCopy {
+  std::vector<shared_plain::pf_kd_cnode> cnodes;
+  std::vector<shared_plain::pf_kd_cleaf> cleaves;
+  float root_box[6];
+  explicit CompactCopy(const pf::Scene& s) {
+    std::vector<int32_t> order, index;
+    preorder(s.kd.nodes, order, index);
+    size_t n_leaves = 0;
+    for (const pf_kd_node& n : s.kd.nodes) n_leaves += n.axis == PF_KD_LEAF ? 1 : 0;
+    cnodes.resize(s.kd.nodes.size());
+    cleaves.resize(n_leaves);
+    shared_plain::pf_kd_compact_build(s.kd.nodes.data(), int32_t(s.kd.nodes.size()), order.data(),
+                                      index.data(), cnodes.data(), cleaves.data(), root_box);
+  }
+  // Whether leaf record `leaf`'s box holds p, widened by `slack` on every side.
+  bool holds(int32_t leaf, const Vec3& p, float slack = 0.f) const {
+    if (leaf < 0 || size_t(leaf) >= cleaves.size()) return false;
+    const float* b = cleaves[size_t(leaf)].box;
+    for (int k = 0; k < 3; ++k)
+      if (!(p[k] >= b[k] - slack && p[k] <= b[3 + k] + slack)) return false;
+    return true;
+  }
+};
+
+bool inside_box(const pf::Scene& s, const Vec3& p) {
+  for (int k = 0; k < 3; ++k)
+    if (!(p[k] >= s.kd.bounds.lo[k] && p[k] <= s.kd.bounds.hi[k])) return false;
+  return true;
+}
+
+bool same_bits(const pf::Hit& a, const pf::Hit& b) {
+  return a.tri == b.tri && (!a.hit() || (std::memcmp(&a.t, &b.t, 4) == 0 &&
+                                         std::memcmp(&a.u, &b.u, 4) == 0 &&
+                                         std::memcmp(&a.v, &b.v, 4) == 0));
+}
+
+// Secondary rays as the tracers cast them: from the hits of random rays, through spawn_ray (the
+// hit's leaf as Ray::leaf), in uniform directions, three in four back to the side the ray came
+// from (reflection), the others through the surface (refraction: their origin crosses it, often
+// into another leaf).
+std::vector<pf::Ray> bounce_rays(const pf::Scene& s, size_t n, uint32_t seed) {
+  const auto first = random_rays(s, n, seed);
+  std::mt19937 rng(seed + 1000);
+  const pf::RayCaster caster(s);
+  const float eps = pf::ray_epsilon(s);
+  std::vector<pf::Ray> out;
+  for (const pf::Ray& r : first) {
+    pf::Hit h;
+    if (!caster.closest(r, h)) continue;
+    const pf::SurfaceHit sh = pf::surface_at(s, r, h);
+    Vec3 d = random_direction(rng);
+    if ((pf::dot(d, sh.ng) > 0.f) == (pf::dot(r.d, sh.ng) > 0.f) && rng() % 4 != 0) d = -d;
+    pf::Ray b = pf::spawn_ray(sh, d, eps);
+    REQUIRE(b.leaf == h.leaf);
+    if (out.size() % 3 == 0) b.tmax = 0.3f;  // some short, like shadow rays
+    out.push_back(b);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a closest hit reports the kd leaf it lies in", "[raycast]") {
+  // Hit::leaf (the leaf record where the walk stopped) must hold the hit point, up to rounding
+  // and the edge tolerance, for rays from inside the scene's box: the next ray from there starts
+  // its walk in it. Both the stack walk and the rope walk report
+  // it; any-hit queries and misses report none.
+  for (const pf::Scene* s : {&room(), &soup(), &blob()}) {
+    const CompactCopy copy(*s);
+    const auto rays = random_rays(*s, 20000, 31);
+    // Up to rounding and the edge tolerance of the triangle test (a hit just past an edge).
+    const float slack = 2.f * PF_HH_EDGE_EPS * pf::length(s->bounds.extent());
+    size_t hits = 0, outside = 0, no_leaf = 0;
+    for (pf::Traversal trav : {pf::Traversal::Stack, pf::Traversal::Ropes}) {
+      for (const pf::Ray& r : rays) {
+        pf::Hit h;
+        if (!pf::intersect_closest(*s, r, h, trav)) {
+          no_leaf += h.leaf == -1 ? 0 : 1;  // a miss reports no leaf
+          continue;
+        }
+        ++hits;
+        if (inside_box(*s, r.o)) outside += copy.holds(h.leaf, r.o + r.d * h.t, slack) ? 0 : 1;
+      }
+    }
+    INFO(s->triangles.size() << " triangles, " << hits << " hits");
+    CHECK(hits > rays.size() / 2);
+    CHECK(outside == 0);
+    CHECK(no_leaf == 0);
+  }
+}
+
+TEST_CASE("a secondary ray started in its origin's leaf gets the root walk's hit bit for bit",
+          "[raycast]") {
+  // Ray::leaf only saves the descent from the root: the closest hit (triangle, t, u, v) and the
+  // any-hit answer must be exactly those of the same ray without it, through RayCaster and
+  // intersect_closest / intersect_any alike. Most bounce origins lie in their hit's leaf (the
+  // path is really taken); a hint whose box does not hold the origin, or that names no leaf at
+  // all, must be ignored.
+  for (const pf::Scene* s : {&room(), &soup(), &blob()}) {
+    const CompactCopy copy(*s);
+    const pf::RayCaster caster(*s);
+    const auto rays = bounce_rays(*s, s->triangles.size() > 50000 ? 60000 : 20000, 32);
+    std::mt19937 rng(33);
+    size_t inside = 0, differ = 0, any_differ = 0, wrong_differ = 0, wrong_outside = 0, hits = 0;
+    for (const pf::Ray& hinted : rays) {
+      pf::Ray plain = hinted;
+      plain.leaf = -1;
+      inside += copy.holds(hinted.leaf, hinted.o) ? 1 : 0;
+      pf::Hit a, b, c;
+      caster.closest(plain, a);
+      caster.closest(hinted, b);
+      pf::intersect_closest(*s, hinted, c);
+      hits += a.hit() ? 1 : 0;
+      differ += same_bits(a, b) && same_bits(a, c) ? 0 : 1;
+      any_differ += caster.any(plain) == caster.any(hinted) &&
+                            caster.any(plain) == pf::intersect_any(*s, hinted)
+                        ? 0
+                        : 1;
+      // Another leaf (almost never holding the origin), or an index past the last leaf.
+      pf::Ray wrong = hinted;
+      wrong.leaf = rng() % 8 == 0 ? int32_t(copy.cleaves.size() + rng() % 100)
+                                  : int32_t(rng() % copy.cleaves.size());
+      wrong_outside += copy.holds(wrong.leaf, wrong.o) ? 0 : 1;
+      pf::Hit w;
+      caster.closest(wrong, w);
+      wrong_differ += same_bits(a, w) && caster.any(wrong) == caster.any(plain) ? 0 : 1;
+    }
+    INFO(s->triangles.size() << " triangles, " << rays.size() << " bounce rays, " << inside
+                             << " origins in their leaf, " << hits << " hits");
+    CHECK(hits > rays.size() / 5);  // the soup is open
+    CHECK(inside > rays.size() * 2 / 3);
+    CHECK(wrong_outside > rays.size() * 9 / 10);
     CHECK(differ == 0);
-    CHECK(sse_any == avx_any);
-    CHECK(hits > rays.size() / 5);  // the soup is open: a quarter of its rays hit
+    CHECK(any_differ == 0);
+    CHECK(wrong_differ == 0);
+  }
+}
+
+TEST_CASE("the shared rope loop started in a leaf equals its root walk (the kernels' leaf test)",
+          "[raycast]") {
+  // pf_kd_traverse_ropes_compact_from with the scalar leaf test, as a kernel would compile it:
+  // started in the origin's leaf it returns the root walk's bits and reports the leaf the hit
+  // lies in; started in a leaf that does not hold the origin, it walks from the root.
+  for (const pf::Scene* s : {&room(), &blob()}) {
+    const CompactCopy c(*s);
+    const auto rays = bounce_rays(*s, 20000, 34);
+    // Up to rounding and the edge tolerance of the triangle test (a hit just past an edge).
+    const float slack = 2.f * PF_HH_EDGE_EPS * pf::length(s->bounds.extent());
+    size_t differ = 0, bad_end = 0, started = 0, hits = 0;
+    for (const pf::Ray& r : rays) {
+      const float o[3] = {r.o.x, r.o.y, r.o.z}, d[3] = {r.d.x, r.d.y, r.d.z};
+      started += c.holds(r.leaf, r.o) ? 1 : 0;
+      for (int any = 0; any < 2; ++any) {
+        for (int32_t start : {r.leaf, int32_t((r.leaf + 1) % int32_t(c.cleaves.size()))}) {
+          shared_plain::pf_ray_hit a = {r.tmax, -1, 0.f, 0.f}, b = a;
+          int32_t end_a = 7, end_b = 7;
+          const int ra = shared_plain::pf_kd_traverse_ropes_compact_from(
+              c.cnodes.data(), int32_t(c.cnodes.size()), c.cleaves.data(), c.root_box,
+              s->kd.leaf_tris.data(), s->hh.data(), o, d, r.tmin, any, &a, -1, &end_a);
+          const int rb = shared_plain::pf_kd_traverse_ropes_compact_from(
+              c.cnodes.data(), int32_t(c.cnodes.size()), c.cleaves.data(), c.root_box,
+              s->kd.leaf_tris.data(), s->hh.data(), o, d, r.tmin, any, &b, start, &end_b);
+          differ += ra == rb && a.tri == b.tri && std::memcmp(&a.t, &b.t, 4) == 0 &&
+                            std::memcmp(&a.u, &b.u, 4) == 0 && std::memcmp(&a.v, &b.v, 4) == 0
+                        ? 0
+                        : 1;
+          if (any || !ra) {
+            bad_end += end_a == -1 && end_b == -1 ? 0 : 1;
+            continue;
+          }
+          hits += 1;
+          // A ray from outside the scene's box may run in the margin around it and hit a wall
+          // there by the edge tolerance, far from the leaf it stopped in (its next ray then
+          // starts from the root): the leaf holds the hit for rays from inside.
+          if (!inside_box(*s, r.o)) continue;
+          const Vec3 p = r.o + r.d * a.t;
+          bad_end += c.holds(end_a, p, slack) && c.holds(end_b, p, slack) ? 0 : 1;
+        }
+      }
+    }
+    INFO(s->triangles.size() << " triangles, " << rays.size() << " rays, " << started
+                             << " started in their leaf");
+    CHECK(started > rays.size() * 2 / 3);
+    CHECK(hits > rays.size() / 3);
+    CHECK(differ == 0);
+    CHECK(bad_end == 0);
+  }
+}
+
+TEST_CASE("leaf_at finds the leaf that holds a point", "[raycast]") {
+  for (const pf::Scene* s : {&room(), &blob()}) {
+    const CompactCopy c(*s);
+    const pf::RayCaster caster(*s);
+    std::mt19937 rng(35);
+    std::uniform_real_distribution<float> uni(0.f, 1.f);
+    size_t wrong = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const float x = uni(rng), y = uni(rng), z = uni(rng);
+      const Vec3 p = s->bounds.lo + Vec3(x, y, z) * s->bounds.extent();
+      wrong += c.holds(caster.leaf_at(p), p) ? 0 : 1;
+    }
+    CHECK(wrong == 0);
+    CHECK(caster.leaf_at(s->bounds.hi + s->bounds.extent()) == -1);
+    CHECK(caster.leaf_at(Vec3(NAN, 0.f, 0.f)) == -1);
   }
 }

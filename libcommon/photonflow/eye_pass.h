@@ -163,6 +163,7 @@ class EyeTracer {
   pf_uint emission_key_;         // the emission samples' scrambling key
   CameraFrame cam_;
   RayCaster caster_;
+  int32_t camera_leaf_;  // the kd leaf of the eye point: the camera rays' Ray::leaf
   std::vector<uint8_t> own_pixels_;          // emission_pixels, when the caller gave none
   const std::vector<uint8_t>* emit_pixels_;  // the marks in use (nullptr: no emission samples)
   Vec3 emission_sample(int x, int y, int k) const;
@@ -177,8 +178,9 @@ class EyeTracer {
 // shadow rays (`samples` per call, each drawing (ul, u1, u2) from `draws`: pixel_sampler.h
 // pf_light_draws, Sobol points under PF_SAMPLER_SOBOL, the shadow stream otherwise): area, point,
 // spot and directional lights (light_shared.h).
+// `leaf`: the kd leaf p lies in (SurfaceHit::leaf), where the shadow rays start their walk.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
-                  const pf_material& m, int samples, pf_light_draws& draws);
+                  const pf_material& m, int samples, pf_light_draws& draws, int32_t leaf = -1);
 // The same with the shadow stream (seed, 0x5AD0000 + pass, index): independent draws. For tests.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
                   const pf_material& m, int samples, uint32_t seed, uint32_t pass, uint32_t index);
@@ -194,11 +196,11 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
 // sample finds area lights, next-event estimation the point, spot and directional ones).
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_light_draws& draws, bool delta_only);
+                      int samples, pf_light_draws& draws, bool delta_only, int32_t leaf = -1);
 // The same drawing from `rng` (a glossy point's samples come from the eye stream), which comes
 // back advanced past the draws.
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_rng& rng, bool delta_only);
+                      int samples, pf_rng& rng, bool delta_only, int32_t leaf = -1);
 
 }  // namespace pf

@@ -285,15 +285,28 @@ PF_INLINE int pf_kd_cleaf_intersect(PF_GLOBAL const pf_kd_cleaf* leaf,
 #define PF_KD_CLEAF_TEST pf_kd_cleaf_intersect
 #endif
 
-/* pf_kd_traverse_ropes over the compact copy: same arguments and result (node_count = the number
- * of compact nodes, the number of pf_kd_node). */
-PF_INLINE int pf_kd_traverse_ropes_compact(PF_GLOBAL const pf_kd_cnode* cnodes, pf_int node_count,
-                                           PF_GLOBAL const pf_kd_cleaf* leaves,
-                                           PF_GLOBAL const float* root_box,
-                                           PF_GLOBAL const pf_int* leaf_tris,
-                                           PF_GLOBAL const pf_hh_triangle* hh, const float* o,
-                                           const float* d, float tmin, int any_hit,
-                                           pf_ray_hit* hit) {
+/* pf_kd_traverse_ropes over the compact copy, optionally started in a given leaf.
+ *
+ * With start_leaf < 0: the same arguments and result as pf_kd_traverse_ropes (node_count = the
+ * number of compact nodes, the number of pf_kd_node): the walk enters at the root box.
+ * With start_leaf = a leaf record index whose box holds the origin (closed box: o on a face
+ * counts): the walk starts in that leaf at t = tmin and skips the root-box test and the descent
+ * from the root (about seven dependent node loads on a 200k-triangle scene). A secondary ray
+ * leaves from a hit point, and the leaf the hit lies in is known from the ray that found it
+ * (end_leaf below), so bounce and shadow rays need no descent at all when the origin is still
+ * inside. The leaves visited from there on are those of the root walk, except that an origin on
+ * the start leaf's face may add that leaf (the root walk puts such a point on the side the ray
+ * moves into): its triangles are then tested too, and since every triangle tested is really hit
+ * in (tmin, tmax] and ties go to the lowest index, the closest hit is the same. A start_leaf whose
+ * box does not hold o (or a NaN origin) is ignored: the walk enters at the root.
+ * end_leaf, if not null, receives the leaf record the walk stopped in when it returns a closest
+ * hit (the hit lies in that leaf's box up to rounding: the loop stops where hit->t < t_exit), else
+ * −1 (no hit, or any_hit). */
+PF_INLINE int pf_kd_traverse_ropes_compact_from(
+    PF_GLOBAL const pf_kd_cnode* cnodes, pf_int node_count, PF_GLOBAL const pf_kd_cleaf* leaves,
+    PF_GLOBAL const float* root_box, PF_GLOBAL const pf_int* leaf_tris,
+    PF_GLOBAL const pf_hh_triangle* hh, const float* o, const float* d, float tmin, int any_hit,
+    pf_ray_hit* hit, pf_int start_leaf, pf_int* end_leaf) {
   float inv_d[3];
   int high[3], exit_face[3]; /* exit_face[k]: index into box[] of the face the ray leaves by */
   for (int k = 0; k < 3; ++k) {
@@ -301,25 +314,38 @@ PF_INLINE int pf_kd_traverse_ropes_compact(PF_GLOBAL const pf_kd_cnode* cnodes, 
     high[k] = inv_d[k] > 0.0f;
     exit_face[k] = 3 * high[k] + k;
   }
+  if (end_leaf) *end_leaf = -1;
   if (node_count <= 0) return 0;
-  float t_entry, t_leave_root;
-  {
+  float t_entry;
+  pf_int node = 0, leaf_index = -1;
+  if (start_leaf >= 0) {
+    PF_GLOBAL const float* b = leaves[start_leaf].box;
+    if (o[0] >= b[0] && o[1] >= b[1] && o[2] >= b[2] && o[0] <= b[3] && o[1] <= b[4] &&
+        o[2] <= b[5] && tmin < hit->t)
+      leaf_index = start_leaf;
+  }
+  if (leaf_index >= 0) {
+    t_entry = tmin;
+  } else {
+    float t_leave_root;
     const float lo[3] = {root_box[0], root_box[1], root_box[2]};
     const float hi[3] = {root_box[3], root_box[4], root_box[5]};
     if (!pf_ray_box(lo, hi, o, d, inv_d, tmin, hit->t, &t_entry, &t_leave_root)) return 0;
   }
-  pf_int node = 0;
   float tie = -1.0f; /* as in pf_kd_traverse_ropes */
   for (pf_int step = 0; step < node_count; ++step) {
-    const float p[3] = {o[0] + t_entry * d[0], o[1] + t_entry * d[1], o[2] + t_entry * d[2]};
-    pf_kd_cnode n = cnodes[node];
-    while ((n.code & 3) != PF_KD_LEAF) {
-      const int a = n.code & 3;
-      const int go_left = (p[a] < n.split) | ((p[a] == n.split) & (d[a] * tie > 0.0f));
-      node = go_left ? node + 1 : (n.code >> 2);
-      n = cnodes[node];
+    if (leaf_index < 0) {
+      const float p[3] = {o[0] + t_entry * d[0], o[1] + t_entry * d[1], o[2] + t_entry * d[2]};
+      pf_kd_cnode n = cnodes[node];
+      while ((n.code & 3) != PF_KD_LEAF) {
+        const int a = n.code & 3;
+        const int go_left = (p[a] < n.split) | ((p[a] == n.split) & (d[a] * tie > 0.0f));
+        node = go_left ? node + 1 : (n.code >> 2);
+        n = cnodes[node];
+      }
+      leaf_index = n.code >> 2;
     }
-    PF_GLOBAL const pf_kd_cleaf* leaf = &leaves[n.code >> 2];
+    PF_GLOBAL const pf_kd_cleaf* leaf = &leaves[leaf_index];
     if (leaf->count > 0 && PF_KD_CLEAF_TEST(leaf, leaf_tris, hh, o, d, tmin, any_hit, hit))
       return 1;
     float t_exit = INFINITY;
@@ -334,10 +360,25 @@ PF_INLINE int pf_kd_traverse_ropes_compact(PF_GLOBAL const pf_kd_cnode* cnodes, 
     if (face < 0 || hit->t < t_exit) break;
     node = leaf->ropes[face];
     if (node < 0) break;
+    leaf_index = -1;
     tie = 1.0f;
     t_entry = t_exit > t_entry ? t_exit : t_entry;
   }
+  if (end_leaf && hit->tri >= 0) *end_leaf = leaf_index;
   return hit->tri >= 0;
+}
+
+/* pf_kd_traverse_ropes over the compact copy: same arguments and result (node_count = the number
+ * of compact nodes, the number of pf_kd_node). */
+PF_INLINE int pf_kd_traverse_ropes_compact(PF_GLOBAL const pf_kd_cnode* cnodes, pf_int node_count,
+                                           PF_GLOBAL const pf_kd_cleaf* leaves,
+                                           PF_GLOBAL const float* root_box,
+                                           PF_GLOBAL const pf_int* leaf_tris,
+                                           PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                           const float* d, float tmin, int any_hit,
+                                           pf_ray_hit* hit) {
+  return pf_kd_traverse_ropes_compact_from(cnodes, node_count, leaves, root_box, leaf_tris, hh, o,
+                                           d, tmin, any_hit, hit, -1, (pf_int*)0);
 }
 
 #ifndef __OPENCL_VERSION__

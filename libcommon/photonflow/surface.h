@@ -20,6 +20,7 @@ struct SurfaceHit {
   int mesh;
   int material;
   float u, v;    // barycentrics of the hit (weights of v1 and v2), for the texture look-up
+  int leaf = -1; // the kd leaf the hit lies in (Hit::leaf): rays leaving here start their walk there
 };
 
 inline SurfaceHit surface_at(const Scene& s, const Ray& ray, const Hit& h) {
@@ -37,6 +38,7 @@ inline SurfaceHit surface_at(const Scene& s, const Ray& ray, const Hit& h) {
   sh.material = t.material;
   sh.u = h.u;
   sh.v = h.v;
+  sh.leaf = h.leaf;
   return sh;
 }
 
@@ -82,6 +84,13 @@ inline float ray_epsilon(const Scene& s) { return 1e-5f * length(s.bounds.extent
 // Origin for a ray leaving `sh` in direction `d`: pushed off the surface on d's side.
 inline Vec3 offset_origin(const SurfaceHit& sh, const Vec3& d, float eps) {
   return sh.p + sh.ng * (dot(d, sh.ng) >= 0.f ? eps : -eps);
+}
+
+// A ray leaving `sh` in direction `d` (offset_origin), its kd walk started in the hit's leaf.
+inline Ray spawn_ray(const SurfaceHit& sh, const Vec3& d, float eps) {
+  Ray r{offset_origin(sh, d, eps), d};
+  r.leaf = sh.leaf;
+  return r;
 }
 
 // Perfect specular scattering of a ray (direction d, unit) at a mirror or glass surface.

@@ -427,27 +427,29 @@ std::atomic<bool>& kd_leaf_avx() {
   return on;
 }
 
-// The same for one leaf of the rope traversal (PF_KD_CLEAF_TEST).
+// The same for one leaf of the rope traversal (PF_KD_CLEAF_TEST), eight triangles at a time
+// where the stack traversal's test does so.
 bool leaf_intersect_packets(const HHPacket* p, uint32_t count, const float* o, const float* d,
                             float tmin, bool any_hit, pf_ray_hit& best, const AlphaTest* alpha) {
   const RayLanes r(o, d);
+#ifdef PF_HAVE_AVX_LEAF
+  if (count > 4 && kd_leaf_avx().load(std::memory_order_relaxed))
+    return alpha ? leaf_intersect_avx<true>(p, count, r, tmin, any_hit, best, alpha)
+                 : leaf_intersect_avx<false>(p, count, r, tmin, any_hit, best, nullptr);
+#endif
   return alpha ? leaf_intersect<true>(p, count, r, tmin, any_hit, best, alpha)
                : leaf_intersect<false>(p, count, r, tmin, any_hit, best, nullptr);
 }
 
-// What the rope traversal passes as its hh argument to PF_KD_CLEAF_TEST: the scene's packets and,
-// in a masked scene, the alpha test (nullptr otherwise).
-struct RopeCtx {
-  const HHPacket* packets;
-  const AlphaTest* alpha;
-};
-
 // Classic front-to-back kd traversal with an explicit stack (pbrt's KdTreeAccel) over the compact
 // copy: each node is visited with the parametric interval [t0, t1] of the ray inside it; the near
 // child is entered first and the far child pushed with its interval.
+// *end_leaf (closest hits): the leaf record whose interval holds the hit, for Ray::leaf; −1
+// without a hit or with any_hit.
 template <bool kMasked>
 bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin, bool any_hit,
-                    pf_ray_hit& hit, const AlphaTest* alpha) {
+                    pf_ray_hit& hit, const AlphaTest* alpha, int32_t* end_leaf) {
+  *end_leaf = -1;
   if (kd.nodes.empty()) return false;
   const float inv_d[3] = {1.f / d[0], 1.f / d[1], 1.f / d[2]};
   float t0, t1;
@@ -464,6 +466,7 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
   const RayLanes r(o, d);
   const bool avx = kd_leaf_avx().load(std::memory_order_relaxed);
   (void)avx;
+  uint32_t end_node = ~0u;  // the last leaf whose interval held the closest hit so far
   for (;;) {
     if (best.t < t0) break;  // closest hit lies before this node (stack intervals only grow)
     const CompactNode n = nodes[node];
@@ -502,6 +505,7 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
       hit = best;
       return true;
     }
+    if (best.t <= t1) end_node = node;
     if (top == 0) break;
     --top;
     node = stack[top].node;
@@ -509,47 +513,76 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
     t1 = stack[top].t1;
   }
   hit = best;
+  if (hit.tri >= 0 && end_node != ~0u) *end_leaf = kd.cnodes[end_node].code >> 2;
   return hit.tri >= 0;
 }
 
-// traverse_stack with the alpha test where the scene has masks (alpha != nullptr).
-inline bool traverse_stack_any(const HostKd& kd, const float* o, const float* d, float tmin,
-                               bool any_hit, pf_ray_hit& hit, const AlphaTest* alpha) {
-  return alpha ? traverse_stack<true>(kd, o, d, tmin, any_hit, hit, alpha)
-               : traverse_stack<false>(kd, o, d, tmin, any_hit, hit, nullptr);
+// What the rope traversal passes as its hh argument to PF_KD_CLEAF_TEST: the scene's packets and,
+// in a masked scene, the alpha test (nullptr otherwise).
+struct RopeCtx {
+  const HHPacket* packets;
+  const AlphaTest* alpha;
+};
+
+// The shared compact rope loop over the host copy, entered at the root (start_leaf < 0) or in
+// start_leaf when its box holds o.
+inline bool traverse_ropes(const HostKd& h, const float* o, const float* d, float tmin,
+                           bool any_hit, pf_ray_hit& hit, const AlphaTest* alpha,
+                           int32_t start_leaf, int32_t* end_leaf) {
+  const RopeCtx ctx{h.packets.data(), alpha};
+  return pf_kd_traverse_ropes_compact_from(
+             h.cnodes.data(), pf_int(h.cnodes.size()), h.cleaves.data(), h.root_box, nullptr,
+             reinterpret_cast<const pf_hh_triangle*>(&ctx), o, d, tmin, any_hit, &hit,
+             start_leaf, end_leaf) != 0;
 }
 
-bool cast(const Scene& scene, const Ray& ray, bool any_hit, Traversal trav, pf_ray_hit& hit) {
+// The default traversal: from a known leaf along the ropes when its box holds the origin (a
+// secondary ray, Ray::leaf), else the stack traversal from the root; with the alpha test where
+// the scene has masks (alpha != nullptr). Both give the same hits (raycast.h); *end_leaf as
+// Hit::leaf.
+inline bool traverse_default(const HostKd& kd, const float* o, const float* d, float tmin,
+                             bool any_hit, int32_t start_leaf, pf_ray_hit& hit,
+                             const AlphaTest* alpha, int32_t* end_leaf) {
+  if (start_leaf >= 0 && size_t(start_leaf) < kd.cleaves.size()) {
+    const float* b = kd.cleaves[size_t(start_leaf)].box;  // pf_kd_traverse_ropes_compact_from's test
+    if (o[0] >= b[0] && o[1] >= b[1] && o[2] >= b[2] && o[0] <= b[3] && o[1] <= b[4] &&
+        o[2] <= b[5])
+      return traverse_ropes(kd, o, d, tmin, any_hit, hit, alpha, start_leaf, end_leaf);
+  }
+  return alpha ? traverse_stack<true>(kd, o, d, tmin, any_hit, hit, alpha, end_leaf)
+               : traverse_stack<false>(kd, o, d, tmin, any_hit, hit, nullptr, end_leaf);
+}
+
+bool cast(const Scene& scene, const Ray& ray, bool any_hit, Traversal trav, pf_ray_hit& hit,
+          int32_t* end_leaf) {
   const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   hit = {ray.tmax, -1, 0.f, 0.f};
+  *end_leaf = -1;
   const AlphaTest at{&scene};
   const AlphaTest* alpha = scene.has_alpha_masks() ? &at : nullptr;
   switch (trav) {
-    case Traversal::Ropes: {
+    case Traversal::Ropes:
       // The shared rope loop over the compact copy (the same bits as pf_kd_traverse_ropes over
-      // the pf_kd_node array, tested); the packets travel in the hh argument (PF_KD_CLEAF_TEST).
-      const HostKd& h = host_kd(scene);
-      const RopeCtx ctx{h.packets.data(), alpha};
-      return pf_kd_traverse_ropes_compact(
-                 h.cnodes.data(), pf_int(h.cnodes.size()), h.cleaves.data(), h.root_box, nullptr,
-                 reinterpret_cast<const pf_hh_triangle*>(&ctx), o, d, ray.tmin, any_hit,
-                 &hit) != 0;
-    }
+      // the pf_kd_node array, tested), always from the root; the packets travel in the hh
+      // argument (PF_KD_CLEAF_TEST).
+      return traverse_ropes(host_kd(scene), o, d, ray.tmin, any_hit, hit, alpha, -1, end_leaf);
     case Traversal::Stack:
-      return traverse_stack_any(host_kd(scene), o, d, ray.tmin, any_hit, hit, alpha);
+      return traverse_default(host_kd(scene), o, d, ray.tmin, any_hit, ray.leaf, hit, alpha,
+                              end_leaf);
     case Traversal::Brute:
       return traverse_brute(scene, o, d, ray.tmin, any_hit, hit);
   }
   return false;
 }
 
-Hit to_hit(const pf_ray_hit& h) {
+Hit to_hit(const pf_ray_hit& h, int32_t leaf) {
   Hit hit;
   hit.t = h.t;
   hit.tri = h.tri;
   hit.u = h.u;
   hit.v = h.v;
+  hit.leaf = leaf;
   return hit;
 }
 
@@ -563,9 +596,10 @@ bool RayCaster::closest(const Ray& ray, Hit& hit) const {
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   pf_ray_hit h{ray.tmax, -1, 0.f, 0.f};
   const AlphaTest at{alpha_scene_};
-  const bool found = traverse_stack_any(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, false,
-                                        h, alpha_scene_ ? &at : nullptr);
-  hit = found ? to_hit(h) : Hit{};
+  int32_t leaf;
+  const bool found = traverse_default(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, false,
+                                      ray.leaf, h, alpha_scene_ ? &at : nullptr, &leaf);
+  hit = found ? to_hit(h, leaf) : Hit{};
   return found;
 }
 
@@ -574,8 +608,24 @@ bool RayCaster::any(const Ray& ray) const {
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   pf_ray_hit h{ray.tmax, -1, 0.f, 0.f};
   const AlphaTest at{alpha_scene_};
-  return traverse_stack_any(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, true, h,
-                            alpha_scene_ ? &at : nullptr);
+  int32_t leaf;
+  return traverse_default(*static_cast<const HostKd*>(kd_), o, d, ray.tmin, true, ray.leaf, h,
+                          alpha_scene_ ? &at : nullptr, &leaf);
+}
+
+int32_t RayCaster::leaf_at(const Vec3& p) const {
+  const HostKd& kd = *static_cast<const HostKd*>(kd_);
+  const float q[3] = {p.x, p.y, p.z};
+  if (kd.cnodes.empty()) return -1;
+  for (int k = 0; k < 3; ++k)
+    if (!(q[k] >= kd.root_box[k] && q[k] <= kd.root_box[3 + k])) return -1;
+  uint32_t node = 0;
+  pf_kd_cnode n = kd.cnodes[0];
+  while ((n.code & 3) != PF_KD_LEAF) {
+    node = q[n.code & 3] < n.split ? node + 1 : uint32_t(n.code) >> 2;
+    n = kd.cnodes[node];
+  }
+  return n.code >> 2;
 }
 
 bool set_kd_leaf_avx(bool on) {
@@ -603,14 +653,16 @@ const char* traversal_name(Traversal t) {
 
 bool intersect_closest(const Scene& scene, const Ray& ray, Hit& hit, Traversal trav) {
   pf_ray_hit h;
-  const bool found = cast(scene, ray, false, trav, h);
-  hit = found ? to_hit(h) : Hit{};
+  int32_t leaf;
+  const bool found = cast(scene, ray, false, trav, h, &leaf);
+  hit = found ? to_hit(h, leaf) : Hit{};
   return found;
 }
 
 bool intersect_any(const Scene& scene, const Ray& ray, Traversal trav) {
   pf_ray_hit h;
-  return cast(scene, ray, true, trav, h);
+  int32_t leaf;
+  return cast(scene, ray, true, trav, h, &leaf);
 }
 
 void intersect_closest_batch(const Scene& scene, const std::vector<Ray>& rays,

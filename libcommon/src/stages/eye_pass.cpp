@@ -67,7 +67,7 @@ bool is_diffuse(const pf_material& m) {
 // p_light over n light samples (Scene::light_incident), each behind an unblocked shadow ray; a
 // light below the shading or the geometric normal sends nothing.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
-                  const pf_material& m, int samples, pf_light_draws& draws) {
+                  const pf_material& m, int samples, pf_light_draws& draws, int32_t leaf) {
   if (scene.lights.empty() || samples <= 0) return {};
   const float eps = ray_epsilon(scene);
   Vec3 sum;
@@ -79,7 +79,7 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
     const float cos_x = dot(ls.w, ns);
     if (cos_x <= 0.f || dot(ls.w, ng) <= 0.f) continue;
     const Vec3 o = p + ng * eps;
-    if (intersect_any(scene, Ray{o, ls.q - o, 0.f, 1.f - 1e-4f})) continue;
+    if (intersect_any(scene, Ray{o, ls.q - o, 0.f, 1.f - 1e-4f, leaf})) continue;
     sum += Vec3(scene.lights[ls.light].radiance) * (cos_x * ls.g / ls.p_light);
   }
   return mat_color(m) * kInvPi * sum * (1.f / float(samples));
@@ -97,7 +97,7 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
 // counts where the BSDF transmits (the shadow ray leaves on its side).
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_light_draws& draws, bool delta_only) {
+                      int samples, pf_light_draws& draws, bool delta_only, int32_t leaf) {
   if (scene.lights.empty() || samples <= 0) return {};
   const float eps = ray_epsilon(scene);
   float ns[3], ng[3], o[3];
@@ -116,7 +116,7 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
     pf_pbr_eval_world(&params, ns, ng, o, wl, f);  // 0 for a pair the normals disagree on
     if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) continue;
     const Vec3 origin = p + ng_front * (dot(ls.w, ng_front) >= 0.f ? eps : -eps);
-    if (intersect_any(scene, Ray{origin, ls.q - origin, 0.f, 1.f - 1e-4f})) continue;
+    if (intersect_any(scene, Ray{origin, ls.q - origin, 0.f, 1.f - 1e-4f, leaf})) continue;
     sum += Vec3(f) * Vec3(scene.lights[ls.light].radiance) *
            (std::fabs(dot(ls.w, ns_front)) * ls.g / ls.p_light);
   }
@@ -132,10 +132,10 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
 
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_rng& rng, bool delta_only) {
+                      int samples, pf_rng& rng, bool delta_only, int32_t leaf) {
   pf_light_draws draws = pf_light_draws_from(rng);
   const Vec3 l = direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, draws,
-                                  delta_only);
+                                  delta_only, leaf);
   rng = draws.rng;  // the caller's stream goes on after the draws
   return l;
 }
@@ -198,6 +198,7 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
       emission_key_(pf_emission_sobol_key(opt.seed)),
       cam_(scene.camera),
       caster_(scene),
+      camera_leaf_(caster_.leaf_at(Vec3(scene.camera.eye))),
       emit_pixels_(nullptr) {
   check_eye_samples(scene, opt);
   if (opt.emission_spp > 0) {
@@ -225,6 +226,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
                       &u2);
   Ray ray;
   cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
+  ray.leaf = camera_leaf_;
   const float w = 1.f / float(spp_);
   Vec3 T(w, w, w);  // throughput × box filter weight
   bool glossy = false;  // the path went on through a glossy point (glossy_threshold)
@@ -254,7 +256,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       if (opt_.direct == DirectMode::ShadowRays) {
         pf_light_draws draws = light_draws(pix, s);
         direct += T * direct_light(scene_, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
-                                   opt_.shadow_samples, draws);
+                                   opt_.shadow_samples, draws, sh.leaf);
       }
       if (pbr) *pbr = pf_pbr_point{};
       return true;
@@ -272,7 +274,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         // stream (ul, u1, u2 each); a sample that picks an area light adds nothing, the BSDF's
         // sample finding those (one strategy per light type: nothing counted twice, no MIS).
         direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
-                                       opt_.shadow_samples, rng, true);
+                                       opt_.shadow_samples, rng, true, sh.leaf);
         float ns[3], ng[3], wo[3], wi[3], wt[3], pdf;
         sh.ns.store(ns);
         sh.ng.store(ng);
@@ -284,7 +286,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         T = T * Vec3(wt);
         if (luminance(T) <= 0.f) return false;
         const Vec3 dir(wi);
-        ray = Ray{offset_origin(sh, dir, eps_), dir};
+        ray = spawn_ray(sh, dir, eps_);
         glossy = true;
         continue;
       }
@@ -306,14 +308,14 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       if (opt_.direct == DirectMode::ShadowRays) {
         pf_light_draws draws = light_draws(pix, s);
         direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
-                                       opt_.shadow_samples, draws, false);
+                                       opt_.shadow_samples, draws, false, sh.leaf);
       }
       return true;
     }
     if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;  // black emitter
     Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
     if (luminance(T) <= 0.f) return false;
-    ray = Ray{offset_origin(sh, d, eps_), d};
+    ray = spawn_ray(sh, d, eps_);
   }
   return false;
 }
@@ -334,6 +336,7 @@ Vec3 EyeTracer::emission_sample(int x, int y, int k) const {
   }
   Ray ray;
   cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
+  ray.leaf = camera_leaf_;
   Vec3 T(1.f, 1.f, 1.f), L;
   for (int depth = 0; depth <= opt_.max_depth; ++depth) {
     Hit h;
@@ -344,7 +347,7 @@ Vec3 EyeTracer::emission_sample(int x, int y, int k) const {
     if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) break;
     const Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
     if (luminance(T) <= 0.f) break;
-    ray = Ray{offset_origin(sh, d, eps_), d};
+    ray = spawn_ray(sh, d, eps_);
   }
   return L;
 }
@@ -379,13 +382,13 @@ bool reaches_emitter(const Scene& scene, const RayCaster& caster, const Ray& ray
   const Vec3 d = normalize(ray.d);
   const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the ray
   const Vec3 r = reflect(d, n);
-  if (reaches_emitter(scene, caster, Ray{offset_origin(sh, r, eps), r}, eps, depth + 1, rays))
+  if (reaches_emitter(scene, caster, spawn_ray(sh, r, eps), eps, depth + 1, rays))
     return true;
   if (m.type != PF_MAT_GLASS) return false;
   Vec3 t;
   const float eta = sh.front ? 1.f / m.ior : m.ior;
   if (!refract(d, n, eta, t)) return false;  // total internal reflection: the branch above
-  return reaches_emitter(scene, caster, Ray{offset_origin(sh, t, eps), t}, eps, depth + 1, rays);
+  return reaches_emitter(scene, caster, spawn_ray(sh, t, eps), eps, depth + 1, rays);
 }
 }  // namespace
 
@@ -393,6 +396,7 @@ std::vector<uint8_t> emission_pixels(const Scene& scene) {
   const int W = scene.camera.width, H = scene.camera.height;
   const CameraFrame cam(scene.camera);
   const RayCaster caster(scene);
+  const int32_t camera_leaf = caster.leaf_at(Vec3(scene.camera.eye));
   const float eps = ray_epsilon(scene);
   std::vector<uint8_t> centre(size_t(W) * size_t(H), 0), marks(centre.size(), 0);
 #pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(0))
@@ -400,6 +404,7 @@ std::vector<uint8_t> emission_pixels(const Scene& scene) {
     for (int x = 0; x < W; ++x) {
       Ray ray;
       cam.ray(float(x) + 0.5f, float(y) + 0.5f, 0.5f, 0.5f, ray.o, ray.d);  // the lens centre
+      ray.leaf = camera_leaf;
       int rays = kEmissionRays;
       centre[size_t(y) * size_t(W) + size_t(x)] = reaches_emitter(scene, caster, ray, eps, 0, rays);
     }

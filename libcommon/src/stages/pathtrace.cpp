@@ -54,7 +54,11 @@ float power_heuristic(float a, float b) {
 class PathTracer {
  public:
   PathTracer(const Scene& scene, const PathTraceOptions& opt)
-      : scene_(scene), opt_(opt), eps_(ray_epsilon(scene)), caster_(scene) {
+      : scene_(scene),
+        opt_(opt),
+        eps_(ray_epsilon(scene)),
+        caster_(scene),
+        camera_leaf_(caster_.leaf_at(Vec3(scene.camera.eye))) {
     tri_light_.assign(scene.triangles.size(), -1);
     light_normal_.resize(scene.lights.size());
     for (size_t li = 0; li < scene.lights.size(); ++li) {
@@ -65,6 +69,9 @@ class PathTracer {
       tri_light_[size_t(l.triangle)] = int32_t(li);
     }
   }
+
+  // The kd leaf of the eye point: the camera rays' Ray::leaf.
+  int32_t camera_leaf() const { return camera_leaf_; }
 
   // One camera path starting with `ray` (unit direction). Returns its radiance estimate
   // (W/(sr m²)); `rays` counts the rays it cast.
@@ -112,7 +119,7 @@ class PathTracer {
         const Vec3 ng = sh.front ? sh.ng : -sh.ng;  // geometric normal on the same side
         const Vec3 albedo = diffuse_color(scene_, m, sh);  // textured albedo
         // Next-event estimation: L_direct = f_r · (one light sample), f_r = ρ/π.
-        L += T * albedo * kInvPi * sample_light(sh.p, n, ng, rng, rays);
+        L += T * albedo * kInvPi * sample_light(sh.p, n, ng, sh.leaf, rng, rays);
         // Continue with f_r·cos/pdf = ρ (cosine sampling around n), after Russian roulette.
         T = T * albedo;
         if (!(max3(T) > 0.f) || !roulette(depth, T, rng)) break;
@@ -124,7 +131,7 @@ class PathTracer {
         bsdf_pdf = pdf_cosine_hemisphere(cos_x);
         nee_could = dot(wi, ng) > 0.f;  // sample_light refuses directions below the surface
         specular = false;
-        ray = Ray{offset_origin(sh, wi, eps_), wi};
+        ray = spawn_ray(sh, wi, eps_);
       } else if (m.type == PF_MAT_PBR) {
         // The glTF BSDF (bsdf_shared.h) in the front shading frame (pbr_scatter_shared.h):
         // NEE with f (draws ul, u1, u2 as sample_light), then the BSDF's sample (u1, u2, u3),
@@ -134,7 +141,7 @@ class PathTracer {
         sh.ns.store(fr.ns);
         sh.ng.store(fr.ng);
         (-d).store(fr.wo);
-        L += T * sample_light_pbr(sh.p, sh.ng, params, fr, rng, rays);
+        L += T * sample_light_pbr(sh.p, sh.ng, sh.leaf, params, fr, rng, rays);
         const float u1 = pf_rng_next(&rng);
         const float u2 = pf_rng_next(&rng);
         const float u3 = pf_rng_next(&rng);
@@ -148,13 +155,13 @@ class PathTracer {
         nee_could = true;  // NEE at a PBR point reaches every direction the BSDF samples
         specular = false;
         const Vec3 dir(wi);
-        ray = Ray{offset_origin(sh, dir, eps_), dir};
+        ray = spawn_ray(sh, dir, eps_);
       } else if (m.type == PF_MAT_MIRROR || m.type == PF_MAT_GLASS) {
         const Vec3 wo = specular_bounce(m, sh, d, &rng, T);
         if (!(max3(T) > 0.f)) break;
         if (!roulette(depth, T, rng)) break;
         specular = true;
-        ray = Ray{offset_origin(sh, wo, eps_), wo};
+        ray = spawn_ray(sh, wo, eps_);
       } else {
         break;  // a black emitter absorbs
       }
@@ -182,7 +189,7 @@ class PathTracer {
   // of the arriving ray): incident radiance times cos θ_x over the sample's density (solid angle),
   // MIS-weighted for area lights under MisMode::Power. Multiply by f_r for L_direct. The same
   // estimator as eye_pass.cpp's direct_light (one sample; its shadow ray and cut-offs).
-  Vec3 sample_light(const Vec3& p, const Vec3& n, const Vec3& ng, pf_rng& rng,
+  Vec3 sample_light(const Vec3& p, const Vec3& n, const Vec3& ng, int32_t leaf, pf_rng& rng,
                     uint64_t& rays) const {
     const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
     Scene::LightSample ls;
@@ -196,7 +203,7 @@ class PathTracer {
       w = power_heuristic(ls.p_light / ls.g, pdf_cosine_hemisphere(cos_x));
     const Vec3 o = p + ng * eps_;
     ++rays;
-    if (caster_.any(Ray{o, ls.q - o, 0.f, 1.f - 1e-4f})) return {};
+    if (caster_.any(Ray{o, ls.q - o, 0.f, 1.f - 1e-4f, leaf})) return {};
     return Vec3(l.radiance) * (g * w);
   }
 
@@ -209,8 +216,9 @@ class PathTracer {
   struct PbrFrame {
     float ns[3], ng[3], wo[3];  // front shading and geometric normals, direction to the eye
   };
-  Vec3 sample_light_pbr(const Vec3& p, const Vec3& ng_front, const pf_bsdf_params& params,
-                        const PbrFrame& fr, pf_rng& rng, uint64_t& rays) const {
+  Vec3 sample_light_pbr(const Vec3& p, const Vec3& ng_front, int32_t leaf,
+                        const pf_bsdf_params& params, const PbrFrame& fr, pf_rng& rng,
+                        uint64_t& rays) const {
     const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
     Scene::LightSample ls;
     if (!scene_.sample_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
@@ -225,7 +233,7 @@ class PathTracer {
       w = power_heuristic(ls.p_light / ls.g, pf_pbr_pdf_world(&params, fr.ns, fr.ng, fr.wo, wv));
     const Vec3 o = p + ng_front * (dot(ls.w, ng_front) >= 0.f ? eps_ : -eps_);
     ++rays;
-    if (caster_.any(Ray{o, ls.q - o, 0.f, 1.f - 1e-4f})) return {};
+    if (caster_.any(Ray{o, ls.q - o, 0.f, 1.f - 1e-4f, leaf})) return {};
     return Vec3(f) * Vec3(l.radiance) * (g * w);
   }
 
@@ -233,6 +241,7 @@ class PathTracer {
   const PathTraceOptions& opt_;
   const float eps_;
   const RayCaster caster_;
+  const int32_t camera_leaf_;
   std::vector<int32_t> tri_light_;  // light index of an emissive triangle, −1 otherwise
   std::vector<Vec3> light_normal_;  // unit front normal of each area light
 };
@@ -310,6 +319,7 @@ Image pathtrace(const Scene& scene, const PathTraceOptions& opt,
           }
           Ray ray;
           cam.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
+          ray.leaf = tracer.camera_leaf();
           Vec3 v = tracer.radiance(ray, rng, rays);
           if (!finite(v)) {
             ++nonfinite;

@@ -25,6 +25,7 @@ namespace {
 // so the same bits): area lights' corners and unit front normal.
 struct LightInfo {
   Vec3 v0, v1, v2, n;
+  int32_t leaf = -1;  // the kd leaf of the light's centre (or position): its photons' Ray::leaf
 };
 
 // Emits photon `index`: picks a light by power and samples a ray and its flux.
@@ -42,10 +43,12 @@ bool emit(const Scene& scene, const std::vector<LightInfo>& info, pf_rng& rng, R
     Vec3 p = sample_triangle(t.v0, t.v1, t.v2, u1, u2);
     Vec3 d = sample_cosine_hemisphere(t.n, u3, u4);
     ray = Ray{p + t.n * eps, d};
+    ray.leaf = t.leaf;
     // Φ = L · A · π for a one-sided Lambertian emitter (cosine sampling: L·cos/pdf = L·π).
     flux = Vec3(l.radiance) * (l.area * kPi / p_light);
   } else if (l.type == PF_LIGHT_POINT) {
     ray = Ray{Vec3(l.position), sample_uniform_sphere(u1, u2)};
+    ray.leaf = info[li].leaf;
     flux = Vec3(l.radiance) * (4.f * kPi / p_light);  // Φ = 4π · I
   } else {  // spot or directional (light_shared.h; the kernel's twin in trace_photons.cl)
     float o[3], d[3];
@@ -53,21 +56,26 @@ bool emit(const Scene& scene, const std::vector<LightInfo>& info, pf_rng& rng, R
                                      l.area, u1, u2, o, d);
     if (!(f > 0.f)) return false;
     ray = Ray{Vec3(o), Vec3(d)};
+    ray.leaf = info[li].leaf;  // a spot light's position; none for a directional light
     flux = Vec3(l.radiance) * (f / p_light);
   }
   return true;
 }
 
-std::vector<LightInfo> light_info(const Scene& scene) {
+std::vector<LightInfo> light_info(const Scene& scene, const RayCaster& caster, float eps) {
   std::vector<LightInfo> info(scene.lights.size());
   for (size_t li = 0; li < scene.lights.size(); ++li) {
     const pf_light& l = scene.lights[li];
+    if (l.type == PF_LIGHT_POINT || l.type == PF_LIGHT_SPOT)
+      info[li].leaf = caster.leaf_at(Vec3(l.position));
     if (l.type != PF_LIGHT_AREA) continue;
     const pf_triangle& t = scene.triangles[size_t(l.triangle)];
     info[li].v0 = Vec3(t.v0);
     info[li].v1 = Vec3(t.v1);
     info[li].v2 = Vec3(t.v2);
     info[li].n = face_normal(t);
+    const Vec3 centre = (info[li].v0 + info[li].v1 + info[li].v2) * (1.f / 3.f);
+    info[li].leaf = caster.leaf_at(centre + info[li].n * eps);
   }
   return info;
 }
@@ -156,10 +164,10 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
   for (auto& p : parts) p.clear();
   if (nchunks == 0) return opt.photons;
   const float eps = ray_epsilon(scene);
-  const std::vector<LightInfo> info = light_info(scene);
+  const RayCaster caster(scene);
+  const std::vector<LightInfo> info = light_info(scene, caster, eps);
   const int threads = worker_threads(opt.threads);
   const pf_uint key = pf_rng_key(opt.seed, pass);
-  const RayCaster caster(scene);
 
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
   for (uint32_t c = 0; c < nchunks; ++c) {
@@ -240,7 +248,7 @@ uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassO
         }
         first_hit = false;
         if (luminance(flux) <= 0.f) break;
-        ray = Ray{offset_origin(sh, d, eps), d};
+        ray = spawn_ray(sh, d, eps);
       }
     }
     parts[c].swap(out);
