@@ -3,6 +3,12 @@
 //
 //   bench_raycast [--rays 200000] [--image 512] [--runs 5] [--mesh PATH] ...
 //
+// Ray sets: primary (a pinhole camera's), random (origins in the box, directions on the sphere),
+// and bounce: from the hits of the random rays, back to the side they came from in uniform
+// directions, offset as the renderer's tracers do (spawn_ray), like photon bounces; these carry
+// their hit's leaf (Ray::leaf), and the row "from the origin's leaf" casts them with it (the
+// renderer's default traversal), the other rows without it.
+//
 // Closest-hit rays per second are medians over --runs runs, each casting the same ray set through
 // intersect_closest_batch (schedule(dynamic), results independent of the thread count); Embree
 // casts the same rays with rtcIntersect1 (single rays) in an identical OpenMP loop.
@@ -25,6 +31,7 @@
 #include "photonflow/kdtree.h"
 #include "photonflow/procedural.h"
 #include "photonflow/raycast.h"
+#include "photonflow/surface.h"
 
 #ifdef PF_HAVE_EMBREE
 #include <embree3/rtcore.h>
@@ -142,6 +149,33 @@ std::vector<pf::Ray> random_rays(const BenchScene& b, size_t n, uint32_t seed) {
     const float z = 2.f * uni() - 1.f, phi = 6.2831853f * uni();
     const float q = std::sqrt(std::max(0.f, 1.f - z * z));
     r.d = Vec3(q * std::cos(phi), q * std::sin(phi), z);
+  }
+  return rays;
+}
+
+// Bounce rays from the closest hits of `from` (see the top of this file).
+std::vector<pf::Ray> bounce_rays(const BenchScene& b, const std::vector<pf::Ray>& from,
+                                 uint32_t seed) {
+  uint64_t s = seed + 0x9E3779B97F4A7C15ull;
+  auto uni = [&]() {  // xorshift64*, [0, 1)
+    s ^= s >> 12;
+    s ^= s << 25;
+    s ^= s >> 27;
+    return float((s * 0x2545F4914F6CDD1Dull) >> 40) * (1.f / 16777216.f);
+  };
+  std::vector<pf::Hit> hits;
+  pf::intersect_closest_batch(b.scene, from, hits);
+  const float eps = pf::ray_epsilon(b.scene);
+  std::vector<pf::Ray> rays;
+  for (size_t i = 0; i < from.size(); ++i) {
+    if (!hits[i].hit()) continue;
+    const pf::SurfaceHit sh = pf::surface_at(b.scene, from[i], hits[i]);
+    const float z = 2.f * uni() - 1.f;
+    const float phi = 6.2831853f * uni();
+    const float q = std::sqrt(std::max(0.f, 1.f - z * z));
+    Vec3 d(q * std::cos(phi), q * std::sin(phi), z);
+    if ((pf::dot(d, sh.ng) > 0.f) == (pf::dot(from[i].d, sh.ng) > 0.f)) d = -d;
+    rays.push_back(pf::spawn_ray(sh, d, eps));
   }
   return rays;
 }
@@ -339,8 +373,15 @@ std::string mrays(double rays, double seconds) {
 void bench_rays(const BenchScene& b, const std::string& ray_set, const std::vector<pf::Ray>& rays,
                 size_t brute_rays, const std::vector<int>& threads, int runs,
                 std::ostream& table) {
+  // Every row but "from the origin's leaf" casts the rays without a start leaf.
+  std::vector<pf::Ray> plain = rays;
+  bool with_leaf = false;
+  for (pf::Ray& r : plain) {
+    with_leaf |= r.leaf >= 0;
+    r.leaf = -1;
+  }
   std::vector<pf::Hit> ref;
-  pf::intersect_closest_batch(b.scene, rays, ref, pf::Traversal::Ropes);
+  pf::intersect_closest_batch(b.scene, plain, ref, pf::Traversal::Ropes);
   size_t hits = 0;
   for (const pf::Hit& h : ref) hits += h.hit() ? 1 : 0;
   auto row = [&](const std::string& method, const std::vector<pf::Ray>& rs, auto&& cast) {
@@ -358,19 +399,26 @@ void bench_rays(const BenchScene& b, const std::string& ray_set, const std::vect
   };
   for (pf::Traversal tr : {pf::Traversal::Ropes, pf::Traversal::Stack}) {
     std::vector<pf::Hit> out;
-    row(pf::traversal_name(tr), rays, [&](const std::vector<pf::Ray>& rs, int t) {
+    row(pf::traversal_name(tr), plain, [&](const std::vector<pf::Ray>& rs, int t) {
       pf::intersect_closest_batch(b.scene, rs, out, tr, t);
+    });
+  }
+  if (with_leaf) {  // the renderer's default: ropes from the origin's leaf where it holds o
+    std::vector<pf::Hit> out;
+    row("ropes from the origin's leaf", rays, [&](const std::vector<pf::Ray>& rs, int t) {
+      pf::intersect_closest_batch(b.scene, rs, out, pf::Traversal::Stack, t);
     });
   }
   if (pf::kd_leaf_avx_supported()) {  // the stack row above tests leaves with AVX; SSE beside it
     std::vector<pf::Hit> out;
     pf::set_kd_leaf_avx(false);
-    row("stack, SSE leaf test", rays, [&](const std::vector<pf::Ray>& rs, int t) {
+    row("stack, SSE leaf test", plain, [&](const std::vector<pf::Ray>& rs, int t) {
       pf::intersect_closest_batch(b.scene, rs, out, pf::Traversal::Stack, t);
     });
     pf::set_kd_leaf_avx(true);
   }
-  const std::vector<pf::Ray> sub(rays.begin(), rays.begin() + std::min(brute_rays, rays.size()));
+  const std::vector<pf::Ray> sub(plain.begin(),
+                                 plain.begin() + std::min(brute_rays, plain.size()));
   std::vector<pf::Hit> out;
   row("brute (" + std::to_string(sub.size()) + " rays)", sub,
       [&](const std::vector<pf::Ray>& rs, int t) {
@@ -379,7 +427,7 @@ void bench_rays(const BenchScene& b, const std::string& ray_set, const std::vect
 #ifdef PF_HAVE_EMBREE
   EmbreeScene embree(b.scene.triangles);
   std::vector<int32_t> etri;
-  row("Embree 3 rtcIntersect1", rays, [&](const std::vector<pf::Ray>& rs, int t) {
+  row("Embree 3 rtcIntersect1", plain, [&](const std::vector<pf::Ray>& rs, int t) {
     embree.intersect(rs, etri, t);
   });
   size_t differ = 0;
@@ -475,6 +523,9 @@ int main(int argc, char** argv) {
     bench_rays(b, "primary " + std::to_string(image) + "²", primary, brute_rays, threads, runs,
                table);
     bench_rays(b, "random " + std::to_string(n_rays), random, brute_rays, threads, runs, table);
+    const auto bounce = bounce_rays(b, random, 2);
+    bench_rays(b, "bounce " + std::to_string(bounce.size()), bounce, brute_rays, threads, runs,
+               table);
     for (bool ropes : {true, false}) {
       const char* tr = ropes ? "ropes" : "stack";
       work << "| " << b.name << " | primary " << image << "² | " << tr << " | "

@@ -13,12 +13,12 @@ namespace {
 
 using pf::Vec3;
 
-pf::Scene make_scene(std::vector<pf_triangle> tris) {
+pf::Scene make_scene(std::vector<pf_triangle> tris, const pf::KdBuildParams& params = {}) {
   pf::Scene s;
   s.triangles = std::move(tris);
   s.compute_hh();
   s.compute_bounds();
-  s.kd = pf::build_kdtree(s.triangles, {});
+  s.kd = pf::build_kdtree(s.triangles, params);
   return s;
 }
 
@@ -162,7 +162,12 @@ TEST_CASE("a ray from a triangle lying in a split plane: a touch at t = 0 or the
   // split plane, rays from its centroid leaving either side. Brute force may touch the triangle
   // at t ≈ 0; a kd traversal starting in the other child gives the next hit instead, and
   // same_hit takes the two as a tie only when that next hit is brute force's beyond the touch.
-  const pf::Scene& s = room();
+  // A deep tree (C_ts 3, empty bonus 0.5: the defaults until December 2026), whose
+  // splits lie in many of the walls' planes.
+  pf::KdBuildParams deep;
+  deep.cost_traversal = 3.f;
+  deep.empty_bonus = 0.5f;
+  const pf::Scene s = make_scene(pf::make_cornell_room(400), deep);
   size_t rays = 0, touches = 0;
   for (size_t i = 0; i < s.triangles.size(); ++i) {
     const pf_triangle& t = s.triangles[i];

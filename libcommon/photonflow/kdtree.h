@@ -36,15 +36,18 @@ constexpr int kKdBins = 64;
 // Nodes with fewer triangle references than this are split by the exact event sweep.
 constexpr size_t kKdExactMaxTriangles = 1024;
 
-// Defaults measured with bench/bench_raycast.cpp (--cost-traversal, --cost-intersect, ...): one
-// traversal step of the rope loop (descent, exit face, cache miss on a 72-byte node) costs about
-// three Havel–Herout tests, and larger ratios C_i/C_ts (up to pbrt's 80) deepen the tree (3–5×
-// the nodes, slower build) for 15–27 % fewer triangle tests but more node steps and no faster
-// rays, with the rope traversal slower on the 100k-triangle scene (docs/BENCHMARKS.md).
+// Defaults measured by rendering (docs/BENCHMARKS.md "kd-tree costs for the renderer"): with the
+// leaf test taking eight triangles per AVX operation and secondary rays starting their walk in
+// their origin's leaf (raycast.h), a traversal step costs about ten Havel–Herout tests and empty
+// space is cut off less eagerly: C_ts 10, empty bonus 0.2 make a tree of a quarter of the nodes
+// on the 200k-triangle box and render it 13 % faster (CPU and OpenCL) than C_ts 3, bonus 0.5
+// (the defaults until December 2026, chosen by bench/bench_raycast.cpp's single random rays);
+// the small scenes render as fast with either. Larger ratios C_i/C_ts (up to pbrt's 80) deepen
+// the tree (3–5× the nodes, slower build) for fewer triangle tests and no faster rays.
 struct KdBuildParams {
-  float cost_traversal = 3.0f;  // C_ts of eq. 4.8 (cost of one traversal step)
+  float cost_traversal = 10.0f;  // C_ts of eq. 4.8 (cost of one traversal step)
   float cost_intersect = 1.0f;  // C_L, C_R weight per triangle of eq. 4.8
-  float empty_bonus = 0.5f;     // fraction of the SAH cost saved by splits that cut off empty space
+  float empty_bonus = 0.2f;      // fraction of the SAH cost saved by splits that cut off empty space
   int max_depth = 0;            // 0 = automatic: 8 + 1.3·log2(N); at most kKdMaxDepth
   int max_leaf_size = 2;        // never split nodes with this many triangles or fewer
   int threads = 0;              // 0 = all cores; the tree is identical for any thread count
