@@ -187,9 +187,13 @@ typedef struct {
   s.alpha_on = alpha_on
 
 /* Closest (any_hit = 0) or any (1) hit of o + t·d for t in (tmin, tmax], rope traversal; in a
- * masked scene hits on cut-away points do not count (pf_leaf_test4). */
-static inline int pf_trace(const pf_scene_view* s, const float* o, const float* d, float tmin,
-                           float tmax, int any_hit, pf_ray_hit* hit) {
+ * masked scene hits on cut-away points do not count (pf_leaf_test4). The walk starts in leaf
+ * `start` when its box holds o (the leaf of the hit o was made from; −1: from the root), and
+ * *end, if end is not null, receives the leaf of the closest hit found (−1 if none):
+ * pf_kd_traverse_ropes_from, the host's raycast.h Ray::leaf / Hit::leaf. */
+static inline int pf_trace_from(const pf_scene_view* s, const float* o, const float* d,
+                                float tmin, float tmax, int any_hit, pf_ray_hit* hit, int start,
+                                int* end) {
   pf_trace_hit th;
   th.hit.t = tmax;
   th.hit.tri = -1;
@@ -197,11 +201,17 @@ static inline int pf_trace(const pf_scene_view* s, const float* o, const float* 
   th.hit.v = 0.0f;
   th.alpha = PF_SCENE_ALPHA && s->alpha_on ? &s->alpha : 0;
   /* PF_KD_LEAF_TEST = pf_leaf_test4: the groups travel in the leaf_tris / hh arguments */
-  const int r = pf_kd_traverse_ropes(s->nodes, s->node_count, s->group_of_first,
-                                     (__global const pf_hh_triangle*)s->leaf_groups, o, d, tmin,
-                                     any_hit, &th.hit);
+  const int r = pf_kd_traverse_ropes_from(s->nodes, s->node_count, s->group_of_first,
+                                          (__global const pf_hh_triangle*)s->leaf_groups, o, d,
+                                          tmin, any_hit, &th.hit, start, end);
   *hit = th.hit;
   return r;
+}
+
+/* pf_trace_from from the root. */
+static inline int pf_trace(const pf_scene_view* s, const float* o, const float* d, float tmin,
+                           float tmax, int any_hit, pf_ray_hit* hit) {
+  return pf_trace_from(s, o, d, tmin, tmax, any_hit, hit, -1, 0);
 }
 
 /* surface.h's SurfaceHit. */

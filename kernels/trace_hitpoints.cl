@@ -58,11 +58,12 @@ static float pf_light_incident_at(const pf_scene_view* s, int li, const float* p
 }
 
 /* eye_pass.cpp's direct_light: L_direct = (1/n) Σ ρ/π·L_e·cos θ_x·G/p_light at a diffuse point by
- * light sampling with shadow rays. Adds weight · L_direct to `direct`. */
+ * light sampling with shadow rays. Adds weight · L_direct to `direct`. `leaf`: p's kd leaf, where
+ * the shadow rays start their walk (pf_trace_from). */
 static void pf_direct_light(const pf_scene_view* s, const float* p, const float* ng,
                             const float* ns, __global const pf_material* m, int samples,
                             pf_light_draws* draws, float eps, const float* weight,
-                            float* direct) {
+                            float* direct, int leaf) {
   if (s->light_count <= 0 || samples <= 0) return;
   float sum[3] = {0.0f, 0.0f, 0.0f};
   for (int smp = 0; smp < samples; ++smp) {
@@ -79,7 +80,7 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     for (int k = 0; k < 3; ++k) o[k] = p[k] + ng[k] * eps;
     for (int k = 0; k < 3; ++k) sd[k] = q[k] - o[k];
     pf_ray_hit hit;
-    if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
+    if (pf_trace_from(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit, leaf, 0)) continue;
     const float f = cos_x * g / p_light;
     for (int k = 0; k < 3; ++k) sum[k] = sum[k] + s->lights[li].radiance[k] * f;
   }
@@ -97,7 +98,7 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
 static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const float* ng,
                                 const float* ns, const pf_bsdf_params* bp, const float* wo,
                                 int samples, pf_light_draws* draws, int delta_only, float eps,
-                                const float* weight, float* direct) {
+                                const float* weight, float* direct, int leaf) {
   if (s->light_count <= 0 || samples <= 0) return;
   float sum[3] = {0.0f, 0.0f, 0.0f};
   for (int smp = 0; smp < samples; ++smp) {
@@ -118,7 +119,7 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
     for (int k = 0; k < 3; ++k) o[k] = p[k] + ng[k] * e;
     for (int k = 0; k < 3; ++k) sd[k] = q[k] - o[k];
     pf_ray_hit hit;
-    if (pf_trace(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit)) continue;
+    if (pf_trace_from(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit, leaf, 0)) continue;
     const float gp = fabs(pf_dot3(w, ns)) * g / p_light;
     for (int k = 0; k < 3; ++k) sum[k] = sum[k] + f[k] * s->lights[li].radiance[k] * gp;
   }
@@ -170,9 +171,10 @@ static void pf_emission_sample(const pf_scene_view* s, __global const float* cam
   pf_camera_ray(cam, width, height, (float)(pix % width) + jx, (float)(pix / width) + jy, u1, u2,
                 o, d);
   float T[3] = {1.0f, 1.0f, 1.0f};
+  int leaf = -1; /* the kd leaf of the last hit: the next ray's start (pf_trace_from) */
   for (int depth = 0; depth <= max_depth; ++depth) {
     pf_ray_hit h;
-    if (!pf_trace(s, o, d, 0.0f, INFINITY, 0, &h)) break;
+    if (!pf_trace_from(s, o, d, 0.0f, INFINITY, 0, &h, leaf, &leaf)) break;
     pf_surface sh;
     pf_surface_at(s, o, d, &h, &sh);
     __global const pf_material* m = &s->mats[sh.material];
@@ -233,9 +235,10 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
     const float w0 = 1.0f / (float)spp;
     float T[3] = {w0, w0, w0};
     int glossy = 0; /* the path went on through a glossy point: its emitters go to `direct` */
+    int leaf = -1;  /* the kd leaf of the last hit: the next ray's start (pf_trace_from) */
     for (int depth = 0; depth <= max_depth; ++depth) {
       pf_ray_hit h;
-      if (!pf_trace(&s, o, d, 0.0f, INFINITY, 0, &h)) break;
+      if (!pf_trace_from(&s, o, d, 0.0f, INFINITY, 0, &h, leaf, &leaf)) break;
       pf_surface sh;
       pf_surface_at(&s, o, d, &h, &sh);
       __global const pf_material* m = &s.mats[sh.material];
@@ -267,7 +270,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
              * never hits them), from the eye stream; area lights by the sample's hit */
             pf_light_draws gd = pf_light_draws_from(rng);
             pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &gd, 1,
-                                eps, T, direct);
+                                eps, T, direct, leaf);
             rng = gd.rng;
             const float u1 = pf_rng_next(&rng);
             const float u2 = pf_rng_next(&rng);
@@ -317,13 +320,13 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
           pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
                                                       (uint)pix, smp, spp, shadow_samples);
           pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws, 0,
-                              eps, T, direct);
+                              eps, T, direct, leaf);
         } else if (shadow_rays) {
           float ng[3];
           for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
           pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
                                                       (uint)pix, smp, spp, shadow_samples);
-          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, &draws, eps, T, direct);
+          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, &draws, eps, T, direct, leaf);
         }
         break;
       }

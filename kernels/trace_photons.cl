@@ -91,9 +91,10 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
     }
   }
   int specular_only = 1, first_hit = 1;
+  int leaf = -1; /* the kd leaf of the last hit: the next ray's start (pf_trace_from) */
   for (int bounce = 0; bounce <= max_bounces; ++bounce) {
     pf_ray_hit h;
-    if (!pf_trace(&s, o, d, 0.0f, INFINITY, 0, &h)) break;
+    if (!pf_trace_from(&s, o, d, 0.0f, INFINITY, 0, &h, leaf, &leaf)) break;
     pf_surface sh;
     pf_surface_at(&s, o, d, &h, &sh);
     __global const pf_material* m = &s.mats[sh.material];

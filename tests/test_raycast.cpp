@@ -701,6 +701,7 @@ namespace {
 struct CompactCopy {
   std::vector<shared_plain::pf_kd_cnode> cnodes;
   std::vector<shared_plain::pf_kd_cleaf> cleaves;
+  std::vector<int32_t> node_of_leaf;  // the pf_kd_node of each leaf record
   float root_box[6];
   explicit CompactCopy(const pf::Scene& s) {
     std::vector<int32_t> order, index;
@@ -711,6 +712,9 @@ struct CompactCopy {
     cleaves.resize(n_leaves);
     shared_plain::pf_kd_compact_build(s.kd.nodes.data(), int32_t(s.kd.nodes.size()), order.data(),
                                       index.data(), cnodes.data(), cleaves.data(), root_box);
+    node_of_leaf.resize(n_leaves);
+    for (size_t i = 0; i < cnodes.size(); ++i)
+      if ((cnodes[i].code & 3) == PF_KD_LEAF) node_of_leaf[size_t(cnodes[i].code >> 2)] = order[i];
   }
   // Whether leaf record `leaf`'s box holds p, widened by `slack` on every side.
   bool holds(int32_t leaf, const Vec3& p, float slack = 0.f) const {
@@ -836,36 +840,55 @@ TEST_CASE("a secondary ray started in its origin's leaf gets the root walk's hit
   }
 }
 
-TEST_CASE("the shared rope loop started in a leaf equals its root walk (the kernels' leaf test)",
+TEST_CASE("the shared rope loops started in a leaf equal their root walks (the kernels' test)",
           "[raycast]") {
-  // pf_kd_traverse_ropes_compact_from with the scalar leaf test, as a kernel would compile it:
-  // started in the origin's leaf it returns the root walk's bits and reports the leaf the hit
-  // lies in; started in a leaf that does not hold the origin, it walks from the root.
+  // pf_kd_traverse_ropes_compact_from and pf_kd_traverse_ropes_from (over pf_kd_node, what the
+  // kernels run) with the scalar leaf test, as a kernel compiles them: started in the origin's
+  // leaf they return the root walk's bits and report the leaf the hit lies in; started in a leaf
+  // that does not hold the origin (or, over pf_kd_node, at an inner node), they walk from the
+  // root.
   for (const pf::Scene* s : {&room(), &blob()}) {
     const CompactCopy c(*s);
+    const std::vector<pf_kd_node>& nodes = s->kd.nodes;
     const auto rays = bounce_rays(*s, 20000, 34);
     // Up to rounding and the edge tolerance of the triangle test (a hit just past an edge).
     const float slack = 2.f * PF_HH_EDGE_EPS * pf::length(s->bounds.extent());
+    auto node_holds = [&](int32_t n, const Vec3& p) {
+      if (n < 0 || size_t(n) >= nodes.size() || nodes[size_t(n)].axis != PF_KD_LEAF) return false;
+      for (int k = 0; k < 3; ++k)
+        if (!(p[k] >= nodes[size_t(n)].lo[k] - slack && p[k] <= nodes[size_t(n)].hi[k] + slack))
+          return false;
+      return true;
+    };
     size_t differ = 0, bad_end = 0, started = 0, hits = 0;
     for (const pf::Ray& r : rays) {
       const float o[3] = {r.o.x, r.o.y, r.o.z}, d[3] = {r.d.x, r.d.y, r.d.z};
       started += c.holds(r.leaf, r.o) ? 1 : 0;
+      const int32_t wrong_leaf = int32_t((r.leaf + 1) % int32_t(c.cleaves.size()));
       for (int any = 0; any < 2; ++any) {
-        for (int32_t start : {r.leaf, int32_t((r.leaf + 1) % int32_t(c.cleaves.size()))}) {
-          shared_plain::pf_ray_hit a = {r.tmax, -1, 0.f, 0.f}, b = a;
-          int32_t end_a = 7, end_b = 7;
+        for (int32_t start : {r.leaf, wrong_leaf}) {
+          shared_plain::pf_ray_hit a = {r.tmax, -1, 0.f, 0.f}, b = a, e = a;
+          int32_t end_a = 7, end_b = 7, end_e = 7;
           const int ra = shared_plain::pf_kd_traverse_ropes_compact_from(
               c.cnodes.data(), int32_t(c.cnodes.size()), c.cleaves.data(), c.root_box,
               s->kd.leaf_tris.data(), s->hh.data(), o, d, r.tmin, any, &a, -1, &end_a);
           const int rb = shared_plain::pf_kd_traverse_ropes_compact_from(
               c.cnodes.data(), int32_t(c.cnodes.size()), c.cleaves.data(), c.root_box,
               s->kd.leaf_tris.data(), s->hh.data(), o, d, r.tmin, any, &b, start, &end_b);
-          differ += ra == rb && a.tri == b.tri && std::memcmp(&a.t, &b.t, 4) == 0 &&
-                            std::memcmp(&a.u, &b.u, 4) == 0 && std::memcmp(&a.v, &b.v, 4) == 0
-                        ? 0
-                        : 1;
+          // The pf_kd_node loop from the same leaf (or from the root's first child, an inner
+          // node, which it must ignore).
+          const int32_t node_start =
+              start == wrong_leaf && (r.leaf & 1) ? 0 : c.node_of_leaf[size_t(start)];
+          const int re = shared_plain::pf_kd_traverse_ropes_from(
+              nodes.data(), int32_t(nodes.size()), s->kd.leaf_tris.data(), s->hh.data(), o, d,
+              r.tmin, any, &e, node_start, &end_e);
+          auto same = [&](int rx, const shared_plain::pf_ray_hit& x) {
+            return ra == rx && a.tri == x.tri && std::memcmp(&a.t, &x.t, 4) == 0 &&
+                   std::memcmp(&a.u, &x.u, 4) == 0 && std::memcmp(&a.v, &x.v, 4) == 0;
+          };
+          differ += same(rb, b) && same(re, e) ? 0 : 1;
           if (any || !ra) {
-            bad_end += end_a == -1 && end_b == -1 ? 0 : 1;
+            bad_end += end_a == -1 && end_b == -1 && end_e == -1 ? 0 : 1;
             continue;
           }
           hits += 1;
@@ -874,7 +897,9 @@ TEST_CASE("the shared rope loop started in a leaf equals its root walk (the kern
           // starts from the root): the leaf holds the hit for rays from inside.
           if (!inside_box(*s, r.o)) continue;
           const Vec3 p = r.o + r.d * a.t;
-          bad_end += c.holds(end_a, p, slack) && c.holds(end_b, p, slack) ? 0 : 1;
+          bad_end += c.holds(end_a, p, slack) && c.holds(end_b, p, slack) && node_holds(end_e, p)
+                         ? 0
+                         : 1;
         }
       }
     }

@@ -186,10 +186,21 @@ PF_INLINE int pf_kd_leaf_intersect(PF_GLOBAL const pf_kd_node* leaf,
  * eye rays from a point on split planes would pay a useless leaf per plane.
  * t_entry never decreases, and at most `node_count` leaves are visited (a safety net
  * against rounding cycles at leaf corners; a correct tree never needs it). */
-PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int node_count,
-                                   PF_GLOBAL const pf_int* leaf_tris,
-                                   PF_GLOBAL const pf_hh_triangle* hh, const float* o,
-                                   const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
+/* pf_kd_traverse_ropes_from: the same walk, optionally started in a given leaf.
+ * start_node < 0: pf_kd_traverse_ropes. start_node = a leaf whose box (lo, hi, closed) holds the
+ * origin: the walk starts there at t = tmin, without the root-box test and the descent from the
+ * root; the hit is the same (the leaves visited are the root walk's, plus, for an origin on the
+ * leaf's face, that leaf: its triangles are really hit in (tmin, tmax], and ties go to the
+ * lowest index). Any other start_node (an inner node, a leaf whose box does not hold o, out of
+ * range) is ignored. end_node, if not null, receives the leaf the walk stopped in when it returns
+ * a closest hit (the hit lies in its box, up to rounding and the edge tolerance, for a ray from
+ * inside the scene's box), else −1: the start_node of the next ray from the hit point. The compact
+ * twin is pf_kd_traverse_ropes_compact_from below. */
+PF_INLINE int pf_kd_traverse_ropes_from(PF_GLOBAL const pf_kd_node* nodes, pf_int node_count,
+                                        PF_GLOBAL const pf_int* leaf_tris,
+                                        PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                        const float* d, float tmin, int any_hit, pf_ray_hit* hit,
+                                        pf_int start_node, pf_int* end_node) {
   float inv_d[3];
   int high[3]; /* per axis: 1 if the ray leaves nodes through their high face */
   for (int k = 0; k < 3; ++k) {
@@ -198,11 +209,25 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
      * +inf or NaN (never chosen) on an axis the ray does not move along. */
     high[k] = inv_d[k] > 0.0f;
   }
-  float t_entry, t_leave_root;
-  if (node_count <= 0 ||
-      !pf_kd_enter_root(nodes, o, d, inv_d, tmin, hit->t, &t_entry, &t_leave_root))
-    return 0;
+  if (end_node) *end_node = -1;
+  if (node_count <= 0) return 0;
+  float t_entry;
   pf_int node = 0;
+  int started = 0;
+  if (start_node >= 0 && start_node < node_count) {
+    PF_GLOBAL const pf_kd_node* sn = &nodes[start_node];
+    if (sn->axis == PF_KD_LEAF && o[0] >= sn->lo[0] && o[1] >= sn->lo[1] && o[2] >= sn->lo[2] &&
+        o[0] <= sn->hi[0] && o[1] <= sn->hi[1] && o[2] <= sn->hi[2] && tmin < hit->t) {
+      node = start_node;
+      t_entry = tmin;
+      started = 1;
+    }
+  }
+  if (!started) {
+    float t_leave_root;
+    if (!pf_kd_enter_root(nodes, o, d, inv_d, tmin, hit->t, &t_entry, &t_leave_root)) return 0;
+  }
+  pf_int leaf_node = -1;
   float tie = -1.0f; /* first descent: ties go where the ray moves (d·tie > 0 picks the left) */
   for (pf_int step = 0; step < node_count; ++step) {
     const float p[3] = {o[0] + t_entry * d[0], o[1] + t_entry * d[1], o[2] + t_entry * d[2]};
@@ -213,6 +238,7 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
       node = go_left ? n->left : n->right;
       n = &nodes[node];
     }
+    leaf_node = node;
     if (PF_KD_LEAF_TEST(n, leaf_tris, hh, o, d, tmin, any_hit, hit)) return 1;
     /* Exit face: the nearest of the three faces the ray moves towards. An axis the ray does not
      * move along is skipped: its face gives +inf or NaN from inside the slab, but −inf when the
@@ -238,7 +264,16 @@ PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int nod
     tie = 1.0f; /* later descents: ties go to the side the ray comes from */
     t_entry = t_exit > t_entry ? t_exit : t_entry;
   }
+  if (end_node && hit->tri >= 0) *end_node = leaf_node;
   return hit->tri >= 0;
+}
+
+PF_INLINE int pf_kd_traverse_ropes(PF_GLOBAL const pf_kd_node* nodes, pf_int node_count,
+                                   PF_GLOBAL const pf_int* leaf_tris,
+                                   PF_GLOBAL const pf_hh_triangle* hh, const float* o,
+                                   const float* d, float tmin, int any_hit, pf_ray_hit* hit) {
+  return pf_kd_traverse_ropes_from(nodes, node_count, leaf_tris, hh, o, d, tmin, any_hit, hit, -1,
+                                   (pf_int*)0);
 }
 
 /* ---- Compact rope traversal ------------------------------------------------------------------
