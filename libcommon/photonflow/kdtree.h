@@ -46,8 +46,8 @@ constexpr size_t kKdExactMaxTriangles = 1024;
 // the tree (3–5× the nodes, slower build) for fewer triangle tests and no faster rays.
 struct KdBuildParams {
   float cost_traversal = 10.0f;  // C_ts of eq. 4.8 (cost of one traversal step)
-  float cost_intersect = 1.0f;  // C_L, C_R weight per triangle of eq. 4.8
-  float empty_bonus = 0.2f;      // fraction of the SAH cost saved by splits that cut off empty space
+  float cost_intersect = 1.0f;   // C_L, C_R weight per triangle of eq. 4.8
+  float empty_bonus = 0.2f;      // fraction of the SAH cost saved by cutting off empty space
   int max_depth = 0;            // 0 = automatic: 8 + 1.3·log2(N); at most kKdMaxDepth
   int max_leaf_size = 2;        // never split nodes with this many triangles or fewer
   int threads = 0;              // 0 = all cores; the tree is identical for any thread count

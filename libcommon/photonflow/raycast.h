@@ -55,6 +55,8 @@ struct Hit {
   bool hit() const { return tri >= 0; }
 };
 
+// Stack is the default: with a Ray::leaf whose box holds the origin it walks the ropes from there
+// (above); Ropes always walks from the root.
 enum class Traversal { Ropes, Stack, Brute };
 const char* traversal_name(Traversal t);
 

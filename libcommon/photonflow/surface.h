@@ -20,7 +20,7 @@ struct SurfaceHit {
   int mesh;
   int material;
   float u, v;    // barycentrics of the hit (weights of v1 and v2), for the texture look-up
-  int leaf = -1; // the kd leaf the hit lies in (Hit::leaf): rays leaving here start their walk there
+  int leaf = -1; // the kd leaf the hit lies in (Hit::leaf): rays from here start their walk there
 };
 
 inline SurfaceHit surface_at(const Scene& s, const Ray& ray, const Hit& h) {

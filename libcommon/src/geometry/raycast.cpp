@@ -544,7 +544,8 @@ inline bool traverse_default(const HostKd& kd, const float* o, const float* d, f
                              bool any_hit, int32_t start_leaf, pf_ray_hit& hit,
                              const AlphaTest* alpha, int32_t* end_leaf) {
   if (start_leaf >= 0 && size_t(start_leaf) < kd.cleaves.size()) {
-    const float* b = kd.cleaves[size_t(start_leaf)].box;  // pf_kd_traverse_ropes_compact_from's test
+    // pf_kd_traverse_ropes_compact_from's test, here to choose the stack walk otherwise
+    const float* b = kd.cleaves[size_t(start_leaf)].box;
     if (o[0] >= b[0] && o[1] >= b[1] && o[2] >= b[2] && o[0] <= b[3] && o[1] <= b[4] &&
         o[2] <= b[5])
       return traverse_ropes(kd, o, d, tmin, any_hit, hit, alpha, start_leaf, end_leaf);
