@@ -128,16 +128,28 @@ std::vector<pf::Ray> primary_rays(const BenchScene& b, int image) {
   return rays;
 }
 
-// Rays with origins uniform in the scene box and directions uniform on the sphere.
-std::vector<pf::Ray> random_rays(const BenchScene& b, size_t n, uint32_t seed) {
-  uint64_t s = seed;
-  auto uni = [&]() {  // xorshift64*, [0, 1)
+// xorshift64*: uniform floats in [0, 1) from a 64-bit state (the ray sets' own generator, so
+// that they do not change with the renderer's streams).
+struct XorShift {
+  uint64_t s;
+  float operator()() {
     s ^= s >> 12;
     s ^= s << 25;
     s ^= s >> 27;
     return float((s * 0x2545F4914F6CDD1Dull) >> 40) * (1.f / 16777216.f);
-  };
-  s += 0x9E3779B97F4A7C15ull;
+  }
+  // A direction uniform on the sphere: z, then the azimuth.
+  Vec3 direction() {
+    const float z = 2.f * (*this)() - 1.f;
+    const float phi = 6.2831853f * (*this)();
+    const float q = std::sqrt(std::max(0.f, 1.f - z * z));
+    return Vec3(q * std::cos(phi), q * std::sin(phi), z);
+  }
+};
+
+// Rays with origins uniform in the scene box and directions uniform on the sphere.
+std::vector<pf::Ray> random_rays(const BenchScene& b, size_t n, uint32_t seed) {
+  XorShift uni{seed + 0x9E3779B97F4A7C15ull};
   const pf::Bounds& box = b.scene.bounds;
   std::vector<pf::Ray> rays(n);
   for (pf::Ray& r : rays) {
@@ -146,9 +158,7 @@ std::vector<pf::Ray> random_rays(const BenchScene& b, size_t n, uint32_t seed) {
     // unspecified, and Clang made other rays from the same seed.
     const float oz = uni() * e.z, oy = uni() * e.y, ox = uni() * e.x;
     r.o = box.lo + Vec3(ox, oy, oz);
-    const float z = 2.f * uni() - 1.f, phi = 6.2831853f * uni();
-    const float q = std::sqrt(std::max(0.f, 1.f - z * z));
-    r.d = Vec3(q * std::cos(phi), q * std::sin(phi), z);
+    r.d = uni.direction();
   }
   return rays;
 }
@@ -156,13 +166,7 @@ std::vector<pf::Ray> random_rays(const BenchScene& b, size_t n, uint32_t seed) {
 // Bounce rays from the closest hits of `from` (see the top of this file).
 std::vector<pf::Ray> bounce_rays(const BenchScene& b, const std::vector<pf::Ray>& from,
                                  uint32_t seed) {
-  uint64_t s = seed + 0x9E3779B97F4A7C15ull;
-  auto uni = [&]() {  // xorshift64*, [0, 1)
-    s ^= s >> 12;
-    s ^= s << 25;
-    s ^= s >> 27;
-    return float((s * 0x2545F4914F6CDD1Dull) >> 40) * (1.f / 16777216.f);
-  };
+  XorShift uni{seed + 0x9E3779B97F4A7C15ull};
   std::vector<pf::Hit> hits;
   pf::intersect_closest_batch(b.scene, from, hits);
   const float eps = pf::ray_epsilon(b.scene);
@@ -170,10 +174,7 @@ std::vector<pf::Ray> bounce_rays(const BenchScene& b, const std::vector<pf::Ray>
   for (size_t i = 0; i < from.size(); ++i) {
     if (!hits[i].hit()) continue;
     const pf::SurfaceHit sh = pf::surface_at(b.scene, from[i], hits[i]);
-    const float z = 2.f * uni() - 1.f;
-    const float phi = 6.2831853f * uni();
-    const float q = std::sqrt(std::max(0.f, 1.f - z * z));
-    Vec3 d(q * std::cos(phi), q * std::sin(phi), z);
+    Vec3 d = uni.direction();
     if ((pf::dot(d, sh.ng) > 0.f) == (pf::dot(from[i].d, sh.ng) > 0.f)) d = -d;
     rays.push_back(pf::spawn_ray(sh, d, eps));
   }

@@ -696,6 +696,15 @@ TEST_CASE("the AVX leaf test (eight triangles at a time) gives the SSE one's hit
 
 namespace {
 
+// Whether p lies in the box [lo, hi] widened by `slack` on every side (indexable lo, hi: float
+// arrays or Vec3).
+template <class Lo, class Hi>
+bool in_box(const Lo& lo, const Hi& hi, const Vec3& p, float slack = 0.f) {
+  for (int k = 0; k < 3; ++k)
+    if (!(p[k] >= lo[k] - slack && p[k] <= hi[k] + slack)) return false;
+  return true;
+}
+
 // The compact rope copy of a scene's tree, as the host builds it (raycast.cpp): its leaf records
 // are numbered as Hit::leaf and Ray::leaf number them.
 struct CompactCopy {
@@ -720,16 +729,12 @@ struct CompactCopy {
   bool holds(int32_t leaf, const Vec3& p, float slack = 0.f) const {
     if (leaf < 0 || size_t(leaf) >= cleaves.size()) return false;
     const float* b = cleaves[size_t(leaf)].box;
-    for (int k = 0; k < 3; ++k)
-      if (!(p[k] >= b[k] - slack && p[k] <= b[3 + k] + slack)) return false;
-    return true;
+    return in_box(b, b + 3, p, slack);
   }
 };
 
 bool inside_box(const pf::Scene& s, const Vec3& p) {
-  for (int k = 0; k < 3; ++k)
-    if (!(p[k] >= s.kd.bounds.lo[k] && p[k] <= s.kd.bounds.hi[k])) return false;
-  return true;
+  return in_box(s.kd.bounds.lo, s.kd.bounds.hi, p);
 }
 
 bool same_bits(const pf::Hit& a, const pf::Hit& b) {
@@ -855,10 +860,7 @@ TEST_CASE("the shared rope loops started in a leaf equal their root walks (the k
     const float slack = 2.f * PF_HH_EDGE_EPS * pf::length(s->bounds.extent());
     auto node_holds = [&](int32_t n, const Vec3& p) {
       if (n < 0 || size_t(n) >= nodes.size() || nodes[size_t(n)].axis != PF_KD_LEAF) return false;
-      for (int k = 0; k < 3; ++k)
-        if (!(p[k] >= nodes[size_t(n)].lo[k] - slack && p[k] <= nodes[size_t(n)].hi[k] + slack))
-          return false;
-      return true;
+      return in_box(nodes[size_t(n)].lo, nodes[size_t(n)].hi, p, slack);
     };
     size_t differ = 0, bad_end = 0, started = 0, hits = 0;
     for (const pf::Ray& r : rays) {

@@ -77,6 +77,15 @@ PF_INLINE int pf_hh_intersect(PF_GLOBAL const pf_hh_triangle* tri, const float* 
   return 1;
 }
 
+/* Whether point p lies in the closed box [lo, hi] (a point on a face counts; NaN never does): the
+ * test that lets a walk start in a given leaf (pf_kd_traverse_ropes_from and its compact twin,
+ * raycast.cpp). */
+PF_INLINE int pf_point_in_box(PF_GLOBAL const float* lo, PF_GLOBAL const float* hi,
+                              const float* p) {
+  return p[0] >= lo[0] && p[1] >= lo[1] && p[2] >= lo[2] && p[0] <= hi[0] && p[1] <= hi[1] &&
+         p[2] <= hi[2];
+}
+
 /* Slab test of a ray against the box [lo, hi] (Kay & Kajiya), clipped to [tmin, tmax].
  * inv_d = 1/d per axis (±inf for a zero component, which is handled without NaNs).
  * Returns 1 and writes the parametric entry and exit when the clipped segment is not empty. */
@@ -216,8 +225,7 @@ PF_INLINE int pf_kd_traverse_ropes_from(PF_GLOBAL const pf_kd_node* nodes, pf_in
   int started = 0;
   if (start_node >= 0 && start_node < node_count) {
     PF_GLOBAL const pf_kd_node* sn = &nodes[start_node];
-    if (sn->axis == PF_KD_LEAF && o[0] >= sn->lo[0] && o[1] >= sn->lo[1] && o[2] >= sn->lo[2] &&
-        o[0] <= sn->hi[0] && o[1] <= sn->hi[1] && o[2] <= sn->hi[2] && tmin < hit->t) {
+    if (sn->axis == PF_KD_LEAF && pf_point_in_box(sn->lo, sn->hi, o) && tmin < hit->t) {
       node = start_node;
       t_entry = tmin;
       started = 1;
@@ -353,12 +361,9 @@ PF_INLINE int pf_kd_traverse_ropes_compact_from(
   if (node_count <= 0) return 0;
   float t_entry;
   pf_int node = 0, leaf_index = -1;
-  if (start_leaf >= 0) {
-    PF_GLOBAL const float* b = leaves[start_leaf].box;
-    if (o[0] >= b[0] && o[1] >= b[1] && o[2] >= b[2] && o[0] <= b[3] && o[1] <= b[4] &&
-        o[2] <= b[5] && tmin < hit->t)
-      leaf_index = start_leaf;
-  }
+  if (start_leaf >= 0 && pf_point_in_box(leaves[start_leaf].box, leaves[start_leaf].box + 3, o) &&
+      tmin < hit->t)
+    leaf_index = start_leaf;
   if (leaf_index >= 0) {
     t_entry = tmin;
   } else {

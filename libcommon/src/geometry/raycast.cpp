@@ -543,11 +543,10 @@ inline bool traverse_ropes(const HostKd& h, const float* o, const float* d, floa
 inline bool traverse_default(const HostKd& kd, const float* o, const float* d, float tmin,
                              bool any_hit, int32_t start_leaf, pf_ray_hit& hit,
                              const AlphaTest* alpha, int32_t* end_leaf) {
+  // pf_kd_traverse_ropes_compact_from's own test, here to choose the stack walk otherwise
   if (start_leaf >= 0 && size_t(start_leaf) < kd.cleaves.size()) {
-    // pf_kd_traverse_ropes_compact_from's test, here to choose the stack walk otherwise
     const float* b = kd.cleaves[size_t(start_leaf)].box;
-    if (o[0] >= b[0] && o[1] >= b[1] && o[2] >= b[2] && o[0] <= b[3] && o[1] <= b[4] &&
-        o[2] <= b[5])
+    if (pf_point_in_box(b, b + 3, o))
       return traverse_ropes(kd, o, d, tmin, any_hit, hit, alpha, start_leaf, end_leaf);
   }
   return alpha ? traverse_stack<true>(kd, o, d, tmin, any_hit, hit, alpha, end_leaf)
@@ -617,9 +616,7 @@ bool RayCaster::any(const Ray& ray) const {
 int32_t RayCaster::leaf_at(const Vec3& p) const {
   const HostKd& kd = *static_cast<const HostKd*>(kd_);
   const float q[3] = {p.x, p.y, p.z};
-  if (kd.cnodes.empty()) return -1;
-  for (int k = 0; k < 3; ++k)
-    if (!(q[k] >= kd.root_box[k] && q[k] <= kd.root_box[3 + k])) return -1;
+  if (kd.cnodes.empty() || !pf_point_in_box(kd.root_box, kd.root_box + 3, q)) return -1;
   uint32_t node = 0;
   pf_kd_cnode n = kd.cnodes[0];
   while ((n.code & 3) != PF_KD_LEAF) {
