@@ -51,7 +51,8 @@ float expected_radius(const Scene& s) {
   const float dist = length(l - e);
   const float pixel_angle = 2.f * std::tan(s.camera.fov_y_deg * 0.5f * 3.14159265f / 180.f) /
                             float(s.camera.height);
-  return std::max(length(s.bounds.extent()) / 200.f, 4.f * pixel_angle * dist);
+  // The factor since the surface gather area (eye_pass.h kRadiusScale, RESULTS.md section 8).
+  return 1.5f * std::max(length(s.bounds.extent()) / 200.f, 4.f * pixel_angle * dist);
 }
 
 }  // namespace
@@ -134,6 +135,9 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
             .find("auto: " + std::to_string(kDefaultShadowSamples) + " for sppm and pppm") !=
         std::string::npos);
   CHECK(help_of(help.out, "shadow-samples").find("(default: auto)") != std::string::npos);
+  CHECK(help_of(help.out, "gather-area").find("auto = surface for sppm and pppm") !=
+        std::string::npos);
+  CHECK(help_of(help.out, "gather-area").find("(default: auto)") != std::string::npos);
 
   SECTION("no options: the automatic choices") {
     const auto r = test::run_tool("render", "--scene " + q(tmp / "s.h5") + " -o " +
@@ -155,6 +159,8 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     CHECK(p.at("emission-spp_auto") == "true");
     CHECK(p.at("shadow-samples") == std::to_string(kDefaultShadowSamples));
     CHECK(p.at("shadow-samples_auto") == "true");
+    CHECK(p.at("gather-area") == "surface");
+    CHECK(p.at("gather-area_auto") == "true");
     // The images: 2 passes of the automatic count emitted.
     const nlohmann::json j = nlohmann::json::parse(test::file_bytes(tmp / "a.json"));
     CHECK(j.at("images").back().at("photons_emitted").get<uint64_t>() == 2ull * photons);
@@ -162,7 +168,7 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     CHECK(r.out.find("pppm (auto), direct shadow-rays (auto), 1 shadow sample (auto), " +
                      std::to_string(photons) + " photons/pass (auto), R0 " + default_text(default_radius(scene)) +
                      " (auto), " + std::to_string(kDefaultEmissionSpp) +
-                     " emission samples (auto)") != std::string::npos);
+                     " emission samples (auto), gather area surface (auto)") != std::string::npos);
   }
   SECTION("every choice overridden") {
     const auto r = test::run_tool(
@@ -183,6 +189,8 @@ TEST_CASE("render: --help, the run record and the summary say the defaults used,
     CHECK(p.at("radius_auto") == "false");
     CHECK(p.at("emission-spp") == "2");
     CHECK(p.at("emission-spp_auto") == "false");
+    CHECK(p.at("gather-area") == "disc");  // ppm's automatic choice
+    CHECK(p.at("gather-area_auto") == "true");
     const nlohmann::json j = nlohmann::json::parse(test::file_bytes(tmp / "b.json"));
     CHECK(j.at("images").back().at("photons_emitted").get<uint64_t>() == 2ull * 777);
     CHECK(r.out.find("ppm, direct photons, 777 photons/pass, R0 0.05, 2 emission samples,") !=

@@ -358,16 +358,19 @@ TEST_CASE("OpenCL: SPPM and PPPM images equal the CPU backend's", "[sppm][opencl
   auto dev = test::test_device();
   if (!dev) return;
   const Scene s = test::room_scene(PF_MAT_GLASS, 40, 30);
-  for (Estimator e : {Estimator::Sppm, Estimator::Pppm}) {
-    RenderOptions opt = options(e, 6, 4000, 0.f);
-    opt.eye.direct = DirectMode::ShadowRays;
-    const Image cpu = render_image(s, opt);
-    opt.device = dev.get();
-    const Image gpu = render_image(s, opt);
-    const double rmse = test::relative_rmse(gpu, cpu);
-    INFO(estimator_name(e) << ": relative RMSE opencl vs cpu " << rmse);
-    CHECK(rmse <= 1e-3);
-  }
+  for (Estimator e : {Estimator::Sppm, Estimator::Pppm})
+    for (GatherArea area : {GatherArea::Disc, GatherArea::Surface}) {
+      RenderOptions opt = options(e, 6, 4000, 0.f);
+      opt.eye.direct = DirectMode::ShadowRays;
+      opt.ppm.gather_area = area;
+      const Image cpu = render_image(s, opt);
+      opt.device = dev.get();
+      const Image gpu = render_image(s, opt);
+      const double rmse = test::relative_rmse(gpu, cpu);
+      INFO(estimator_name(e) << ", gather area " << gather_area_name(area)
+                             << ": relative RMSE opencl vs cpu " << rmse);
+      CHECK(rmse <= 1e-3);
+    }
 }
 
 namespace {
@@ -440,6 +443,22 @@ TEST_CASE("staged route: trace-hitpoints --pass, trace-photons, illuminate --est
       refused("merge", state + " " + part + " " + tmp / "part4.h5" + " -o " + out, tmp, out,
               "overlap");
       refused("merge", state + " " + tmp / "seed2.h5" + " -o " + out, tmp, out, "seed");
+      // The gather area is part of a run's options: a part divided by the disc does not merge
+      // with the surface's (the default), whose images differ.
+      const std::string disc = tmp / "disc3.h5";
+      ok("render", common + "--estimator pppm --first-pass 3 --passes 2 --photons 3000 "
+                            "--direct shadow-rays --gather-area disc --sums " + disc, tmp);
+      refused("merge", state + " " + disc + " -o " + out, tmp, out, "gather-area");
+      const std::string disc_img = tmp / "disc.exr";
+      ok("render", common + "--estimator pppm --passes 3 --photons 3000 --direct shadow-rays "
+                            "--gather-area disc -o " + disc_img, tmp);
+      CHECK(read_exr(disc_img).rgb != b.rgb);
+      refused("render", common + "--estimator ppm --gather-area surface -o " + out, tmp, out,
+              "--gather-area surface applies to --estimator sppm and pppm");
+      refused("render", common + "--gather-area sideways -o " + out, tmp, out, "gather-area");
+      refused("illuminate", common + "--estimator ppm --gather-area surface --hitpoints " +
+                                tmp / "eye1.h5" + " --photons " + tmp / "ph1.h5" + " -o " + out,
+              tmp, out, "--gather-area surface applies");
       refused("merge", state + " --range 0:5 -o " + out, tmp, out, "render the missing passes");
       refused("illuminate", common + "--estimator pppm --hitpoints " + tmp / "eye1.h5" +
                                 " --photons " + tmp / "ph2.h5" + " --state " + state + " -o " + out,
@@ -475,13 +494,18 @@ TEST_CASE("OpenCL: the device's SPPM pass gives sppm_pass's state, bit for bit",
   // Without and with the slab (PpmOptions::slab): the room's walls are one mesh, so its corners
   // have photons of another face inside the sphere, which the slab leaves out.
   const float slab = GENERATE(0.f, 0.25f);
-  INFO("slab " << slab);
+  // And with either gather area (gather_area.h): the surface's factor is folded into β, which
+  // the device takes from the host (sppm_sites), so the bits agree.
+  const GatherArea area = GENERATE(GatherArea::Disc, GatherArea::Surface);
+  INFO("slab " << slab << ", gather area " << gather_area_name(area));
   HitpointSet cpu = make_sppm_state(s, default_radius(s), DirectMode::ShadowRays), gpu = cpu;
   HitpointSet sphere = cpu;  // the CPU without the slab, to see that the slab changes something
   DevicePpmState on_device(s, gpu, *dev);
   PpmOptions ppm;
   ppm.slab = slab;
+  ppm.gather_area = area;
   PpmOptions no_slab;
+  no_slab.gather_area = area;
   for (uint32_t pass = 0; pass < 4; ++pass) {
     EyePassOptions eo;
     eo.pass = pass;
@@ -548,9 +572,13 @@ TEST_CASE("OpenCL: the device's PPPM gather gives pppm_pass's sums", "[sppm][ope
            gpu = cpu;
   PassSums sphere = cpu;  // the CPU without the slab
   const float slab = GENERATE(0.f, 0.25f);
-  INFO("slab " << slab);
+  const GatherArea area = GENERATE(GatherArea::Disc, GatherArea::Surface);
+  INFO("slab " << slab << ", gather area " << gather_area_name(area));
   PpmOptions ppm;
   ppm.slab = slab;
+  ppm.gather_area = area;
+  PpmOptions no_slab;
+  no_slab.gather_area = area;
   for (uint32_t pass = 0; pass < 3; ++pass) {
     EyePassOptions eo;
     eo.pass = pass;
@@ -564,7 +592,7 @@ TEST_CASE("OpenCL: the device's PPPM gather gives pppm_pass's sums", "[sppm][ope
     gp.default_radius = cpu.radius1;
     const PhotonGrid grid = build_photon_grid(ph.photons, int(s.mesh_names.size()), gp);
     pppm_pass(s, cpu, eye, grid, ph.emitted, ppm);
-    pppm_pass(s, sphere, eye, grid, ph.emitted, PpmOptions());
+    pppm_pass(s, sphere, eye, grid, ph.emitted, no_slab);
     ClBuffer buf = dev->buffer(ph.photons.size() * sizeof(pf_photon), ph.photons.data());
     const DevicePhotons dp{&buf, ph.photons.size(), ph.emitted};
     pppm_accumulate(gpu, eye,
@@ -684,7 +712,7 @@ TEST_CASE("glossy threshold option: auto by estimator, checked, recorded only wh
   a.eye.sampler = b.eye.sampler = PixelSampler::Sobol;
   const auto staged = [&](const Provenance& e) {
     return staged_state_parameters(Estimator::Pppm, e, "eye.h5", photons, "photons.h5",
-                                   b.ppm.alpha, b.ppm.slab);
+                                   b.ppm.alpha, b.ppm.slab, b.ppm.gather_area);
   };
   CHECK(staged(eye) == state_parameters(b));
   eye.parameters["glossy-threshold"] = "0.5";
@@ -757,12 +785,14 @@ TEST_CASE("sppm_pass_traced: tracing as it gathers gives trace_hitpoints_into + 
   const DirectMode mode = GENERATE(DirectMode::Photons, DirectMode::ShadowRays);
   const PixelSampler sampler = GENERATE(PixelSampler::Sobol, PixelSampler::Random);
   const int threads = GENERATE(1, 2);
+  const GatherArea area = GENERATE(GatherArea::Disc, GatherArea::Surface);
   INFO(direct_mode_name(mode) << ", " << pixel_sampler_name(sampler) << ", " << threads
-                              << " threads");
+                              << " threads, gather area " << gather_area_name(area));
   HitpointSet staged = make_sppm_state(s, default_radius(s), mode), traced = staged;
   PpmOptions ppm;
   ppm.slab = kDefaultSlab;
   ppm.threads = threads;
+  ppm.gather_area = area;
   EyePassResult eye;
   EyePassWork work;
   for (uint32_t pass = 0; pass < 4; ++pass) {
@@ -830,13 +860,16 @@ TEST_CASE("pppm_pass_traced: tracing as it gathers gives trace_hitpoints_into + 
   const DirectMode mode = GENERATE(DirectMode::Photons, DirectMode::ShadowRays);
   const int spp = GENERATE(1, 3);
   const int threads = GENERATE(1, 2);
-  INFO(direct_mode_name(mode) << ", spp " << spp << ", " << threads << " threads");
+  const GatherArea area = GENERATE(GatherArea::Disc, GatherArea::Surface);
+  INFO(direct_mode_name(mode) << ", spp " << spp << ", " << threads << " threads, gather area "
+                              << gather_area_name(area));
   PassSums staged = make_pass_sums(s.camera.width, s.camera.height, 0, default_radius(s), 0.7f,
                                    mode, s.scene_id, {});
   PassSums traced = staged;
   PpmOptions ppm;
   ppm.slab = kDefaultSlab;
   ppm.threads = threads;
+  ppm.gather_area = area;
   EyePassResult eye;
   EyePassWork work;
   for (uint32_t pass = 0; pass < 4; ++pass) {

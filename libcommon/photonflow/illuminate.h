@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "photonflow/estimators/gather_area.h"
 #include "photonflow/gather_method.h"
 #include "photonflow/hash_grid.h"
 #include "photonflow/material/pbr_point_shared.h"
@@ -40,6 +41,9 @@ struct PpmOptions {
   // sppm and pppm: the gather region's slab half-thickness κ in units of R (ppm.h,
   // pf_ppm_in_slab); 0 = the sphere alone (the thesis's rule, which ppm always uses).
   float slab = 0.f;
+  // sppm and pppm: what the gathered flux is divided by (estimators/gather_area.h): the disc πR²
+  // (the thesis's eq. 3.17, which ppm always uses) or the surface the gather region holds.
+  GatherArea gather_area = GatherArea::Disc;
   // How photons are found (gather_method.h): grid | flann on the CPU backend, the thesis's
   // variants and hash-grid on the OpenCL backend (cl_backend.h). All select the same photons.
   GatherMethod method = GatherMethod::Grid;
@@ -102,6 +106,13 @@ constexpr float kDefaultSlab = 0.25f;
 // `pbr`: the BSDF at a PF_MAT_PBR site (pbr_of), nullptr at a diffuse one.
 int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
                 bool skip_direct, float slab, float tau_m[3], const pf_pbr_point* pbr = nullptr);
+
+// The throughput a visible point v's gathered τ_M is multiplied by, per channel: β = v.weight
+// itself with the disc (the same bits as before the option existed), β·πR²/A(x, R) with
+// opt.gather_area surface (gather_area.h eq. 3; A with opt.slab, both sides at a transmissive
+// PBR point). Every route (CPU, device, staged) multiplies τ_M by these floats, so they agree.
+void gather_weight(const Scene& scene, const PpmOptions& opt, const pf_hitpoint& v, float radius,
+                   const pf_pbr_point* pbr, float w[3]);
 
 // The BSDF entry of hitpoint i (`hp`) in `table` (parallel to the hitpoints) when hp lies on a
 // PF_MAT_PBR material, nullptr otherwise (a diffuse hitpoint, or an SPPM pixel not reached yet).

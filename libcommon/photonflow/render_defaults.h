@@ -21,7 +21,11 @@
 //               are a pixel's Sobol points over the passes (pixel_sampler.h pf_light_draws); 4 for
 //               ppm, whose one eye pass keeps its samples (kDefaultShadowSamples)
 //   radius      automatic, from the pixel footprint and the scene extent (default_radius,
-//               eye_pass.h): R0 = max(scene diagonal / 200, 4 · pixel angle · look-at distance)
+//               eye_pass.h): R0 = 1.5 · max(scene diagonal / 200, 4 · pixel angle · look-at
+//               distance), the factor since the surface gather area (kRadiusScale)
+//   gather-area surface for sppm and pppm (estimators/gather_area.h): the estimate divides by
+//               the surface the gather region holds, unbiased at corners and edges; measured in
+//               docs/RESULTS.md section 8, "Gather area"
 //
 // No double counting with direct light by shadow rays (thesis eq. 3.7: L = L_e + L_direct +
 // L_specular + L_caustic + L_indirect; Hachisuka & Jensen 2009, section 4, SPPM's direct light
@@ -159,14 +163,16 @@ struct RenderChoices {
   bool emission_spp_auto = true;
   int shadow_samples = kDefaultShadowSamples;  // EyePassOptions::shadow_samples used
   bool shadow_samples_auto = true;
+  GatherArea gather_area = GatherArea::Surface;  // PpmOptions::gather_area used
+  bool gather_area_auto = true;
 };
 // "pppm (auto), direct shadow-rays (auto), 1 shadow sample (auto), 366592 photons/pass (auto),
-// R0 0.0123 (auto), 8 emission samples (auto)": render's summary line (the shadow samples only
-// with direct shadow-rays).
+// R0 0.0123 (auto), 8 emission samples (auto), gather area surface (auto)": render's summary line
+// (the shadow samples only with direct shadow-rays).
 std::string describe_choices(const RenderChoices& c);
 // Writes the choices into a run record's parameters (provenance.h): the values used, and
-// "<name>_auto": "true" | "false" for estimator, direct, shadow-samples, photons, radius and
-// emission-spp.
+// "<name>_auto": "true" | "false" for estimator, direct, shadow-samples, photons, radius,
+// emission-spp and gather-area.
 void record_choices(std::map<std::string, std::string>& parameters, const RenderChoices& c);
 
 }  // namespace pf

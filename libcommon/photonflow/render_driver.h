@@ -157,7 +157,8 @@ void check_options(const RenderOptions& opt);
 
 // The options a PPM state depends on, as canonical text under their tool option names ("alpha" →
 // "0.7", "seed", "photons", "spp", "max-depth", "max-bounces", "direct", "shadow-samples",
-// "radius"; with sppm and pppm also "estimator", "pixel-sampler" and "slab"). render_progressive
+// "radius"; with sppm and pppm also "estimator", "pixel-sampler" and "slab", and "gather-area"
+// when it is the surface). render_progressive
 // records them in every checkpoint's provenance parameters as
 // "state.<name>" and resumes only a checkpoint whose record equals this run's: a state continued
 // under other options would be neither run's image. (Passes, snapshots, threads, device, method
@@ -165,12 +166,12 @@ void check_options(const RenderOptions& opt);
 std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
 // The same record for the staged route (illuminate --estimator pppm), from the options recorded in
 // the provenance of its eye pass (trace-hitpoints: spp, max-depth, direct, shadow-samples, radius,
-// seed, pixel-sampler) and photon pass (trace-photons: photons, max-bounces, seed) and its alpha
-// and slab: equal to render's for the same options, so parts of either route merge. InputError
-// naming the file whose provenance lacks one.
+// seed, pixel-sampler) and photon pass (trace-photons: photons, max-bounces, seed) and its alpha,
+// slab and gather area: equal to render's for the same options, so parts of either route merge.
+// InputError naming the file whose provenance lacks one.
 std::map<std::string, std::string> staged_state_parameters(
     Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
-    const std::string& photons_path, float alpha, float slab);
+    const std::string& photons_path, float alpha, float slab, GatherArea area);
 
 // The whole run: resumes from opt.checkpoint when `resume` (and the file exists), runs the
 // remaining passes with checkpoints every opt.checkpoint_every passes, and returns the final

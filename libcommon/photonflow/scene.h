@@ -61,6 +61,9 @@ struct Scene {
   pf_camera camera{};
   KdTree kd;
   Bounds bounds;                   // of all triangles
+  // Derived data of --gather-area surface (estimators/gather_area.h, surface_area), built on
+  // first use and keyed on triangles[]; not serialised, and copies start without it.
+  KdHostCache gather_area_cache;
   // Base-colour textures (format version 3): headers over one pool of linear RGBA texels (4 floats
   // each; a texture used by several materials is stored once), each material's texture (−1 none;
   // empty = none for every material) and, when some material has one, every triangle's UVs.

@@ -87,13 +87,15 @@ void sppm_pass_traced(const Scene& scene, HitpointSet& state, const EyePassOptio
 // The two halves of sppm_pass around the gather, for the device's SPPM pass (cl_gather.h,
 // DevicePpmState::sppm_pass), which gathers on the device in between:
 //   sppm_sites: one site per pixel of `state` — the pixel's visible point in `eye`, or a site
-//     with mesh −1 where the eye path found none — and its throughput β (3 floats, 0 without one);
-//     InputError as sppm_pass when the eye pass does not fit the state;
+//     with mesh −1 where the eye path found none — and its throughput β (3 floats, 0 without one;
+//     gather_weight's, which with opt.gather_area surface reads the pixel's radius in `state`, so
+//     a device state must be read back first); InputError as sppm_pass when the eye pass does
+//     not fit the state;
 //   sppm_finish_pass: every pixel with a visible point takes its position, normal, direction, mesh
 //     and material; the emitted and direct layers take the pass's into their running mean; the
 //     pass is counted with its `emitted` photons.
-void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,
-                std::vector<float>& beta);
+void sppm_sites(const Scene& scene, const HitpointSet& state, const EyePassResult& eye,
+                const PpmOptions& opt, std::vector<pf_hitpoint>& sites, std::vector<float>& beta);
 void sppm_finish_pass(HitpointSet& state, const EyePassResult& eye, uint64_t emitted);
 
 // r_i of pass p (0-based; i = p + 1) for initial radius r1: r_i² = r1² · Π_{j=1..i−1} (j + α)/(j + 1)

@@ -48,6 +48,10 @@ int main(int argc, char** argv) {
       ("slab", "sppm, pppm: count only photons within SLAB x R of the visible point's tangent "
        "plane (ppm.h); 0 = the sphere alone; auto = 0.25 for sppm and pppm, 0 otherwise",
        cxxopts::value<std::string>()->default_value("auto"))
+      ("gather-area", "sppm, pppm: divide the gathered flux by the surface the gather region "
+       "holds (surface, estimators/gather_area.h) or by the disc pi R^2 (disc, the thesis's eq. "
+       "3.17); auto = surface for sppm and pppm, disc otherwise",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("clusters", "PPM, --method kmeans-clusters | grid-kmeans | grid-gridclusters: hitpoint "
        "clusters of these hitpoints (clusters.h5 from the cluster stage); without it they are "
        "made once here", cxxopts::value<std::string>())
@@ -84,6 +88,8 @@ int main(int argc, char** argv) {
     pf::require_positive("max-bins", ppm.max_bins);
     ppm.slab = pf::parse_slab(a["slab"].as<std::string>(),
                               estimator == "sppm" || estimator == "pppm");
+    ppm.gather_area = pf::parse_gather_area(a["gather-area"].as<std::string>(),
+                                            estimator == "sppm" || estimator == "pppm");
     if (estimator == "sppm" || estimator == "pppm") {
       // The per-pass visible points move, so the gather is the CPU grid's (render --device opencl
       // traces them on the device); prebuilt grids and clusters belong to fixed hitpoints.
@@ -136,7 +142,7 @@ int main(int argc, char** argv) {
       }
       const auto params = pf::staged_state_parameters(
           pf::Estimator::Pppm, pf::load_hitpoints_provenance(eye_path), eye_path,
-          pf::load_photons_provenance(ph_path), ph_path, ppm.alpha, ppm.slab);
+          pf::load_photons_provenance(ph_path), ph_path, ppm.alpha, ppm.slab, ppm.gather_area);
       pf::PassSums sums;
       if (a.count("state")) {
         const std::string sp = a["state"].as<std::string>();

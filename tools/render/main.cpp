@@ -66,6 +66,10 @@ int main(int argc, char** argv) {
       ("slab", "sppm, pppm: count only photons within SLAB x R of the visible point's tangent "
        "plane (ppm.h); 0 = the sphere alone; auto = 0.25 for sppm and pppm, 0 for ppm",
        cxxopts::value<std::string>()->default_value("auto"))
+      ("gather-area", "sppm, pppm: divide the gathered flux by the surface the gather region "
+       "holds (surface: corners and edges come out unbiased, estimators/gather_area.h) or by "
+       "the disc pi R^2 (disc, the thesis's eq. 3.17); auto = surface for sppm and pppm, disc "
+       "for ppm", cxxopts::value<std::string>()->default_value("auto"))
       ("max-bins", "grid bins along a mesh's longest extent", cxxopts::value<int>()->default_value("64"))
       ("spp", "eye samples per pixel (ppm; pppm: per pass; sppm: 1)",
        cxxopts::value<int>()->default_value("1"))
@@ -153,6 +157,8 @@ int main(int argc, char** argv) {
     opt.photons.threads = threads;
     opt.ppm.alpha = a["alpha"].as<float>();
     opt.ppm.slab = pf::parse_slab(a["slab"].as<std::string>(), opt.estimator != pf::Estimator::Ppm);
+    opt.ppm.gather_area = pf::parse_gather_area(a["gather-area"].as<std::string>(),
+                                                opt.estimator != pf::Estimator::Ppm);
     opt.ppm.max_bins = a["max-bins"].as<int>();
     opt.ppm.threads = threads;
     opt.checkpoint = a["checkpoint"].as<std::string>();
@@ -202,6 +208,8 @@ int main(int argc, char** argv) {
     chosen.emission_spp_auto = a["emission-spp"].as<std::string>() == "auto";
     chosen.shadow_samples = opt.eye.shadow_samples;
     chosen.shadow_samples_auto = a["shadow-samples"].as<std::string>() == "auto";
+    chosen.gather_area = opt.ppm.gather_area;
+    chosen.gather_area_auto = a["gather-area"].as<std::string>() == "auto";
     opt.photons.photons = chosen.photons;
     if (opened.baked_here) {
       for (const std::string& w : pf::bake_warnings(bake, opened.report))

@@ -33,8 +33,8 @@ int main(int argc, char** argv) {
        std::to_string(pf::kDefaultShadowSamples) + " for sppm and pppm, " +
        std::to_string(pf::kPpmShadowSamples) + " for ppm (render's: render_defaults.h)",
        cxxopts::value<std::string>()->default_value("auto"))
-      ("radius", "initial radius R0 in world units; 0 = automatic: max(scene diagonal / 200, "
-       "4 pixel footprints at the look-at distance)",
+      ("radius", "initial radius R0 in world units; 0 = automatic: 1.5 x max(scene diagonal / "
+       "200, 4 pixel footprints at the look-at distance)",
        cxxopts::value<float>()->default_value("0"))
       ("estimator", "the estimator the hitpoints are for: ppm (one eye pass, pass 0, any --spp) | "
        "sppm | pppm (eye pass --pass of a run that traces one every pass, one sample per pixel); "

@@ -32,7 +32,7 @@ std::string auto_photons_rule() {
 }
 
 std::string auto_radius_rule() {
-  return "auto: max(scene diagonal / 200, 4 pixel footprints at the look-at distance)";
+  return "auto: 1.5 x max(scene diagonal / 200, 4 pixel footprints at the look-at distance)";
 }
 
 RenderDefaults choose_defaults(const Scene& scene) {
@@ -129,7 +129,8 @@ std::string describe_choices(const RenderChoices& c) {
          std::to_string(c.photons) +
          " photons/pass" + how(c.photons_auto) + ", R0 " + default_text(c.radius) +
          how(c.radius_auto) + ", " + std::to_string(c.emission_spp) + " emission samples" +
-         how(c.emission_spp_auto);
+         how(c.emission_spp_auto) + ", gather area " + gather_area_name(c.gather_area) +
+         how(c.gather_area_auto);
 }
 
 void record_choices(std::map<std::string, std::string>& p, const RenderChoices& c) {
@@ -146,6 +147,8 @@ void record_choices(std::map<std::string, std::string>& p, const RenderChoices& 
   p["emission-spp_auto"] = flag(c.emission_spp_auto);
   p["shadow-samples"] = std::to_string(c.shadow_samples);
   p["shadow-samples_auto"] = flag(c.shadow_samples_auto);
+  p["gather-area"] = gather_area_name(c.gather_area);
+  p["gather-area_auto"] = flag(c.gather_area_auto);
 }
 
 }  // namespace pf

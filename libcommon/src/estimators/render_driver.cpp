@@ -205,6 +205,9 @@ void check_options(const RenderOptions& opt) {
   require_in_unit_interval("alpha", opt.ppm.alpha);
   check_slab(opt.ppm.slab);
   if (opt.estimator == Estimator::Ppm) require_sphere(opt.ppm.slab);
+  if (opt.estimator == Estimator::Ppm && opt.ppm.gather_area == GatherArea::Surface)
+    throw input_error("", "--gather-area surface applies to --estimator sppm and pppm",
+                      "ppm's fixed hitpoints divide by the disc, the thesis's eq. 3.17");
   require_positive("max-bins", opt.ppm.max_bins);
   if (!opt.checkpoint.empty()) require_positive("checkpoint-every", opt.checkpoint_every);
   if (opt.snapshot_every < 0) throw input_error("", "--snapshot-every must be >= 0");
@@ -247,6 +250,8 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
     p["estimator"] = estimator_name(opt.estimator);
     p["pixel-sampler"] = pixel_sampler_name(opt.eye.sampler);
     p["slab"] = default_text(opt.ppm.slab);
+    // Only with the surface (states and sums made before the option existed divided by the disc).
+    if (opt.ppm.gather_area == GatherArea::Surface) p["gather-area"] = "surface";
   }
   // Only where eye paths continue through glossy points (eye_pass.h): the states and sums of
   // runs without it, and those written before it existed, keep their parameters.
@@ -258,7 +263,7 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
 
 std::map<std::string, std::string> staged_state_parameters(
     Estimator e, const Provenance& eye, const std::string& eye_path, const Provenance& photons,
-    const std::string& photons_path, float alpha, float slab) {
+    const std::string& photons_path, float alpha, float slab, GatherArea area) {
   auto text = [](const Provenance& p, const std::string& path, const char* name) {
     const auto it = p.parameters.find(name);
     if (it == p.parameters.end())
@@ -293,6 +298,7 @@ std::map<std::string, std::string> staged_state_parameters(
   o.photons.seed = uint32_t(number(photons, photons_path, "seed"));
   o.ppm.alpha = alpha;
   o.ppm.slab = slab;
+  o.ppm.gather_area = area;
   return state_parameters(o);
 }
 

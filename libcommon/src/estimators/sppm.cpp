@@ -157,7 +157,9 @@ inline void gather_visible_point(const Scene& scene, const PhotonGrid& grid, con
   pf_hitpoint& s = state.hitpoints[px];
   float tau_m[3];
   const int m = gather_site(scene, grid, v, s.radius, skip_direct, opt.slab, tau_m, pbr);
-  for (int c = 0; c < 3; ++c) tau_m[c] *= v.weight[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
+  float w[3];  // β_i, times πR²/A with --gather-area surface (gather_area.h eq. 3)
+  gather_weight(scene, opt, v, s.radius, pbr, w);
+  for (int c = 0; c < 3; ++c) tau_m[c] *= w[c];  // τ_M = β_i Σ f_r Φ_p (HJ09 eq. 11)
   pf_ppm_update(&s, m, tau_m, opt.alpha);              // thesis eq. 3.14, 3.16, 3.18
   take_visible_point(state, px, v, pbr);
 }
@@ -223,20 +225,25 @@ void sppm_pass_traced(const Scene& scene, HitpointSet& state, const EyePassOptio
   count_pass(state, emitted);
 }
 
-void sppm_sites(const HitpointSet& state, const EyePassResult& eye, std::vector<pf_hitpoint>& sites,
-                std::vector<float>& beta) {
+void sppm_sites(const Scene& scene, const HitpointSet& state, const EyePassResult& eye,
+                const PpmOptions& opt, std::vector<pf_hitpoint>& sites, std::vector<float>& beta) {
   check_visible_pixels(eye, state.width, state.height, true);
   const size_t n = size_t(state.width) * size_t(state.height);
   if (state.hitpoints.size() != n)
     throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
+  const bool pbr = scene_has_pbr(scene);
+  if (opt.gather_area == GatherArea::Surface) require_bsdf_table(scene, eye.hitpoints, eye.bsdf);
   pf_hitpoint none{};
   none.mesh = none.material = -1;
   sites.assign(n, none);
   beta.assign(n * 3, 0.f);
-  for (const pf_hitpoint& v : eye.hitpoints) {
+  for (size_t i = 0; i < eye.hitpoints.size(); ++i) {
+    const pf_hitpoint& v = eye.hitpoints[i];
     const size_t px = pixel_of(v, state.width);
     sites[px] = v;
-    for (int c = 0; c < 3; ++c) beta[px * 3 + size_t(c)] = v.weight[c];
+    // β, times πR²/A at the pixel's radius with --gather-area surface (gather_visible_point's)
+    gather_weight(scene, opt, v, state.hitpoints[px].radius, eye_pbr(pbr, scene, eye, i),
+                  &beta[px * 3]);
   }
 }
 
@@ -317,10 +324,11 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
 #pragma omp parallel for schedule(dynamic, 256) num_threads(worker_threads(opt.threads))
     for (int64_t i = 0; i < count; ++i) {
       const pf_hitpoint& v = eye.hitpoints[size_t(i)];
-      float tau_m[3];
-      gather_site(scene, grid, v, r, skip, opt.slab, tau_m,
-                  eye_pbr(pbr, scene, eye, size_t(i)));
-      for (int c = 0; c < 3; ++c) out[size_t(i) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
+      float tau_m[3], w[3];
+      const pf_pbr_point* at = eye_pbr(pbr, scene, eye, size_t(i));
+      gather_site(scene, grid, v, r, skip, opt.slab, tau_m, at);
+      gather_weight(scene, opt, v, r, at, w);
+      for (int c = 0; c < 3; ++c) out[size_t(i) * 3 + size_t(c)] = tau_m[c] * w[c];
     }
   }
   pppm_accumulate(sums, eye, tau_beta, emitted);
@@ -355,9 +363,12 @@ void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& 
         pf_pbr_point pt;
         if (!tracer.sample(x, y, s, v, e, d, pbr_scene ? &pt : nullptr)) continue;
         const bool on_pbr = pbr_scene && scene.materials[size_t(v.material)].type == PF_MAT_PBR;
-        float tau_m[3] = {0.f, 0.f, 0.f};
-        if (emitted > 0) gather_site(scene, grid, v, r, skip, opt.slab, tau_m, on_pbr ? &pt : nullptr);
-        for (int c = 0; c < 3; ++c) tau_beta[size_t(visible) * 3 + size_t(c)] = tau_m[c] * v.weight[c];
+        float tau_m[3] = {0.f, 0.f, 0.f}, w[3] = {0.f, 0.f, 0.f};
+        if (emitted > 0) {
+          gather_site(scene, grid, v, r, skip, opt.slab, tau_m, on_pbr ? &pt : nullptr);
+          gather_weight(scene, opt, v, r, on_pbr ? &pt : nullptr, w);
+        }
+        for (int c = 0; c < 3; ++c) tau_beta[size_t(visible) * 3 + size_t(c)] = tau_m[c] * w[c];
         ++visible;
       }
       e = tracer.emitted_layer(x, y, e);  // with the pixel's emission samples (eye_pass.h)

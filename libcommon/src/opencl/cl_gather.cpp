@@ -799,7 +799,8 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
   // throughput β; the host copy of the state takes the visible points too (sppm_pass's fields).
   std::vector<pf_hitpoint>& sites = sppm_sites_;
   std::vector<float>& beta = sppm_beta_;
-  sppm_sites(h_, eye, sites, beta);
+  if (o.gather_area == GatherArea::Surface) sync();  // the pixels' radii (sppm_sites)
+  sppm_sites(scene_, h_, eye, o, sites, beta);
   upload();
   if (nh > 0) {
     if (weights_.bytes() < nh * 3 * sizeof(float)) weights_ = dev_.buffer(nh * 3 * sizeof(float));
@@ -857,13 +858,15 @@ std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& e
   require_one_buffer(dev, nh, sizeof(pf_gather_site), "visible points", o.method);
   std::vector<pf_hitpoint> fresh(eye.hitpoints);
   std::vector<float> beta(nh * 3);
+  require_bsdf_table(scene, eye.hitpoints, eye.bsdf);
+  const bool pbr_scene = scene_has_pbr(scene);
   for (size_t i = 0; i < nh; ++i) {
     fresh[i].radius = radius;
     fresh[i].n_photons = 0.f;
-    for (int c = 0; c < 3; ++c) {
-      fresh[i].flux[c] = 0.f;
-      beta[i * 3 + size_t(c)] = eye.hitpoints[i].weight[c];
-    }
+    for (int c = 0; c < 3; ++c) fresh[i].flux[c] = 0.f;
+    // β, times πR²/A with --gather-area surface (pppm_pass's)
+    gather_weight(scene, o, eye.hitpoints[i], radius,
+                  pbr_scene ? pbr_of(scene, eye.hitpoints[i], eye.bsdf, i) : nullptr, &beta[i * 3]);
   }
   const SplitHitpoints hps{&dev.scratch("pppm.sites", nh * sizeof(pf_gather_site)),
                            &dev.scratch("pppm.states", nh * sizeof(pf_ppm_state))};
@@ -872,7 +875,6 @@ std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& e
   dev.write(weights, nh * 3 * sizeof(float), beta.data());
   const ClBuffer& mats = dev.scratch("ppm.materials", scene.materials.size() * sizeof(pf_material));
   dev.write(mats, scene.materials.size() * sizeof(pf_material), scene.materials.data());
-  require_bsdf_table(scene, eye.hitpoints, eye.bsdf);
   const ClBuffer& pbr = pbr_sites(dev, scene, "pppm.pbr", eye.hitpoints, eye.bsdf, nullptr, 0, nh);
   GatherTimes times;
   hash_grid_pass(scene, hps, mats, pbr, nh, direct, radius,

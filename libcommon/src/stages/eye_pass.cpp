@@ -49,7 +49,7 @@ float default_radius(const Scene& scene) {
   CameraFrame cam(scene.camera);
   float dist = length(Vec3(scene.camera.look_at) - Vec3(scene.camera.eye));
   float diag = length(scene.bounds.extent());
-  return std::max(diag / 200.f, 4.f * cam.pixel_angle() * dist);
+  return kRadiusScale * std::max(diag / 200.f, 4.f * cam.pixel_angle() * dist);
 }
 
 namespace {

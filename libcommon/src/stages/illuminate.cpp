@@ -184,6 +184,15 @@ void require_bsdf_table(const Scene& scene, const std::vector<pf_hitpoint>& hitp
   for (size_t i = 0; i < hitpoints.size(); ++i) pbr_of(scene, hitpoints[i], table, i);
 }
 
+void gather_weight(const Scene& scene, const PpmOptions& opt, const pf_hitpoint& v, float radius,
+                   const pf_pbr_point* pbr, float w[3]) {
+  for (int c = 0; c < 3; ++c) w[c] = v.weight[c];
+  if (opt.gather_area != GatherArea::Surface) return;
+  const float g =
+      float(surface_area(scene).scale(v, radius, opt.slab, pbr_two_sided_gather(pbr)));
+  for (int c = 0; c < 3; ++c) w[c] *= g;
+}
+
 int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& site, float radius,
                 bool skip_direct, float slab, float tau_m[3], const pf_pbr_point* pbr) {
   tau_m[0] = tau_m[1] = tau_m[2] = 0.f;
