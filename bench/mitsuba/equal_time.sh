@@ -13,10 +13,11 @@
 #
 #   defaults  render --time T                          (DEFAULTS ONLY: sppm, shadow rays, auto photons and radius)
 #   pppm      render --time T --estimator pppm
-#   pppm-issue render --time T --estimator pppm --direct photons --photons 100000 --emission-spp 0 (the baseline the
-#             mirror-and-glass box's target is stated against: "today's --estimator pppm" when issue
-#             34 was filed, i.e. render's defaults then, 18c2973^, beside pppm; the radius rule is
-#             the same then and now)
+#   pppm-issue render --time T --estimator pppm --direct photons --photons 100000 --emission-spp 0
+#             --gather-area disc --radius R (the baseline the mirror-and-glass box's target is stated
+#             against: "today's --estimator pppm" when issue 34 was filed, i.e. render's defaults
+#             then, 18c2973^, beside pppm; R the radius rule of then, max(diagonal / 200, 4 pixel
+#             footprints), which is today's automatic R0 / 1.5, read from a one-pass run)
 #   <name>    with FLAGS_<name> set in the environment (a shell identifier): render --time T
 #             $FLAGS_<name>, for trying settings under the same harness, e.g.
 #             FLAGS_ss2="--shadow-samples 2" METHODS="defaults ss2"
@@ -56,6 +57,12 @@ MI_SPP=${MI_SPP:-16}
 MASK_SPP=${MASK_SPP:-64}
 PY=${PY:-.venv-mitsuba/bin/python}
 HERE=$(cd "$(dirname "$0")" && pwd)
+# The issue-time automatic radius of a scene: today's automatic R0 (render's summary) / 1.5.
+issue_radius() {
+  "$BIN/render" --scene "$1" -o "$OUT/.issue-radius.exr" --passes 1 --photons 16384 --threads "$THREADS" \
+    | sed -n 's/.*R0 \([0-9.e+-]*\) (auto).*/\1/p' | awk '{ printf "%.9g", $1 / 1.5 }'
+  rm -f "$OUT/.issue-radius.exr" "$OUT/.issue-radius.png"
+}
 export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-$PWD/.llvm19/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
 export DRJIT_CACHE_DIR=${DRJIT_CACHE_DIR:-$OUT/drjit-cache}
 if [ "${DRY:-0}" = 1 ]; then TIME=3; RUNS=1; OUT=$OUT-dry; export DRJIT_CACHE_DIR=$OUT/drjit-cache; fi
@@ -101,7 +108,8 @@ for s in $SCENES; do
         pppm)     "$BIN/render" --scene "$D/scene.h5" -o "$img" --time "$TIME" --seed "$r" --threads "$THREADS" \
                     --estimator pppm --stats "$rec" | tail -1 ;;
         pppm-issue) "$BIN/render" --scene "$D/scene.h5" -o "$img" --time "$TIME" --seed "$r" --threads "$THREADS" \
-                    --estimator pppm --direct photons --photons 100000 --emission-spp 0 --stats "$rec" | tail -1 ;;
+                    --estimator pppm --direct photons --photons 100000 --emission-spp 0 --gather-area disc \
+                    --radius "$(issue_radius "$D/scene.h5")" --stats "$rec" | tail -1 ;;
         pt)       "$BIN/pathtrace" --scene "$D/scene.h5" -o "$img" --time "$TIME" --spp 1000000 --seed "$r" \
                     --threads "$THREADS" --png none --stats "$rec" | tail -1 ;;
         mi-*)     "$PY" "$HERE/mi_render.py" "$D/mi/scene.xml" "$img" --time "$TIME" --spp-per-pass "$MI_SPP" \
