@@ -266,13 +266,8 @@ inline EdgePhoton edge_photon() {
   return e;
 }
 
-// White furnace: the inside of a unit sphere whose walls all emit `le` and reflect diffusely with
-// albedo `rho`; the camera sits at the centre. Every radiance inside is le / (1 − rho).
-inline Scene furnace_scene(float rho, float le, int size, size_t triangles = 2000) {
-  Scene s;
-  s.triangles = make_sphere(Vec3(0, 0, 0), 1.f, triangles, {0, 0});
-  for (auto& t : s.triangles) flip(t);
-  s.mesh_names = {"sphere"};
+// A furnace's walls: emit `le` and reflect diffusely with albedo `rho`.
+inline pf_material furnace_material(float rho, float le) {
   pf_material m{};
   m.type = PF_MAT_EMITTER;
   m.ior = 1.f;
@@ -280,7 +275,17 @@ inline Scene furnace_scene(float rho, float le, int size, size_t triangles = 200
     m.color[c] = rho;
     m.emission[c] = le;
   }
-  s.materials = {m};
+  return m;
+}
+
+// White furnace: the inside of a unit sphere whose walls all emit `le` and reflect diffusely with
+// albedo `rho`; the camera sits at the centre. Every radiance inside is le / (1 − rho).
+inline Scene furnace_scene(float rho, float le, int size, size_t triangles = 2000) {
+  Scene s;
+  s.triangles = make_sphere(Vec3(0, 0, 0), 1.f, triangles, {0, 0});
+  for (auto& t : s.triangles) flip(t);
+  s.mesh_names = {"sphere"};
+  s.materials = {furnace_material(rho, le)};
   s.material_names = {"furnace"};
   s.camera = pf_camera{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 60.f, size, size};
   finish_scene(s);

@@ -263,14 +263,7 @@ TEST_CASE("furnace in a cube: the surface estimate is unbiased at the edges wher
     Scene s;
     s.triangles = tris;
     for (int m = 0; m < meshes; ++m) s.mesh_names.push_back("face" + std::to_string(m));
-    pf_material mat{};
-    mat.type = PF_MAT_EMITTER;
-    mat.ior = 1.f;
-    for (int c = 0; c < 3; ++c) {
-      mat.color[c] = rho;
-      mat.emission[c] = le;
-    }
-    s.materials = {mat};
+    s.materials = {test::furnace_material(rho, le)};
     s.material_names = {"furnace"};
     s.camera = pf_camera{{0.75f, 0.7f, 0.75f}, {0.f, 0.f, 0.f}, {0, 1, 0}, 70.f, 16, 16};
     finish_scene(s);

@@ -108,7 +108,8 @@ int eye_strata_columns(int spp);
 // edge bias that had held the radius down: together, at equal time, 12–16 % less error over all
 // pixels and 23–32 % less away from the lights on the diffuse scenes of docs/RESULTS.md section
 // 8, the mirror-and-glass box's within 2 %; 2× was better still on the diffuse ones and 8 %
-// worse there (its caustics blur).
+// worse there (its caustics blur). ppm's fixed hitpoints start from the same R0 (not re-measured
+// for ppm, which keeps the disc).
 constexpr float kRadiusScale = 1.5f;
 float default_radius(const Scene& scene);
 

@@ -33,6 +33,7 @@
 // | --alpha            | 0.7     | α of eq. 3.14 (sppm) or of KZ11 eq. 19 (pppm) |
 // | --radius           | 0 = auto| R_1 in world units (default_radius) |
 // | --slab             | auto    | κ: 0.25 for sppm and pppm, 0 (the sphere) for ppm |
+// | --gather-area      | auto    | surface for sppm and pppm (estimators/gather_area.h), disc for ppm |
 // | --pixel-sampler    | auto    | sobol for sppm and pppm: where a pixel's eye samples go |
 //
 // | estimator | state                                    | memory      | passes merge |

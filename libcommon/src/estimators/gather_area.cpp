@@ -145,6 +145,11 @@ struct SurfaceArea::Impl {
   void build(int32_t slot, std::vector<int32_t>& idx, int begin, int end,
              const std::vector<AreaTri>& src, const std::vector<double>& centroid);
   int sign_at(int mesh, const double* x, const double* n, int32_t* tri) const;
+  // Where eq. (1) is asked at `site` with R: x, n, the triangle T0 holding x and σ (1 with
+  // both_sides, where eq. 2 does not use it); false when there is no area (no mesh of this
+  // scene, R <= 0, or x on no triangle of its mesh).
+  bool locate(const pf_hitpoint& site, float radius, bool both_sides, double x[3], double n[3],
+              int32_t& tri, int& sigma) const;
   double sum(int mesh, const double* x, const double* n, double r, double kr, int sigma,
              bool both_sides) const;
   double vertex_ratio(int32_t vertex, int level, float slab, bool both_sides) const;
@@ -512,19 +517,32 @@ double SurfaceArea::Impl::vertex_ratio(int32_t vertex, int level, float slab,
   return double(f);
 }
 
+bool SurfaceArea::Impl::locate(const pf_hitpoint& site, float radius, bool both_sides,
+                               double x[3], double n[3], int32_t& tri, int& sigma) const {
+  const int mesh = site.mesh;
+  if (mesh < 0 || size_t(mesh) >= root.size() || root[size_t(mesh)] < 0 || !(radius > 0.f))
+    return false;
+  for (int k = 0; k < 3; ++k) {
+    x[k] = site.position[k];
+    n[k] = site.normal[k];
+  }
+  tri = -1;
+  sigma = sign_at(mesh, x, n, &tri);
+  if (sigma == 0) return false;
+  if (both_sides) sigma = 1;
+  return true;
+}
+
 double SurfaceArea::area(const pf_hitpoint& site, float radius, float slab,
                          bool both_sides) const {
   const Impl& I = *impl_;
-  const int mesh = site.mesh;
-  if (mesh < 0 || size_t(mesh) >= I.root.size() || I.root[size_t(mesh)] < 0 || !(radius > 0.f))
-    return 0.0;
-  const double x[3] = {site.position[0], site.position[1], site.position[2]};
-  const double n[3] = {site.normal[0], site.normal[1], site.normal[2]};
-  int32_t tri = -1;
-  const int sigma = I.sign_at(mesh, x, n, &tri);
-  if (sigma == 0) return 0.0;
+  double x[3], n[3];
+  int32_t tri;
+  int sigma;
+  if (!I.locate(site, radius, both_sides, x, n, tri, sigma)) return 0.0;
   const double r = radius;
-  // A triangle small against R: the ratio at its centroid and the nearest radius level.
+  // A triangle small against R: the ratios of its corners at the nearest radius level,
+  // interpolated at x.
   const long level = std::lround(-kLevelsPerOctave * std::log2(r / I.r_ref));
   if (level > -32768 && level < 32767) {
     const double rl = I.r_ref * std::exp2(-double(level) / kLevelsPerOctave);
@@ -554,40 +572,32 @@ double SurfaceArea::area(const pf_hitpoint& site, float radius, float slab,
       return ratio * kPiD * r * r;
     }
   }
-  return I.sum(mesh, x, n, r, slab > 0.f ? double(slab) * r : -1.0, both_sides ? 1 : sigma,
-               both_sides);
+  return I.sum(site.mesh, x, n, r, slab > 0.f ? double(slab) * r : -1.0, sigma, both_sides);
 }
 
 double SurfaceArea::area_at(const pf_hitpoint& site, float radius, float slab,
                             bool both_sides) const {
   const Impl& I = *impl_;
-  const int mesh = site.mesh;
-  if (mesh < 0 || size_t(mesh) >= I.root.size() || I.root[size_t(mesh)] < 0 || !(radius > 0.f))
-    return 0.0;
-  const double x[3] = {site.position[0], site.position[1], site.position[2]};
-  const double n[3] = {site.normal[0], site.normal[1], site.normal[2]};
-  int32_t tri = -1;
-  const int sigma = I.sign_at(mesh, x, n, &tri);
-  if (sigma == 0) return 0.0;
-  return I.sum(mesh, x, n, double(radius), slab > 0.f ? double(slab) * double(radius) : -1.0,
-               both_sides ? 1 : sigma, both_sides);
+  double x[3], n[3];
+  int32_t tri;
+  int sigma;
+  if (!I.locate(site, radius, both_sides, x, n, tri, sigma)) return 0.0;
+  const double r = radius;
+  return I.sum(site.mesh, x, n, r, slab > 0.f ? double(slab) * r : -1.0, sigma, both_sides);
 }
 
 double SurfaceArea::area_brute(const pf_hitpoint& site, float radius, float slab,
                                bool both_sides) const {
   const Impl& I = *impl_;
+  double x[3], n[3];
+  int32_t tri;
+  int sigma;
+  if (!I.locate(site, radius, both_sides, x, n, tri, sigma)) return 0.0;
   const int mesh = site.mesh;
-  if (mesh < 0 || size_t(mesh) >= I.root.size() || I.root[size_t(mesh)] < 0 || !(radius > 0.f))
-    return 0.0;
-  const double x[3] = {site.position[0], site.position[1], site.position[2]};
-  const double n[3] = {site.normal[0], site.normal[1], site.normal[2]};
-  int32_t tri = -1;
-  const int sigma = I.sign_at(mesh, x, n, &tri);
-  if (sigma == 0) return 0.0;
   const double kr = slab > 0.f ? double(slab) * double(radius) : -1.0;
   double A = 0.0;
   for (int32_t i = I.tri_begin[size_t(mesh)]; i < I.tri_begin[size_t(mesh) + 1]; ++i)
-    A += I.weight(I.tris[size_t(i)], n, both_sides ? 1 : sigma, both_sides) *
+    A += I.weight(I.tris[size_t(i)], n, sigma, both_sides) *
          I.clipped(I.tris[size_t(i)], x, n, double(radius), kr);
   return A;
 }
