@@ -40,9 +40,11 @@
 // ball in a disc of radius √(R² − h²) (h: x's distance to the plane), the slab in a strip, and
 // the area of a convex polygon within a disc is the sum over its edges of the signed area of the
 // disc within the triangle (centre, edge) (a circular sector where the edge runs outside the
-// disc). Cost: a lookup of the triangle holding x and a walk over the nodes the border crosses;
-// flat scenes touch two to six triangles per gather; on fine meshes the value is kept per
-// triangle and radius level (SurfaceArea::area).
+// disc). Coplanar pairs of large triangles sharing an edge are merged into convex quads first
+// (a wall, a box's face: one polygon, and a disc inside it needs no sectors). Cost: a lookup of
+// the triangle holding x and a walk over the nodes the border crosses; flat scenes touch one to
+// four polygons per gather; on fine meshes the corners' values are kept per vertex and radius
+// level (SurfaceArea::area).
 //
 // Parameters:
 // | option          | default | meaning                                                          |
@@ -83,14 +85,14 @@ class SurfaceArea {
 
   // A(x, R) of eq. (1) as the estimator uses it, for a gather at `site` (position, normal,
   // mesh) with radius R and slab κ (0: the ball alone); both_sides: w_T = 1 (a transmissive PBR
-  // point). Where the triangle T0 holding x is small against R (its longest edge at most
-  // R_L / 2), πR² times the ratio A/(πR_L²) interpolated linearly (x's barycentric weights)
-  // between T0's corners instead, each corner's evaluated there with its vertex normal and R_L,
-  // the nearest of the radius levels r_ref · 2^(−L/16) (r_ref the scene diagonal), and rounded
-  // to float. A corner's ratio depends on the corner and L alone, so it is computed once per
-  // vertex and level (a fine mesh's region covers hundreds of triangles, and the mesh is
-  // faceted no more than it was) and is the same for any thread count, pass order or route;
-  // it changes R by at most 2 %. 0 when the site lies on no triangle of its mesh.
+  // point). Where the triangle T0 holding x is small against R (its longest edge at most R),
+  // πR² times the ratio A/(πR_L²) interpolated instead: linearly in log R between the two
+  // radius levels R_L >= R > R_{L+1} of r_ref · 2^(−L/4) (r_ref the scene diagonal), and
+  // linearly over T0 (x's barycentric weights) between its corners, each corner's ratio
+  // evaluated there with its vertex normal and rounded to float. A corner's ratio depends on the
+  // corner and L alone, so it is computed once per vertex and level (a fine mesh's region
+  // covers a hundred triangles or more) and is the same for any thread count, pass order or
+  // route. 0 when the site lies on no triangle of its mesh.
   double area(const pf_hitpoint& site, float radius, float slab, bool both_sides = false) const;
 
   // Eq. (1) at x itself by the hierarchy, whatever the triangles' size.

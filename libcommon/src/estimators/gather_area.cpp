@@ -57,8 +57,8 @@ double disc_triangle(double ax, double ay, double bx, double by, double rho) {
   return sector(ax, ay, p1x, p1y) + 0.5 * (p1x * p2y - p1y * p2x) + sector(p2x, p2y, bx, by);
 }
 
-// Sutherland–Hodgman: the convex polygon p[0..n) (x, y pairs, at most 5 vertices after clipping a
-// triangle twice) cut to kx·x + ky·y <= c, in place; returns the new vertex count.
+// Sutherland–Hodgman: the convex polygon p[0..n) (x, y pairs, at most 6 vertices after clipping a
+// quad twice) cut to kx·x + ky·y <= c, in place; returns the new vertex count.
 int clip_half_plane(double* p, int n, double kx, double ky, double c) {
   double out[2 * 8];
   int m = 0;
@@ -82,15 +82,91 @@ int clip_half_plane(double* p, int n, double kx, double ky, double c) {
   return m;
 }
 
-// A triangle of a mesh, with what eq. (1) needs of it.
+inline double dot3(const double* a, const double* b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+// A triangle of a mesh, or two coplanar triangles sharing an edge whose union is convex (a
+// quad: a box's face, a wall), with what eq. (1) needs of it. The quad's area within a disc is
+// the two triangles' (their shared edge's terms cancel) at the cost of one polygon, and a disc
+// inside it takes the whole-disc path where it spans the diagonal.
 struct AreaTri {
-  double v[3][3];  // vertices
+  double v[4][3];  // corners, counter-clockwise about m
+  int count;       // 3, or 4 for a merged quad
   double m[3];     // unit geometric normal, (v1 − v0) × (v2 − v0) normalised
   double u[3];     // unit vector along v1 − v0 (with m × u, the plane's frame)
   double area;     // |T|
-  int32_t vid[3];  // its corners in SurfaceArea::Impl::verts (shared by the mesh's triangles)
-  double edge;     // longest edge
+  int32_t vid[4];  // its corners in SurfaceArea::Impl::verts (shared by the mesh's triangles)
+  double edge;     // longest edge of a triangle (quads are never small: not used)
 };
+
+// Merges coplanar pairs of the mesh's triangles `list` (indices into src) that share an edge
+// (the same two vertex ids, opposite directions) into convex quads, greedily in index order;
+// `list` then holds each quad in its first triangle's place and drops the second. Only
+// triangles whose longest edge reaches `min_edge`: a fine mesh's small triangles keep the
+// interpolated rule of SurfaceArea::area (quads never take it).
+void merge_coplanar_pairs(std::vector<int32_t>& list, std::vector<AreaTri>& src,
+                          std::vector<double>& centroid, double min_edge) {
+  std::unordered_map<uint64_t, int32_t> by_edge;  // directed edge (from, to) → triangle
+  auto key = [](int32_t a, int32_t b) { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); };
+  for (int32_t i : list)
+    for (int e = 0; e < 3; ++e) by_edge.emplace(key(src[size_t(i)].vid[e], src[size_t(i)].vid[(e + 1) % 3]), i);
+  std::vector<char> gone(src.size(), 0);
+  for (int32_t i : list) {
+    AreaTri& a = src[size_t(i)];
+    if (gone[size_t(i)] || a.count != 3 || a.edge < min_edge) continue;
+    for (int e = 0; e < 3 && a.count == 3; ++e) {
+      // A's edge p → q; B holds q → p and its third corner s: the quad p, s, q, r.
+      const int32_t p = a.vid[e], q = a.vid[(e + 1) % 3];
+      const auto it = by_edge.find(key(q, p));
+      if (it == by_edge.end() || it->second == i || gone[size_t(it->second)]) continue;
+      const AreaTri& b = src[size_t(it->second)];
+      if (b.count != 3 || b.edge < min_edge || dot3(a.m, b.m) < 1.0 - 1e-12) continue;
+      int bs = 0;
+      while (bs < 3 && (b.vid[bs] == p || b.vid[bs] == q)) ++bs;
+      const double* P = a.v[e];
+      const double* Q = a.v[(e + 1) % 3];
+      const double* R = a.v[(e + 2) % 3];
+      const double* S = b.v[bs];
+      const double* quad[4] = {P, S, Q, R};
+      // Convex (every turn left about m) and flat (S on A's plane).
+      double sp[3];
+      for (int k = 0; k < 3; ++k) sp[k] = S[k] - P[k];
+      bool ok = std::fabs(dot3(sp, a.m)) <= 1e-9 * std::sqrt(dot3(sp, sp));
+      for (int j = 0; j < 4 && ok; ++j) {
+        const double* o = quad[j];
+        const double* v1 = quad[(j + 1) % 4];
+        const double* v2 = quad[(j + 2) % 4];
+        const double d1[3] = {v1[0] - o[0], v1[1] - o[1], v1[2] - o[2]};
+        const double d2[3] = {v2[0] - v1[0], v2[1] - v1[1], v2[2] - v1[2]};
+        const double c[3] = {d1[1] * d2[2] - d1[2] * d2[1], d1[2] * d2[0] - d1[0] * d2[2],
+                             d1[0] * d2[1] - d1[1] * d2[0]};
+        ok = dot3(c, a.m) > 0.0;
+      }
+      if (!ok) continue;
+      AreaTri merged = a;
+      const int32_t ids[4] = {p, b.vid[bs], q, a.vid[(e + 2) % 3]};
+      for (int j = 0; j < 4; ++j) {
+        for (int k = 0; k < 3; ++k) merged.v[j][k] = quad[j][k];
+        merged.vid[j] = ids[j];
+      }
+      merged.count = 4;
+      merged.area = a.area + b.area;
+      for (int k = 0; k < 3; ++k) {
+        double d[3];
+        for (int kk = 0; kk < 3; ++kk) d[kk] = merged.v[1][kk] - merged.v[0][kk];
+        const double len = std::sqrt(dot3(d, d));
+        merged.u[k] = d[k] / len;
+        centroid[size_t(i) * 3 + size_t(k)] =
+            (quad[0][k] + quad[1][k] + quad[2][k] + quad[3][k]) / 4.0;
+      }
+      gone[size_t(it->second)] = 1;
+      a = merged;
+    }
+  }
+  list.erase(std::remove_if(list.begin(), list.end(), [&](int32_t i) { return gone[size_t(i)] != 0; }),
+             list.end());
+}
 
 // A corner shared by triangles of one mesh (equal float position): where a fine mesh's ratios
 // A/(πR_L²) are evaluated (SurfaceArea::area).
@@ -111,12 +187,9 @@ struct AreaNode {
 };
 
 constexpr int kLeafSize = 4;
-constexpr double kLevelsPerOctave = 16.0;  // radius levels R_L = r_ref · 2^(−L/16)
-constexpr double kSmallEdge = 0.5;         // a triangle whose longest edge is <= R_L / 2 is small
+constexpr double kLevelsPerOctave = 4.0;  // radius levels R_L = r_ref · 2^(−L/4)
+constexpr double kSmallEdge = 1.0;        // a triangle whose longest edge is <= R is small
 
-inline double dot3(const double* a, const double* b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 }  // namespace
 
@@ -174,7 +247,7 @@ void SurfaceArea::Impl::build(int32_t slot, std::vector<int32_t>& idx, int begin
   double clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int i = begin; i < end; ++i) {
     const AreaTri& t = src[size_t(idx[size_t(i)])];
-    for (int v = 0; v < 3; ++v)
+    for (int v = 0; v < t.count; ++v)
       for (int k = 0; k < 3; ++k) {
         // The box of the vertices, rounded outwards to float.
         nd.lo[k] = std::min(nd.lo[k], std::nextafter(float(t.v[v][k]), -INFINITY));
@@ -245,6 +318,7 @@ SurfaceArea::SurfaceArea(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   for (size_t i = 0; i < scene.triangles.size(); ++i) {
     const pf_triangle& t = scene.triangles[i];
     AreaTri& a = src[i];
+    a.count = 3;
     const float* v[3] = {t.v0, t.v1, t.v2};
     for (int j = 0; j < 3; ++j)
       for (int k = 0; k < 3; ++k) a.v[j][k] = double(v[j][k]);
@@ -287,6 +361,9 @@ SurfaceArea::SurfaceArea(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     }
     of_mesh[size_t(t.mesh)].push_back(int32_t(i));
   }
+  // Quads of triangles longer than a hundredth of the scene's diagonal (walls, boxes: beyond
+  // the automatic radius's scale, eye_pass.h default_radius).
+  for (auto& list : of_mesh) merge_coplanar_pairs(list, src, centroid, I.r_ref / 100.0);
   I.root.assign(of_mesh.size(), -1);
   I.tri_begin.assign(of_mesh.size() + 1, 0);
   I.tris.reserve(scene.triangles.size());
@@ -335,9 +412,9 @@ int SurfaceArea::Impl::sign_at(int mesh, const double* x, const double* n, int32
       if (h > tol || h >= best) continue;
       // x's projection inside the triangle: on the inner side of its three edges, within tol.
       bool in = true;
-      for (int e = 0; e < 3 && in; ++e) {
+      for (int e = 0; e < t.count && in; ++e) {
         const double* a = t.v[e];
-        const double* b = t.v[(e + 1) % 3];
+        const double* b = t.v[(e + 1) % t.count];
         const double ed[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
         const double xa[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
         // (ed × xa)·m >= −tol·|ed|
@@ -360,7 +437,7 @@ double SurfaceArea::Impl::clipped(const AreaTri& t, const double* x, const doubl
                                   double kr) const {
   // The whole triangle when its three corners lie in the ball and the slab (both convex).
   bool whole = true;
-  for (int j = 0; j < 3 && whole; ++j) {
+  for (int j = 0; j < t.count && whole; ++j) {
     const double q[3] = {t.v[j][0] - x[0], t.v[j][1] - x[1], t.v[j][2] - x[2]};
     whole = dot3(q, q) <= r * r && (kr < 0.0 || std::fabs(dot3(q, n)) <= kr);
   }
@@ -376,13 +453,13 @@ double SurfaceArea::Impl::clipped(const AreaTri& t, const double* x, const doubl
   v[1] = t.m[2] * t.u[0] - t.m[0] * t.u[2];
   v[2] = t.m[0] * t.u[1] - t.m[1] * t.u[0];
   double p[2 * 8];
-  for (int j = 0; j < 3; ++j) {
+  for (int j = 0; j < t.count; ++j) {
     double q[3];
     for (int k = 0; k < 3; ++k) q[k] = t.v[j][k] - c0[k];
     p[2 * j] = dot3(q, t.u);
     p[2 * j + 1] = dot3(q, v);  // counter-clockwise: u × v = m
   }
-  int count = 3;
+  int count = t.count;
   if (kr >= 0.0) {
     // n·(y − x) over the plane: g0 + s·(n·u) + t·(n·v), g0 = n·(c0 − x) = −h·(n·m).
     const double g0 = -h * dot3(n, t.m), nu = dot3(n, t.u), nv = dot3(n, v);
@@ -474,8 +551,10 @@ std::atomic<uint64_t>* SurfaceArea::Impl::cache_for(float slab) const {
     if (!c.claimed.load(std::memory_order_acquire)) {
       bool expected = false;
       if (c.claimed.compare_exchange_strong(expected, true, std::memory_order_acq_rel)) {
-        auto slots = std::make_unique<std::atomic<uint64_t>[]>(std::max<size_t>(verts.size(), 1));
-        for (size_t i = 0; i < verts.size(); ++i) slots[i].store(0, std::memory_order_relaxed);
+        // Two slots per vertex, for even and odd levels: a query reads two adjacent ones.
+        const size_t n = 2 * std::max<size_t>(verts.size(), 1);
+        auto slots = std::make_unique<std::atomic<uint64_t>[]>(n);
+        for (size_t i = 0; i < n; ++i) slots[i].store(0, std::memory_order_relaxed);
         c.slots = std::move(slots);
         c.slab.store(bits, std::memory_order_relaxed);
         c.ready.store(true, std::memory_order_release);
@@ -496,7 +575,7 @@ double SurfaceArea::Impl::vertex_ratio(int32_t vertex, int level, float slab,
       0x80000000u | (both_sides ? 0x10000u : 0u) | (uint32_t(level + 32768) & 0xffffu);
   std::atomic<uint64_t>* slots = cache_for(slab);
   if (slots) {
-    const uint64_t v = slots[vertex].load(std::memory_order_relaxed);
+    const uint64_t v = slots[2 * size_t(vertex) + size_t(level & 1)].load(std::memory_order_relaxed);
     if (uint32_t(v >> 32) == key) {
       float f;
       const uint32_t b = uint32_t(v);
@@ -512,7 +591,8 @@ double SurfaceArea::Impl::vertex_ratio(int32_t vertex, int level, float slab,
   if (slots) {
     uint32_t b;
     std::memcpy(&b, &f, 4);
-    slots[vertex].store((uint64_t(key) << 32) | b, std::memory_order_relaxed);
+    slots[2 * size_t(vertex) + size_t(level & 1)].store((uint64_t(key) << 32) | b,
+                                                        std::memory_order_relaxed);
   }
   return double(f);
 }
@@ -541,36 +621,36 @@ double SurfaceArea::area(const pf_hitpoint& site, float radius, float slab,
   int sigma;
   if (!I.locate(site, radius, both_sides, x, n, tri, sigma)) return 0.0;
   const double r = radius;
-  // A triangle small against R: the ratios of its corners at the nearest radius level,
-  // interpolated at x.
-  const long level = std::lround(-kLevelsPerOctave * std::log2(r / I.r_ref));
-  if (level > -32768 && level < 32767) {
-    const double rl = I.r_ref * std::exp2(-double(level) / kLevelsPerOctave);
-    const AreaTri& t = I.tris[size_t(tri)];
-    if (t.edge <= kSmallEdge * rl) {
-      // x's barycentric weights in T0 (clamped: x may lie a rounding error outside).
-      double e1[3], e2[3], q[3];
-      for (int k = 0; k < 3; ++k) {
-        e1[k] = t.v[1][k] - t.v[0][k];
-        e2[k] = t.v[2][k] - t.v[0][k];
-        q[k] = x[k] - t.v[0][k];
-      }
-      const double d11 = dot3(e1, e1), d12 = dot3(e1, e2), d22 = dot3(e2, e2);
-      const double q1 = dot3(q, e1), q2 = dot3(q, e2), det = d11 * d22 - d12 * d12;
-      double b1 = std::clamp((d22 * q1 - d12 * q2) / det, 0.0, 1.0);
-      double b2 = std::clamp((d11 * q2 - d12 * q1) / det, 0.0, 1.0);
-      if (b1 + b2 > 1.0) {
-        const double s12 = b1 + b2;
-        b1 /= s12;
-        b2 /= s12;
-      }
-      const double b0 = 1.0 - b1 - b2;
-      const int L = int(level);
-      const double ratio = b0 * I.vertex_ratio(t.vid[0], L, slab, both_sides) +
-                           b1 * I.vertex_ratio(t.vid[1], L, slab, both_sides) +
-                           b2 * I.vertex_ratio(t.vid[2], L, slab, both_sides);
-      return ratio * kPiD * r * r;
+  // A triangle small against R: its corners' ratios at the two radius levels around R,
+  // interpolated linearly in log R and then at x.
+  const double l = -kLevelsPerOctave * std::log2(r / I.r_ref);  // R = R_l
+  const AreaTri& t = I.tris[size_t(tri)];
+  if (t.count == 3 && t.edge <= kSmallEdge * r && l > -32768.0 && l < 32766.0) {
+    const int L = int(std::floor(l));  // R_{L+1} < R <= R_L
+    const double u = l - double(L);
+    // x's barycentric weights in T0 (clamped: x may lie a rounding error outside).
+    double e1[3], e2[3], q[3];
+    for (int k = 0; k < 3; ++k) {
+      e1[k] = t.v[1][k] - t.v[0][k];
+      e2[k] = t.v[2][k] - t.v[0][k];
+      q[k] = x[k] - t.v[0][k];
     }
+    const double d11 = dot3(e1, e1), d12 = dot3(e1, e2), d22 = dot3(e2, e2);
+    const double q1 = dot3(q, e1), q2 = dot3(q, e2), det = d11 * d22 - d12 * d12;
+    double b[3];
+    b[1] = std::clamp((d22 * q1 - d12 * q2) / det, 0.0, 1.0);
+    b[2] = std::clamp((d11 * q2 - d12 * q1) / det, 0.0, 1.0);
+    if (b[1] + b[2] > 1.0) {
+      const double s12 = b[1] + b[2];
+      b[1] /= s12;
+      b[2] /= s12;
+    }
+    b[0] = 1.0 - b[1] - b[2];
+    double ratio = 0.0;
+    for (int j = 0; j < 3; ++j)
+      ratio += b[j] * ((1.0 - u) * I.vertex_ratio(t.vid[j], L, slab, both_sides) +
+                       u * I.vertex_ratio(t.vid[j], L + 1, slab, both_sides));
+    return ratio * kPiD * r * r;
   }
   return I.sum(site.mesh, x, n, r, slab > 0.f ? double(slab) * r : -1.0, sigma, both_sides);
 }
