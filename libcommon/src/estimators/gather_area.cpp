@@ -109,8 +109,10 @@ void merge_coplanar_pairs(std::vector<int32_t>& list, std::vector<AreaTri>& src,
                           std::vector<double>& centroid, double min_edge) {
   std::unordered_map<uint64_t, int32_t> by_edge;  // directed edge (from, to) → triangle
   auto key = [](int32_t a, int32_t b) { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); };
-  for (int32_t i : list)
-    for (int e = 0; e < 3; ++e) by_edge.emplace(key(src[size_t(i)].vid[e], src[size_t(i)].vid[(e + 1) % 3]), i);
+  for (int32_t i : list) {
+    const int32_t* vid = src[size_t(i)].vid;
+    for (int e = 0; e < 3; ++e) by_edge.emplace(key(vid[e], vid[(e + 1) % 3]), i);
+  }
   std::vector<char> gone(src.size(), 0);
   for (int32_t i : list) {
     AreaTri& a = src[size_t(i)];
@@ -152,10 +154,10 @@ void merge_coplanar_pairs(std::vector<int32_t>& list, std::vector<AreaTri>& src,
       }
       merged.count = 4;
       merged.area = a.area + b.area;
+      double d[3];
+      for (int k = 0; k < 3; ++k) d[k] = merged.v[1][k] - merged.v[0][k];
+      const double len = std::sqrt(dot3(d, d));  // > 0: S lies off the edge P → Q
       for (int k = 0; k < 3; ++k) {
-        double d[3];
-        for (int kk = 0; kk < 3; ++kk) d[kk] = merged.v[1][kk] - merged.v[0][kk];
-        const double len = std::sqrt(dot3(d, d));
         merged.u[k] = d[k] / len;
         centroid[size_t(i) * 3 + size_t(k)] =
             (quad[0][k] + quad[1][k] + quad[2][k] + quad[3][k]) / 4.0;
@@ -164,7 +166,8 @@ void merge_coplanar_pairs(std::vector<int32_t>& list, std::vector<AreaTri>& src,
       a = merged;
     }
   }
-  list.erase(std::remove_if(list.begin(), list.end(), [&](int32_t i) { return gone[size_t(i)] != 0; }),
+  list.erase(std::remove_if(list.begin(), list.end(),
+                            [&](int32_t i) { return gone[size_t(i)] != 0; }),
              list.end());
 }
 
@@ -190,7 +193,6 @@ constexpr int kLeafSize = 4;
 constexpr double kLevelsPerOctave = 4.0;  // radius levels R_L = r_ref · 2^(−L/4)
 constexpr double kSmallEdge = 1.0;        // a triangle whose longest edge is <= R is small
 
-
 }  // namespace
 
 struct SurfaceArea::Impl {
@@ -204,8 +206,9 @@ struct SurfaceArea::Impl {
   double tolerance = 0.0;             // how far off its triangle a site may lie (rounding)
   double r_ref = 1.0;                 // the radius levels' reference length (the scene diagonal)
   // The ratios A/(πR_L²) at the corners of small triangles (area's interpolated rule), one cache
-  // per slab value (the first kCaches slabs asked for; others compute every time), one slot per
-  // vertex: (key << 32) | the ratio's float bits, key = 2^31 | both_sides << 16 | level + 32768.
+  // per slab value (the first kCaches slabs asked for; others compute every time), two slots per
+  // vertex (even and odd levels: a query reads two adjacent ones): (key << 32) | the ratio's
+  // float bits, key = 2^31 | both_sides << 16 | level + 32768.
   static constexpr int kCaches = 4;
   struct Cache {
     std::atomic<uint32_t> slab{0};
@@ -574,8 +577,9 @@ double SurfaceArea::Impl::vertex_ratio(int32_t vertex, int level, float slab,
   const uint32_t key =
       0x80000000u | (both_sides ? 0x10000u : 0u) | (uint32_t(level + 32768) & 0xffffu);
   std::atomic<uint64_t>* slots = cache_for(slab);
+  const size_t slot = 2 * size_t(vertex) + size_t(level & 1);
   if (slots) {
-    const uint64_t v = slots[2 * size_t(vertex) + size_t(level & 1)].load(std::memory_order_relaxed);
+    const uint64_t v = slots[slot].load(std::memory_order_relaxed);
     if (uint32_t(v >> 32) == key) {
       float f;
       const uint32_t b = uint32_t(v);
@@ -591,8 +595,7 @@ double SurfaceArea::Impl::vertex_ratio(int32_t vertex, int level, float slab,
   if (slots) {
     uint32_t b;
     std::memcpy(&b, &f, 4);
-    slots[2 * size_t(vertex) + size_t(level & 1)].store((uint64_t(key) << 32) | b,
-                                                        std::memory_order_relaxed);
+    slots[slot].store((uint64_t(key) << 32) | b, std::memory_order_relaxed);
   }
   return double(f);
 }
