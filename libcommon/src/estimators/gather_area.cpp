@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 #include <mutex>
-#include <numeric>
 #include <unordered_map>
 
 #include "photonflow/error.h"
@@ -224,8 +223,12 @@ struct SurfaceArea::Impl {
   // Where eq. (1) is asked at `site` with R: x, n, the triangle T0 holding x and σ (1 with
   // both_sides, where eq. 2 does not use it); false when there is no area (no mesh of this
   // scene, R <= 0, or x on no triangle of its mesh).
-  bool locate(const pf_hitpoint& site, float radius, bool both_sides, double x[3], double n[3],
-              int32_t& tri, int& sigma) const;
+  struct Site {
+    double x[3], n[3];
+    int32_t tri;
+    int sigma;
+  };
+  bool locate(const pf_hitpoint& site, float radius, bool both_sides, Site& at) const;
   double sum(int mesh, const double* x, const double* n, double r, double kr, int sigma,
              bool both_sides) const;
   double vertex_ratio(int32_t vertex, int level, float slab, bool both_sides) const;
@@ -601,33 +604,32 @@ double SurfaceArea::Impl::vertex_ratio(int32_t vertex, int level, float slab,
 }
 
 bool SurfaceArea::Impl::locate(const pf_hitpoint& site, float radius, bool both_sides,
-                               double x[3], double n[3], int32_t& tri, int& sigma) const {
+                               Site& at) const {
   const int mesh = site.mesh;
   if (mesh < 0 || size_t(mesh) >= root.size() || root[size_t(mesh)] < 0 || !(radius > 0.f))
     return false;
   for (int k = 0; k < 3; ++k) {
-    x[k] = site.position[k];
-    n[k] = site.normal[k];
+    at.x[k] = site.position[k];
+    at.n[k] = site.normal[k];
   }
-  tri = -1;
-  sigma = sign_at(mesh, x, n, &tri);
-  if (sigma == 0) return false;
-  if (both_sides) sigma = 1;
+  at.tri = -1;
+  at.sigma = sign_at(mesh, at.x, at.n, &at.tri);
+  if (at.sigma == 0) return false;
+  if (both_sides) at.sigma = 1;
   return true;
 }
 
 double SurfaceArea::area(const pf_hitpoint& site, float radius, float slab,
                          bool both_sides) const {
   const Impl& I = *impl_;
-  double x[3], n[3];
-  int32_t tri;
-  int sigma;
-  if (!I.locate(site, radius, both_sides, x, n, tri, sigma)) return 0.0;
+  Impl::Site at;
+  if (!I.locate(site, radius, both_sides, at)) return 0.0;
+  const double* x = at.x;
   const double r = radius;
   // A triangle small against R: its corners' ratios at the two radius levels around R,
   // interpolated linearly in log R and then at x.
   const double l = -kLevelsPerOctave * std::log2(r / I.r_ref);  // R = R_l
-  const AreaTri& t = I.tris[size_t(tri)];
+  const AreaTri& t = I.tris[size_t(at.tri)];
   if (t.count == 3 && t.edge <= kSmallEdge * r && l > -32768.0 && l < 32766.0) {
     const int L = int(std::floor(l));  // R_{L+1} < R <= R_L
     const double u = l - double(L);
@@ -655,33 +657,31 @@ double SurfaceArea::area(const pf_hitpoint& site, float radius, float slab,
                        u * I.vertex_ratio(t.vid[j], L + 1, slab, both_sides));
     return ratio * kPiD * r * r;
   }
-  return I.sum(site.mesh, x, n, r, slab > 0.f ? double(slab) * r : -1.0, sigma, both_sides);
+  return I.sum(site.mesh, x, at.n, r, slab > 0.f ? double(slab) * r : -1.0, at.sigma,
+               both_sides);
 }
 
 double SurfaceArea::area_at(const pf_hitpoint& site, float radius, float slab,
                             bool both_sides) const {
   const Impl& I = *impl_;
-  double x[3], n[3];
-  int32_t tri;
-  int sigma;
-  if (!I.locate(site, radius, both_sides, x, n, tri, sigma)) return 0.0;
+  Impl::Site at;
+  if (!I.locate(site, radius, both_sides, at)) return 0.0;
   const double r = radius;
-  return I.sum(site.mesh, x, n, r, slab > 0.f ? double(slab) * r : -1.0, sigma, both_sides);
+  return I.sum(site.mesh, at.x, at.n, r, slab > 0.f ? double(slab) * r : -1.0, at.sigma,
+               both_sides);
 }
 
 double SurfaceArea::area_brute(const pf_hitpoint& site, float radius, float slab,
                                bool both_sides) const {
   const Impl& I = *impl_;
-  double x[3], n[3];
-  int32_t tri;
-  int sigma;
-  if (!I.locate(site, radius, both_sides, x, n, tri, sigma)) return 0.0;
+  Impl::Site at;
+  if (!I.locate(site, radius, both_sides, at)) return 0.0;
   const int mesh = site.mesh;
   const double kr = slab > 0.f ? double(slab) * double(radius) : -1.0;
   double A = 0.0;
   for (int32_t i = I.tri_begin[size_t(mesh)]; i < I.tri_begin[size_t(mesh) + 1]; ++i)
-    A += I.weight(I.tris[size_t(i)], n, sigma, both_sides) *
-         I.clipped(I.tris[size_t(i)], x, n, double(radius), kr);
+    A += I.weight(I.tris[size_t(i)], at.n, at.sigma, both_sides) *
+         I.clipped(I.tris[size_t(i)], at.x, at.n, double(radius), kr);
   return A;
 }
 
