@@ -5,7 +5,7 @@
 // The estimators that trace a new eye pass every pass (sppm, pppm) gather at a visible point x with
 // shading normal n the photons p of its mesh with |x_p − x| <= R, |n·(x_p − x)| <= κR (the slab,
 // ppm.h) and dot(d_p, n) < 0 (arrived on x's side), and divide their flux by the disc area πR²
-// (thesis eq. 3.17; HJ09 eq. 6). That assumes the region holds a flat disc of the surface. Near
+// (thesis eq. 3.17). That assumes the region holds a flat disc of the surface. Near
 // a crease (a wall meets the floor, a block's edge), a mesh's border or a part thinner than R, it
 // holds less: the estimate is too dark there by the missing fraction, a bias that does not shrink
 // with more photons, only with R, and along the scene's edges it is most of the error of a render
