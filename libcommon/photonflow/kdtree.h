@@ -59,7 +59,8 @@ struct KdBuildParams {
 // from the arrays on first use. It is no part of the tree's bytes or
 // of scene.h5: copies and assignments start without it. raycast.cpp rebuilds it when the arrays
 // it was built from were replaced (other data pointers or sizes); arrays changed in place after
-// rays were cast need a fresh tree (assign the KdTree).
+// rays were cast need a fresh tree (assign the KdTree). Scene::gather_area_cache holds the
+// surface gather area's hierarchy (estimators/gather_area.h) the same way.
 class KdHostCache {
  public:
   KdHostCache() = default;
@@ -67,6 +68,20 @@ class KdHostCache {
   KdHostCache& operator=(const KdHostCache&) {
     current.store(nullptr, std::memory_order_release);
     return *this;
+  }
+  // The cached T while T::matches(key) holds, else a new one from make() (a shared_ptr<const T>),
+  // installed under the lock. Thread-safe; later calls are an atomic load and the key check.
+  template <class T, class Key, class Make>
+  const T& get(const Key& key, Make&& make) const {
+    auto* t = static_cast<const T*>(current.load(std::memory_order_acquire));
+    if (t && t->matches(key)) return *t;
+    std::lock_guard<std::mutex> lock(mutex);
+    t = static_cast<const T*>(current.load(std::memory_order_acquire));
+    if (t && t->matches(key)) return *t;
+    std::shared_ptr<const T> fresh = make();
+    owned.push_back(fresh);  // earlier versions stay alive for threads still using them
+    current.store(fresh.get(), std::memory_order_release);
+    return *fresh;
   }
   // The cached object (nullptr if none) and the lock and owner list used to install one.
   mutable std::atomic<const void*> current{nullptr};

@@ -6,7 +6,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <mutex>
 #include <unordered_map>
 
 #include "photonflow/error.h"
@@ -84,6 +83,9 @@ int clip_half_plane(double* p, int n, double kx, double ky, double c) {
 inline double dot3(const double* a, const double* b) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
+
+// The slab's half-width κR at radius r, or −1 for none (κ = 0: the ball alone).
+inline double slab_reach(float slab, double r) { return slab > 0.f ? double(slab) * r : -1.0; }
 
 // A triangle of a mesh, or two coplanar triangles sharing an edge whose union is convex (a
 // quad: a box's face, a wall), with what eq. (1) needs of it. The quad's area within a disc is
@@ -229,6 +231,25 @@ struct SurfaceArea::Impl {
     int sigma;
   };
   bool locate(const pf_hitpoint& site, float radius, bool both_sides, Site& at) const;
+  // Depth first over `mesh`'s hierarchy: open(node) says whether to go into the node (a query
+  // that skips it, or takes it whole itself, returns false); the triangles of the leaves it
+  // opens go to leaf(triangle index).
+  template <class Open, class Leaf>
+  void walk(int mesh, Open&& open, Leaf&& leaf) const {
+    int32_t stack[64];
+    int top = 0;
+    stack[top++] = root[size_t(mesh)];
+    while (top > 0) {
+      const AreaNode& nd = nodes[size_t(stack[--top])];
+      if (!open(nd)) continue;
+      if (nd.count == 0) {
+        stack[top++] = nd.first;
+        stack[top++] = nd.first + 1;
+        continue;
+      }
+      for (int32_t i = nd.first; i < nd.first + nd.count; ++i) leaf(i);
+    }
+  }
   double sum(int mesh, const double* x, const double* n, double r, double kr, int sigma,
              bool both_sides) const;
   double vertex_ratio(int32_t vertex, int level, float slab, bool both_sides) const;
@@ -394,47 +415,40 @@ bool SurfaceArea::matches(const Scene& scene) const {
 // into *tri; 0 when none does.
 int SurfaceArea::Impl::sign_at(int mesh, const double* x, const double* n, int32_t* tri) const {
   const double tol = tolerance;
-  int32_t stack[64];
-  int top = 0;
-  stack[top++] = root[size_t(mesh)];
   double best = INFINITY;
   int sigma = 0;
-  while (top > 0) {
-    const AreaNode& nd = nodes[size_t(stack[--top])];
-    bool inside = true;
-    for (int k = 0; k < 3; ++k)
-      inside = inside && x[k] >= double(nd.lo[k]) - tol && x[k] <= double(nd.hi[k]) + tol;
-    if (!inside) continue;
-    if (nd.count == 0) {
-      stack[top++] = nd.first;
-      stack[top++] = nd.first + 1;
-      continue;
-    }
-    for (int32_t i = nd.first; i < nd.first + nd.count; ++i) {
-      const AreaTri& t = tris[size_t(i)];
-      double d[3];
-      for (int k = 0; k < 3; ++k) d[k] = x[k] - t.v[0][k];
-      const double h = std::fabs(dot3(t.m, d));
-      if (h > tol || h >= best) continue;
-      // x's projection inside the triangle: on the inner side of its three edges, within tol.
-      bool in = true;
-      for (int e = 0; e < t.count && in; ++e) {
-        const double* a = t.v[e];
-        const double* b = t.v[(e + 1) % t.count];
-        const double ed[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-        const double xa[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
-        // (ed × xa)·m >= −tol·|ed|
-        const double cx = ed[1] * xa[2] - ed[2] * xa[1];
-        const double cy = ed[2] * xa[0] - ed[0] * xa[2];
-        const double cz = ed[0] * xa[1] - ed[1] * xa[0];
-        in = cx * t.m[0] + cy * t.m[1] + cz * t.m[2] >= -tol * std::sqrt(dot3(ed, ed));
-      }
-      if (!in) continue;
-      best = h;
-      sigma = dot3(t.m, n) >= 0.0 ? 1 : -1;
-      *tri = i;
-    }
-  }
+  walk(
+      mesh,
+      [&](const AreaNode& nd) {
+        bool inside = true;
+        for (int k = 0; k < 3; ++k)
+          inside = inside && x[k] >= double(nd.lo[k]) - tol && x[k] <= double(nd.hi[k]) + tol;
+        return inside;
+      },
+      [&](int32_t i) {
+        const AreaTri& t = tris[size_t(i)];
+        double d[3];
+        for (int k = 0; k < 3; ++k) d[k] = x[k] - t.v[0][k];
+        const double h = std::fabs(dot3(t.m, d));
+        if (h > tol || h >= best) return;
+        // x's projection inside the triangle: on the inner side of its edges, within tol.
+        bool in = true;
+        for (int e = 0; e < t.count && in; ++e) {
+          const double* a = t.v[e];
+          const double* b = t.v[(e + 1) % t.count];
+          const double ed[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+          const double xa[3] = {x[0] - a[0], x[1] - a[1], x[2] - a[2]};
+          // (ed × xa)·m >= −tol·|ed|
+          const double cx = ed[1] * xa[2] - ed[2] * xa[1];
+          const double cy = ed[2] * xa[0] - ed[0] * xa[2];
+          const double cz = ed[0] * xa[1] - ed[1] * xa[0];
+          in = cx * t.m[0] + cy * t.m[1] + cz * t.m[2] >= -tol * std::sqrt(dot3(ed, ed));
+        }
+        if (!in) return;
+        best = h;
+        sigma = dot3(t.m, n) >= 0.0 ? 1 : -1;
+        *tri = i;
+      });
   return sigma;
 }
 
@@ -510,41 +524,36 @@ double SurfaceArea::Impl::sum(int mesh, const double* x, const double* n, double
                               int sigma, bool both_sides) const {
   const double r2 = r * r;
   double A = 0.0;
-  int32_t stack[64];
-  int top = 0;
-  stack[top++] = root[size_t(mesh)];
-  while (top > 0) {
-    const AreaNode& nd = nodes[size_t(stack[--top])];
-    // The box against the ball (nearest and farthest points) and the slab (its extent along n).
-    double near2 = 0.0, far2 = 0.0, centre = 0.0, extent = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      const double lo = nd.lo[k], hi = nd.hi[k];
-      const double gap = std::max(0.0, std::max(lo - x[k], x[k] - hi));
-      near2 += gap * gap;
-      const double far = std::max(std::fabs(x[k] - lo), std::fabs(hi - x[k]));
-      far2 += far * far;
-      centre += n[k] * (0.5 * (lo + hi) - x[k]);
-      extent += std::fabs(n[k]) * 0.5 * (hi - lo);
-    }
-    if (near2 > r2) continue;
-    if (kr >= 0.0 && (centre - extent > kr || centre + extent < -kr)) continue;
-    const bool in_slab = kr < 0.0 || (centre + extent <= kr && centre - extent >= -kr);
-    if (far2 <= r2 && in_slab) {  // the whole node: Σ w_T |T| by its sums (eq. 2)
-      A += both_sides ? nd.area
-                      : std::max(0.0, 0.5 * (nd.area + double(sigma) * dot3(nd.an, n)));
-      continue;
-    }
-    if (nd.count == 0) {
-      stack[top++] = nd.first;
-      stack[top++] = nd.first + 1;
-      continue;
-    }
-    for (int32_t i = nd.first; i < nd.first + nd.count; ++i) {
-      const AreaTri& t = tris[size_t(i)];
-      const double w = weight(t, n, sigma, both_sides);
-      if (w > 0.0) A += w * clipped(t, x, n, r, kr);
-    }
-  }
+  walk(
+      mesh,
+      [&](const AreaNode& nd) {
+        // The box against the ball (nearest and farthest points) and the slab (its extent
+        // along n).
+        double near2 = 0.0, far2 = 0.0, centre = 0.0, extent = 0.0;
+        for (int k = 0; k < 3; ++k) {
+          const double lo = nd.lo[k], hi = nd.hi[k];
+          const double gap = std::max(0.0, std::max(lo - x[k], x[k] - hi));
+          near2 += gap * gap;
+          const double far = std::max(std::fabs(x[k] - lo), std::fabs(hi - x[k]));
+          far2 += far * far;
+          centre += n[k] * (0.5 * (lo + hi) - x[k]);
+          extent += std::fabs(n[k]) * 0.5 * (hi - lo);
+        }
+        if (near2 > r2) return false;
+        if (kr >= 0.0 && (centre - extent > kr || centre + extent < -kr)) return false;
+        const bool in_slab = kr < 0.0 || (centre + extent <= kr && centre - extent >= -kr);
+        if (far2 <= r2 && in_slab) {  // the whole node: Σ w_T |T| by its sums (eq. 2)
+          A += both_sides ? nd.area
+                          : std::max(0.0, 0.5 * (nd.area + double(sigma) * dot3(nd.an, n)));
+          return false;
+        }
+        return true;
+      },
+      [&](int32_t i) {
+        const AreaTri& t = tris[size_t(i)];
+        const double w = weight(t, n, sigma, both_sides);
+        if (w > 0.0) A += w * clipped(t, x, n, r, kr);
+      });
   return A;
 }
 
@@ -592,8 +601,7 @@ double SurfaceArea::Impl::vertex_ratio(int32_t vertex, int level, float slab,
   }
   const AreaVertex& p = verts[size_t(vertex)];
   const double rl = r_ref * std::exp2(-double(level) / kLevelsPerOctave);
-  const double kr = slab > 0.f ? double(slab) * rl : -1.0;
-  const double a = sum(p.mesh, p.p, p.n, rl, kr, 1, both_sides);
+  const double a = sum(p.mesh, p.p, p.n, rl, slab_reach(slab, rl), 1, both_sides);
   const float f = float(a / (kPiD * rl * rl));
   if (slots) {
     uint32_t b;
@@ -657,8 +665,7 @@ double SurfaceArea::area(const pf_hitpoint& site, float radius, float slab,
                        u * I.vertex_ratio(t.vid[j], L + 1, slab, both_sides));
     return ratio * kPiD * r * r;
   }
-  return I.sum(site.mesh, x, at.n, r, slab > 0.f ? double(slab) * r : -1.0, at.sigma,
-               both_sides);
+  return I.sum(site.mesh, x, at.n, r, slab_reach(slab, r), at.sigma, both_sides);
 }
 
 double SurfaceArea::area_at(const pf_hitpoint& site, float radius, float slab,
@@ -666,9 +673,7 @@ double SurfaceArea::area_at(const pf_hitpoint& site, float radius, float slab,
   const Impl& I = *impl_;
   Impl::Site at;
   if (!I.locate(site, radius, both_sides, at)) return 0.0;
-  const double r = radius;
-  return I.sum(site.mesh, at.x, at.n, r, slab > 0.f ? double(slab) * r : -1.0, at.sigma,
-               both_sides);
+  return I.sum(site.mesh, at.x, at.n, radius, slab_reach(slab, radius), at.sigma, both_sides);
 }
 
 double SurfaceArea::area_brute(const pf_hitpoint& site, float radius, float slab,
@@ -677,7 +682,7 @@ double SurfaceArea::area_brute(const pf_hitpoint& site, float radius, float slab
   Impl::Site at;
   if (!I.locate(site, radius, both_sides, at)) return 0.0;
   const int mesh = site.mesh;
-  const double kr = slab > 0.f ? double(slab) * double(radius) : -1.0;
+  const double kr = slab_reach(slab, radius);
   double A = 0.0;
   for (int32_t i = I.tri_begin[size_t(mesh)]; i < I.tri_begin[size_t(mesh) + 1]; ++i)
     A += I.weight(I.tris[size_t(i)], at.n, at.sigma, both_sides) *
@@ -694,16 +699,8 @@ double SurfaceArea::scale(const pf_hitpoint& site, float radius, float slab,
 }
 
 const SurfaceArea& surface_area(const Scene& s) {
-  const KdHostCache& cache = s.gather_area_cache;
-  auto* a = static_cast<const SurfaceArea*>(cache.current.load(std::memory_order_acquire));
-  if (a && a->matches(s)) return *a;
-  std::lock_guard<std::mutex> lock(cache.mutex);
-  a = static_cast<const SurfaceArea*>(cache.current.load(std::memory_order_acquire));
-  if (a && a->matches(s)) return *a;
-  auto fresh = std::make_shared<const SurfaceArea>(s);
-  cache.owned.push_back(fresh);
-  cache.current.store(fresh.get(), std::memory_order_release);
-  return *fresh;
+  return s.gather_area_cache.get<SurfaceArea>(
+      s, [&] { return std::make_shared<const SurfaceArea>(s); });
 }
 
 }  // namespace pf

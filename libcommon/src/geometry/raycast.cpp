@@ -199,16 +199,7 @@ std::shared_ptr<const HostKd> make_host_kd(const Scene& s) {
 
 // The scene's HostKd, built once (thread-safe; later calls are one atomic load and a key check).
 const HostKd& host_kd(const Scene& s) {
-  const KdHostCache& cache = s.kd.host_cache;
-  auto* h = static_cast<const HostKd*>(cache.current.load(std::memory_order_acquire));
-  if (h && h->matches(s)) return *h;
-  std::lock_guard<std::mutex> lock(cache.mutex);
-  h = static_cast<const HostKd*>(cache.current.load(std::memory_order_acquire));
-  if (h && h->matches(s)) return *h;
-  std::shared_ptr<const HostKd> fresh = make_host_kd(s);
-  cache.owned.push_back(fresh);  // earlier versions stay alive for threads still using them
-  cache.current.store(fresh.get(), std::memory_order_release);
-  return *fresh;
+  return s.kd.host_cache.get<HostKd>(s, [&] { return make_host_kd(s); });
 }
 
 // A ray's origin and direction broadcast to four lanes.
