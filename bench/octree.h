@@ -40,8 +40,8 @@ class Octree {
   Octree(const Scene& scene, const OctreeParams& params) : scene_(scene), params_(params) {
     const double t0 = now();
     // The cube around the scene bounds, widened like the kd-tree's root box
-    // (pf_kd_enter_root): the triangle test accepts hits up to PF_HH_EDGE_EPS outside a
-    // triangle.
+    // (pf_kd_enter_root): the triangle test accepts hits a few float roundoffs outside
+    // a triangle (PF_HH_ROUNDING).
     const Vec3 c = scene.bounds.center();
     const Vec3 e = scene.bounds.extent();
     const float half = 0.5f * std::max({e.x, e.y, e.z}) * (1.f + 4.f * PF_HH_EDGE_EPS);
@@ -98,9 +98,10 @@ class Octree {
 
   // True when the triangle overlaps the box [lo, hi]: separating-axis test over the three box
   // axes, the triangle's normal and the nine edge × box-axis products (Akenine-Möller 2001).
-  // The triangle is first scaled about its centroid by 1 + 4·PF_HH_EDGE_EPS: the Havel–Herout
-  // test accepts barycentrics down to −PF_HH_EDGE_EPS, i.e. the triangle scaled by
-  // 1 + 3·PF_HH_EDGE_EPS, and every leaf holding a point of that region must list the triangle.
+  // The triangle is first scaled about its centroid by 1 + 4·PF_HH_EDGE_EPS: every leaf holding
+  // a point the Havel–Herout test accepts must list the triangle, and the test's slack (a few
+  // float roundoffs of the coordinates, PF_HH_ROUNDING) is below 1e-4 of every triangle larger
+  // than about a thousandth of a unit-sized scene.
   static bool overlaps(const pf_triangle& t, const Vec3& lo, const Vec3& hi) {
     const Vec3 c = (lo + hi) * 0.5f;
     const Vec3 h = (hi - lo) * (0.5f * (1.f + 1e-5f));  // and a few ulps of slack on the box

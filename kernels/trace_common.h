@@ -79,6 +79,7 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
   int best_tri = *hit_tri, found = 0;
   const float4 ox = (float4)(o[0]), oy = (float4)(o[1]), oz = (float4)(o[2]);
   const float4 dx = (float4)(d[0]), dy = (float4)(d[1]), dz = (float4)(d[2]);
+  const float4 ao = (float4)(pf_hh_magnitude(o)), ad = (float4)(pf_hh_magnitude(d));
   for (int base = 0; base < count; base += 4, g += PF_LEAF_GROUP_FLOAT4) {
     /* pf_hh_intersect, four lanes (see intersect_shared.h for the equations) */
     const float4 det = dx * g[0] + dy * g[1] + dz * g[2];
@@ -91,9 +92,13 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
     const float4 pz = det * oz + tp * dz;
     const float4 su = (px * g[4] + py * g[5] + pz * g[6] + det * g[7]) * sgn;
     const float4 sv = (px * g[8] + py * g[9] + pz * g[10] + det * g[11]) * sgn;
-    const float4 slack = PF_HH_EDGE_EPS * adet;
-    const int4 inside = (st >= (float4)(0.0f)) & (su >= -slack) & (sv >= -slack) &
-                        (su + sv <= adet + slack) & (adet > (float4)(0.0f));
+    const float4 m = adet * ao + st * ad;
+    const float4 slack_u =
+        PF_HH_ROUNDING * (m * (fabs(g[4]) + fabs(g[5]) + fabs(g[6])) + adet * fabs(g[7]));
+    const float4 slack_v =
+        PF_HH_ROUNDING * (m * (fabs(g[8]) + fabs(g[9]) + fabs(g[10])) + adet * fabs(g[11]));
+    const int4 inside = (st >= (float4)(0.0f)) & (su >= -slack_u) & (sv >= -slack_v) &
+                        (su + sv <= adet + (slack_u + slack_v)) & (adet > (float4)(0.0f));
     if (!any(inside)) continue;
     const float4 t4 = tp / det, u4 = su / adet, v4 = sv / adet;
     int in[4], tri[4];

@@ -380,6 +380,53 @@ TEST_CASE("rays aimed exactly at vertices and edges never slip through, from man
   }
 }
 
+TEST_CASE("a large triangle is widened by its float precision only, not by a fraction of it",
+          "[raycast]") {
+  // The sign tests' slack bounds their rounding (PF_HH_ROUNDING), so a triangle's outline is
+  // where its vertices put it: a ray aimed 4e-5 of the lamp's width outside an edge of the Cornell
+  // box's lamp (two triangles, seen from the camera) misses, one aimed as far inside hits. A
+  // slack of 1e-4 of the triangle drew the lamp that much wider on every side (a bright ring in
+  // the image). The same at the scene's millimetre scale (555 units).
+  for (float scale : {1.f, 555.f}) {
+    const float y = 0.995f * scale, x0 = 0.381982f * scale, x1 = 0.616216f * scale;
+    const float z0 = 0.401802f * scale, z1 = 0.590991f * scale;
+    pf_triangle a{}, b{};
+    const float v[4][3] = {{x0, y, z0}, {x1, y, z0}, {x1, y, z1}, {x0, y, z1}};
+    std::memcpy(a.v0, v[0], sizeof v[0]);
+    std::memcpy(a.v1, v[1], sizeof v[0]);
+    std::memcpy(a.v2, v[2], sizeof v[0]);
+    std::memcpy(b.v0, v[0], sizeof v[0]);
+    std::memcpy(b.v1, v[2], sizeof v[0]);
+    std::memcpy(b.v2, v[3], sizeof v[0]);
+    const pf::Scene s = make_scene({a, b});
+    const Vec3 eye(0.5f * scale, 0.5f * scale, 2.441441f * scale);
+    const float delta = 4e-5f * (x1 - x0);
+    size_t outside_hit = 0, inside_missed = 0, rays = 0;
+    for (int i = 1; i < 64; ++i) {  // points along each of the four edges
+      const float f = float(i) / 64.f;
+      const float xm = x0 + f * (x1 - x0), zm = z0 + f * (z1 - z0);
+      const Vec3 edge[4] = {{xm, y, z0}, {xm, y, z1}, {x0, y, zm}, {x1, y, zm}};
+      const Vec3 out[4] = {{0, 0, -1}, {0, 0, 1}, {-1, 0, 0}, {1, 0, 0}};
+      for (int e = 0; e < 4; ++e)
+        for (int side : {1, -1}) {
+          pf::Ray r;
+          r.o = eye;
+          r.d = edge[e] + out[e] * (float(side) * delta) - eye;
+          for (pf::Traversal trav : {pf::Traversal::Ropes, pf::Traversal::Stack}) {
+            pf::Hit h;
+            const bool hit = pf::intersect_closest(s, r, h, trav);
+            ++rays;
+            if (side == 1) outside_hit += hit ? 1 : 0;
+            else inside_missed += hit ? 0 : 1;
+          }
+        }
+    }
+    INFO("scale " << scale << ", " << rays << " rays");
+    CHECK(outside_hit == 0);
+    CHECK(inside_missed == 0);
+  }
+}
+
 TEST_CASE("stack and ropes give the same triangle, t and barycentrics, bit for bit", "[raycast]") {
   // The host-only stack traversal (compact nodes, four-wide triangle tests) must return exactly
   // what the shared rope traversal (the GPU kernels' code) returns, so either can serve the CPU.

@@ -23,13 +23,30 @@
 #include <math.h>
 #endif
 
-/* Tolerance of the barycentric sign tests, in barycentric units (fraction of the triangle's
- * size). The planes of eq. 4.3 are rounded once per triangle, and u = N1·P + d1 cancels digits of
- * |N1|·|P| (large for thin triangles far from the origin), so two triangles sharing an edge or a
- * vertex do not agree on which side of it a point lies; without slack a ray through the edge or
- * vertex can slip between them. Widening every triangle by this fraction closes those cracks. The
- * kd build (kdtree.h) and the root-box entry below are made consistent with the widening. */
+/* Widening of the scene's root box, as a fraction of its largest extent (pf_kd_enter_root and
+ * the host's compact tree): a bound on how far the triangle test below accepts points outside a
+ * triangle, so that those points are reachable too. */
 #define PF_HH_EDGE_EPS 1e-4f
+
+/* Slack of the barycentric sign tests: a bound on their rounding error, not a fraction of the
+ * triangle. The planes of eq. 4.3 are rounded once per triangle and u' = P'·N1 + det·d1 cancels
+ * the digits of terms as large as |det|·|N1|·(|O| + t|D|) and |det·d1|, so two triangles sharing
+ * an edge or a vertex do not agree on which side of it a point lies; without slack a ray through
+ * the edge can slip between them. Each test therefore accepts u' >= −s_u with
+ *   s_u = PF_HH_ROUNDING · (m · |N1|_1 + |det| · |d1|),   m = |det| · max_k |O_k| + |t'| · max_k |D_k|
+ * (m bounds |P'_k| and the error of computing it; |N1|_1 = |N1x| + |N1y| + |N1z|), likewise s_v
+ * with N2, and u' + v' <= |det| + s_u + s_v. The slack is absolute in world units (a few float
+ * roundoffs of the coordinates' size): a triangle is widened by the precision of its position,
+ * 2e-6 world units in a unit box seen from 2.4 away, not by a fraction of its size (which drew a
+ * 0.2-unit lamp 2e-5 wider on every side, a bright ring at its outline). */
+#define PF_HH_ROUNDING 2.38418579e-7f /* 2^-22: four units of float roundoff */
+
+/* max_k |v_k| of a ray's origin or direction (the magnitudes of the slack above). */
+PF_INLINE float pf_hh_magnitude(const float* v) {
+  const float a = fabs(v[0]), b = fabs(v[1]), c = fabs(v[2]);
+  const float ab = a > b ? a : b;
+  return ab > c ? ab : c;
+}
 
 /* Closest (or any) hit of a ray: t in units of |d|, triangle index (−1 = none), barycentrics. */
 typedef struct {
@@ -62,11 +79,18 @@ PF_INLINE int pf_hh_intersect(PF_GLOBAL const pf_hh_triangle* tri, const float* 
   /* eq. 4.6: u' = P'·N1 + det·d1 = det·u; eq. 4.7: v' = P'·N2 + det·d2 = det·v. */
   const float su = (px * tri->n1[0] + py * tri->n1[1] + pz * tri->n1[2] + det * tri->n1[3]) * sgn;
   const float sv = (px * tri->n2[0] + py * tri->n2[1] + pz * tri->n2[2] + det * tri->n2[3]) * sgn;
-  const float slack = PF_HH_EDGE_EPS * adet;
+  /* The slack of the sign tests (PF_HH_ROUNDING above). */
+  const float m = adet * pf_hh_magnitude(o) + st * pf_hh_magnitude(d);
+  const float slack_u =
+      PF_HH_ROUNDING * (m * (fabs(tri->n1[0]) + fabs(tri->n1[1]) + fabs(tri->n1[2])) +
+                        adet * fabs(tri->n1[3]));
+  const float slack_v =
+      PF_HH_ROUNDING * (m * (fabs(tri->n2[0]) + fabs(tri->n2[1]) + fabs(tri->n2[2])) +
+                        adet * fabs(tri->n2[3]));
   /* t in [0, tmax]; u >= 0, v >= 0, u + v <= 1 (u <= 1 follows); det == 0 (ray parallel to the
    * plane) fails st <= adet·tmax or the barycentric tests, which then read 0 <= ±0. */
-  const int inside = (st >= 0.0f) & (st <= adet * tmax) & (su >= -slack) & (sv >= -slack) &
-                     (su + sv <= adet + slack) & (adet > 0.0f);
+  const int inside = (st >= 0.0f) & (st <= adet * tmax) & (su >= -slack_u) & (sv >= -slack_v) &
+                     (su + sv <= adet + (slack_u + slack_v)) & (adet > 0.0f);
   if (!inside) return 0;
   const float t = tp / det;
   /* The exact contract (tmin, tmax] on the divided t, whatever the rounding above. */

@@ -12,7 +12,7 @@
 // clipped to each child's box as polygons ("split clipping"), so every reference's bounds are those
 // of the part of the triangle inside the node. A triangle that only touches a split plane (with a
 // vertex or an edge) stays on its own side; rays through such a vertex are caught because the
-// widened triangle test (PF_HH_EDGE_EPS, intersect_shared.h) accepts hits anywhere along the ray
+// widened triangle test (PF_HH_ROUNDING, intersect_shared.h) accepts hits anywhere along the ray
 // and both traversals visit the leaves on both sides of a leaf corner the ray passes exactly
 // through (tested by aiming rays at every vertex, test_raycast.cpp). Subtrees are built in
 // parallel and spliced in a fixed order: the arrays are the same bytes for any thread count.

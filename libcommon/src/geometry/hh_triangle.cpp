@@ -27,7 +27,7 @@ void store_plane(const D3& n, const float* a, float* out) {
 }  // namespace
 
 // The planes are computed in double and rounded once, which keeps the barycentrics of points on
-// an edge shared by two triangles within a few ulps of each other (see PF_HH_EDGE_EPS).
+// an edge shared by two triangles within a few ulps of each other (see PF_HH_ROUNDING).
 pf_hh_triangle make_hh_triangle(const pf_triangle& t) {
   const D3 ab = sub(t.v1, t.v0);
   const D3 ac = sub(t.v2, t.v0);

@@ -203,18 +203,23 @@ const HostKd& host_kd(const Scene& s) {
 }
 
 // A ray's origin and direction broadcast to four lanes.
+// (With the magnitudes max_k |o_k| and max_k |d_k| of the test's slack, pf_hh_magnitude.)
 struct RayLanes {
   const float* o;
   const float* d;
+  float ao, ad;
 #ifdef __SSE2__
-  __m128 o4[3], d4[3];
+  __m128 o4[3], d4[3], ao4, ad4;
 #endif
-  RayLanes(const float* o_, const float* d_) : o(o_), d(d_) {
+  RayLanes(const float* o_, const float* d_)
+      : o(o_), d(d_), ao(pf_hh_magnitude(o_)), ad(pf_hh_magnitude(d_)) {
 #ifdef __SSE2__
     for (int k = 0; k < 3; ++k) {
       o4[k] = _mm_set1_ps(o[k]);
       d4[k] = _mm_set1_ps(d[k]);
     }
+    ao4 = _mm_set1_ps(ao);
+    ad4 = _mm_set1_ps(ad);
 #endif
   }
 };
@@ -257,7 +262,7 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
                            bool any_hit, pf_ray_hit& best, const AlphaTest* alpha) {
 #ifdef __SSE2__
   const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), minus_one = _mm_set1_ps(-1.0f);
-  const __m128 sign = _mm_set1_ps(-0.0f), eps = _mm_set1_ps(PF_HH_EDGE_EPS);
+  const __m128 sign = _mm_set1_ps(-0.0f), rounding = _mm_set1_ps(PF_HH_ROUNDING);
   for (uint32_t first = 0; first < count; first += 4, ++p) {
     const __m128 n0 = _mm_load_ps(p->n[0]), n1 = _mm_load_ps(p->n[1]);
     const __m128 n2 = _mm_load_ps(p->n[2]), n3 = _mm_load_ps(p->n[3]);
@@ -286,12 +291,26 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
                               _mm_mul_ps(pz, _mm_load_ps(p->n2[2]))),
                    _mm_mul_ps(det, _mm_load_ps(p->n2[3]))),
         sgn);
-    const __m128 slack = _mm_mul_ps(eps, adet);
-    const __m128 nslack = _mm_xor_ps(slack, sign);
+    // The slack of the sign tests, pf_hh_intersect's expressions (|x| = x without its sign bit).
+    const __m128 m = _mm_add_ps(_mm_mul_ps(adet, r.ao4), _mm_mul_ps(st, r.ad4));
+    const __m128 slack_u = _mm_mul_ps(
+        rounding,
+        _mm_add_ps(_mm_mul_ps(m, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, _mm_load_ps(p->n1[0])),
+                                                       _mm_andnot_ps(sign, _mm_load_ps(p->n1[1]))),
+                                            _mm_andnot_ps(sign, _mm_load_ps(p->n1[2])))),
+                   _mm_mul_ps(adet, _mm_andnot_ps(sign, _mm_load_ps(p->n1[3])))));
+    const __m128 slack_v = _mm_mul_ps(
+        rounding,
+        _mm_add_ps(_mm_mul_ps(m, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, _mm_load_ps(p->n2[0])),
+                                                       _mm_andnot_ps(sign, _mm_load_ps(p->n2[1]))),
+                                            _mm_andnot_ps(sign, _mm_load_ps(p->n2[2])))),
+                   _mm_mul_ps(adet, _mm_andnot_ps(sign, _mm_load_ps(p->n2[3])))));
     const __m128 tmax = _mm_mul_ps(adet, _mm_set1_ps(best.t));
     __m128 in = _mm_and_ps(_mm_cmpge_ps(st, zero), _mm_cmple_ps(st, tmax));
-    in = _mm_and_ps(in, _mm_and_ps(_mm_cmpge_ps(su, nslack), _mm_cmpge_ps(sv, nslack)));
-    in = _mm_and_ps(in, _mm_cmple_ps(_mm_add_ps(su, sv), _mm_add_ps(adet, slack)));
+    in = _mm_and_ps(in, _mm_and_ps(_mm_cmpge_ps(su, _mm_xor_ps(slack_u, sign)),
+                                   _mm_cmpge_ps(sv, _mm_xor_ps(slack_v, sign))));
+    in = _mm_and_ps(in, _mm_cmple_ps(_mm_add_ps(su, sv),
+                                     _mm_add_ps(adet, _mm_add_ps(slack_u, slack_v))));
     in = _mm_and_ps(in, _mm_cmpgt_ps(adet, zero));
     int mask = _mm_movemask_ps(in);
     if (!mask) continue;
@@ -343,7 +362,8 @@ __attribute__((target("avx"))) bool leaf_intersect_avx(const HHPacket* p, uint32
                                                        const AlphaTest* alpha) {
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
   const __m256 minus_one = _mm256_set1_ps(-1.0f), sign = _mm256_set1_ps(-0.0f);
-  const __m256 eps = _mm256_set1_ps(PF_HH_EDGE_EPS);
+  const __m256 rounding = _mm256_set1_ps(PF_HH_ROUNDING);
+  const __m256 ao = _mm256_set1_ps(r.ao), ad = _mm256_set1_ps(r.ad);
   const __m256 o0 = _mm256_set1_ps(r.o[0]), o1 = _mm256_set1_ps(r.o[1]), o2 = _mm256_set1_ps(r.o[2]);
   const __m256 d0 = _mm256_set1_ps(r.d[0]), d1 = _mm256_set1_ps(r.d[1]), d2 = _mm256_set1_ps(r.d[2]);
   uint32_t first = 0;
@@ -378,13 +398,30 @@ __attribute__((target("avx"))) bool leaf_intersect_avx(const HHPacket* p, uint32
                                     _mm256_mul_ps(pz, both(p->n2[2], q->n2[2]))),
                       _mm256_mul_ps(det, both(p->n2[3], q->n2[3]))),
         sgn);
-    const __m256 slack = _mm256_mul_ps(eps, adet);
-    const __m256 nslack = _mm256_xor_ps(slack, sign);
+#define absb(a, b) _mm256_andnot_ps(sign, both(a, b))
+    const __m256 m = _mm256_add_ps(_mm256_mul_ps(adet, ao), _mm256_mul_ps(st, ad));
+    const __m256 slack_u = _mm256_mul_ps(
+        rounding,
+        _mm256_add_ps(
+            _mm256_mul_ps(m, _mm256_add_ps(_mm256_add_ps(absb(p->n1[0], q->n1[0]),
+                                                         absb(p->n1[1], q->n1[1])),
+                                           absb(p->n1[2], q->n1[2]))),
+            _mm256_mul_ps(adet, absb(p->n1[3], q->n1[3]))));
+    const __m256 slack_v = _mm256_mul_ps(
+        rounding,
+        _mm256_add_ps(
+            _mm256_mul_ps(m, _mm256_add_ps(_mm256_add_ps(absb(p->n2[0], q->n2[0]),
+                                                         absb(p->n2[1], q->n2[1])),
+                                           absb(p->n2[2], q->n2[2]))),
+            _mm256_mul_ps(adet, absb(p->n2[3], q->n2[3]))));
+#undef absb
     const __m256 tmax = _mm256_mul_ps(adet, _mm256_set1_ps(best.t));
     __m256 in = _mm256_and_ps(_mm256_cmp_ps(st, zero, _CMP_GE_OS), _mm256_cmp_ps(st, tmax, _CMP_LE_OS));
-    in = _mm256_and_ps(in, _mm256_and_ps(_mm256_cmp_ps(su, nslack, _CMP_GE_OS),
-                                         _mm256_cmp_ps(sv, nslack, _CMP_GE_OS)));
-    in = _mm256_and_ps(in, _mm256_cmp_ps(_mm256_add_ps(su, sv), _mm256_add_ps(adet, slack),
+    in = _mm256_and_ps(
+        in, _mm256_and_ps(_mm256_cmp_ps(su, _mm256_xor_ps(slack_u, sign), _CMP_GE_OS),
+                          _mm256_cmp_ps(sv, _mm256_xor_ps(slack_v, sign), _CMP_GE_OS)));
+    in = _mm256_and_ps(in, _mm256_cmp_ps(_mm256_add_ps(su, sv),
+                                         _mm256_add_ps(adet, _mm256_add_ps(slack_u, slack_v)),
                                          _CMP_LE_OS));
     in = _mm256_and_ps(in, _mm256_cmp_ps(adet, zero, _CMP_GT_OS));
     int mask = _mm256_movemask_ps(in);
