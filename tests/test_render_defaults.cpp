@@ -45,14 +45,20 @@ std::string help_of(const std::string& help, const std::string& option) {
   return squeeze(help.substr(at, next == std::string::npos ? std::string::npos : next - at));
 }
 
-// The automatic radius as eye_pass.h documents it, computed here from the scene.
+// The automatic radius as eye_pass.h documents it, computed here from the scene: 2 × the
+// footprint rule where every triangle is diffuse or an emitter, 1.5 × with a mirror, glass or PBR
+// material (eye_pass.h kRadiusScale and kRadiusScaleDiffuse, RESULTS.md section 8).
 float expected_radius(const Scene& s) {
+  bool diffuse_only = true;
+  for (const pf_triangle& t : s.triangles) {
+    const int type = s.materials[size_t(t.material)].type;
+    diffuse_only = diffuse_only && (type == PF_MAT_DIFFUSE || type == PF_MAT_EMITTER);
+  }
   const Vec3 e(s.camera.eye), l(s.camera.look_at);
   const float dist = length(l - e);
   const float pixel_angle = 2.f * std::tan(s.camera.fov_y_deg * 0.5f * 3.14159265f / 180.f) /
                             float(s.camera.height);
-  // The factor since the surface gather area (eye_pass.h kRadiusScale, RESULTS.md section 8).
-  return 1.5f * std::max(length(s.bounds.extent()) / 200.f, 4.f * pixel_angle * dist);
+  return (diffuse_only ? 2.f : 1.5f) * std::max(length(s.bounds.extent()) / 200.f, 4.f * pixel_angle * dist);
 }
 
 }  // namespace
@@ -106,6 +112,13 @@ TEST_CASE("choose_defaults: pppm with shadow rays, photons from the image, radiu
   finish_scene(big);
   CHECK(choose_defaults(big).radius == Approx(10.f * b.radius).epsilon(1e-4));
   CHECK(choose_defaults(big).photons == b.photons);
+  // The same room with a diffuse block instead of the glass one: diffuse surfaces only, the
+  // radius 2/1.5 of the glass room's (the caustics that mirrors and glass focus want it small).
+  const Scene diffuse = test::room_scene(PF_MAT_DIFFUSE, 800, 600);
+  CHECK(radius_scale(diffuse) == kRadiusScaleDiffuse);
+  CHECK(radius_scale(room) == kRadiusScale);
+  CHECK(choose_defaults(diffuse).radius == Approx(b.radius * 2.f / 1.5f).epsilon(1e-5));
+  CHECK(choose_defaults(diffuse).radius == Approx(expected_radius(diffuse)).epsilon(1e-5));
 }
 
 TEST_CASE("render: --help, the run record and the summary say the defaults used, every one "

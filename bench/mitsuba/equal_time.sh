@@ -57,11 +57,22 @@ MI_SPP=${MI_SPP:-16}
 MASK_SPP=${MASK_SPP:-64}
 PY=${PY:-.venv-mitsuba/bin/python}
 HERE=$(cd "$(dirname "$0")" && pwd)
-# The issue-time automatic radius of a scene: today's automatic R0 (render's summary) / 1.5.
+# The issue-time automatic radius of a scene: max(diag / 200, 4 pixel footprints at the look-at
+# distance), the rule before the surface gather area scaled it (eye_pass.h default_radius).
 issue_radius() {
-  "$BIN/render" --scene "$1" -o "$OUT/.issue-radius.exr" --passes 1 --photons 16384 --threads "$THREADS" \
-    | sed -n 's/.*R0 \([0-9.e+-]*\) (auto).*/\1/p' | awk '{ printf "%.9g", $1 / 1.5 }'
-  rm -f "$OUT/.issue-radius.exr" "$OUT/.issue-radius.png"
+  "$PY" - "$1" <<'PYEOF'
+import math, sys
+import h5py
+import numpy as np
+with h5py.File(sys.argv[1], "r") as f:
+    cam = f["camera"][0]
+    tris = f["geometry/triangles"][:]
+    v = np.concatenate([tris["v0"], tris["v1"], tris["v2"]]).astype(np.float32)
+    diag = float(np.linalg.norm(v.max(0) - v.min(0)))
+    dist = float(np.linalg.norm(cam["look_at"].astype(np.float64) - cam["eye"]))
+    pixel_angle = 2 * math.tan(math.radians(0.5 * float(cam["fov_y_deg"]))) / float(cam["height"])
+    print("%.9g" % max(diag / 200, 4 * pixel_angle * dist))
+PYEOF
 }
 export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-$PWD/.llvm19/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
 export DRJIT_CACHE_DIR=${DRJIT_CACHE_DIR:-$OUT/drjit-cache}

@@ -103,14 +103,18 @@ struct EyePassResult {
 int eye_strata_columns(int spp);
 
 // The automatic initial radius: a fraction of the scene, never below a few pixel footprints at
-// the camera-to-scene distance:  R0 = 1.5 · max(diag / 200, 4 · pixel_angle · |look_at − eye|).
-// The factor 1.5 came with the surface gather area (estimators/gather_area.h), which removed the
-// edge bias that had held the radius down: together, at equal time, 12–16 % less error over all
-// pixels and 23–32 % less away from the lights on the diffuse scenes of docs/RESULTS.md section
-// 8, the mirror-and-glass box's within 2 %; 2× was better still on the diffuse ones and 8 %
-// worse there (its caustics blur). ppm's fixed hitpoints start from the same R0 (not re-measured
-// for ppm, which keeps the disc).
+// the camera-to-scene distance:  R0 = s · max(diag / 200, 4 · pixel_angle · |look_at − eye|),
+// s = kRadiusScaleDiffuse where every triangle is diffuse or an emitter (radius_scale), else
+// kRadiusScale. The factors came with the surface gather area (estimators/gather_area.h), which
+// removed the edge bias that had held the radius down (docs/RESULTS.md section 8, "Gather area"
+// and "The radius of diffuse scenes"): 1.5 gave, at equal time, 12–16 % less error over all
+// pixels and 23–32 % less away from the lights on the diffuse scenes, the mirror-and-glass box's
+// within 2 %; 2 is better still on the diffuse scenes, but blurs the caustics that mirrors and
+// glass focus (8 % worse on that box), and PBR scenes (glossy caustics) were not measured at 2.
+// ppm's fixed hitpoints start from the same R0 (not re-measured for ppm, which keeps the disc).
 constexpr float kRadiusScale = 1.5f;
+constexpr float kRadiusScaleDiffuse = 2.f;
+float radius_scale(const Scene& scene);
 float default_radius(const Scene& scene);
 
 // InputError naming the option (--spp, --max-depth, --shadow-samples, --radius, --threads) when

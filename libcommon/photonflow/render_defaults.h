@@ -21,8 +21,10 @@
 //               are a pixel's Sobol points over the passes (pixel_sampler.h pf_light_draws); 4 for
 //               ppm, whose one eye pass keeps its samples (kDefaultShadowSamples)
 //   radius      automatic, from the pixel footprint and the scene extent (default_radius,
-//               eye_pass.h): R0 = 1.5 · max(scene diagonal / 200, 4 · pixel angle · look-at
-//               distance), the factor since the surface gather area (kRadiusScale)
+//               eye_pass.h): R0 = s · max(scene diagonal / 200, 4 · pixel angle · look-at
+//               distance), s = 2 in a scene of diffuse surfaces only, 1.5 with mirrors, glass
+//               or PBR materials (radius_scale: kRadiusScaleDiffuse, kRadiusScale), the factors
+//               since the surface gather area
 //   gather-area surface for sppm and pppm (estimators/gather_area.h): the estimate divides by
 //               the surface the gather region holds, unbiased at corners and edges; measured in
 //               docs/RESULTS.md section 8, "Gather area"

@@ -32,7 +32,8 @@ std::string auto_photons_rule() {
 }
 
 std::string auto_radius_rule() {
-  return "auto: 1.5 x max(scene diagonal / 200, 4 pixel footprints at the look-at distance)";
+  return "auto: 2 (a scene of diffuse surfaces only) or 1.5 (with mirrors, glass or PBR "
+         "materials) x max(scene diagonal / 200, 4 pixel footprints at the look-at distance)";
 }
 
 RenderDefaults choose_defaults(const Scene& scene) {

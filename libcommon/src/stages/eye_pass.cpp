@@ -45,11 +45,19 @@ int eye_strata_columns(int spp) {
   return std::max(1, spp / rows);
 }
 
+float radius_scale(const Scene& scene) {
+  for (const pf_triangle& t : scene.triangles) {
+    const int type = scene.materials[size_t(t.material)].type;
+    if (type != PF_MAT_DIFFUSE && type != PF_MAT_EMITTER) return kRadiusScale;
+  }
+  return kRadiusScaleDiffuse;
+}
+
 float default_radius(const Scene& scene) {
   CameraFrame cam(scene.camera);
   float dist = length(Vec3(scene.camera.look_at) - Vec3(scene.camera.eye));
   float diag = length(scene.bounds.extent());
-  return kRadiusScale * std::max(diag / 200.f, 4.f * cam.pixel_angle() * dist);
+  return radius_scale(scene) * std::max(diag / 200.f, 4.f * cam.pixel_angle() * dist);
 }
 
 namespace {
