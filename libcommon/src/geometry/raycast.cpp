@@ -293,18 +293,14 @@ inline bool leaf_intersect(const HHPacket* p, uint32_t count, const RayLanes& r,
         sgn);
     // The slack of the sign tests, pf_hh_intersect's expressions (|x| = x without its sign bit).
     const __m128 m = _mm_add_ps(_mm_mul_ps(adet, r.ao4), _mm_mul_ps(st, r.ad4));
-    const __m128 slack_u = _mm_mul_ps(
-        rounding,
-        _mm_add_ps(_mm_mul_ps(m, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, _mm_load_ps(p->n1[0])),
-                                                       _mm_andnot_ps(sign, _mm_load_ps(p->n1[1]))),
-                                            _mm_andnot_ps(sign, _mm_load_ps(p->n1[2])))),
-                   _mm_mul_ps(adet, _mm_andnot_ps(sign, _mm_load_ps(p->n1[3])))));
-    const __m128 slack_v = _mm_mul_ps(
-        rounding,
-        _mm_add_ps(_mm_mul_ps(m, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, _mm_load_ps(p->n2[0])),
-                                                       _mm_andnot_ps(sign, _mm_load_ps(p->n2[1]))),
-                                            _mm_andnot_ps(sign, _mm_load_ps(p->n2[2])))),
-                   _mm_mul_ps(adet, _mm_andnot_ps(sign, _mm_load_ps(p->n2[3])))));
+#define absl(a) _mm_andnot_ps(sign, _mm_load_ps(a))
+#define slack_of(pl)                                                                          \
+  _mm_mul_ps(rounding, _mm_add_ps(_mm_mul_ps(m, _mm_add_ps(_mm_add_ps(absl(pl[0]), absl(pl[1])), \
+                                                           absl(pl[2]))),                     \
+                                  _mm_mul_ps(adet, absl(pl[3]))))
+    const __m128 slack_u = slack_of(p->n1), slack_v = slack_of(p->n2);
+#undef slack_of
+#undef absl
     const __m128 tmax = _mm_mul_ps(adet, _mm_set1_ps(best.t));
     __m128 in = _mm_and_ps(_mm_cmpge_ps(st, zero), _mm_cmple_ps(st, tmax));
     in = _mm_and_ps(in, _mm_and_ps(_mm_cmpge_ps(su, _mm_xor_ps(slack_u, sign)),
@@ -398,22 +394,17 @@ __attribute__((target("avx"))) bool leaf_intersect_avx(const HHPacket* p, uint32
                                     _mm256_mul_ps(pz, both(p->n2[2], q->n2[2]))),
                       _mm256_mul_ps(det, both(p->n2[3], q->n2[3]))),
         sgn);
+    // The slack of the sign tests: the SSE test's expressions, eight lanes.
 #define absb(a, b) _mm256_andnot_ps(sign, both(a, b))
+#define slack_of(pl, ql)                                                                        \
+  _mm256_mul_ps(rounding,                                                                       \
+                _mm256_add_ps(_mm256_mul_ps(m, _mm256_add_ps(_mm256_add_ps(absb(pl[0], ql[0]),  \
+                                                                           absb(pl[1], ql[1])), \
+                                                             absb(pl[2], ql[2]))),              \
+                              _mm256_mul_ps(adet, absb(pl[3], ql[3]))))
     const __m256 m = _mm256_add_ps(_mm256_mul_ps(adet, ao), _mm256_mul_ps(st, ad));
-    const __m256 slack_u = _mm256_mul_ps(
-        rounding,
-        _mm256_add_ps(
-            _mm256_mul_ps(m, _mm256_add_ps(_mm256_add_ps(absb(p->n1[0], q->n1[0]),
-                                                         absb(p->n1[1], q->n1[1])),
-                                           absb(p->n1[2], q->n1[2]))),
-            _mm256_mul_ps(adet, absb(p->n1[3], q->n1[3]))));
-    const __m256 slack_v = _mm256_mul_ps(
-        rounding,
-        _mm256_add_ps(
-            _mm256_mul_ps(m, _mm256_add_ps(_mm256_add_ps(absb(p->n2[0], q->n2[0]),
-                                                         absb(p->n2[1], q->n2[1])),
-                                           absb(p->n2[2], q->n2[2]))),
-            _mm256_mul_ps(adet, absb(p->n2[3], q->n2[3]))));
+    const __m256 slack_u = slack_of(p->n1, q->n1), slack_v = slack_of(p->n2, q->n2);
+#undef slack_of
 #undef absb
     const __m256 tmax = _mm256_mul_ps(adet, _mm256_set1_ps(best.t));
     __m256 in = _mm256_and_ps(_mm256_cmp_ps(st, zero, _CMP_GE_OS), _mm256_cmp_ps(st, tmax, _CMP_LE_OS));
