@@ -447,10 +447,10 @@ std::atomic<bool>& kd_leaf_avx() {
 }
 
 // The same for one leaf of the rope traversal (PF_KD_CLEAF_TEST), eight triangles at a time
-// where the stack traversal's test does so.
-bool leaf_intersect_packets(const HHPacket* p, uint32_t count, const float* o, const float* d,
-                            float tmin, bool any_hit, pf_ray_hit& best, const AlphaTest* alpha) {
-  const RayLanes r(o, d);
+// where the stack traversal's test does so; r is the ray's lanes, set up once per ray as the stack
+// traversal does.
+bool leaf_intersect_packets(const HHPacket* p, uint32_t count, const RayLanes& r, float tmin,
+                            bool any_hit, pf_ray_hit& best, const AlphaTest* alpha) {
 #ifdef PF_HAVE_AVX_LEAF
   if (count > 4 && kd_leaf_avx().load(std::memory_order_relaxed))
     return alpha ? leaf_intersect_avx<true>(p, count, r, tmin, any_hit, best, alpha)
@@ -541,6 +541,7 @@ bool traverse_stack(const HostKd& kd, const float* o, const float* d, float tmin
 struct RopeCtx {
   const HHPacket* packets;
   const AlphaTest* alpha;
+  const RayLanes* lanes;  // the ray's (origin, direction and their magnitudes), for every leaf
 };
 
 // The shared compact rope loop over the host copy, entered at the root (start_leaf < 0) or in
@@ -548,7 +549,8 @@ struct RopeCtx {
 inline bool traverse_ropes(const HostKd& h, const float* o, const float* d, float tmin,
                            bool any_hit, pf_ray_hit& hit, const AlphaTest* alpha,
                            int32_t start_leaf, int32_t* end_leaf) {
-  const RopeCtx ctx{h.packets.data(), alpha};
+  const RayLanes lanes(o, d);
+  const RopeCtx ctx{h.packets.data(), alpha, &lanes};
   return pf_kd_traverse_ropes_compact_from(
              h.cnodes.data(), pf_int(h.cnodes.size()), h.cleaves.data(), h.root_box, nullptr,
              reinterpret_cast<const pf_hh_triangle*>(&ctx), o, d, tmin, any_hit, &hit,
@@ -705,10 +707,12 @@ static int pf_host_cleaf_test4(int first_packet, int count, const pf_hh_triangle
                                const float* o, const float* d, float tmin, int any_hit,
                                float* hit_t, pf_int* hit_tri, float* hit_u, float* hit_v) {
   const auto* ctx = reinterpret_cast<const pf::RopeCtx*>(groups);
+  (void)o;  // the ray traverse_ropes set ctx->lanes up for, once
+  (void)d;
   const pf::HHPacket* p = ctx->packets + first_packet;
   pf_ray_hit best = {*hit_t, *hit_tri, *hit_u, *hit_v};
-  const bool stop =
-      pf::leaf_intersect_packets(p, uint32_t(count), o, d, tmin, any_hit != 0, best, ctx->alpha);
+  const bool stop = pf::leaf_intersect_packets(p, uint32_t(count), *ctx->lanes, tmin,
+                                               any_hit != 0, best, ctx->alpha);
   *hit_t = best.t;
   *hit_tri = best.tri;
   *hit_u = best.u;
