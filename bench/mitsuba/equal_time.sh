@@ -17,7 +17,7 @@
 #             --gather-area disc --radius R (the baseline the mirror-and-glass box's target is stated
 #             against: "today's --estimator pppm" when issue 34 was filed, i.e. render's defaults
 #             then, 18c2973^, beside pppm; R the radius rule of then, max(diagonal / 200, 4 pixel
-#             footprints), which is today's automatic R0 / 1.5, read from a one-pass run)
+#             footprints), computed from scene.h5 by issue_radius below)
 #   <name>    with FLAGS_<name> set in the environment (a shell identifier): render --time T
 #             $FLAGS_<name>, for trying settings under the same harness, e.g.
 #             FLAGS_ss2="--shadow-samples 2" METHODS="defaults ss2"

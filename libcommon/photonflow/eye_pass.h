@@ -107,7 +107,7 @@ int eye_strata_columns(int spp);
 // s = kRadiusScaleDiffuse where every triangle is diffuse or an emitter (radius_scale), else
 // kRadiusScale. The factors came with the surface gather area (estimators/gather_area.h), which
 // removed the edge bias that had held the radius down (docs/RESULTS.md section 8, "Gather area"
-// and "The radius of diffuse scenes"): 1.5 gave, at equal time, 12–16 % less error over all
+// and "The lamp's outline and the radius of diffuse scenes"): 1.5 gave, at equal time, 12–16 % less error over all
 // pixels and 23–32 % less away from the lights on the diffuse scenes, the mirror-and-glass box's
 // within 2 %; 2 is better still on the diffuse scenes, but blurs the caustics that mirrors and
 // glass focus (8 % worse on that box), and PBR scenes (glossy caustics) were not measured at 2.

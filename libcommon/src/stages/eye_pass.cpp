@@ -46,10 +46,18 @@ int eye_strata_columns(int spp) {
 }
 
 float radius_scale(const Scene& scene) {
-  for (const pf_triangle& t : scene.triangles) {
-    const int type = scene.materials[size_t(t.material)].type;
-    if (type != PF_MAT_DIFFUSE && type != PF_MAT_EMITTER) return kRadiusScale;
+  // Every pass's eye tracer asks (default_radius): the triangles are scanned only when the
+  // material table holds a material other than diffuse or emitter, up to its first user.
+  std::vector<char> other(scene.materials.size());
+  bool any = false;
+  for (size_t i = 0; i < other.size(); ++i) {
+    const int type = scene.materials[i].type;
+    other[i] = type != PF_MAT_DIFFUSE && type != PF_MAT_EMITTER;
+    any = any || other[i];
   }
+  if (any)
+    for (const pf_triangle& t : scene.triangles)
+      if (other[size_t(t.material)]) return kRadiusScale;
   return kRadiusScaleDiffuse;
 }
 
