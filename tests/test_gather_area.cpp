@@ -212,6 +212,40 @@ TEST_CASE("SurfaceArea: the hierarchy's sum equals every triangle clipped, on fi
   }
 }
 
+TEST_CASE("SurfaceArea: a fine flat mesh under a tilted normal: the slab's strip within the disc",
+          "[gather-area]") {
+  // The floor y = 0 over [0, 1]² in 150² cells of two triangles (too small to merge into quads),
+  // seen with a shading normal tilted by θ about z: the slab |n·(y − x)| <= κR cuts the plane in
+  // the strip |s| <= κR / sin θ across x, so A = w · 2 ∫_0^min(κR/sinθ, R) 2 sqrt(R² − s²) ds with
+  // the weight w = (1 + cos θ)/2 of eq. (2). Most triangles near x lie in the ball and cross
+  // the strip's border (clipped's closed form for the slab alone); those on the ball's border,
+  // and those beyond it in the leaves it opens, take the polygon clip and the far-corner test.
+  const int cells = 150;
+  std::vector<pf_triangle> tris;
+  for (int i = 0; i < cells; ++i)
+    for (int j = 0; j < cells; ++j) {
+      const float x0 = float(i) / cells, x1 = float(i + 1) / cells;
+      const float z0 = float(j) / cells, z1 = float(j + 1) / cells;
+      const auto q = test::quad(Vec3(x0, 0, z0), Vec3(x0, 0, z1), Vec3(x1, 0, z1), Vec3(x1, 0, z0), 0);
+      tris.insert(tris.end(), q.begin(), q.end());
+    }
+  const Scene s = scene_of(tris);
+  const SurfaceArea& a = surface_area(s);
+  for (double theta : {0.3, 0.5236, 1.2})
+    for (float R : {0.02f, 0.05f})
+      for (const Vec3& p : {Vec3(0.5f, 0, 0.5f), Vec3(0.4137f, 0, 0.6021f)}) {
+        const Vec3 n(float(std::sin(theta)), float(std::cos(theta)), 0.f);
+        const double half = std::min(0.25 * double(R) / double(n.x), double(R));
+        const double w = 0.5 * (1.0 + double(n.y));
+        INFO("theta " << theta << " R " << R << " x " << p.x);
+        const double expect = w * 2.0 * strip_area(R, 0.0, half);
+        CHECK(a.area_at(site(p, n, 0), R, 0.25f) == Approx(expect).epsilon(1e-6));
+        CHECK(a.area_brute(site(p, n, 0), R, 0.25f) == Approx(expect).epsilon(1e-6));
+        // Without the slab: the whole disc at that weight.
+        CHECK(a.area_at(site(p, n, 0), R, 0.f) == Approx(w * kPi * R * R).epsilon(1e-9));
+      }
+}
+
 TEST_CASE("SurfaceArea: small triangles interpolate cached corner values, the same in any thread",
           "[gather-area]") {
   // A fine sphere (triangles far smaller than R): area() interpolates the ratios of the corners

@@ -87,6 +87,17 @@ inline double dot3(const double* a, const double* b) {
 // The slab's half-width κR at radius r, or −1 for none (κ = 0: the ball alone).
 inline double slab_reach(float slab, double r) { return slab > 0.f ? double(slab) * r : -1.0; }
 
+// The share of a triangle's area on which a linear function is <= c, from its values at the
+// corners sorted ascending g[0] <= g[1] <= g[2]: the part below the level line is a triangle
+// similar to the corner g[0]'s cut, (c − g0)² / ((g2 − g0)(g1 − g0)) up to g[1], and one minus
+// the mirror image above it (every divisor is positive on its branch).
+inline double share_below(const double* g, double c) {
+  if (c <= g[0]) return 0.0;
+  if (c >= g[2]) return 1.0;
+  if (c <= g[1]) return (c - g[0]) * (c - g[0]) / ((g[2] - g[0]) * (g[1] - g[0]));
+  return 1.0 - (g[2] - c) * (g[2] - c) / ((g[2] - g[0]) * (g[2] - g[1]));
+}
+
 // A triangle of a mesh, or two coplanar triangles sharing an edge whose union is convex (a
 // quad: a box's face, a wall), with what eq. (1) needs of it. The quad's area within a disc is
 // the two triangles' (their shared edge's terms cancel) at the cost of one polygon, and a disc
@@ -455,13 +466,34 @@ int SurfaceArea::Impl::sign_at(int mesh, const double* x, const double* n, int32
 // |T ∩ B(x, r) ∩ S|, S the slab |n·(y − x)| <= kr (kr < 0: no slab).
 double SurfaceArea::Impl::clipped(const AreaTri& t, const double* x, const double* n, double r,
                                   double kr) const {
-  // The whole triangle when its three corners lie in the ball and the slab (both convex).
-  bool whole = true;
-  for (int j = 0; j < t.count && whole; ++j) {
+  // The corners against the ball and the slab (both convex): the whole polygon when all of them
+  // lie in both.
+  const double r2 = r * r, reach = r + t.edge;
+  double g[4];  // n·(v_j − x): the corners' heights over x's tangent plane
+  bool in_ball = true, in_slab = true, far = false;
+  for (int j = 0; j < t.count; ++j) {
     const double q[3] = {t.v[j][0] - x[0], t.v[j][1] - x[1], t.v[j][2] - x[2]};
-    whole = dot3(q, q) <= r * r && (kr < 0.0 || std::fabs(dot3(q, n)) <= kr);
+    const double d2 = dot3(q, q);
+    g[j] = dot3(q, n);
+    in_ball = in_ball && d2 <= r2;
+    in_slab = in_slab && (kr < 0.0 || std::fabs(g[j]) <= kr);
+    far = far || d2 > reach * reach;
   }
-  if (whole) return t.area;
+  if (in_ball && in_slab) return t.area;
+  if (t.count == 3) {
+    // Every point of a triangle lies within its longest edge of each corner, so a corner farther
+    // than r + edge from x leaves none of it in the ball (a fine mesh's leaves along the ball's
+    // border hold such triangles).
+    if (far) return 0.0;
+    // In the ball, cut by the slab alone (a fine curved mesh, most of its triangles near x): the
+    // share of T between the slab's planes, from the corners' heights (n·(y − x) is linear on T).
+    if (in_ball) {
+      if (g[0] > g[1]) std::swap(g[0], g[1]);
+      if (g[1] > g[2]) std::swap(g[1], g[2]);
+      if (g[0] > g[1]) std::swap(g[0], g[1]);
+      return t.area * (share_below(g, kr) - share_below(g, -kr));
+    }
+  }
   double d[3];
   for (int k = 0; k < 3; ++k) d[k] = x[k] - t.v[0][k];
   const double h = dot3(t.m, d);  // x's height over T's plane
