@@ -87,7 +87,7 @@ struct EyePassResult {
   std::vector<pf_hitpoint> hitpoints;  // sorted by pixel (row-major), then sample
   // The BSDF at each hitpoint, parallel to `hitpoints` (material/pbr_point_shared.h): the
   // textured parameters at a PF_MAT_PBR hitpoint, all zero at any other. EMPTY when the scene has
-  // no PBR material (scene_has_pbr, surface.h): other scenes keep and write nothing more.
+  // no PBR material (Scene::has_pbr): other scenes keep and write nothing more.
   std::vector<pf_pbr_point> bsdf;
   std::vector<float> emitted;          // width × height × 3
   std::vector<float> direct;           // width × height × 3 (zero unless ShadowRays)

@@ -151,7 +151,8 @@ struct Scene {
                                                          : -1;
   }
   // Whether some material is PF_MAT_PBR (format version 5): the scene id covers the
-  // metallic-roughness fields and materials/metallic_roughness_texture only then.
+  // metallic-roughness fields and materials/metallic_roughness_texture only then, and only then
+  // do the eye passes keep a pf_pbr_point per hitpoint (EyePassResult::bsdf, HitpointSet::bsdf).
   bool has_pbr() const {
     return std::any_of(materials.begin(), materials.end(),
                        [](const pf_material& m) { return m.type == PF_MAT_PBR; });

@@ -59,14 +59,6 @@ inline pf_bsdf_params bsdf_params_at(const Scene& s, const pf_material& m, const
   return p;
 }
 
-// Whether the scene has a PF_MAT_PBR material: only then do the eye passes keep a pf_pbr_point
-// per hitpoint (EyePassResult::bsdf, HitpointSet::bsdf); other scenes pay nothing.
-inline bool scene_has_pbr(const Scene& s) {
-  for (const pf_material& m : s.materials)
-    if (m.type == PF_MAT_PBR) return true;
-  return false;
-}
-
 // The BSDF at a visible point on a PF_MAT_PBR surface (material/pbr_point_shared.h): the textured
 // parameters, and whether the facing normal (the hitpoint's normal: ns on the side the ray
 // arrived from) is the outside, i.e. the front: pf_pbr_point_eval then works in the frame of the

@@ -57,7 +57,7 @@ HitpointSet make_sppm_state(const Scene& scene, float radius0, DirectMode mode) 
   }
   // A PBR scene's state keeps each pixel's last visible point's BSDF beside its hitpoint (what
   // the file shows of the pass, as the geometry; the gather reads the pass's own).
-  if (scene_has_pbr(scene)) h.bsdf.assign(n, pf_pbr_point{});
+  if (scene.has_pbr()) h.bsdf.assign(n, pf_pbr_point{});
   return h;
 }
 
@@ -115,7 +115,7 @@ inline void take_visible_point(HitpointSet& state, size_t px, const pf_hitpoint&
 }
 
 // The BSDF of visible point i of an eye pass (pbr_of), nullptr for a diffuse one; `pbr`: the
-// scene has a PBR material (scene_has_pbr, computed once per pass).
+// scene has a PBR material (Scene::has_pbr, asked once per pass).
 inline const pf_pbr_point* eye_pbr(bool pbr, const Scene& scene, const EyePassResult& eye,
                                    size_t i) {
   return pbr ? pbr_of(scene, eye.hitpoints[i], eye.bsdf, i) : nullptr;
@@ -175,7 +175,7 @@ void sppm_pass(const Scene& scene, HitpointSet& state, const EyePassResult& eye,
     throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
   const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
   const int64_t count = int64_t(eye.hitpoints.size());
-  const bool pbr = scene_has_pbr(scene);
+  const bool pbr = scene.has_pbr();
   require_bsdf_table(scene, eye.hitpoints, eye.bsdf);  // not in the workers: no exceptions there
   if (state.bsdf.empty() && pbr)  // made here, not by the workers
     state.bsdf.assign(state.hitpoints.size(), pf_pbr_point{});
@@ -201,7 +201,7 @@ void sppm_pass_traced(const Scene& scene, HitpointSet& state, const EyePassOptio
   const EyeTracer tracer(scene, eye);
   const bool skip_direct = state.direct_mode == DirectMode::ShadowRays;
   const float inv_k = 1.f / float(state.passes + 1);
-  const bool pbr_scene = scene_has_pbr(scene);
+  const bool pbr_scene = scene.has_pbr();
   if (pbr_scene && state.bsdf.empty()) state.bsdf.assign(state.hitpoints.size(), pf_pbr_point{});
 #pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(opt.threads))
   for (int y = 0; y < H; ++y) {
@@ -231,7 +231,7 @@ void sppm_sites(const Scene& scene, const HitpointSet& state, const EyePassResul
   const size_t n = size_t(state.width) * size_t(state.height);
   if (state.hitpoints.size() != n)
     throw input_error("", "the SPPM state does not hold one hitpoint per pixel");
-  const bool pbr = scene_has_pbr(scene);
+  const bool pbr = scene.has_pbr();
   if (opt.gather_area == GatherArea::Surface) require_bsdf_table(scene, eye.hitpoints, eye.bsdf);
   pf_hitpoint none{};
   none.mesh = none.material = -1;
@@ -313,7 +313,7 @@ void pppm_pass(const Scene& scene, PassSums& sums, const EyePassResult& eye,
   const float r = pppm_pass_radius(sums);
   const bool skip = sums.direct_mode == DirectMode::ShadowRays;
   const int64_t count = int64_t(eye.hitpoints.size());
-  const bool pbr = scene_has_pbr(scene);
+  const bool pbr = scene.has_pbr();
   require_bsdf_table(scene, eye.hitpoints, eye.bsdf);  // not in the workers: no exceptions there
   // The calling thread's buffer, kept from pass to pass (no allocation per pass); the workers
   // write it through `out` (a thread_local named inside the region would be each worker's own).
@@ -345,7 +345,7 @@ void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& 
   const EyeTracer tracer(scene, eye);
   const int spp = tracer.spp();
   const float r = pppm_pass_radius(sums);
-  const bool pbr_scene = scene_has_pbr(scene);
+  const bool pbr_scene = scene.has_pbr();
   const bool skip = sums.direct_mode == DirectMode::ShadowRays;
   // β Σ f_r Φ / (π r_i² N_p) of a visible point (pppm_accumulate's).
   const double norm = emitted > 0 ? 1.0 / (double(kPi) * double(r) * double(r) * double(emitted))

@@ -298,7 +298,7 @@ void check_against_scene(const std::string& path, const HitpointSet& h, const Sc
   }
   // The BSDF table (hitpoint_bsdf): an entry exactly at the hitpoints on PBR materials. A PBR
   // hitpoint without one cannot be gathered (its f depends on the parameters there).
-  if (h.bsdf.empty() && !scene_has_pbr(scene)) return;  // a diffuse scene: nothing to check
+  if (h.bsdf.empty() && !scene.has_pbr()) return;  // a diffuse scene: nothing to check
   for (size_t i = 0; i < h.hitpoints.size(); ++i) {
     const pf_hitpoint& hp = h.hitpoints[i];
     const bool pbr = hp.material >= 0 && scene.materials[size_t(hp.material)].type == PF_MAT_PBR;

@@ -90,8 +90,8 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
     for (size_t m = 0; m < mat_tex.size(); ++m) {
       mat_tex[m] = scene.texture_of(int(m));
       mr_tex[m] = scene.mr_texture_of(int(m));
-      s->has_pbr = s->has_pbr || scene.materials[m].type == PF_MAT_PBR;
     }
+    s->has_pbr = scene.has_pbr();
     if (mat_tex.empty()) mat_tex.push_back(-1);
     if (mr_tex.empty()) mr_tex.push_back(-1);
     std::vector<pf_texture> textures = scene.textures;
@@ -136,7 +136,7 @@ std::vector<float> camera_frame(const pf_camera& c) {
 std::string scene_kernel_variant(const Scene& scene, const ClContext& dev) {
   std::string v;
   if (!dev.scene_variants()) return v;
-  if (!scene_has_pbr(scene)) v += " -DPF_SCENE_PBR=0";
+  if (!scene.has_pbr()) v += " -DPF_SCENE_PBR=0";
   if (scene.textures.empty()) v += " -DPF_SCENE_TEXTURES=0";
   if (!scene.has_alpha_masks()) v += " -DPF_SCENE_ALPHA=0";
   return v;

@@ -495,7 +495,7 @@ const ClBuffer& pbr_sites(ClContext& dev, const Scene& scene, const std::string&
                           const std::vector<pf_hitpoint>& hps,
                           const std::vector<pf_pbr_point>& table, const int32_t* order,
                           size_t first, size_t n, ClBuffer* own = nullptr) {
-  const bool has = scene_has_pbr(scene) && n > 0;
+  const bool has = scene.has_pbr() && n > 0;
   const size_t bytes = (has ? n : 1) * sizeof(pf_pbr_site);
   const ClBuffer* b;
   if (own) {
@@ -818,7 +818,7 @@ GatherTimes DevicePpmState::sppm_hash_grid(const EyePassResult& eye, const pf_ph
       }
       m.unmap();
     }
-    if (scene_has_pbr(scene_)) {  // the PBR sites of the pass's visible points, by pixel
+    if (scene_.has_pbr()) {  // the PBR sites of the pass's visible points, by pixel
       require_bsdf_table(scene_, eye.hitpoints, eye.bsdf);
       std::vector<int32_t>& at = sppm_pbr_order_;  // (sppm_sites' placement)
       at.assign(nh, 0);  // a pixel without a visible point: entry 0, never read (material −1)
@@ -859,7 +859,7 @@ std::vector<float> pppm_gather_device(const Scene& scene, const EyePassResult& e
   std::vector<pf_hitpoint> fresh(eye.hitpoints);
   std::vector<float> beta(nh * 3);
   require_bsdf_table(scene, eye.hitpoints, eye.bsdf);
-  const bool pbr_scene = scene_has_pbr(scene);
+  const bool pbr_scene = scene.has_pbr();
   for (size_t i = 0; i < nh; ++i) {
     fresh[i].radius = radius;
     fresh[i].n_photons = 0.f;

@@ -451,7 +451,7 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
   std::vector<std::vector<pf_hitpoint>>& rows = work.rows;
   rows.resize(size_t(std::max(H, 0)));
   // The BSDF table only for a scene with a PBR material (eye_pass.h, EyePassResult::bsdf).
-  const bool pbr = scene_has_pbr(scene);
+  const bool pbr = scene.has_pbr();
   std::vector<std::vector<pf_pbr_point>>& pbr_rows = work.pbr_rows;
   pbr_rows.resize(pbr ? rows.size() : 0);
   int threads = worker_threads(opt.threads);

@@ -180,7 +180,7 @@ const pf_pbr_point* pbr_of(const Scene& scene, const pf_hitpoint& hp,
 
 void require_bsdf_table(const Scene& scene, const std::vector<pf_hitpoint>& hitpoints,
                         const std::vector<pf_pbr_point>& table) {
-  if (table.size() == hitpoints.size() || !scene_has_pbr(scene)) return;
+  if (table.size() == hitpoints.size() || !scene.has_pbr()) return;
   for (size_t i = 0; i < hitpoints.size(); ++i) pbr_of(scene, hitpoints[i], table, i);
 }
 
