@@ -40,7 +40,9 @@
 // ball in a disc of radius √(R² − h²) (h: x's distance to the plane), the slab in a strip, and
 // the area of a convex polygon within a disc is the sum over its edges of the signed area of the
 // disc within the triangle (centre, edge) (a circular sector where the edge runs outside the
-// disc). Coplanar pairs of large triangles sharing an edge are merged into convex quads first
+// disc); a triangle within the ball that only the slab cuts takes the share of it between the
+// slab's planes (n·(y − x) is linear on it), and one with a corner farther than R + its longest
+// edge from x is none. Coplanar pairs of large triangles sharing an edge are merged into convex quads first
 // (a wall, a box's face: one polygon, and a disc inside it needs no sectors). Cost: a lookup of
 // the triangle holding x and a walk over the nodes the border crosses; flat scenes touch one to
 // four polygons per gather; on fine meshes the corners' values are kept per vertex and radius

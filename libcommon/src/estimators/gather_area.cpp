@@ -88,9 +88,10 @@ inline double dot3(const double* a, const double* b) {
 inline double slab_reach(float slab, double r) { return slab > 0.f ? double(slab) * r : -1.0; }
 
 // The share of a triangle's area on which a linear function is <= c, from its values at the
-// corners sorted ascending g[0] <= g[1] <= g[2]: the part below the level line is a triangle
-// similar to the corner g[0]'s cut, (c − g0)² / ((g2 − g0)(g1 − g0)) up to g[1], and one minus
-// the mirror image above it (every divisor is positive on its branch).
+// corners sorted ascending g[0] <= g[1] <= g[2]. For c up to g[1] the part below the level line
+// is a triangle at corner 0 whose sides along edges 0–1 and 0–2 are (c − g0)/(g1 − g0) and
+// (c − g0)/(g2 − g0) of theirs: (c − g0)² / ((g2 − g0)(g1 − g0)) of the area; above g[1], one
+// minus the same at corner 2 (every divisor is positive on its branch).
 inline double share_below(const double* g, double c) {
   if (c <= g[0]) return 0.0;
   if (c >= g[2]) return 1.0;
