@@ -39,11 +39,11 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/camera.h"
-#include "photonflow/kdtree.h"
-#include "photonflow/procedural.h"
-#include "photonflow/raycast.h"
-#include "photonflow/scene_import.h"
+#include "photonflow/geometry/camera.h"
+#include "photonflow/geometry/kdtree.h"
+#include "photonflow/geometry/procedural.h"
+#include "photonflow/geometry/raycast.h"
+#include "photonflow/geometry/scene_import.h"
 #include "bench_common.h"
 #include "ch6_common.h"
 #include "octree.h"

@@ -56,11 +56,11 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/eye_pass.h"
-#include "photonflow/illuminate.h"
-#include "photonflow/image.h"
-#include "photonflow/photon_pass.h"
-#include "photonflow/synthesize.h"
+#include "photonflow/stages/eye_pass.h"
+#include "photonflow/stages/illuminate.h"
+#include "photonflow/image/image.h"
+#include "photonflow/stages/photon_pass.h"
+#include "photonflow/stages/synthesize.h"
 #include "bench_common.h"
 #include "ch6_common.h"
 #include "knn_indices.h"

@@ -15,9 +15,9 @@
 
 #include <cxxopts.hpp>
 
-#include "photonflow/cl_runtime.h"
-#include "photonflow/scene.h"
-#include "photonflow/scene_import.h"
+#include "photonflow/opencl/cl_runtime.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_import.h"
 
 namespace pf::bench {
 

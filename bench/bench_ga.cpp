@@ -40,13 +40,13 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/clusters.h"
-#include "photonflow/eye_pass.h"
-#include "photonflow/ga_clusters.h"
-#include "photonflow/illuminate.h"
-#include "photonflow/photon_distribution.h"
-#include "photonflow/photon_pass.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/stages/clusters.h"
+#include "photonflow/stages/eye_pass.h"
+#include "photonflow/stages/ga_clusters.h"
+#include "photonflow/stages/illuminate.h"
+#include "photonflow/stages/photon_distribution.h"
+#include "photonflow/stages/photon_pass.h"
 #include "bench_common.h"
 
 namespace {

@@ -45,14 +45,14 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/clusters.h"
-#include "photonflow/eye_pass.h"
-#include "photonflow/error.h"
-#include "photonflow/gather_method.h"
-#include "photonflow/hash_grid.h"
-#include "photonflow/illuminate.h"
-#include "photonflow/photon_pass.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/stages/clusters.h"
+#include "photonflow/stages/eye_pass.h"
+#include "photonflow/foundations/error.h"
+#include "photonflow/stages/gather_method.h"
+#include "photonflow/stages/hash_grid.h"
+#include "photonflow/stages/illuminate.h"
+#include "photonflow/stages/photon_pass.h"
 #include "bench_common.h"
 
 namespace {

@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "bench_common.h"
-#include "photonflow/isolate.h"
-#include "photonflow/scene_import.h"
+#include "photonflow/foundations/isolate.h"
+#include "photonflow/geometry/scene_import.h"
 
 using pf::bench::fmt_ms;
 using pf::bench::median;

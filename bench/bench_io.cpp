@@ -24,9 +24,9 @@
 #include <png.h>
 
 #include "bench_common.h"
-#include "photonflow/hash.h"
-#include "photonflow/image.h"
-#include "photonflow/rng.h"
+#include "photonflow/foundations/hash.h"
+#include "photonflow/image/image.h"
+#include "photonflow/foundations/rng.h"
 
 using pf::bench::median;
 using pf::bench::now;

@@ -41,14 +41,14 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/eye_pass.h"
-#include "photonflow/illuminate.h"
-#include "photonflow/kernels_embedded.h"
-#include "photonflow/photon_pass.h"
-#include "photonflow/scene.h"
-#include "photonflow/scene_import.h"
-#include "photonflow/synthesize.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/stages/eye_pass.h"
+#include "photonflow/stages/illuminate.h"
+#include "photonflow/opencl/kernels_embedded.h"
+#include "photonflow/stages/photon_pass.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_import.h"
+#include "photonflow/stages/synthesize.h"
 #include "bench_common.h"
 
 namespace {

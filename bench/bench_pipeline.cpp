@@ -45,14 +45,14 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/eye_pass.h"
-#include "photonflow/illuminate.h"
-#include "photonflow/photon_grid.h"
-#include "photonflow/photon_pass.h"
-#include "photonflow/render_driver.h"
-#include "photonflow/scene.h"
-#include "photonflow/scene_import.h"
-#include "photonflow/synthesize.h"
+#include "photonflow/stages/eye_pass.h"
+#include "photonflow/stages/illuminate.h"
+#include "photonflow/stages/photon_grid.h"
+#include "photonflow/stages/photon_pass.h"
+#include "photonflow/estimators/render_driver.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_import.h"
+#include "photonflow/stages/synthesize.h"
 #include "bench_common.h"
 
 namespace {

@@ -27,11 +27,11 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/intersect_shared.h"
-#include "photonflow/kdtree.h"
-#include "photonflow/procedural.h"
-#include "photonflow/raycast.h"
-#include "photonflow/surface.h"
+#include "photonflow/geometry/intersect_shared.h"
+#include "photonflow/geometry/kdtree.h"
+#include "photonflow/geometry/procedural.h"
+#include "photonflow/geometry/raycast.h"
+#include "photonflow/geometry/surface.h"
 
 #ifdef PF_HAVE_EMBREE
 #include <embree3/rtcore.h>

@@ -31,11 +31,11 @@
 set -euo pipefail
 
 BINS=(bench_gather bench_ga bench_opencl render)
-TESTS=(test_opencl_backend test_gather_methods test_cl_shared_headers test_intersect_shared_cl
-       test_ga_clusters)
-# Catch2 test specs per test program where not all of it can run there: test_ga_clusters's other
+TESTS=(cl_backend_test gather_method_test cl_shared_headers_test intersect_shared_cl_test
+       ga_clusters_test)
+# Catch2 test specs per test program where not all of it can run there: ga_clusters_test's other
 # cases run the tools, which are not carried.
-declare -A TEST_SPEC=([test_ga_clusters]="[opencl]")
+declare -A TEST_SPEC=([ga_clusters_test]="[opencl]")
 
 pack() {
   local build=${1:-build}

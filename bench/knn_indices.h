@@ -30,8 +30,8 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/photon_map.h"
-#include "photonflow/shared_types.h"
+#include "photonflow/stages/photon_map.h"
+#include "photonflow/foundations/shared_types.h"
 
 #ifdef PF_HAVE_ANN
 #include <ANN/ANN.h>

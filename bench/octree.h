@@ -21,9 +21,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "photonflow/intersect_shared.h"
-#include "photonflow/raycast.h"
-#include "photonflow/scene.h"
+#include "photonflow/geometry/intersect_shared.h"
+#include "photonflow/geometry/raycast.h"
+#include "photonflow/geometry/scene.h"
 #include "bench_common.h"
 
 namespace pf::bench {

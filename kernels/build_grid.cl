@@ -25,8 +25,8 @@
  *     flux) per photon.
  */
 #pragma OPENCL FP_CONTRACT OFF
-#include "photonflow/shared_types.h"
-#include "photonflow/grid_shared.h"
+#include "photonflow/foundations/shared_types.h"
+#include "photonflow/stages/grid_shared.h"
 
 #define PF_CHUNK 256
 #define PF_SCAN_ITEMS 16 /* entries per work-item of scan_blocks (kScanItems in cl_gather.cpp) */

@@ -27,9 +27,9 @@
  * g·L … (g+1)·L − 1, all of one mesh (per-mesh runs and clusters are padded to multiples of L).
  */
 #pragma OPENCL FP_CONTRACT OFF
-#include "photonflow/shared_types.h"
-#include "photonflow/ppm.h"
-#include "photonflow/grid_shared.h"
+#include "photonflow/foundations/shared_types.h"
+#include "photonflow/estimators/ppm.h"
+#include "photonflow/stages/grid_shared.h"
 #include "photonflow/material/pbr_point_shared.h"
 #include "scene_features.h" /* PF_SCENE_PBR = 0: a scene without PBR gathers as before PBR */
 

@@ -11,8 +11,8 @@
  * hitpoints to the scheduler: a GPU could round the last bit differently from run to run.)
  */
 #pragma OPENCL FP_CONTRACT OFF
-#include "photonflow/shared_types.h"
-#include "photonflow/ppm.h"
+#include "photonflow/foundations/shared_types.h"
+#include "photonflow/estimators/ppm.h"
 
 /* Pixels [first, first + n) of this batch; their hitpoints are hps[start[k], start[k + 1]) in
  * order (k = pixel - first, start rebased to the batch). */

@@ -13,7 +13,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 
 #include "scene_features.h"
-#include "photonflow/shared_types.h"
+#include "photonflow/foundations/shared_types.h"
 #include "photonflow/material/texture_shared.h"
 #include "photonflow/material/pbr_point_shared.h"
 #include "photonflow/material/pbr_scatter_shared.h"
@@ -50,10 +50,10 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
 #define PF_KD_LEAF_TEST(n, lt, h, o, d, tmin, any, hit) \
   pf_leaf_test4(n, lt, h, o, d, tmin, any, (struct pf_trace_hit_s*)(hit))
 
-#include "photonflow/intersect_shared.h"
-#include "photonflow/rng.h"
-#include "photonflow/sampling_shared.h"
-#include "photonflow/light_shared.h"
+#include "photonflow/geometry/intersect_shared.h"
+#include "photonflow/foundations/rng.h"
+#include "photonflow/sampling/sampling_shared.h"
+#include "photonflow/geometry/light_shared.h"
 
 struct pf_trace_hit_s {
   pf_ray_hit hit; /* first */

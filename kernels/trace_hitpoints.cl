@@ -17,7 +17,7 @@
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "trace_common.h"
-#include "photonflow/pixel_sampler.h"
+#include "photonflow/sampling/pixel_sampler.h"
 #include "photonflow/material/lens_shared.h"
 
 #define PF_EYE_STREAM 0xE7E0000u

@@ -23,7 +23,7 @@
 # traced reference: the bias a PPM reference of that length carries.
 #
 # Errors are imgcompare's metrics over the pixels that see no emitter (emitter-mask, the mask's
-# reasons in libcommon/photonflow/emitter_mask.h). The runs go one after another (.NOTPARALLEL)
+# reasons in libcommon/photonflow/stages/emitter_mask.h). The runs go one after another (.NOTPARALLEL)
 # so that their wall times do not disturb each other; each run records the load average before
 # and after. bench/accuracy.py collects the metrics into TSV files and draws the charts.
 #

@@ -1,5 +1,5 @@
 // h5edit.h — edits of written intermediates the way a user's h5py script makes them (tests of the
-// loaders' value checks, test_input_validation.cpp and test_semantic_fuzz.cpp). Include
+// loaders' value checks, validate_test.cpp and semantic_fuzz_test.cpp). Include
 // catch.hpp first. An edit of a dataset's values refreshes its checksum64 (support.h); a dataset
 // rewritten with another length gets no checksum64 (as an editor that deletes the attribute,
 // docs/FORMATS.md); refresh_scene_id recomputes a scene file's id from its content, as an editor
@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/h5io.h"
-#include "photonflow/scene.h"
+#include "photonflow/io/h5io.h"
+#include "photonflow/geometry/scene.h"
 #include "support.h"
 
 namespace pf::test {

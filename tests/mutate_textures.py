@@ -1,24 +1,24 @@
 #!/usr/bin/env python3
-"""mutate_textures.py — check that tests/test_textures.cpp can fail (issue 32 item 1).
+"""mutate_textures.py — check that tests/image/texture_image_test.cpp can fail (issue 32 item 1).
 
 Applies one small mutation at a time to the texture code of the bake, the scene file and the CPU
 shading (a texture left out of the eye pass, the photon bounce or the path tracer, no sRGB
 decode, no v flip, the texCoord or the wrap modes ignored, an image stored twice, the scene id
 or the loader's checks weakened, the missing-texture warning dropped, damaged JPEGs or oversized
-images accepted, the OpenCL tracers without the texture), rebuilds test_textures and the tools it runs, runs
+images accepted, the OpenCL tracers without the texture), rebuilds texture_image_test and the tools it runs, runs
 it, and reports which test cases fail; the source is restored afterwards, whatever happens.
 Every mutation must make at least one test case fail: the script exits 1 if one survives.
 
 Run from the repository root with a configured build folder (default build/):
     python3 tests/mutate_textures.py [build-dir]
-It builds test_textures, scene-bake, render and trace-hitpoints (-j2), about a minute per
+It builds texture_image_test, scene-bake, render and trace-hitpoints (-j2), about a minute per
 mutation. MUTATE_ONLY=<text> runs only the mutations whose name contains <text>.
 """
 import os
 import sys
 
 BUILD = sys.argv[1] if len(sys.argv) > 1 else "build"
-TARGETS = "test_textures scene-bake render trace-hitpoints"
+TARGETS = "texture_image_test scene-bake render trace-hitpoints"
 S = "libcommon/src/"
 MUTATIONS = [
     # (file, name, original, mutated)
@@ -74,5 +74,5 @@ MUTATIONS = [
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from mutation_runner import run_mutations  # noqa: E402
 
-sys.exit(run_mutations([(path, "test_textures", name, a, b) for path, name, a, b in MUTATIONS],
+sys.exit(run_mutations([(path, "texture_image_test", name, a, b) for path, name, a, b in MUTATIONS],
                        BUILD, lambda test: TARGETS, TARGETS, env=f"PF_BIN={BUILD}/bin"))

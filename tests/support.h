@@ -14,16 +14,16 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/clusters.h"
-#include "photonflow/h5io.h"
-#include "photonflow/hash.h"
-#include "photonflow/grid_shared.h"
-#include "photonflow/image.h"
-#include "photonflow/ppm.h"
-#include "photonflow/procedural.h"
-#include "photonflow/rng.h"
-#include "photonflow/scene.h"
-#include "photonflow/vec.h"
+#include "photonflow/stages/clusters.h"
+#include "photonflow/io/h5io.h"
+#include "photonflow/foundations/hash.h"
+#include "photonflow/stages/grid_shared.h"
+#include "photonflow/image/image.h"
+#include "photonflow/estimators/ppm.h"
+#include "photonflow/geometry/procedural.h"
+#include "photonflow/foundations/rng.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/foundations/vec.h"
 
 namespace pf::test {
 

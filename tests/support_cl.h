@@ -4,11 +4,11 @@
 
 #include <memory>
 
-#include "photonflow/cl_runtime.h"
-#include "photonflow/gather_method.h"
-#include "photonflow/provenance.h"
-#include "photonflow/render_driver.h"
-#include "photonflow/synthesize.h"
+#include "photonflow/opencl/cl_runtime.h"
+#include "photonflow/stages/gather_method.h"
+#include "photonflow/io/provenance.h"
+#include "photonflow/estimators/render_driver.h"
+#include "photonflow/stages/synthesize.h"
 #include "support.h"
 
 namespace pf::test {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the small glTF files of tests/test_punctual_lights.cpp into tests/data (run once; the
+"""Writes the small glTF files of tests/geometry/light_import_test.cpp into tests/data (run once; the
 files are committed): a 20 x 20 floor at y = 0 (front up, grey albedo 0.5) lit by
   spot.gltf         a KHR_lights_punctual spot at (0, 2, 0) pointing down (intensity 10 cd,
                     colour 1, 0.5, 0.25, innerConeAngle 0.3, outerConeAngle 0.6, range 100),

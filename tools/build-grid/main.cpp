@@ -5,13 +5,13 @@
 // kernel) and are the same arrays as the CPU build's.
 #include <iostream>
 
-#include "photonflow/cl_gather.h"
-#include "photonflow/device_options.h"
-#include "photonflow/options.h"
-#include "photonflow/photon_grid.h"
-#include "photonflow/scene.h"
-#include "photonflow/stage_files.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/opencl/cl_gather.h"
+#include "photonflow/opencl/device_options.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/stages/photon_grid.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/io/stage_files.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("build-grid", [&] {

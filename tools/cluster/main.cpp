@@ -5,15 +5,15 @@
 // hitpoints to a multiple of the work-group size. Writes clusters.h5 (docs/FORMATS.md).
 #include <iostream>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/clusters.h"
-#include "photonflow/device_options.h"
-#include "photonflow/ga_clusters.h"
-#include "photonflow/options.h"
-#include "photonflow/photon_distribution.h"
-#include "photonflow/scene.h"
-#include "photonflow/stage_files.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/stages/clusters.h"
+#include "photonflow/opencl/device_options.h"
+#include "photonflow/stages/ga_clusters.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/stages/photon_distribution.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/io/stage_files.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("cluster", [&] {

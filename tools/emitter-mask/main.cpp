@@ -5,10 +5,10 @@
 //   emitter-mask --scene scene.h5 -o mask.exr [--spp 16] [--dilate 1]
 #include <iostream>
 
-#include "photonflow/emitter_mask.h"
-#include "photonflow/options.h"
-#include "photonflow/scene.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/stages/emitter_mask.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("emitter-mask", [&] {

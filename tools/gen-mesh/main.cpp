@@ -5,8 +5,8 @@
 #include <iostream>
 #include <string>
 
-#include "photonflow/procedural.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/geometry/procedural.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("gen-mesh", [&]() {

@@ -10,18 +10,18 @@
 #include <iostream>
 #include <memory>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/cl_gather.h"
-#include "photonflow/clusters.h"
-#include "photonflow/device_options.h"
-#include "photonflow/illuminate.h"
-#include "photonflow/options.h"
-#include "photonflow/pass_sums.h"
-#include "photonflow/progress.h"
-#include "photonflow/render_defaults.h"
-#include "photonflow/render_driver.h"
-#include "photonflow/sppm.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/opencl/cl_gather.h"
+#include "photonflow/stages/clusters.h"
+#include "photonflow/opencl/device_options.h"
+#include "photonflow/stages/illuminate.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/estimators/pass_sums.h"
+#include "photonflow/foundations/progress.h"
+#include "photonflow/estimators/render_defaults.h"
+#include "photonflow/estimators/render_driver.h"
+#include "photonflow/estimators/sppm.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("illuminate", [&] {

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/image_metrics.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/image/image_metrics.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("imgcompare", [&] {

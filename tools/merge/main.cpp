@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/image.h"
-#include "photonflow/output_file.h"
-#include "photonflow/pass_sums.h"
-#include "photonflow/render_driver.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/image/image.h"
+#include "photonflow/io/output_file.h"
+#include "photonflow/estimators/pass_sums.h"
+#include "photonflow/estimators/render_driver.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("merge", [&] {

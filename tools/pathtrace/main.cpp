@@ -6,11 +6,11 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/options.h"
-#include "photonflow/pathtrace.h"
-#include "photonflow/progress.h"
-#include "photonflow/text_file.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/stages/pathtrace.h"
+#include "photonflow/foundations/progress.h"
+#include "photonflow/foundations/text_file.h"
+#include "photonflow/foundations/tool_main.h"
 
 namespace {
 

@@ -5,15 +5,15 @@
 // than a photons file should hold). Writes photon_distribution.h5 (docs/FORMATS.md).
 #include <iostream>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/device_options.h"
-#include "photonflow/illuminate.h"
-#include "photonflow/options.h"
-#include "photonflow/photon_distribution.h"
-#include "photonflow/photon_pass.h"
-#include "photonflow/progress.h"
-#include "photonflow/stage_files.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/opencl/device_options.h"
+#include "photonflow/stages/illuminate.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/stages/photon_distribution.h"
+#include "photonflow/stages/photon_pass.h"
+#include "photonflow/foundations/progress.h"
+#include "photonflow/io/stage_files.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("photon-distribution", [&] {

@@ -14,16 +14,16 @@
 #include <iostream>
 #include <vector>
 
-#include "photonflow/bake_options.h"
-#include "photonflow/cl_backend.h"
-#include "photonflow/device_options.h"
-#include "photonflow/options.h"
-#include "photonflow/progress.h"
-#include "photonflow/render_defaults.h"
-#include "photonflow/render_driver.h"
-#include "photonflow/scene_source.h"
-#include "photonflow/synthesize.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/geometry/bake_options.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/opencl/device_options.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/foundations/progress.h"
+#include "photonflow/estimators/render_defaults.h"
+#include "photonflow/estimators/render_driver.h"
+#include "photonflow/geometry/scene_source.h"
+#include "photonflow/stages/synthesize.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("render", [&] {

@@ -6,13 +6,13 @@
 #include <iostream>
 #include <sstream>
 
-#include "photonflow/bake_options.h"
-#include "photonflow/options.h"
-#include "photonflow/provenance.h"
-#include "photonflow/scene.h"
-#include "photonflow/scene_import.h"
-#include "photonflow/scene_source.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/geometry/bake_options.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/io/provenance.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_import.h"
+#include "photonflow/geometry/scene_source.h"
+#include "photonflow/foundations/tool_main.h"
 
 namespace {
 

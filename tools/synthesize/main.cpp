@@ -4,12 +4,12 @@
 // pass estimates of a probabilistic PPM range (pass_sums.h; render --sums or merge --sums).
 #include <iostream>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/device_options.h"
-#include "photonflow/pass_sums.h"
-#include "photonflow/stage_files.h"
-#include "photonflow/synthesize.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/opencl/device_options.h"
+#include "photonflow/estimators/pass_sums.h"
+#include "photonflow/io/stage_files.h"
+#include "photonflow/stages/synthesize.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("synthesize", [&] {

@@ -4,14 +4,14 @@
 // writes hitpoints.h5: the hitpoints (R = R0, N = 0, τ = 0) and the emitted/direct image layers.
 #include <iostream>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/device_options.h"
-#include "photonflow/eye_pass.h"
-#include "photonflow/options.h"
-#include "photonflow/render_defaults.h"
-#include "photonflow/sppm.h"
-#include "photonflow/stage_files.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/opencl/device_options.h"
+#include "photonflow/stages/eye_pass.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/estimators/render_defaults.h"
+#include "photonflow/estimators/sppm.h"
+#include "photonflow/io/stage_files.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("trace-hitpoints", [&] {

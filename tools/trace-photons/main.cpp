@@ -4,14 +4,14 @@
 // table). Counter-based randomness: the same photons for any thread count.
 #include <iostream>
 
-#include "photonflow/cl_backend.h"
-#include "photonflow/device_options.h"
-#include "photonflow/options.h"
-#include "photonflow/photon_pass.h"
-#include "photonflow/progress.h"
-#include "photonflow/render_defaults.h"
-#include "photonflow/stage_files.h"
-#include "photonflow/tool_main.h"
+#include "photonflow/opencl/cl_backend.h"
+#include "photonflow/opencl/device_options.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/stages/photon_pass.h"
+#include "photonflow/foundations/progress.h"
+#include "photonflow/estimators/render_defaults.h"
+#include "photonflow/io/stage_files.h"
+#include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("trace-photons", [&] {

@@ -60,8 +60,8 @@
 #include <string>
 #include <vector>
 
-#include "photonflow/scene.h"
-#include "photonflow/shared_types.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/foundations/shared_types.h"
 
 namespace pf {
 

@@ -22,9 +22,9 @@
 #ifndef PHOTONFLOW_MATERIAL_ALPHA_SHARED_H
 #define PHOTONFLOW_MATERIAL_ALPHA_SHARED_H
 
-#include "photonflow/cl_compat.h"
+#include "photonflow/foundations/cl_compat.h"
 #include "photonflow/material/texture_shared.h"
-#include "photonflow/sampling_shared.h"
+#include "photonflow/sampling/sampling_shared.h"
 
 #define PF_ALPHA_OPAQUE (-1.0f)
 #define PF_ALPHA_DEFAULT_CUTOFF 0.5f /* glTF 2.0 alphaCutoff default */

@@ -25,8 +25,8 @@
 #ifndef PHOTONFLOW_MATERIAL_LENS_SHARED_H
 #define PHOTONFLOW_MATERIAL_LENS_SHARED_H
 
-#include "photonflow/cl_compat.h"
-#include "photonflow/sampling_shared.h"
+#include "photonflow/foundations/cl_compat.h"
+#include "photonflow/sampling/sampling_shared.h"
 
 #ifdef __OPENCL_VERSION__
 #pragma OPENCL FP_CONTRACT OFF

@@ -30,8 +30,8 @@
 #ifndef PHOTONFLOW_MATERIAL_TEXTURE_SHARED_H
 #define PHOTONFLOW_MATERIAL_TEXTURE_SHARED_H
 
-#include "photonflow/cl_compat.h"
-#include "photonflow/shared_types.h"
+#include "photonflow/foundations/cl_compat.h"
+#include "photonflow/foundations/shared_types.h"
 
 #ifdef __OPENCL_VERSION__
 #pragma OPENCL FP_CONTRACT OFF

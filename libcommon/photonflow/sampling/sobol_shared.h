@@ -13,7 +13,7 @@
  * rows d = 2..16, which are dimensions 1..15 here):
  *   V[k] = m_{k+1} · 2^(31−k)                                   for k < s
  *   V[k] = V[k−s] ⊕ (V[k−s] >> s) ⊕ ⊕_{j=1}^{s−1} a_j V[k−j]    for k ≥ s   (Joe & Kuo eq. 2.3)
- * The table below is that recurrence evaluated once (tests/test_sobol.cpp recomputes it from the
+ * The table below is that recurrence evaluated once (tests/sampling/sobol_shared_test.cpp recomputes it from the
  * published m_i and checks it, and checks the net property it implies).
  *
  * Owen scrambling (a nested uniform scramble: every elementary interval is permuted as a whole)
@@ -26,8 +26,8 @@
 #ifndef PHOTONFLOW_SAMPLING_SOBOL_SHARED_H
 #define PHOTONFLOW_SAMPLING_SOBOL_SHARED_H
 
-#include "photonflow/cl_compat.h"
-#include "photonflow/shared_types.h"
+#include "photonflow/foundations/cl_compat.h"
+#include "photonflow/foundations/shared_types.h"
 
 #ifdef __OPENCL_VERSION__
 #define PF_CONSTANT_TABLE __constant

@@ -1,0 +1,498 @@
+// Eye pass: see eye_pass.h.
+#include "photonflow/stages/eye_pass.h"
+#include "photonflow/io/validate.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "photonflow/geometry/camera.h"
+#include "photonflow/geometry/light_shared.h"
+#include "photonflow/material/pbr_scatter_shared.h"
+#include "photonflow/foundations/options.h"
+#include "photonflow/foundations/rng.h"
+#include "photonflow/sampling/sampling.h"
+#include "photonflow/geometry/surface.h"
+#include "photonflow/foundations/threads.h"
+
+namespace pf {
+
+const char* direct_mode_name(DirectMode m) {
+  return m == DirectMode::Photons ? "photons" : "shadow-rays";
+}
+
+const char* pixel_sampler_name(PixelSampler s) {
+  switch (s) {
+    case PixelSampler::Strata: return "strata";
+    case PixelSampler::Random: return "random";
+    case PixelSampler::Sobol: return "sobol";
+  }
+  return "?";
+}
+
+PixelSampler parse_pixel_sampler(const std::string& name) {
+  require_choice("pixel-sampler", name, {"strata", "random", "sobol"});
+  return name == "strata" ? PixelSampler::Strata
+                          : name == "random" ? PixelSampler::Random : PixelSampler::Sobol;
+}
+
+int eye_strata_columns(int spp) {
+  int rows = 1;
+  for (int r = 1; int64_t(r) * r <= int64_t(spp); ++r)
+    if (spp % r == 0) rows = r;
+  return std::max(1, spp / rows);
+}
+
+float radius_scale(const Scene& scene) {
+  // Every pass's eye tracer asks (default_radius): the triangles are scanned only when the
+  // material table holds a material other than diffuse or emitter, up to its first user.
+  std::vector<char> other(scene.materials.size());
+  bool any = false;
+  for (size_t i = 0; i < other.size(); ++i) {
+    const int type = scene.materials[i].type;
+    other[i] = type != PF_MAT_DIFFUSE && type != PF_MAT_EMITTER;
+    any = any || other[i];
+  }
+  if (any)
+    for (const pf_triangle& t : scene.triangles)
+      if (other[size_t(t.material)]) return kRadiusScale;
+  return kRadiusScaleDiffuse;
+}
+
+float default_radius(const Scene& scene) {
+  CameraFrame cam(scene.camera);
+  float dist = length(Vec3(scene.camera.look_at) - Vec3(scene.camera.eye));
+  float diag = length(scene.bounds.extent());
+  return radius_scale(scene) * std::max(diag / 200.f, 4.f * cam.pixel_angle() * dist);
+}
+
+namespace {
+// Random stream of the eye pass: pass slot 0xE7E (distinct from photon passes 0, 1, 2, ...).
+constexpr uint32_t kEyeStream = 0xE7E0000u;
+constexpr uint32_t kShadowStream = PF_SHADOW_STREAM_SLOT;
+
+Vec3 mat_color(const pf_material& m) { return Vec3(m.color); }
+bool is_diffuse(const pf_material& m) {
+  return m.type == PF_MAT_DIFFUSE || (m.type == PF_MAT_EMITTER && luminance(mat_color(m)) > 0.f);
+}
+}  // namespace
+
+// L_direct at a diffuse point (thesis eq. 3.7; HJ09 section 4): (1/n) Σ ρ/π · L_e · cos θ_x · G /
+// p_light over n light samples (Scene::light_incident), each behind an unblocked shadow ray; a
+// light below the shading or the geometric normal sends nothing.
+Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
+                  const pf_material& m, int samples, pf_light_draws& draws, int32_t leaf) {
+  if (scene.lights.empty() || samples <= 0) return {};
+  const float eps = ray_epsilon(scene);
+  Vec3 sum;
+  for (int s = 0; s < samples; ++s) {
+    float ul, u1, u2;
+    pf_light_draws_next(&draws, &ul, &u1, &u2);
+    Scene::LightSample ls;
+    if (!scene.sample_light(ul, u1, u2, p, ls)) continue;
+    const float cos_x = dot(ls.w, ns);
+    if (cos_x <= 0.f || dot(ls.w, ng) <= 0.f) continue;
+    const Vec3 o = p + ng * eps;
+    if (intersect_any(scene, Ray{o, ls.q - o, 0.f, 1.f - 1e-4f, leaf})) continue;
+    sum += Vec3(scene.lights[ls.light].radiance) * (cos_x * ls.g / ls.p_light);
+  }
+  return mat_color(m) * kInvPi * sum * (1.f / float(samples));
+}
+
+Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
+                  const pf_material& m, int samples, uint32_t seed, uint32_t pass,
+                  uint32_t index) {
+  pf_light_draws draws = pf_light_draws_from(pf_rng_start(seed, kShadowStream + pass, index));
+  return direct_light(scene, p, ng, ns, m, samples, draws);
+}
+
+// The same draws, light samples and shadow rays at a PF_MAT_PBR point: f(wo, w_l) of the BSDF
+// in radiance mode instead of ρ/π and |cos θ_x| at the shading normal; a light behind the surface
+// counts where the BSDF transmits (the shadow ray leaves on its side).
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, pf_light_draws& draws, bool delta_only, int32_t leaf) {
+  if (scene.lights.empty() || samples <= 0) return {};
+  const float eps = ray_epsilon(scene);
+  float ns[3], ng[3], o[3];
+  ns_front.store(ns);
+  ng_front.store(ng);
+  wo.store(o);
+  Vec3 sum;
+  for (int s = 0; s < samples; ++s) {
+    float ul, u1, u2;
+    pf_light_draws_next(&draws, &ul, &u1, &u2);
+    Scene::LightSample ls;
+    if (!scene.sample_light(ul, u1, u2, p, ls)) continue;
+    if (delta_only && scene.lights[ls.light].type == PF_LIGHT_AREA) continue;
+    float wl[3], f[3];
+    ls.w.store(wl);
+    pf_pbr_eval_world(&params, ns, ng, o, wl, f);  // 0 for a pair the normals disagree on
+    if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) continue;
+    const Vec3 origin = p + ng_front * (dot(ls.w, ng_front) >= 0.f ? eps : -eps);
+    if (intersect_any(scene, Ray{origin, ls.q - origin, 0.f, 1.f - 1e-4f, leaf})) continue;
+    sum += Vec3(f) * Vec3(scene.lights[ls.light].radiance) *
+           (std::fabs(dot(ls.w, ns_front)) * ls.g / ls.p_light);
+  }
+  return sum * (1.f / float(samples));
+}
+
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, uint32_t seed, uint32_t pass, uint32_t index) {
+  pf_light_draws draws = pf_light_draws_from(pf_rng_start(seed, kShadowStream + pass, index));
+  return direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, draws, false);
+}
+
+Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
+                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
+                      int samples, pf_rng& rng, bool delta_only, int32_t leaf) {
+  pf_light_draws draws = pf_light_draws_from(rng);
+  const Vec3 l = direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, draws,
+                                  delta_only, leaf);
+  rng = draws.rng;  // the caller's stream goes on after the draws
+  return l;
+}
+
+void check_options(const EyePassOptions& opt) {
+  require_positive("spp", opt.spp);
+  require_positive("max-depth", opt.max_depth);
+  require_positive("shadow-samples", opt.shadow_samples);
+  // Light samples per visible point and pass: more than kMaxShadowSamples converge no faster than
+  // as many more passes, and 2^31 of them would keep one pass busy for days.
+  if (opt.shadow_samples > kMaxShadowSamples)
+    throw input_error("", "--shadow-samples must be at most " + std::to_string(kMaxShadowSamples) +
+                              ", got " + std::to_string(opt.shadow_samples),
+                      "run more passes instead");
+  if (opt.emission_spp < 0 || opt.emission_spp > kMaxEmissionSpp)
+    throw input_error("", "--emission-spp must be in [0, " + std::to_string(kMaxEmissionSpp) +
+                              "], got " + std::to_string(opt.emission_spp),
+                      "0 leaves the emitted light to the eye samples");
+  // A perceptual roughness (glTF: [0, 1]); above 1 every metal and clear glass would continue.
+  if (!(opt.glossy_threshold >= 0.f && opt.glossy_threshold <= 1.f))
+    throw input_error("", "--glossy-threshold must be a roughness in [0, 1], got " +
+                              value_text(opt.glossy_threshold),
+                      "0 keeps every visible point at the first non-delta vertex");
+  // R0² must stay a normal float (validate.h kMinRadius): 1e-23 squared is 0 in float, and
+  // every radiance of eq. 3.19 would divide by it.
+  if (!(opt.radius == 0.f || (opt.radius >= kMinRadius && opt.radius <= kMaxRadius)))
+    throw input_error("", "--radius must be 0 (automatic) or a length in [" +
+                              value_text(kMinRadius, 6) + ", " + value_text(kMaxRadius, 6) +
+                              "], got " + value_text(opt.radius));
+  require_threads(opt.threads);
+}
+
+EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt) {
+  EyePassResult res;
+  EyePassWork work;
+  trace_hitpoints_into(scene, opt, res, work);
+  return res;
+}
+
+void check_eye_samples(const Scene& scene, const EyePassOptions& opt) {
+  const uint64_t samples = uint64_t(scene.camera.width) * uint64_t(scene.camera.height) *
+                           uint64_t(std::max(1, opt.spp));
+  if (samples > uint64_t(UINT32_MAX) + 1)
+    throw input_error("", "--spp " + std::to_string(opt.spp) + " gives " + std::to_string(samples) +
+                              " eye samples for the " + std::to_string(scene.camera.width) + "x" +
+                              std::to_string(scene.camera.height) +
+                              " image, more than the 2^32 sample streams of a pass",
+                      "lower --spp, or run more passes");
+}
+
+EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
+    : scene_(scene),
+      opt_(opt),
+      spp_(std::max(1, opt.spp)),
+      columns_(eye_strata_columns(spp_)),
+      radius_(opt.radius > 0.f ? opt.radius : default_radius(scene)),
+      eps_(ray_epsilon(scene)),
+      eye_key_(pf_rng_key(opt.seed, kEyeStream + opt.pass)),
+      sobol_key_(pf_sobol_key(opt.seed)),
+      emission_key_(pf_emission_sobol_key(opt.seed)),
+      cam_(scene.camera),
+      caster_(scene),
+      camera_leaf_(caster_.leaf_at(Vec3(scene.camera.eye))),
+      emit_pixels_(nullptr) {
+  check_eye_samples(scene, opt);
+  if (opt.emission_spp > 0) {
+    const size_t n = size_t(scene.camera.width) * size_t(scene.camera.height);
+    if (opt.emission_pixels && opt.emission_pixels->size() != n)
+      throw std::invalid_argument("EyeTracer: emission_pixels is not the image's size");
+    if (!opt.emission_pixels) own_pixels_ = emission_pixels(scene);
+    emit_pixels_ = opt.emission_pixels ? opt.emission_pixels : &own_pixels_;
+  }
+}
+
+bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct,
+                       pf_pbr_point* pbr) const {
+  const size_t pix = size_t(y) * size_t(scene_.camera.width) + size_t(x);
+  const uint32_t index = uint32_t(pix * size_t(spp_) + size_t(s));
+  pf_rng rng{eye_key_, index, 0};  // = pf_rng_start(seed, kEyeStream + pass, index)
+  float jx, jy;
+  pf_eye_jitter_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_, columns_,
+                      &rng, &jx, &jy);
+  // A thin lens draws its point on the lens next (pixel_sampler.h); a pinhole draws nothing, so
+  // its streams (and images) are those of the pinhole eye pass.
+  float u1 = 0.5f, u2 = 0.5f;
+  if (cam_.lens())
+    pf_eye_lens_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_, &rng, &u1,
+                      &u2);
+  Ray ray;
+  cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
+  ray.leaf = camera_leaf_;
+  const float w = 1.f / float(spp_);
+  Vec3 T(w, w, w);  // throughput × box filter weight
+  bool glossy = false;  // the path went on through a glossy point (glossy_threshold)
+  for (int depth = 0; depth <= opt_.max_depth; ++depth) {
+    Hit h;
+    if (!caster_.closest(ray, h)) return false;
+    SurfaceHit sh = surface_at(scene_, ray, h);
+    const pf_material& m = scene_.materials[size_t(sh.material)];
+    if (m.type == PF_MAT_EMITTER && sh.front) (glossy ? direct : emitted) += T * Vec3(m.emission);
+    if (is_diffuse(m)) {
+      Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
+      // A textured material's texture value at the hit joins the weight: every gather's
+      // f_r = color/π times the weight is then the textured f_r (docs/FORMATS.md, hitpoints),
+      // and so is the direct light below. Without texture the weight is T as before.
+      const int texture = scene_.texture_of(sh.material);
+      if (texture >= 0) T = T * scene_.texture_value(texture, size_t(sh.tri), sh.u, sh.v);
+      hp = pf_hitpoint{};
+      sh.p.store(hp.position);
+      n.store(hp.normal);
+      (depth > 0 ? normalize(ray.d) : ray.d).store(hp.dir);  // camera rays are unit
+      T.store(hp.weight);
+      hp.radius = radius_;
+      hp.pixel_x = x;
+      hp.pixel_y = y;
+      hp.mesh = sh.mesh;
+      hp.material = sh.material;
+      if (opt_.direct == DirectMode::ShadowRays) {
+        pf_light_draws draws = light_draws(pix, s);
+        direct += T * direct_light(scene_, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
+                                   opt_.shadow_samples, draws, sh.leaf);
+      }
+      if (pbr) *pbr = pf_pbr_point{};
+      return true;
+    }
+    if (m.type == PF_MAT_PBR) {
+      const Vec3 d = depth > 0 ? normalize(ray.d) : ray.d;  // camera rays are unit
+      const pf_pbr_point pt = pbr_point_at(scene_, m, sh);
+      if (pf_pbr_eye_continues(&pt.params, opt_.glossy_threshold)) {
+        // A near-specular point without a diffuse base (pbr_scatter_shared.h): the path goes on
+        // by the BSDF's sample in radiance mode (u1, u2, u3 from the eye stream, after the
+        // glass choices before it), T ·= f·|cos θ|/pdf, as through a mirror; an emitter it then
+        // hits adds its light (L G E, as L S E above) and the visible point sits further on.
+        // The sample never hits a point, spot or directional light, so their light reflected
+        // here is next-event estimated first, with shadow_samples light samples from the eye
+        // stream (ul, u1, u2 each); a sample that picks an area light adds nothing, the BSDF's
+        // sample finding those (one strategy per light type: nothing counted twice, no MIS).
+        direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
+                                       opt_.shadow_samples, rng, true, sh.leaf);
+        float ns[3], ng[3], wo[3], wi[3], wt[3], pdf;
+        sh.ns.store(ns);
+        sh.ng.store(ng);
+        (-d).store(wo);
+        const float u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng), u3 = pf_rng_next(&rng);
+        if (!pf_pbr_scatter(&pt.params, ns, ng, wo, u1, u2, u3, PF_TRANSPORT_RADIANCE, wi, wt,
+                            &pdf))
+          return false;
+        T = T * Vec3(wt);
+        if (luminance(T) <= 0.f) return false;
+        const Vec3 dir(wi);
+        ray = spawn_ray(sh, dir, eps_);
+        glossy = true;
+        continue;
+      }
+      // A glossy visible point (HJ09 section 4): the hitpoint as at a diffuse surface, its weight
+      // the throughput alone, the BSDF's textured parameters beside it; every gather evaluates f
+      // per photon (pbr_point_shared.h). No random number is drawn here.
+      const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
+      hp = pf_hitpoint{};
+      sh.p.store(hp.position);
+      n.store(hp.normal);
+      d.store(hp.dir);
+      T.store(hp.weight);
+      hp.radius = radius_;
+      hp.pixel_x = x;
+      hp.pixel_y = y;
+      hp.mesh = sh.mesh;
+      hp.material = sh.material;
+      if (pbr) *pbr = pt;
+      if (opt_.direct == DirectMode::ShadowRays) {
+        pf_light_draws draws = light_draws(pix, s);
+        direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
+                                       opt_.shadow_samples, draws, false, sh.leaf);
+      }
+      return true;
+    }
+    if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;  // black emitter
+    Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
+    if (luminance(T) <= 0.f) return false;
+    ray = spawn_ray(sh, d, eps_);
+  }
+  return false;
+}
+
+// Emission sample k of pixel (x, y) (pixel_sampler.h PF_EMISSION_STREAM): the camera ray through
+// its jitter (and lens point), followed through mirrors and glass as sample() follows it (the same
+// specular_bounce), adding each emitter front it meets times the throughput. Unweighted.
+Vec3 EyeTracer::emission_sample(int x, int y, int k) const {
+  const int K = opt_.emission_spp;
+  const uint32_t pix = uint32_t(size_t(y) * size_t(scene_.camera.width) + size_t(x));
+  pf_rng rng = pf_emission_rng(opt_.seed, opt_.pass, pix, k, opt_.max_depth);
+  float jx, jy;
+  pf_sobol_pixel_sample_keyed(emission_key_, pix, opt_.pass * uint32_t(K) + uint32_t(k), &jx, &jy);
+  float u1 = 0.5f, u2 = 0.5f;
+  if (cam_.lens()) {
+    u1 = pf_rng_next(&rng);
+    u2 = pf_rng_next(&rng);
+  }
+  Ray ray;
+  cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
+  ray.leaf = camera_leaf_;
+  Vec3 T(1.f, 1.f, 1.f), L;
+  for (int depth = 0; depth <= opt_.max_depth; ++depth) {
+    Hit h;
+    if (!caster_.closest(ray, h)) break;
+    SurfaceHit sh = surface_at(scene_, ray, h);
+    const pf_material& m = scene_.materials[size_t(sh.material)];
+    if (m.type == PF_MAT_EMITTER && sh.front) L += T * Vec3(m.emission);
+    if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) break;
+    const Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
+    if (luminance(T) <= 0.f) break;
+    ray = spawn_ray(sh, d, eps_);
+  }
+  return L;
+}
+
+Vec3 EyeTracer::emitted_layer(int x, int y, const Vec3& emitted) const {
+  if (!emit_pixels_ || !(*emit_pixels_)[size_t(y) * size_t(scene_.camera.width) + size_t(x)])
+    return emitted;
+  const int K = opt_.emission_spp;
+  Vec3 sum;
+  for (int k = 0; k < K; ++k) sum += emission_sample(x, y, k);
+  const float inv = 1.f / float(spp_ + K);
+  return emitted * (float(spp_) * inv) + sum * inv;
+}
+
+namespace {
+// Whether a ray reaches an emitter's front through mirrors and glass, following both branches at
+// glass, reflection first (emission_pixels): at most kEmissionDepth bounces deep and
+// kEmissionRays rays per pixel in all (`rays` counts them down), so a scene full of glass costs
+// a bounded, deterministic search; a chain past either bound counts as not reaching one.
+constexpr int kEmissionDepth = 8;
+constexpr int kEmissionRays = 32;
+bool reaches_emitter(const Scene& scene, const RayCaster& caster, const Ray& ray, float eps,
+                     int depth, int& rays) {
+  Hit h;
+  if (depth > kEmissionDepth || rays <= 0) return false;
+  --rays;
+  if (!caster.closest(ray, h)) return false;
+  const SurfaceHit sh = surface_at(scene, ray, h);
+  const pf_material& m = scene.materials[size_t(sh.material)];
+  if (m.type == PF_MAT_EMITTER) return sh.front;
+  if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;
+  const Vec3 d = normalize(ray.d);
+  const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the ray
+  const Vec3 r = reflect(d, n);
+  if (reaches_emitter(scene, caster, spawn_ray(sh, r, eps), eps, depth + 1, rays))
+    return true;
+  if (m.type != PF_MAT_GLASS) return false;
+  Vec3 t;
+  const float eta = sh.front ? 1.f / m.ior : m.ior;
+  if (!refract(d, n, eta, t)) return false;  // total internal reflection: the branch above
+  return reaches_emitter(scene, caster, spawn_ray(sh, t, eps), eps, depth + 1, rays);
+}
+}  // namespace
+
+std::vector<uint8_t> emission_pixels(const Scene& scene) {
+  const int W = scene.camera.width, H = scene.camera.height;
+  const CameraFrame cam(scene.camera);
+  const RayCaster caster(scene);
+  const int32_t camera_leaf = caster.leaf_at(Vec3(scene.camera.eye));
+  const float eps = ray_epsilon(scene);
+  std::vector<uint8_t> centre(size_t(W) * size_t(H), 0), marks(centre.size(), 0);
+#pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(0))
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      Ray ray;
+      cam.ray(float(x) + 0.5f, float(y) + 0.5f, 0.5f, 0.5f, ray.o, ray.d);  // the lens centre
+      ray.leaf = camera_leaf;
+      int rays = kEmissionRays;
+      centre[size_t(y) * size_t(W) + size_t(x)] = reaches_emitter(scene, caster, ray, eps, 0, rays);
+    }
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      uint8_t m = 0;
+      for (int yy = std::max(0, y - 1); yy <= std::min(H - 1, y + 1); ++yy)
+        for (int xx = std::max(0, x - 1); xx <= std::min(W - 1, x + 1); ++xx)
+          m |= centre[size_t(yy) * size_t(W) + size_t(xx)];
+      marks[size_t(y) * size_t(W) + size_t(x)] = m;
+    }
+  return marks;
+}
+
+void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePassResult& res,
+                          EyePassWork& work) {
+  const int W = scene.camera.width, H = scene.camera.height;
+  const EyeTracer tracer(scene, opt);
+  const int spp = tracer.spp();
+  res.width = W;
+  res.height = H;
+  res.radius = tracer.radius();
+  res.emitted.resize(size_t(W) * H * 3);  // every pixel writes its own below
+  res.direct.resize(size_t(W) * H * 3);
+
+  // Each image row collects its hitpoints in (pixel, sample) order; the rows are concatenated in
+  // order afterwards, so the result does not depend on the thread count.
+  std::vector<std::vector<pf_hitpoint>>& rows = work.rows;
+  rows.resize(size_t(std::max(H, 0)));
+  // The BSDF table only for a scene with a PBR material (eye_pass.h, EyePassResult::bsdf).
+  const bool pbr = scene.has_pbr();
+  std::vector<std::vector<pf_pbr_point>>& pbr_rows = work.pbr_rows;
+  pbr_rows.resize(pbr ? rows.size() : 0);
+  int threads = worker_threads(opt.threads);
+
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+  for (int y = 0; y < H; ++y) {
+    std::vector<pf_hitpoint>& row_buf = rows[size_t(y)];  // kept from the last call (work)
+    row_buf.clear();
+    std::vector<pf_pbr_point>* pbr_buf = pbr ? &pbr_rows[size_t(y)] : nullptr;
+    if (pbr_buf) pbr_buf->clear();
+    for (int x = 0; x < W; ++x) {
+      Vec3 emitted, direct;
+      for (int s = 0; s < spp; ++s) {
+        pf_hitpoint& hp = row_buf.emplace_back();  // written in place (no copy of a temporary)
+        if (pbr_buf) {
+          pf_pbr_point pt;
+          if (tracer.sample(x, y, s, hp, emitted, direct, &pt))
+            pbr_buf->push_back(pt);
+          else
+            row_buf.pop_back();
+          continue;
+        }
+        if (!tracer.sample(x, y, s, hp, emitted, direct)) row_buf.pop_back();
+      }
+      const size_t pix = size_t(y) * W + x;
+      tracer.emitted_layer(x, y, emitted).store(&res.emitted[pix * 3]);
+      direct.store(&res.direct[pix * 3]);
+    }
+  }
+  std::vector<size_t> offset(rows.size() + 1, 0);
+  for (size_t y = 0; y < rows.size(); ++y) offset[y + 1] = offset[y] + rows[y].size();
+  res.hitpoints.resize(offset.back());
+  res.bsdf.resize(pbr ? offset.back() : 0);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int y = 0; y < H; ++y) {
+    std::copy(rows[size_t(y)].begin(), rows[size_t(y)].end(),
+              res.hitpoints.begin() + long(offset[size_t(y)]));
+    if (pbr)
+      std::copy(pbr_rows[size_t(y)].begin(), pbr_rows[size_t(y)].end(),
+                res.bsdf.begin() + long(offset[size_t(y)]));
+  }
+}
+
+}  // namespace pf
