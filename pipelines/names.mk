@@ -29,4 +29,4 @@ pf_strip_chars = $(if $(2),$(call pf_strip_chars,$(subst $(firstword $(2)),,$(1)
 # one word; a newline alone is whitespace to make), starts with '-', or holds a character outside
 # pf_name_chars.
 pf_bad_name = $(if $(filter-out 1,$(words $(1))),bad,$(if $(filter -%,$(1)),bad,$(if $(findstring $(pf_newline),$(1)),bad,$(if $(call pf_strip_chars,$(1),$(pf_name_chars)),bad))))
-pf_check_name = $(if $(call pf_bad_name,$(value $(1))),$(error $(1)='$(subst $(pf_newline),\n,$(value $(1)))' is not a name make can pass safely to the tools: use only A-Z a-z 0-9 . _ / + ~ @ $(pf_comma) -, not first (docs/SCENES.md); rename the file, or run build/bin/render --scene FILE -o image.exr directly))
+pf_check_name = $(if $(call pf_bad_name,$(value $(1))),$(error $(1)='$(subst $(pf_newline),\n,$(value $(1)))' is not a name make can pass safely to the tools: use only A-Z a-z 0-9 . _ / + ~ @ $(pf_comma) - and no leading - (docs/SCENES.md); rename the file, or run build/bin/render --scene FILE -o image.exr directly))

@@ -99,8 +99,8 @@ inline void add_options_file_options(cxxopts::Options& o, const std::string& gro
   // clang-format off
   o.add_options(group)
     ("options-file", "read bake options from this file before the command line's, which win: "
-                     "words and '#' comments, no shell (docs/SCENES.md) (default: the scene "
-                     "file's NAME.bake-options beside it, if there is one)",
+                     "words and '#' comments, no shell (docs/SCENES.md); without it the scene "
+                     "source's NAME.bake-options beside it is read, if there is one",
      cxxopts::value<std::string>())
     ("no-options-file", "read no options file, not even the scene's NAME.bake-options");
   // clang-format on

@@ -9,7 +9,7 @@
 #     as before; `-o elsewhere.h5` in an options file writes nowhere);
 #   - the run exits 0 with an image, or exits 2 with one line on stderr (for make: the one line
 #     besides make's own "make: *** [target] Error 2");
-#   - the run ends within PF_HOSTILE_TIMEOUT seconds (default 30; a run killed there fails).
+#   - the run ends within PF_HOSTILE_TIMEOUT seconds (default 20; a run killed there fails).
 #
 # Groups (the first argument; default: both):
 #   shell   shell syntax in NAME.bake-options (; $(...) ` && | > and a quote that breaks out of a
@@ -25,7 +25,7 @@ T=test_hostile_folder
 GROUPS_RUN=${1:-shell inputs}
 SRC=${PF_SOURCE_DIR:-$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)}
 BIN=${PF_BIN:-$SRC/build/bin}
-LIMIT=${PF_HOSTILE_TIMEOUT:-30}
+LIMIT=${PF_HOSTILE_TIMEOUT:-20}
 for tool in scene-bake render; do
   [[ -x $BIN/$tool ]] || { echo "$T: FAIL: no $BIN/$tool (set PF_BIN)" >&2; exit 1; }
 done
