@@ -499,8 +499,9 @@ def bake_options():
     forward = normalize(sub(TARGET, EYE))
     focus = dot(sub(METAL_CENTER, EYE), forward)
     return ("# scene-bake options of data/showcase.gltf (written by data/make_showcase.py; read by\n"
-            "# pipelines/scene.mk for make render SCENE=showcase): depth of field, focused on the\n"
-            "# metal sphere. glTF cameras carry no aperture.\n"
+            "# scene-bake and render --scene beside the scene file, also for make render\n"
+            "# SCENE=showcase): depth of field, focused on the metal sphere. glTF cameras carry\n"
+            "# no aperture.\n"
             "--aperture %s --focus-distance %s\n" % (num(APERTURE), "%.4f" % focus))
 
 

@@ -24,6 +24,9 @@ BIN         ?= $(BUILD)/bin
 OUT         ?= out
 RES         ?= docs/results
 SCENE       ?= cornell-box
+# SCENE goes into recipes: only a name make can pass safely (pipelines/names.mk).
+include pipelines/names.mk
+$(call pf_check_name,SCENE)
 SCENE_FILE  ?= data/$(SCENE).dae
 SIZE        ?= 320x280
 MESH        ?= floor

@@ -27,7 +27,8 @@
 # DIRECT (photons | shadow-rays), RADIUS (0 = automatic), METHOD (grid | flann on DEVICE=cpu; an
 # OpenCL gather of gather_method.h, e.g. grid-kmeans, with DEVICE=opencl), DEVICE (cpu | opencl |
 # auto), MAX_BINS, WG (work-group size of the clusters), EXPOSURE, BAKE_FLAGS (extra scene-bake
-# options, after the scene's own NAME.bake-options file: pipelines/scene.mk), THREADS. The clustered OpenCL methods add the cluster stage to the DAG (clusters.h5).
+# options, after the scene's own NAME.bake-options file, which scene-bake reads: pipelines/scene.mk;
+# SCENE_BAKE_OPTIONS= reads none), THREADS. The clustered OpenCL methods add the cluster stage to the DAG (clusters.h5).
 BIN        ?= build/bin
 SCENE      ?= cornell-box
 OUT        ?= out
@@ -63,7 +64,9 @@ ifeq ($(SCENE_FILE),)
 $(error no file '$(SCENE)' and no scene named '$(SCENE)' in data/ (looked for .dae .obj .gltf .glb .ply); give SCENE=path/to/file or a name in data/)
 endif
 
-BAKE_P  := --width $(WIDTH) --height $(HEIGHT) $(SCENE_BAKE_OPTIONS) $(BAKE_FLAGS)
+# scene-bake reads the scene's options file itself (SCENE_OPTIONS_ARG, pipelines/scene.mk) and
+# puts its options before these, so WIDTH, HEIGHT and BAKE_FLAGS win over the file's.
+BAKE_P  := --width $(WIDTH) --height $(HEIGHT) $(SCENE_OPTIONS_ARG) $(BAKE_FLAGS)
 EYE_P   := --spp $(SPP) --direct $(DIRECT) --radius $(RADIUS) --seed $(SEED)
 PHOT_P  := --passes $(PASSES) --photons $(PHOTONS) --seed $(SEED)
 GRID_P  := --max-bins $(MAX_BINS)
@@ -87,7 +90,7 @@ render: $(DIR)/image.exr
 	@echo "render: $(DIR)/image.exr ($(PASSES) passes, staged)"
 endif
 
-$(DIR)/scene.h5: $(SCENE_FILE) $(BIN)/scene-bake $(call param_stamp,$(DIR)/bake.params,$(BAKE_P))
+$(DIR)/scene.h5: $(SCENE_FILE) $(SCENE_BAKE_OPTIONS) $(BIN)/scene-bake $(call param_stamp,$(DIR)/bake.params,$(BAKE_P))
 	$(BIN)/scene-bake $(SCENE_FILE) -o $@ $(BAKE_P)
 
 $(DIR)/hitpoints.h5: $(DIR)/scene.h5 $(BIN)/trace-hitpoints $(call param_stamp,$(DIR)/eye.params,$(EYE_P))

@@ -107,7 +107,9 @@ int main(int argc, char** argv) {
     // scene-bake's options, the same names and checks (bake_options.h); --threads is the kd-tree
     // build's too.
     pf::add_bake_options(o, "Scene source");
-    auto a = pf::parse_options(o, argc, argv);
+    pf::add_options_file_options(o, "Scene source");
+    // A scene source's options file (NAME.bake-options beside it) is read as scene-bake reads it.
+    auto a = pf::parse_bake_command_line(o, argc, argv, "scene", true);
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     pf::RenderOptions opt;

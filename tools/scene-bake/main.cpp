@@ -96,13 +96,15 @@ int run(int argc, char** argv) {
     ("input", "scene file to bake", cxxopts::value<std::string>())
     ("o,output", "output scene file (HDF5), written atomically", cxxopts::value<std::string>());
   pf::add_bake_options(opts);  // shared with render --scene SOURCE (bake_options.h)
+  pf::add_options_file_options(opts);
   opts.add_options()
     ("threads", "threads for the kd-tree build (0 = all cores; the result does not depend "
                 "on it)", cxxopts::value<int>()->default_value("0"))
     ("h,help", "print this help");
   // clang-format on
   opts.parse_positional({"input"});
-  auto args = pf::parse_options(opts, argc, argv);  // one INPUT: a second is unexpected
+  // One INPUT (a second is unexpected); the options file's bake options before the command line's.
+  auto args = pf::parse_bake_command_line(opts, argc, argv, "input", false);
   if (args.count("help")) {
     std::cout << opts.help() << "\n";
     return 0;

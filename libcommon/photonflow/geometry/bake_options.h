@@ -6,6 +6,11 @@
 //
 // Not here: the tool's --threads (the kd-tree build's threads; each tool defines it, with the same
 // meaning) and the input and output names.
+//
+// The bake options may also come from an options file (options_file.h): --options-file FILE, or
+// else the scene's NAME.bake-options beside it, unless --no-options-file. parse_bake_command_line
+// reads it in the tool's own process (no shell) and puts its options before the command line's,
+// so an option given on the command line wins (cxxopts keeps the last value of an option).
 #pragma once
 #include <cxxopts.hpp>
 #include <sstream>
@@ -13,6 +18,8 @@
 #include <vector>
 
 #include "photonflow/foundations/options.h"
+#include "photonflow/foundations/options_file.h"
+#include "photonflow/foundations/tool_main.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/scene_import.h"
 #include "photonflow/geometry/scene_source.h"
@@ -87,11 +94,67 @@ inline void add_bake_options(cxxopts::Options& o, const std::string& group = "")
   // clang-format on
 }
 
-// The bake options given on the command line ("" none): "--width, --kd-ct".
+// Adds --options-file and --no-options-file to `o` under `group`.
+inline void add_options_file_options(cxxopts::Options& o, const std::string& group = "") {
+  // clang-format off
+  o.add_options(group)
+    ("options-file", "read bake options from this file before the command line's, which win: "
+                     "words and '#' comments, no shell (docs/SCENES.md); without it the scene "
+                     "source's NAME.bake-options beside it is read, if there is one",
+     cxxopts::value<std::string>())
+    ("no-options-file", "read no options file, not even the scene's NAME.bake-options");
+  // clang-format on
+}
+
+// The command line of a tool that bakes (add_bake_options, add_options_file_options), parsed
+// (parse_options) with the options of its options file in front: --options-file FILE, else
+// discover_options_file of the scene (the option `scene_option`: "input" for scene-bake, "scene"
+// for render) unless --no-options-file is given or the scene is a baked scene (only when
+// `scene_may_be_baked`: render). Each option of the file is parsed alone first, so a value that
+// cxxopts refuses is refused naming the file and line. The result holds --options-file FILE for
+// the file read (given or found), so provenance and given_bake_options see it.
+inline cxxopts::ParseResult parse_bake_command_line(cxxopts::Options& o, int argc, char** argv,
+                                                    const std::string& scene_option,
+                                                    bool scene_may_be_baked) {
+  cxxopts::ParseResult a = parse_options(o, argc, argv);
+  require_not_both(a, "options-file", "no-options-file",
+                   "--no-options-file reads none, --options-file reads the one given");
+  std::string file;
+  if (a.count("options-file")) {
+    file = a["options-file"].as<std::string>();
+    if (file.empty()) throw input_error("", "--options-file is empty", "give it a file name");
+  } else if (!a.count("no-options-file") && !a.count("help") && a.count(scene_option)) {
+    const std::string scene = a[scene_option].as<std::string>();
+    file = discover_options_file(scene);
+    if (!file.empty() && scene_may_be_baked && is_baked_scene(scene)) file.clear();
+  }
+  if (file.empty()) return a;
+  std::vector<std::string> words = {argv[0]};
+  for (const OptionsFileOption& opt : read_options_file(file, bake_option_names())) {
+    const std::string word = "--" + opt.name + "=" + opt.value;
+    const char* one[] = {argv[0], word.c_str(), nullptr};
+    try {
+      o.parse(2, one);
+    } catch (const cxxopts::exceptions::exception& e) {
+      throw input_error(file + ":" + std::to_string(opt.line), e.what(),
+                        "correct the value in the options file, or give --no-options-file");
+    }
+    words.push_back(word);
+  }
+  words.push_back("--options-file=" + file);
+  for (int i = 1; i < argc; ++i) words.push_back(argv[i]);
+  std::vector<char*> ptrs;
+  for (std::string& w : words) ptrs.push_back(&w[0]);
+  ptrs.push_back(nullptr);
+  return parse_options(o, int(words.size()), ptrs.data());
+}
+
+// The bake options given on the command line or by an options file ("" none): "--width, --kd-ct".
 inline std::string given_bake_options(const cxxopts::ParseResult& a) {
   std::string list;
   for (const std::string& name : bake_option_names())
     if (a.count(name)) list += (list.empty() ? "--" : ", --") + name;
+  if (a.count("options-file")) list += list.empty() ? "--options-file" : ", --options-file";
   return list;
 }
 
@@ -193,6 +256,7 @@ inline Provenance bake_provenance(const cxxopts::ParseResult& a, const BakeOptio
   prov.command_line = command_line;
   record_bake_options(prov, a, o);
   prov.param("input", o.input);
+  prov.param("options-file", path_option(a, "options-file"));  // "" none
   prov.param("output", output);
   prov.param("threads", o.kd.threads);
   add_bake_inputs(prov, o);
