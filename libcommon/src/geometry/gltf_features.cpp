@@ -293,7 +293,7 @@ void warn_unread_maps(const aiMaterial& am, const std::string& file, const std::
     aiString path;
     am.GetTexture(type, 0, &path);
     warnings.push_back(file + ": material '" + material + "': its " + what + " '" +
-                       path.C_Str() + "' is not read; ignored");
+                       path.C_Str() + "' is not read");
   }
 }
 
