@@ -14,16 +14,24 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <utility>
 
 #include "light_import.h"
 #include "photonflow/error.h"
+#include "photonflow/scene_import.h"
 
 namespace pf {
 
 namespace {
 
 using nlohmann::json;
+
+std::string show(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
 
 // "material 'fence'", or "material 3" for an unnamed one.
 std::string owner_name(const std::string& kind, const json& item, size_t index) {
@@ -237,7 +245,8 @@ void check_gltf_features(const std::string& file, std::vector<std::string>& warn
       if (c.is_object() && c.contains("type") && c["type"] == "orthographic")
         warnings.push_back(file + ": " + owner_name("camera", c, i) +
                            ": orthographic projection is not implemented; the camera's place and "
-                           "direction are used with a perspective view");
+                           "direction are used with a perspective view of " +
+                           show(kDefaultFovYDeg) + " degrees vertical (or --fov)");
     }
   for (const auto& [key, what] :
        {std::make_pair("animations", "animations are ignored; nodes keep their rest transforms"),

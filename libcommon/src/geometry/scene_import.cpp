@@ -473,9 +473,11 @@ std::optional<FileCamera> read_camera(const aiScene& ai, const std::string& file
   fc.fov_x_rad = c.mHorizontalFOV;
   fc.aspect = c.mAspect;
   if (!(fc.fov_x_rad > 0.f && fc.fov_x_rad < kPi)) {
-    report.warnings.push_back(file + ": camera '" + std::string(c.mName.C_Str()) +
-                              "' has no usable perspective angle; using " +
-                              fmt_float(kDefaultFovYDeg) + " degrees vertical");
+    // A glTF orthographic camera (no angle) has its own line already (gltf_features.h).
+    if (!(gltf && c.mOrthographicWidth > 0.f))
+      report.warnings.push_back(file + ": camera '" + std::string(c.mName.C_Str()) +
+                                "' has no usable perspective angle; using " +
+                                fmt_float(kDefaultFovYDeg) + " degrees vertical");
     fc.fov_x_rad = 0;
   }
   return fc;
