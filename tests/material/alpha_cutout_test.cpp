@@ -610,6 +610,9 @@ TEST_CASE("alpha import: glTF MASK with its cutoff, BLEND as MASK 0.5, OPAQUE ig
   CHECK(blend.cutoff == 0.5f);
   CHECK(blend.factor == 0.8f);
   CHECK(opaque.cutoff == PF_ALPHA_OPAQUE);
+  // OPAQUE ignores the base colour's alpha 0.8: the material is not a glass (glTF 2.0 3.9.4).
+  CHECK(s.materials[material_named(s, "opaque")].type == PF_MAT_DIFFUSE);
+  REQUIRE(s.material_texture[material_named(s, "opaque")] >= 0);  // its colour map is read
   bool warned = false;
   for (const std::string& w : report.warnings) warned = warned || w.find("BLEND") != std::string::npos;
   CHECK(warned);

@@ -35,7 +35,7 @@ AlphaImport read_alpha(const aiMaterial& am, const std::string& file, const std:
   aiString mode;
   if (am.Get(AI_MATKEY_GLTF_ALPHAMODE, mode) == aiReturn_SUCCESS) {
     const std::string m = mode.C_Str();
-    if (m != "MASK" && m != "BLEND") return a;  // OPAQUE: alpha ignored (spec 3.9.4)
+    if (m != "MASK" && m != "BLEND") return a;  // OPAQUE (others refused: gltf_features.h)
     float cutoff = PF_ALPHA_DEFAULT_CUTOFF;
     if (m == "MASK") {
       float c = PF_ALPHA_DEFAULT_CUTOFF;

@@ -12,6 +12,8 @@
 // π/4) into mAngleInnerCone/mAngleOuterCone; mDirection is the light's local −z.
 #include "photonflow/geometry/light_import.h"
 
+#include "gltf_features.h"
+
 #include <assimp/scene.h>
 
 #include <algorithm>
@@ -128,8 +130,6 @@ void add_lights(const aiScene& ai, const std::string& file, Scene& scene, BakeRe
   }
 }
 
-namespace {
-
 // The JSON of a .gltf file, or the JSON chunk of a .glb (glTF 2.0 §4.4: a 12-byte header "glTF",
 // version, length, then chunks of length, type, data; the first chunk is JSON).
 std::string gltf_json_text(const std::string& file) {
@@ -157,8 +157,6 @@ std::string gltf_json_text(const std::string& file) {
     throw input_error(file, "its JSON chunk runs past the file", "export it again");
   return text;
 }
-
-}  // namespace
 
 std::map<std::string, float> gltf_emissive_strengths(const std::string& file) {
   if (!is_gltf(file)) return {};

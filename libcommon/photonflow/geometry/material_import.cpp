@@ -22,8 +22,8 @@
 // The first rule that matches decides:
 //   1. max(Ke) > 0                                     → EMITTER, emission = Ke, color = Kd
 //   2. illum 4, 6 or 7, or d < 1                       → GLASS, ior = Ni (1.5 if Ni ≤ 1), color = 1
-//      (d is not read for a glTF MASK/BLEND material: its base-colour alpha, which assimp also
-//      hands as d, is its alpha cut-out, alpha_import.h)
+//      (d is not read for glTF: its base-colour alpha, which assimp also hands as d, is the
+//      alpha cut-out of a MASK/BLEND material, alpha_import.h, and ignored under OPAQUE)
 //   3. M or R present (glTF, MTL Pm/Pr)                → metallic-roughness (below): base = Kd,
 //                                                         metallic M (0 if absent), roughness R
 //                                                         (1 if absent), transmission T
@@ -49,7 +49,8 @@
 // PBR ior: Ni where it is above 1, else 1.5 (glTF's default; OBJ's missing Ni reads as 1, which
 // would remove the F0 = 0.04 coat); a transmitting material whose file gives an ior of at most 1 is
 // refused (ior 1 is index-matched: the surface would be invisible, bsdf_shared.h).
-// M, R, T outside [0, 1] are clamped with a warning; a PBR base colour to [0, 1].
+// M, R, T outside [0, 1] are clamped with a warning (OBJ Pm/Pr; glTF refuses them before,
+// gltf_features.h); a PBR base colour to [0, 1].
 // Diffuse albedo (also the emitter's) is clamped per channel to [0, kMaxAlbedo] with a warning;
 // mirror reflectance to [0, 1].
 // Note: assimp's OBJ loader fills a missing Kd with 0.6 and COLLADA's a missing <specular> with
@@ -336,10 +337,10 @@ int TextureLoader::load(const aiScene& ai, const std::string& file, const std::s
 
 ImportedMaterial import_material(const aiScene& ai, const aiMaterial& am, const std::string& name,
                                  const std::string& file, TextureLoader& textures,
-                                 BakeReport& report, bool alpha_masked, float emissive_strength) {
+                                 BakeReport& report, bool gltf, float emissive_strength) {
   MaterialValues v = read_values(am, name, file);
   v.ke = v.ke * emissive_strength;  // KHR_materials_emissive_strength (light_import.h)
-  if (alpha_masked) v.opacity = 1.f;  // the alpha is a cut-out (alpha_import.h), not a glass
+  if (gltf) v.opacity = 1.f;  // base-colour alpha: a cut-out (alpha_import.h) or ignored, no glass
   const std::optional<TextureRef> base_ref = base_color_texture(am);
   // The metallic-roughness texture belongs to the glTF factors (rule 3).
   const std::optional<TextureRef> mr_ref =
@@ -437,6 +438,9 @@ ImportedMaterial import_material(const aiScene& ai, const aiMaterial& am, const 
       (out.type == PF_MAT_DIFFUSE || out.type == PF_MAT_EMITTER || out.type == PF_MAT_PBR)) {
     r.texture = textures.load(ai, file, name, *base_ref);
     r.uv_channel = base_ref->uv_channel;
+  } else if (base_ref) {
+    warn(std::string("its base-colour texture '") + base_ref->path + "' is not read (a " +
+         (out.type == PF_MAT_GLASS ? "glass" : "mirror") + " takes no texture)");
   }
   if (mr_ref && out.type == PF_MAT_PBR) {
     r.mr_texture = textures.load(ai, file, name, *mr_ref);

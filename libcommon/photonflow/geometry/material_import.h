@@ -74,14 +74,15 @@ std::optional<TextureRef> base_color_texture(const aiMaterial& am);
 
 // Converts material `am` (called `name`) of assimp scene `ai`, read from `file`, by the rules of
 // docs/SCENES.md, loading its textures through `textures`. Warnings go to `report`; InputError for
-// non-finite values and for a transmitting material with an ior of 1. `alpha_masked`: a glTF
-// MASK/BLEND material (alpha_import.h), whose baseColorFactor alpha (which assimp 5.2.5 also
-// hands as AI_MATKEY_OPACITY) is its cut-out, not a glass: the opacity is not read then.
+// non-finite values and for a transmitting material with an ior of 1. `gltf`: a glTF material,
+// whose baseColorFactor alpha (which assimp 5.2.5 also hands as AI_MATKEY_OPACITY) is its
+// cut-out under MASK/BLEND (alpha_import.h) and ignored under OPAQUE, never a glass: the opacity
+// is not read then.
 // `emissive_strength`: glTF's KHR_materials_emissive_strength (light_import.h; 1 for other
 // formats), a factor on Ke: radiance = emissiveFactor × emissiveStrength.
 ImportedMaterial import_material(const aiScene& ai, const aiMaterial& am, const std::string& name,
                                  const std::string& file, TextureLoader& textures,
-                                 BakeReport& report, bool alpha_masked = false,
+                                 BakeReport& report, bool gltf = false,
                                  float emissive_strength = 1.f);
 
 }  // namespace pf::import

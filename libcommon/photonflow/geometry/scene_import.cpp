@@ -66,6 +66,7 @@
 #include "photonflow/foundations/memory_cap.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/image/texture_image.h"
+#include "gltf_features.h"
 #include "photonflow/geometry/light_import.h"
 #include "photonflow/geometry/material_import.h"
 
@@ -242,9 +243,11 @@ class Flattener {
       material_map_[i] = int(scene_.materials.size());
       const AlphaImport alpha =
           read_alpha(am, file_, name, lower_extension(file_) == ".obj", report_.warnings);
+      warn_unread_maps(am, file_, name, report_.warnings);  // gltf_features.h
+      // glTF has no opacity: the AI_MATKEY_OPACITY assimp hands is baseColorFactor's alpha, a
+      // cut-out under MASK/BLEND and nothing under OPAQUE (glTF 2.0 section 3.9.4).
       const ImportedMaterial m = import::import_material(ai_, am, name, file_, textures_, report_,
-                                                         alpha.masked() && alpha.base_texture_alpha,
-                                                         emissive_strength_of(am));
+                                                         is_gltf(file_), emissive_strength_of(am));
       uv_channel_[i] = m.uv_channel;
       scene_.materials.push_back(m.material);
       scene_.material_names.push_back(name);
@@ -337,6 +340,7 @@ class Flattener {
     const aiVector3D* tex = channel < AI_MAX_NUMBER_OF_TEXTURECOORDS && mesh.HasTextureCoords(channel)
                                 ? mesh.mTextureCoords[channel]
                                 : nullptr;
+    if (!tex && material_override_ < 0) warn_missing_uvs(mesh.mMaterialIndex, mat, name, channel);
 
     const aiMatrix3x3 lin(m);
     const float det = lin.Determinant();
@@ -408,6 +412,23 @@ class Flattener {
     }
   }
 
+  // One warning per material whose textures read a UV channel that one of its meshes lacks
+  // (glTF texCoord N without TEXCOORD_N, an OBJ face without vt): its texels are read at (0, 0).
+  void warn_missing_uvs(unsigned file_material, int mat, const std::string& mesh,
+                        unsigned channel) {
+    const size_t m = size_t(mat);
+    const bool textured =
+        (m < scene_.material_texture.size() && scene_.material_texture[m] >= 0) ||
+        (m < scene_.material_mr_texture.size() && scene_.material_mr_texture[m] >= 0) ||
+        (m < scene_.material_alpha.size() && scene_.material_alpha[m].texture >= 0);
+    if (!textured || uv_warned_.count(file_material)) return;
+    uv_warned_.insert(file_material);
+    report_.warnings.push_back(file_ + ": material '" + scene_.material_names[m] +
+                               "': its textures read UV set " + std::to_string(channel) +
+                               " (glTF texCoord " + std::to_string(channel) + "), which mesh '" +
+                               mesh + "' does not have; the texture is read at UV (0, 0) there");
+  }
+
   const aiScene& ai_;
   const std::string& file_;
   Scene& scene_;
@@ -416,6 +437,7 @@ class Flattener {
   std::vector<int> material_map_;
   std::vector<unsigned> uv_channel_;  // per file material: the UV channel of its texture
   std::vector<bool> checked_;
+  std::set<unsigned> uv_warned_;  // file materials warned about by warn_missing_uvs
   std::map<std::string, float> emissive_strength_;  // glTF emissiveStrength by name (light_import.h)
   // The emissiveStrength of material `am` (1 where the file gives none).
   float emissive_strength_of(const aiMaterial& am) const {
@@ -451,9 +473,11 @@ std::optional<FileCamera> read_camera(const aiScene& ai, const std::string& file
   fc.fov_x_rad = c.mHorizontalFOV;
   fc.aspect = c.mAspect;
   if (!(fc.fov_x_rad > 0.f && fc.fov_x_rad < kPi)) {
-    report.warnings.push_back(file + ": camera '" + std::string(c.mName.C_Str()) +
-                              "' has no usable perspective angle; using " +
-                              fmt_float(kDefaultFovYDeg) + " degrees vertical");
+    // A glTF orthographic camera (no angle) has its own line already (gltf_features.h).
+    if (!(gltf && c.mOrthographicWidth > 0.f))
+      report.warnings.push_back(file + ": camera '" + std::string(c.mName.C_Str()) +
+                                "' has no usable perspective angle; using " +
+                                fmt_float(kDefaultFovYDeg) + " degrees vertical");
     fc.fov_x_rad = 0;
   }
   return fc;
@@ -639,6 +663,9 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   const std::string& file = options.input;
 
   Assimp::Importer importer;
+  struct stat st {};
+  if (stat(file.c_str(), &st) == 0 && S_ISREG(st.st_mode))
+    check_gltf_features(file, report.warnings);  // refusals and warnings from the JSON
   const aiScene* ai = read_file(importer, file, ctx);
   TextureLoader textures(scene, report);
   Flattener flattener(*ai, file, scene, report, textures);
