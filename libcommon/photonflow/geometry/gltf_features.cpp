@@ -5,7 +5,7 @@
 // what it skipped: an extension it does not know, a KHR_texture_transform, an unknown alphaMode
 // (it keeps the string, which then reads as OPAQUE) or light type (it becomes a spot light).
 // These are read here from the file's JSON, with the glTF 2.0 schema's ranges for the factors.
-#include "gltf_features.h"
+#include "photonflow/geometry/gltf_features.h"
 
 #include <assimp/material.h>
 

@@ -12,7 +12,7 @@
 // π/4) into mAngleInnerCone/mAngleOuterCone; mDirection is the light's local −z.
 #include "photonflow/geometry/light_import.h"
 
-#include "gltf_features.h"
+#include "photonflow/geometry/gltf_features.h"
 
 #include <assimp/scene.h>
 

@@ -66,7 +66,7 @@
 #include "photonflow/foundations/memory_cap.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/image/texture_image.h"
-#include "gltf_features.h"
+#include "photonflow/geometry/gltf_features.h"
 #include "photonflow/geometry/light_import.h"
 #include "photonflow/geometry/material_import.h"
 
