@@ -428,7 +428,8 @@ TEST_CASE("a metallicRoughnessTexture is stored linear beside the sRGB base colo
   }
 }
 
-TEST_CASE("a missing metallic-roughness image is one warning, the factors are used", "[pbr_import]") {
+TEST_CASE("a missing metallic-roughness image is refused, or with --missing-textures warn one "
+          "warning and the factors are used", "[pbr_import]") {
   test::TempDir tmp("pbr-missing");
   json m = pbr("rough", {{"metallicFactor", 0.5}, {"roughnessFactor", 0.7},
                          {"metallicRoughnessTexture", {{"index", 0}}}});
@@ -438,7 +439,12 @@ TEST_CASE("a missing metallic-roughness image is one warning, the factors are us
   g["images"][0]["uri"] = "nowhere.png";
   write_text(tmp / "m.gltf", g.dump());
   BakeReport report;
-  const Scene s = bake(tmp / "m.gltf", report);
+  CHECK_THROWS_AS(bake(tmp / "m.gltf", report), InputError);
+  BakeOptions o;
+  o.input = tmp / "m.gltf";
+  o.width = o.height = 16;
+  o.inputs.missing_textures_warn = true;
+  const Scene s = bake_scene(o, report);
   INFO((report.warnings.empty() ? "" : report.warnings[0] + " | " + report.warnings.back()));
   REQUIRE(report.warnings.size() == 1);
   CHECK(report.warnings[0].find("nowhere.png") != std::string::npos);

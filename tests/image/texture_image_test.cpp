@@ -689,13 +689,25 @@ TEST_CASE("scene.h5 keeps textures, texels, materials' textures and UVs, edits a
   }
 }
 
-TEST_CASE("a missing texture is one warning naming the file and the material, the factor is used",
+TEST_CASE("a missing texture is refused, or with --missing-textures warn one warning naming the "
+          "file and the material and the factor is used",
           "[textures]") {
   test::TempDir tmp("tex-missing");
   write_text(tmp / "m.mtl", "newmtl floor\nKd 0.5 0.25 0.5\nmap_Kd nowhere.png\n" + light_mtl());
   write_text(tmp / "m.obj", floor_obj("m.mtl"));
   BakeReport report;
-  const Scene s = bake(floor_options(tmp / "m.obj", 16), report);
+  // By default an error: exit 2, one line naming the image and the material, no output.
+  CHECK_THROWS_AS(bake(floor_options(tmp / "m.obj", 16), report), InputError);
+  test::ToolRun refused =
+      test::run_tool("scene-bake", q(tmp / "m.obj") + " -o " + q(tmp / "s.h5"), tmp);
+  CHECK(refused.exit_code == 2);
+  CHECK(std::count(refused.err.begin(), refused.err.end(), '\n') == 1);
+  CHECK(refused.err.find("nowhere.png") != std::string::npos);
+  CHECK(refused.err.find("'floor'") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(tmp / "s.h5"));
+  BakeOptions warn = floor_options(tmp / "m.obj", 16);
+  warn.inputs.missing_textures_warn = true;
+  const Scene s = bake(warn, report);
   REQUIRE(report.warnings.size() == 1);
   CHECK(report.warnings[0].find("nowhere.png") != std::string::npos);
   CHECK(report.warnings[0].find("'floor'") != std::string::npos);
@@ -705,8 +717,8 @@ TEST_CASE("a missing texture is one warning naming the file and the material, th
   CHECK(s.texture_of(int(floor_mat)) == -1);
   CHECK(s.materials[floor_mat].color[1] == 0.25f);
   // The tool: exit 0, the scene written, that one line on stderr.
-  const test::ToolRun r =
-      test::run_tool("scene-bake", q(tmp / "m.obj") + " -o " + q(tmp / "s.h5"), tmp);
+  const test::ToolRun r = test::run_tool(
+      "scene-bake", q(tmp / "m.obj") + " -o " + q(tmp / "s.h5") + " --missing-textures warn", tmp);
   CHECK(r.exit_code == 0);
   CHECK(std::filesystem::exists(tmp / "s.h5"));
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);

@@ -148,9 +148,8 @@ int main(int argc, char** argv) {
         const std::string sp = a["state"].as<std::string>();
         sums = pf::load_pass_sums(sp);
         pf::require_scene(sp, sums.scene_id, scene.scene_id, scene_path);
-        if (sums.parameters != params)
-          throw pf::input_error(sp, "was made with other options than these eye and photon passes",
-                                "continue it with the same seed and options");
+        pf::require_same_state_parameters(sp, sums.parameters, params,
+                                          "start a new range without --state");
         prov.add_input("state", sp, pf::kPassSumsFormat, sums.scene_id);
       } else {
         sums = pf::make_pass_sums(scene.camera.width, scene.camera.height, eye.eye_pass,

@@ -8,6 +8,9 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <optional>
+#include <set>
 
 #include "photonflow/opencl/cl_backend.h"
 #include "photonflow/foundations/options.h"
@@ -245,10 +248,11 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
                        : std::to_string(opt.eye.seed) + "/" + std::to_string(opt.photons.seed)},
           {"photons", std::to_string(opt.photons.photons)},
           {"max-bounces", std::to_string(opt.photons.max_bounces)},
-          {"alpha", default_text(opt.ppm.alpha)}};
+          {"alpha", default_text(opt.ppm.alpha)},
+          // ppm too: its one eye pass, and so its hitpoints, depend on where the samples went.
+          {"pixel-sampler", pixel_sampler_name(opt.eye.sampler)}};
   if (opt.estimator != Estimator::Ppm) {
     p["estimator"] = estimator_name(opt.estimator);
-    p["pixel-sampler"] = pixel_sampler_name(opt.eye.sampler);
     p["slab"] = default_text(opt.ppm.slab);
     // Only with the surface (states and sums made before the option existed divided by the disc).
     if (opt.ppm.gather_area == GatherArea::Surface) p["gather-area"] = "surface";
@@ -259,6 +263,56 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
   // Likewise only where eye passes take emission samples (files made before them have none).
   if (opt.eye.emission_spp > 0) p["emission-spp"] = std::to_string(opt.eye.emission_spp);
   return p;
+}
+
+const char* const kStateParameterPrefix = "state.";
+
+std::optional<std::string> state_parameter_unrecorded_value(const std::string& name) {
+  // The options state_parameters leaves out at these values (above): a file without the entry
+  // was made with them (or before the option existed, which is the same).
+  if (name == "glossy-threshold") return std::string("0");
+  if (name == "emission-spp") return std::string("0");
+  if (name == "gather-area") return std::string("disc");
+  if (name == "estimator") return std::string("ppm");  // ppm's record has no estimator
+  return std::nullopt;
+}
+
+void require_same_state_parameters(const std::string& file,
+                                   const std::map<std::string, std::string>& recorded,
+                                   const std::map<std::string, std::string>& run,
+                                   const std::string& fresh) {
+  if (recorded.empty())
+    throw input_error(file, "records none of the options its state was made with (no " +
+                                std::string(kStateParameterPrefix) + "* attributes), so it "
+                                "cannot be continued safely",
+                      fresh);
+  // Every name either side records, in order: a new option of state_parameters is checked here
+  // without a line more.
+  std::set<std::string> names;
+  for (const auto& kv : recorded) names.insert(kv.first);
+  for (const auto& kv : run) names.insert(kv.first);
+  for (const std::string& name : names) {
+    const auto in_file = recorded.find(name);
+    const auto in_run = run.find(name);
+    const std::optional<std::string> unrecorded = state_parameter_unrecorded_value(name);
+    const std::string attr = kStateParameterPrefix + name;
+    if ((in_file == recorded.end() || in_run == run.end()) && !unrecorded) {
+      if (in_run == run.end())
+        throw input_error(file, "records " + attr + " = " + in_file->second +
+                                    ", a setting this run does not have (made by another "
+                                    "version or estimator)",
+                          fresh);
+      throw input_error(file, "records no " + attr + " (made by another version), so its --" +
+                                  name + " is not known",
+                        fresh);
+    }
+    const std::string theirs = in_file != recorded.end() ? in_file->second : *unrecorded;
+    const std::string ours = in_run != run.end() ? in_run->second : *unrecorded;
+    if (theirs != ours)
+      throw input_error(file, "--" + name + " " + ours + " differs from the checkpoint's " +
+                                  theirs + " (" + attr + ")",
+                        "rerun with --" + name + " " + theirs + ", the checkpoint's, or " + fresh);
+  }
 }
 
 std::map<std::string, std::string> staged_state_parameters(
@@ -322,24 +376,17 @@ void require_state_agrees(const std::string& checkpoint, const RenderOptions& op
                       "use the checkpoint's --radius or start without --resume");
 }
 
-// Refuses a checkpoint whose recorded state options differ from this run's (state_parameters).
+// Refuses a checkpoint whose recorded state options differ from this run's: one walk of the
+// state.* attributes of the file and of the run's own record (require_same_state_parameters).
 void require_same_state(const std::string& checkpoint, const RenderOptions& opt) {
   const Provenance made = opt.estimator == Estimator::Pppm ? load_pass_sums_provenance(checkpoint)
                                                            : load_hitpoints_provenance(checkpoint);
-  for (const auto& [name, value] : state_parameters(opt)) {
-    const auto it = made.parameters.find("state." + name);
-    if (it == made.parameters.end())
-      throw input_error(checkpoint, "records no '" + name + "' of the run that wrote it, so it "
-                                    "cannot be resumed safely",
-                        // options recorded only when on: an older file ran without them
-                        name == "emission-spp" || name == "glossy-threshold"
-                            ? "resume with --" + name + " 0, or start without --resume"
-                            : std::string("start without --resume"));
-    if (it->second != value)
-      throw input_error(checkpoint, "was made with --" + name + " " + it->second +
-                                        ", this run has " + value,
-                        "use the checkpoint's options or start without --resume");
-  }
+  std::map<std::string, std::string> recorded;
+  for (const auto& [key, value] : made.parameters)
+    if (key.rfind(kStateParameterPrefix, 0) == 0)
+      recorded[key.substr(std::strlen(kStateParameterPrefix))] = value;
+  require_same_state_parameters(checkpoint, recorded, state_parameters(opt),
+                                "start without --resume");
 }
 
 }  // namespace
@@ -430,7 +477,8 @@ State drive(const RenderOptions& opt, std::unique_ptr<Renderer> r, Make&& make,
 // The checkpoint's provenance: the run's, with the options its state depends on.
 Provenance with_state_parameters(const Provenance& prov, const RenderOptions& opt) {
   Provenance p = prov;
-  for (const auto& [name, value] : state_parameters(opt)) p.parameters["state." + name] = value;
+  for (const auto& [name, value] : state_parameters(opt))
+    p.parameters[kStateParameterPrefix + name] = value;
   return p;
 }
 
@@ -440,6 +488,31 @@ void require_passes_left(const RenderOptions& opt, int passes) {
     throw input_error(opt.checkpoint,
                       "already has " + std::to_string(passes) + " passes, more than --passes",
                       "raise --passes or start without --resume");
+}
+
+// Loads the checkpoint with `load`; a checkpoint of the other kind (pass sums where ppm and sppm
+// keep hitpoints, or the other way round) is refused as a changed --estimator, by the record of
+// the kind it is (require_same_state_parameters), when that record can be read.
+template <class Load>
+auto load_checkpoint(const RenderOptions& opt, Load&& load) {
+  try {
+    return load(opt.checkpoint);
+  } catch (const InputError&) {
+    std::optional<Provenance> other;
+    try {
+      other = opt.estimator == Estimator::Pppm ? load_hitpoints_provenance(opt.checkpoint)
+                                               : load_pass_sums_provenance(opt.checkpoint);
+    } catch (const InputError&) {
+    }
+    if (!other) throw;
+    std::map<std::string, std::string> recorded;
+    for (const auto& [key, value] : other->parameters)
+      if (key.rfind(kStateParameterPrefix, 0) == 0)
+        recorded[key.substr(std::strlen(kStateParameterPrefix))] = value;
+    require_same_state_parameters(opt.checkpoint, recorded, state_parameters(opt),
+                                  "start without --resume");
+    throw;
+  }
 }
 
 bool checkpoint_exists(const RenderOptions& opt, bool resume) {
@@ -461,7 +534,8 @@ HitpointSet render_progressive(
   Stopwatch wall;
   std::unique_ptr<ProgressiveRenderer> r;
   if (checkpoint_exists(opt, resume)) {
-    HitpointSet loaded = load_hitpoints(opt.checkpoint);
+    HitpointSet loaded =
+        load_checkpoint(opt, [](const std::string& path) { return load_hitpoints(path); });
     require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
     // Checks the state's indices against the scene's tables; no work yet (that is run_iteration).
     r = std::make_unique<ProgressiveRenderer>(scene, opt, std::move(loaded), opt.checkpoint);
@@ -469,13 +543,13 @@ HitpointSet render_progressive(
     if (state.estimator == "classic")
       throw input_error(opt.checkpoint, "holds a classic photon-mapping estimate, not a PPM state",
                         "delete it or pass another --checkpoint");
+    require_same_state(opt.checkpoint, opt);  // names a changed --estimator too
     if (is_sppm_state(state) != (opt.estimator == Estimator::Sppm))
       throw input_error(opt.checkpoint,
                         std::string("holds ") + (is_sppm_state(state) ? "an SPPM" : "a PPM") +
                             " state, this run is --estimator " + estimator_name(opt.estimator),
                         "use the checkpoint's estimator or start without --resume");
     require_passes_left(opt, state.passes);
-    require_same_state(opt.checkpoint, opt);
     require_state_agrees(opt.checkpoint, opt, state.direct_mode, state.radius0,
                          initial_radius(scene, opt.eye), "radius0");
   }
@@ -494,7 +568,8 @@ PassSums render_pppm(const Scene& scene, const RenderOptions& opt, bool resume,
   Stopwatch wall;
   std::unique_ptr<PppmRenderer> r;
   if (checkpoint_exists(opt, resume)) {
-    PassSums loaded = load_pass_sums(opt.checkpoint);
+    PassSums loaded =
+        load_checkpoint(opt, [](const std::string& path) { return load_pass_sums(path); });
     require_scene(opt.checkpoint, loaded.scene_id, scene.scene_id, scene.source);
     if (loaded.first_pass != opt.first_pass)
       throw input_error(opt.checkpoint,

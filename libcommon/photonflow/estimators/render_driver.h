@@ -15,6 +15,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -157,13 +158,34 @@ void check_options(const RenderOptions& opt);
 
 // The options a PPM state depends on, as canonical text under their tool option names ("alpha" →
 // "0.7", "seed", "photons", "spp", "max-depth", "max-bounces", "direct", "shadow-samples",
-// "radius"; with sppm and pppm also "estimator", "pixel-sampler" and "slab", and "gather-area"
-// when it is the surface). render_progressive
+// "radius", "pixel-sampler"; with sppm and pppm also "estimator" and "slab", and "gather-area"
+// when it is the surface; "glossy-threshold" and "emission-spp" when above 0). render_progressive
 // records them in every checkpoint's provenance parameters as
-// "state.<name>" and resumes only a checkpoint whose record equals this run's: a state continued
-// under other options would be neither run's image. (Passes, snapshots, threads, device, method
-// and work-group size may change: every gather method gathers the same photons.)
+// "state.<name>" and resumes only a checkpoint whose record equals this run's
+// (require_same_state_parameters): a state continued under other options would be neither run's
+// image. (Passes, snapshots, threads, device, method and work-group size may change: every gather
+// method gathers the same photons.)
 std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
+
+// "state.", the prefix of state_parameters' names among a checkpoint's provenance parameters.
+extern const char* const kStateParameterPrefix;
+
+// The value an option that state_parameters leaves out of the record at its "off" value stands
+// for when a file has no entry for it ("emission-spp" → "0", "glossy-threshold" → "0",
+// "gather-area" → "disc", "estimator" → "ppm"); nullopt for an option that every record has.
+std::optional<std::string> state_parameter_unrecorded_value(const std::string& name);
+
+// The one check of a recorded state against a run (render --resume, illuminate --state): walks
+// every name in `recorded` (the state.* entries of `file`, prefix removed) and in `run` (this
+// run's state_parameters) and refuses, with one InputError line naming the option, a value that
+// differs ("ck.h5: --emission-spp 4 differs from the checkpoint's 1 (state.emission-spp) (rerun
+// with --emission-spp 1, the checkpoint's, or start without --resume)"), an entry only one side
+// has that has no unrecorded value (a file of another version), and a file with no entry at all.
+// `fresh` is the way out besides the checkpoint's value ("start without --resume").
+void require_same_state_parameters(const std::string& file,
+                                   const std::map<std::string, std::string>& recorded,
+                                   const std::map<std::string, std::string>& run,
+                                   const std::string& fresh);
 // The same record for the staged route (illuminate --estimator pppm), from the options recorded in
 // the provenance of its eye pass (trace-hitpoints: spp, max-depth, direct, shadow-samples, radius,
 // seed, pixel-sampler) and photon pass (trace-photons: photons, max-bounces, seed) and its alpha,

@@ -31,7 +31,7 @@ inline const std::vector<std::string>& bake_option_names() {
   static const std::vector<std::string> names = {
       "eye", "look-at", "up", "fov", "aperture", "focus-distance", "width", "height", "insert", "insert-box", "up-axis",
       "insert-material", "kd-ct", "kd-ci", "kd-empty-bonus", "kd-max-depth", "kd-max-leaf",
-      "import-memory-mb", "import-seconds"};
+      "import-memory-mb", "import-seconds", "missing-textures", "confine-inputs"};
   return names;
 }
 
@@ -90,7 +90,15 @@ inline void add_bake_options(cxxopts::Options& o, const std::string& group = "")
      cxxopts::value<uint64_t>()->default_value("0"))
     ("import-seconds", "time limit of the file import, s (0 = automatic: 60 s + 10 s per MB "
                        "of the input files); a loader that loops on a damaged file is stopped "
-                       "there", cxxopts::value<double>()->default_value("0"));
+                       "there", cxxopts::value<double>()->default_value("0"))
+    ("missing-textures", "a texture the scene names that cannot be found or has no data "
+                         "(missing file, empty or bad URI, image without a source, empty buffer "
+                         "view): error (refuse the bake) | warn (drop it with a warning: the "
+                         "material's factors alone)",
+     cxxopts::value<std::string>()->default_value("error"))
+    ("confine-inputs", "every file the scene references (buffers, images, material libraries) "
+                       "and every --insert must resolve, after symlinks, inside the scene file's "
+                       "folder; for services that render scenes from strangers");
   // clang-format on
 }
 
@@ -181,6 +189,10 @@ inline BakeOptions bake_options(const cxxopts::ParseResult& a, const std::string
   o.kd.threads = threads;
   o.import_memory_mb = a["import-memory-mb"].as<uint64_t>();
   o.import_seconds = a["import-seconds"].as<double>();
+  const std::string missing = a["missing-textures"].as<std::string>();
+  require_choice("missing-textures", missing, {"error", "warn"});
+  o.inputs.missing_textures_warn = missing == "warn";
+  o.inputs.confine = a.count("confine-inputs") > 0;
   std::vector<std::string> inserts, materials;
   std::vector<float> boxes;
   if (a.count("insert")) inserts = a["insert"].as<std::vector<std::string>>();

@@ -72,6 +72,7 @@
 #include <fstream>
 #include <iterator>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -275,20 +276,33 @@ int TextureLoader::load(const aiScene& ai, const std::string& file, const std::s
       if (embedded) {
         bytes.assign(reinterpret_cast<const char*>(embedded->pcData), embedded->mWidth);
       } else {
+        // A FIFO, device, directory or symlink loop is refused before it is opened (its read
+        // would wait or never end), and so is a file outside the folder with --confine-inputs.
+        const std::string role = std::string(linear ? "metallic-roughness" : coverage_map
+                                                                                ? "alpha"
+                                                                                : "base-colour") +
+                                 " texture of material '" + material + "'";
+        const bool found = check_input_file(name, role, file, policy_, root_);
         struct stat st {};
-        if (stat(name.c_str(), &st) != 0 || !S_ISREG(st.st_mode) ||
-            access(name.c_str(), R_OK) != 0) {
+        if (!found || stat(name.c_str(), &st) != 0 || access(name.c_str(), R_OK) != 0) {
+          const std::string what = std::string(found ? "cannot be read" : "not found");
+          if (!policy_.missing_textures_warn)
+            throw input_error(file, "material '" + material + "': " +
+                                        (linear ? "metallic-roughness " : "") + "texture '" +
+                                        name + "' " + what,
+                              "put the image beside the scene, or bake with --missing-textures "
+                              "warn to use the material's factors alone");
           report_.warnings.push_back(file + ": material '" + material + "': " +
                                      (linear ? "metallic-roughness " : "") + "texture '" + name +
-                                     "' not found, using the " +
+                                     "' " + what + ", using the " +
                                      (linear ? "metallic and roughness factors" : "colour factor") +
                                      " alone");
           return -1;
         }
+        // The size is not told: the file may be one the scene has no business naming.
         if (uint64_t(st.st_size) > kMaxTextureFileBytes)
-          throw input_error(label, "texture file of " + std::to_string(st.st_size) +
-                                      " bytes is larger than the limit of " +
-                                      std::to_string(kMaxTextureFileBytes),
+          throw input_error(label, "texture file is larger than the limit of " +
+                                      std::to_string(kMaxTextureFileBytes) + " bytes",
                             "scale the image down");
         std::ifstream in(name, std::ios::binary);
         bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -333,6 +347,71 @@ int TextureLoader::load(const aiScene& ai, const std::string& file, const std::s
   scene_.texture_names.push_back(image->second.second);
   headers_.emplace(header, index);
   return index;
+}
+
+void TextureLoader::charge_budget(const aiScene& ai, const std::string& file) {
+  struct Charged {
+    std::string label;
+    uint64_t w, h;
+  };
+  std::set<std::pair<int, std::string>> seen;  // (decoding, image), as load() keys its images
+  std::optional<Charged> largest;
+  for (unsigned i = 0; i < ai.mNumMaterials; ++i) {
+    const aiMaterial& am = *ai.mMaterials[i];
+    std::string material = am.GetName().C_Str();
+    if (material.empty()) material = "material" + std::to_string(i);
+    for (const std::optional<TextureRef>& ref : {base_color_texture(am), metallic_roughness_texture(am)}) {
+      if (!ref) continue;
+      const bool linear = ref->decoding == TexelDecoding::kLinear;
+      const aiTexture* embedded = ai.GetEmbeddedTexture(ref->path.c_str());
+      std::string name, bytes;
+      uint64_t w = 0, h = 0;
+      if (embedded) {
+        name = file + "#" + std::to_string(ai.GetEmbeddedTextureAndIndex(ref->path.c_str()).second);
+        if (!seen.insert({int(ref->decoding), "embedded:" + name}).second) continue;
+        if (embedded->mHeight != 0) {
+          w = embedded->mWidth;
+          h = embedded->mHeight;
+        } else {
+          bytes.assign(reinterpret_cast<const char*>(embedded->pcData), embedded->mWidth);
+          if (!texture_image_size(bytes, w, h)) continue;
+        }
+      } else {
+        std::string rel = ref->path;
+        std::replace(rel.begin(), rel.end(), '\\', '/');
+        const size_t slash = file.find_last_of('/');
+        name = (rel.empty() || rel[0] == '/' || slash == std::string::npos)
+                   ? rel
+                   : file.substr(0, slash + 1) + rel;
+        if (!seen.insert({int(ref->decoding), name}).second) continue;
+        // Only a regular file inside the rules is opened; every other case is load()'s to refuse.
+        try {
+          if (!check_input_file(name, "texture", file, policy_, root_)) continue;
+        } catch (const InputError&) {
+          continue;
+        }
+        // The header is at the start (PNG's IHDR first; a JPEG frame header after its markers).
+        std::ifstream in(name, std::ios::binary);
+        bytes.resize(size_t(4) << 20);
+        in.read(&bytes[0], std::streamsize(bytes.size()));
+        bytes.resize(size_t(in.gcount()));
+        if (!texture_image_size(bytes, w, h)) continue;
+      }
+      const std::string label = name + " (" + (linear ? "metallic-roughness" : "base-colour") +
+                                " texture of material '" + material + "')";
+      if (!largest || w * h > largest->w * largest->h) largest = Charged{label, w, h};
+      charged_ += w * h;
+      if (charged_ > kMaxTextureTexels)
+        throw input_error(largest->label,
+                          "texture image of " + std::to_string(largest->w) + "x" +
+                              std::to_string(largest->h) + " texels, the largest of the scene's " +
+                              "textures, which need " + std::to_string(charged_) +
+                              " texels by the first " + std::to_string(seen.size()) +
+                              " images, more than the " + std::to_string(kMaxTextureTexels) +
+                              " a scene may have",
+                          "scale this image down");
+    }
+  }
 }
 
 ImportedMaterial import_material(const aiScene& ai, const aiMaterial& am, const std::string& name,

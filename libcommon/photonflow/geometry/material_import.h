@@ -45,16 +45,32 @@ struct TextureRef {
 // into the scene's texel pool, one pf_texture header per (image, decoding, wrap modes, filter).
 class TextureLoader {
  public:
-  TextureLoader(Scene& scene, BakeReport& report) : scene_(scene), report_(report) {}
+  // `policy` (BakeOptions::inputs) and `root` (input_root of the scene file, scene_inputs.h) say
+  // which image files may be read and what a missing one does.
+  TextureLoader(Scene& scene, BakeReport& report, const InputPolicy& policy = {},
+                const std::string& root = "")
+      : scene_(scene), report_(report), policy_(policy), root_(root) {}
 
-  // Texture index for `ref` of material `material` in scene file `file`, or −1 (with one warning
-  // line) when its file is missing. InputError for a damaged or oversized image.
+  // Texture index for `ref` of material `material` in scene file `file`. A missing image file is
+  // an InputError naming the material and the file, or, with --missing-textures warn, −1 with one
+  // warning line. InputError for an image path that is not a regular file (check_input_file), one
+  // outside the scene's folder with --confine-inputs, and a damaged or oversized image.
   int load(const aiScene& ai, const std::string& file, const std::string& material,
            const TextureRef& ref);
+
+  // Charges every image that a material of `ai` names (base colour, metallic-roughness), in
+  // material order, against the scene's texel budget (kMaxTextureTexels) from its header alone,
+  // before load() decodes any: InputError naming the largest image charged when the sum passes
+  // the budget (an 8192² image then a 128² one: the 8192² is named, and neither is decoded).
+  // Images that cannot be read are left to load().
+  void charge_budget(const aiScene& ai, const std::string& file);
 
  private:
   Scene& scene_;
   BakeReport& report_;
+  InputPolicy policy_;
+  std::string root_;
+  uint64_t charged_ = 0;  // texels charge_budget counted so far
   // (decoding, image key) → pool part, name
   std::map<std::pair<int, std::string>, std::pair<pf_texture, std::string>> images_;
   std::map<std::tuple<int, std::string, int, int, int>, int> headers_;

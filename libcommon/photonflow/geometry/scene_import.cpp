@@ -65,8 +65,9 @@
 #include "photonflow/foundations/isolate.h"
 #include "photonflow/foundations/memory_cap.h"
 #include "photonflow/io/provenance.h"
-#include "photonflow/image/texture_image.h"
+#include "photonflow/geometry/scene_inputs.h"
 #include "photonflow/geometry/gltf_features.h"
+#include "photonflow/image/texture_image.h"
 #include "photonflow/geometry/light_import.h"
 #include "photonflow/geometry/material_import.h"
 
@@ -146,6 +147,19 @@ struct ImportContext {
   std::function<void(const std::string&)> reading;
 };
 
+// The first file `path` references outside its own folder ("" for none, or when the references
+// cannot be read).
+std::string reference_outside_folder(const std::string& path) {
+  try {
+    std::vector<std::string> ignored;
+    const std::string root = input_root(path);
+    for (const SceneReference& ref : scene_references(path, InputPolicy{}, root, ignored))
+      if (outside_root(ref.path, root)) return ref.path;
+  } catch (const std::exception&) {
+  }
+  return {};
+}
+
 // Reads a file with assimp; the Importer owns the returned scene. ctx.memory_mb > 0 fixes the
 // import's address-space budget, 0 makes it automatic (kImportBudget*).
 const aiScene* read_file(Assimp::Importer& importer, const std::string& path,
@@ -197,6 +211,12 @@ const aiScene* read_file(Assimp::Importer& importer, const std::string& path,
     if (ext.empty() || !importer.IsExtensionSupported(ext))
       throw input_error(path, "not a scene format assimp reads",
                         "use COLLADA (.dae), Wavefront OBJ, glTF or PLY");
+    // assimp's message may quote a referenced file's size or bytes: for a file outside the
+    // scene's folder (/etc/passwd as a buffer) it is not shown.
+    if (const std::string away = reference_outside_folder(path); !away.empty())
+      throw input_error(path, "assimp cannot read it (its message is not shown: the scene "
+                              "references " + away + ", outside its folder)",
+                        "check that the file is valid " + ext.substr(1));
     throw input_error(path, "assimp cannot read it: " + one_line(importer.GetErrorString()),
                       "check that the file is valid " + ext.substr(1));
   }
@@ -667,7 +687,8 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   if (stat(file.c_str(), &st) == 0 && S_ISREG(st.st_mode))
     check_gltf_features(file, report.warnings);  // refusals and warnings from the JSON
   const aiScene* ai = read_file(importer, file, ctx);
-  TextureLoader textures(scene, report);
+  TextureLoader textures(scene, report, options.inputs, input_root(file));
+  textures.charge_budget(*ai, file);  // from the images' headers, before any is decoded
   Flattener flattener(*ai, file, scene, report, textures);
   flattener.run("", -1, scene.triangles, scene.uvs);
   if (scene.triangles.empty())
@@ -973,7 +994,13 @@ UpAxis dominant_axis(const Vec3& up) {
 Scene bake_scene(const BakeOptions& options, BakeReport& report) {
   report = BakeReport();
   Stopwatch import_clock;
+  // Every file the scene and the inserts reference, checked before assimp opens any of them (it
+  // opens glTF buffers and OBJ material libraries itself; a FIFO among them would hang it).
+  std::vector<std::string> inserts, warnings;
+  for (const MeshInsert& ins : options.inserts) inserts.push_back(ins.path);
+  check_scene_inputs(options.input, inserts, options.inputs, warnings);
   Scene scene = import_isolated(options, report);
+  report.warnings.insert(report.warnings.begin(), warnings.begin(), warnings.end());
   report.import_seconds = import_clock.seconds();
   finish_scene(scene, options.kd);
   // A baked scene is one load_scene reads: refused here, naming the source, when the file's

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "photonflow/geometry/scene_inputs.h"
+
 #include "photonflow/geometry/kdtree.h"
 #include "photonflow/geometry/scene.h"
 #include "photonflow/foundations/vec.h"
@@ -72,6 +74,9 @@ struct BakeOptions {
   // Time limit of the import in seconds (bake_scene's child process); 0 = automatic: 60 s + 10 s
   // per MB of the input files. An import still running then is killed and refused (InputError).
   double import_seconds = 0;
+  // What the bake does with the files the scene references (scene_inputs.h): --confine-inputs,
+  // --missing-textures.
+  InputPolicy inputs;
 };
 
 // What the bake found and did, for the tool's summary and warnings.

@@ -135,6 +135,35 @@ DecodedImage decode_jpeg_texture(const std::string& bytes, const std::string& na
 
 }  // namespace
 
+bool texture_image_size(const std::string& bytes, uint64_t& width, uint64_t& height) {
+  static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  const auto* b = reinterpret_cast<const unsigned char*>(bytes.data());
+  // PNG (ISO 15948 §5.6): the signature, then IHDR first: length, "IHDR", width, height (big-endian).
+  if (bytes.size() >= 24 && std::memcmp(b, kPng, 8) == 0 && std::memcmp(b + 12, "IHDR", 4) == 0) {
+    auto be32 = [](const unsigned char* p) {
+      return uint64_t(p[0]) << 24 | uint64_t(p[1]) << 16 | uint64_t(p[2]) << 8 | uint64_t(p[3]);
+    };
+    width = be32(b + 16);
+    height = be32(b + 20);
+    return true;
+  }
+  if (bytes.size() >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff) {
+    JpegState s;
+    s.info.err = jpeg_std_error(&s.err.mgr);
+    s.err.mgr.error_exit = jpeg_on_error;
+    s.err.mgr.emit_message = jpeg_on_message;
+    s.err.message[0] = 0;
+    const bool ok = jpeg_header_step(&s, b, static_cast<unsigned long>(bytes.size()));
+    if (ok) {
+      width = s.info.image_width;
+      height = s.info.image_height;
+    }
+    if (s.created) jpeg_destroy_decompress(&s.info);
+    return ok;
+  }
+  return false;
+}
+
 DecodedImage decode_texture_image(const std::string& bytes, const std::string& name, int max_side,
                                   uint64_t max_texels) {
   static const unsigned char kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
@@ -143,8 +172,10 @@ DecodedImage decode_texture_image(const std::string& bytes, const std::string& n
   if (bytes.size() >= 3 && static_cast<unsigned char>(bytes[0]) == 0xff &&
       static_cast<unsigned char>(bytes[1]) == 0xd8 && static_cast<unsigned char>(bytes[2]) == 0xff)
     return decode_jpeg_texture(bytes, name, max_side, max_texels);
-  throw input_error(name, "is not a PNG or JPEG image (" + std::to_string(bytes.size()) +
-                              " bytes)",
+  // Neither its size nor its bytes are told: the file may be one the scene has no business
+  // naming (/etc/passwd).
+  throw input_error(name, bytes.empty() ? "is an empty file, not a PNG or JPEG image"
+                                        : "is not a PNG or JPEG image",
                     kHint);
 }
 

@@ -20,4 +20,10 @@ struct DecodedImage {
 DecodedImage decode_texture_image(const std::string& bytes, const std::string& name, int max_side,
                                   uint64_t max_texels);
 
+// The width and height a PNG or JPEG file's header gives (PNG: the IHDR chunk; JPEG: the frame
+// header jpeg_read_header reaches), without decoding a pixel; false when `bytes` (the file, or
+// its first part) holds no such header. The texel budget is charged from it before any image is
+// decoded.
+bool texture_image_size(const std::string& bytes, uint64_t& width, uint64_t& height);
+
 }  // namespace pf
