@@ -29,7 +29,7 @@
 #include "photonflow/stages/grid_shared.h"
 
 #define PF_CHUNK 256
-#define PF_SCAN_ITEMS 16 /* entries per work-item of scan_blocks (kScanItems in cl_gather.cpp) */
+#define PF_SCAN_ITEMS 16 /* entries per work-item of scan_blocks (kScanItems in cl_scan_sort.cpp) */
 
 /* bounds[8·m + 0..2] = ordered lo, 3..5 = ordered hi, 6 = count (host initialises lo to INT_MAX,
  * hi to INT_MIN, count to 0). Meshes mesh_first .. mesh_first + span − 1 only; `lb` holds 7·span

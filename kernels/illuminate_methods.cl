@@ -1,7 +1,7 @@
 /*
  * illuminate_methods.cl — hitpoint illumination of progressive photon mapping on the device: the
  * naive gather (thesis ch. 7.2, Table 7.1) and the accelerated variants of thesis ch. 7.3
- * (Table 7.3), plus a hashed grid. gather_method.h lists them; cl_gather.cpp launches them.
+ * (Table 7.3), plus a hashed grid. gather_method.h lists them, cl_gather_methods.cpp runs them.
  *
  * Every kernel selects exactly the photons illuminate.h's rule selects (same mesh; not
  * PF_PHOTON_DIRECT when direct light came from shadow rays; dot(photon.dir, normal) < 0, except
@@ -22,9 +22,10 @@
  * a photon the rule accepts and the selected set stays exact.
  *
  * Work-group layout. Kernels with local memory stage photons in tiles of the work-group size L.
- * Hitpoint orders (hitpoint sorting, clusters) come from the host (cl_gather.cpp): entry s of
- * `order` is a hitpoint index or −1 (a filler, idle), and work-group g covers entries
- * g·L … (g+1)·L − 1, all of one mesh (per-mesh runs and clusters are padded to multiples of L).
+ * Hitpoint orders (hitpoint sorting, clusters) come from the host (cl_gather_methods.cpp,
+ * cl_clusters.cpp): entry s of `order` is a hitpoint index or −1 (a filler, idle), and work-group
+ * g covers entries g·L … (g+1)·L − 1, all of one mesh (per-mesh runs and clusters are padded to
+ * multiples of L).
  */
 #pragma OPENCL FP_CONTRACT OFF
 #include "photonflow/foundations/shared_types.h"
@@ -573,9 +574,9 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  * size makes that the common case) no two cells share a slot, and a row is one run of photons
  * (two if it wraps around the table).
  *
- * The hitpoints come split (pf_gather_site, read; pf_ppm_state, read and rewritten: cl_gather.cpp
- * splits and merges them): 72 bytes of traffic per hitpoint instead of 168 for whole pf_hitpoint
- * records (1080p gather on PoCL 56–64 → 57–59 ms, docs/BENCHMARKS.md).
+ * The hitpoints come split (pf_gather_site, read; pf_ppm_state, read and rewritten:
+ * cl_pass_inputs.cpp splits and merges them): 72 bytes of traffic per hitpoint instead of 168 for
+ * whole pf_hitpoint records (1080p gather on PoCL 56–64 → 57–59 ms, docs/BENCHMARKS.md).
  * One work-item owns one hitpoint for the whole pass, so the kernel also applies eq. 3.14–3.18 to
  * it (pf_ppm_update_state, the arithmetic of ppm_apply on the same sums: the same state) instead of
  * leaving m and τ_M in accumulators for ppm_apply, and it reduces the largest finite positive

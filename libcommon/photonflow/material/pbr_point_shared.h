@@ -72,8 +72,8 @@ PF_INLINE void pf_pbr_params_at(PF_GLOBAL const pf_material* m, PF_GLOBAL const 
 
 /* A PBR visible point as the device gathers read it (kernels/illuminate_methods.cl): its BSDF
  * and ω_o = −hp.dir (the split hitpoints of the hashed grid carry no direction). One per hitpoint
- * of a pass, built by the host (cl_gather.cpp) from the hitpoints and their pf_pbr_point table;
- * entries of diffuse hitpoints are never read. 48 bytes. */
+ * of a pass, built by the host (cl_pass_inputs.cpp) from the hitpoints and their pf_pbr_point
+ * table; entries of diffuse hitpoints are never read. 48 bytes. */
 typedef struct {
   pf_pbr_point pt;
   pf_float wo[3];

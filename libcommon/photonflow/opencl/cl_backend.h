@@ -9,11 +9,11 @@
 //   trace_photons   — kernels/trace_photons.cl: one work-item per photon, fixed bounce limit,
 //                     per-photon slots compacted on the host into the CPU's order (or, by
 //                     trace_photons_device, on the device, for a pass gathered there);
-//   ppm_pass        — kernels/illuminate_methods.cl (cl_gather.cpp; f per photon at PF_MAT_PBR
-//                     hitpoints, HitpointSet::bsdf, MATERIALS.md): the naive gather (every
-//                     hitpoint loops over all photons; thesis Table 7.1 "Hitpoint Illumination",
-//                     the CPU's summation order) and the accelerated variants of thesis ch. 7.3
-//                     (gather_method.h), all with the CPU's acceptance rule;
+//   ppm_pass        — kernels/illuminate_methods.cl (cl_gather_methods.cpp; f per photon at
+//                     PF_MAT_PBR hitpoints, HitpointSet::bsdf, MATERIALS.md): the naive gather
+//                     (every hitpoint loops over all photons; thesis Table 7.1 "Hitpoint
+//                     Illumination", the CPU's summation order) and the accelerated variants of
+//                     thesis ch. 7.3 (gather_method.h), all with the CPU's acceptance rule;
 //   synthesize      — kernels/synthesize.cl: one work-item per pixel adds its hitpoints in array
 //                     order (the CPU's bits).
 //

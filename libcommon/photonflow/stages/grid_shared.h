@@ -1,5 +1,5 @@
 /*
- * grid_shared.h — grid arithmetic shared by the host (photon_grid.h, clusters.h, cl_gather.cpp)
+ * grid_shared.h — grid arithmetic shared by the host (photon_grid.h, clusters.h, cl_build_grid.cpp)
  * and the OpenCL kernels (kernels/build_grid.cl, kernels/illuminate_methods.cl), compiled as C++
  * and as OpenCL C 1.2 so that both sides put every photon into the same bin, bit for bit:
  *

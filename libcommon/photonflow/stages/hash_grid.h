@@ -11,7 +11,7 @@
 //
 // Two builders give these arrays byte for byte (tested):
 //   device  build_grid.cl's key_hash_cell, scan, scatter, per-slot sort and permute_photons_keys
-//           (cl_gather.cpp) — atomic counters, so the per-slot sort restores index order;
+//           (cl_build_grid.cpp) — atomic counters, so the per-slot sort restores index order;
 //   host    order_hash_grid below — a sequential-per-worker counting sort over contiguous runs of
 //           photons, written straight into the (mapped) device buffers: no photon upload apart
 //           from it, and no atomics. On a CPU device (PoCL) the kernels and the host share the
