@@ -1,5 +1,5 @@
 // ga_checkpoint.h — the GA's checkpoint file (photonflow.ga_checkpoint, docs/FORMATS.md), for
-// ga_clusters.cpp's evolution loop only: the chromosome and history of a run written every
+// ga_evolution.cpp's evolution loop only: the chromosome and history of a run written every
 // --checkpoint-every generations and read back by --resume, checked on read and before it is
 // written with the same function (validate_checkpoint; validate.h written_check).
 #pragma once

@@ -1,5 +1,5 @@
 // The genetic algorithm's evolution loop (thesis ch. 8; ga_clusters.h: evolve_clusters): the
-// population, selection and mutation over GaState chromosomes (ga_clusters.cpp), checkpoints
+// population, selection and mutation over GaState chromosomes (ga_chromosome.h), checkpoints
 // (ga_checkpoint.h) and the worker pool that evaluates a generation.
 #include "photonflow/stages/ga_clusters.h"
 
