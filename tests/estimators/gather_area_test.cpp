@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "photonflow/estimators/gather_area.h"
+#include "photonflow/estimators/gather_area_clip.h"
 #include "photonflow/stages/illuminate.h"
 #include "photonflow/geometry/procedural.h"
 #include "photonflow/estimators/render_driver.h"

@@ -73,10 +73,6 @@ const char* gather_area_name(GatherArea a);
 // or "disc". InputError naming --gather-area otherwise, or for surface without new_eye_pass.
 GatherArea parse_gather_area(const std::string& text, bool new_eye_pass);
 
-// The area of the part of the disc of radius `rho` about the origin that lies in the convex
-// polygon p[0..n) (x, y pairs, counter-clockwise). Exact up to rounding; 0 for n < 3.
-double disc_polygon_area(const double* p, int n, double rho);
-
 // The measure (1) over one scene's meshes (the hierarchies, built once).
 class SurfaceArea {
  public:
