@@ -74,7 +74,7 @@ const std::set<std::string> kNoDefault = {
     "scene", "output", "hitpoints", "photons", "grid", "state", "clusters", "distribution",
     "input", "eye", "look-at", "up", "fov", "focus-distance", "insert", "insert-box", "insert-material",
     "checkpoint", "sums", "range", "parts", "reference", "test", "mask", "json", "time-limit",
-    "out"};
+    "out", "options-file"};
 
 // Every option of `help` with a printed default must be in `recorded` (the parameters of a run
 // record or a provenance group) with that value; options given on the command line (`given`) and
