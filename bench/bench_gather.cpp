@@ -1,6 +1,6 @@
 // bench_gather — the thesis's Tables 7.3, 7.4 and 7.5 (ch. 7.3) on this machine: every gather
 // method of gather_method.h for one PPM pass, k-means against grid clusters, and hitpoint counts
-// with fillers (docs/BENCHMARKS.md, "Accelerated gathers (issue 5)").
+// with fillers (docs/BENCHMARKS.md, "Accelerated gathers: thesis Tables 7.3, 7.4 and 7.5").
 //
 //   bench_gather [--dae data/cornell-box.dae | --scene scene.h5] [--sizes 320x280,1920x1080]
 //                [--cluster-sizes 320x280,854x480,1280x720,1920x1080] [--photons 100000]

@@ -1,4 +1,4 @@
-// bench_io — the cost of the file formats photonflow hands to libraries (issue 26): SHA-256 of a
+// bench_io — the cost of the file formats photonflow hands to libraries: SHA-256 of a
 // large input file (sha256_file, as every stage hashes its inputs for provenance) and writing the
 // PNG preview of an image (write_png, as synthesize, render and pathtrace do), then libpng's
 // encoding alone of the same pixels at several zlib levels and row filters (the choice behind

@@ -1,6 +1,6 @@
 // bench_opencl — the thesis's Tables 7.1/7.2 (ch. 7.2) on this machine: the CPU backend against the
 // OpenCL backend (PoCL on the CPU here, or a GPU driver), per block, median of --runs runs
-// (docs/BENCHMARKS.md, "OpenCL backend (issue 4)").
+// (docs/BENCHMARKS.md, "OpenCL backend").
 //
 //   bench_opencl [--scene scene.h5 | --dae data/cornell-box.dae] [--sizes 320x280,1920x1080]
 //                [--photons 100000] [--runs 5] [--gather-runs 5] [--gather-sample 0]

@@ -1,6 +1,6 @@
-// bench_pipeline — per-stage times of the CPU progressive-photon-mapping pipeline (issue 3), the
+// bench_pipeline — per-stage times of the CPU progressive-photon-mapping pipeline, the
 // CPU column of the thesis's Tables 7.1/7.2, plus PPM throughput and peak memory. Prints markdown
-// tables (docs/BENCHMARKS.md, "CPU pipeline (issue 3)").
+// tables (docs/BENCHMARKS.md, "CPU pipeline").
 //
 //   bench_pipeline [--scene scene.h5 | --dae data/cornell-box.dae] [--runs 5] [--threads 1,2]
 //                  [--sizes 320x280,1920x1080] [--photons 100000]

@@ -1,5 +1,6 @@
 // bench_raycast — ray casting throughput (ropes, stack, brute force, Embree 3) and kd-tree build
-// time / memory on procedural scenes. Prints markdown tables (docs/BENCHMARKS.md, issue 2).
+// time / memory on procedural scenes. Prints markdown tables (docs/BENCHMARKS.md, "Ray casting
+// and kd-tree build").
 //
 //   bench_raycast [--rays 200000] [--image 512] [--runs 5] [--mesh PATH] ...
 //

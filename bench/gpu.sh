@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # bench/gpu.sh — the GPU columns of the benchmarks (Tables 7.3–7.5, 8.4) on a machine that has an
 # OpenCL GPU driver but none of photonflow's Debian packages and no network (the lent GPU machines
-# of docs/BENCHMARKS.md, issue-4 section).
+# of docs/BENCHMARKS.md, "OpenCL backend").
 #
 #   bench/gpu.sh pack [BUILD]      here: copies the benchmark and OpenCL test binaries of BUILD
 #                                  (default build) and the shared libraries they need (less the C
@@ -15,16 +15,16 @@
 #                 intersect_shared.h built by the driver give the host's results; the GA's
 #                 clusters and device-time fitness)
 #       gather    Tables 7.3–7.5 (bench_gather --runs 5)
-#       targets   issue 5's GPU targets alone (a few minutes): naive against hash-grid at 320×280
-#                 and 1920×1080 (bench_gather --runs 5), once with the GPU's default gather and
-#                 once with the CPU devices' pending list (PF_GATHER_LIST=32)
+#       targets   the GPU targets of "Accelerated gathers" alone (a few minutes): naive against
+#                 hash-grid at 320×280 and 1920×1080 (bench_gather --runs 5), once with the GPU's
+#                 default gather and once with the CPU devices' pending list (PF_GATHER_LIST=32)
 #       ga        Table 8.4, the device-time fitness (bench_ga, 3 runs × 300 generations × 50;
 #                 the CPU fitnesses of Tables 8.1–8.3 are skipped, they do not use the device)
-#       opencl    the per-block table of issue 4 (bench_opencl --runs 5)
+#       opencl    the per-block table of "OpenCL backend" (bench_opencl --runs 5)
 #     ARGS are passed on to the benchmark (e.g. --cl-platform 1 --cl-device 0).
 #
 # The NVIDIA driver registers no ICD file on those machines (their /etc/OpenCL/vendors names only a
-# PoCL that finds no device there: seen on the H100 machine, 2026-11-22); `run` writes one naming
+# PoCL that finds no device there, as on the H100 machine); `run` writes one naming
 # libnvidia-opencl.so.1 (when found) into a temporary vendors folder and points OCL_ICD_VENDORS at
 # it, so the NVIDIA platform is the only one. Without that library, or with OCL_ICD_VENDORS already
 # set, the ICD loader's usual search applies.

@@ -203,8 +203,9 @@ static inline void pf_gather_payload(pf_gather_hp* h, __global const pf_photon_p
  *          when the hitpoint's rows are done (pf_pending_flush). The default on a CPU device
  *          (32): PoCL runs a work-item's loops as scalar code, and there the per-lane and
  *          per-block branches mispredict (at 1920×1080 a hitpoint tests 33 candidates in 10
- *          blocks of four and accepts 6, spread over the blocks): 1080p gather 88 → 62–68 ms,
- *          and 56 ms since a block's passing lanes are stored as one compacted vector.
+ *          blocks of four and accepts 6, spread over the blocks); the list, to which a block's
+ *          passing lanes go as one compacted vector, avoids those branches (docs/BENCHMARKS.md
+ *          "How hash-grid's pass is built").
  * Both read the accepted photons in the same order (index order within a row, rows in box
  * order), so both give the same sums, byte for byte (tested with lists of 4 and 32). */
 #ifndef PF_GATHER_LIST
@@ -278,7 +279,8 @@ static inline void pf_gather_keyed(pf_gather_hp* h, __global const pf_photon_key
     /* The passing lanes' indices, compacted in lane order (pf_passing_lanes), are stored as one
      * vector at n, and n moves past those that passed: entries n .. n + 3 <= PF_GATHER_LIST − 1.
      * (Storing lane by lane with n −= ok.sK between the stores chained every store's address on
-     * the previous lane's test: 1080p gather 63–68 → 56 ms on PoCL, docs/BENCHMARKS.md.) */
+     * the previous lane's test, a slower gather on PoCL: docs/BENCHMARKS.md "How hash-grid's
+     * pass is built".) */
     const int4 bit = ok & (int4)(1, 2, 4, 8); /* a vector comparison is −1 when true */
     const int passed = bit.s0 | bit.s1 | bit.s2 | bit.s3;
     vstore4((int4)(4 * b) + pf_passing_lanes[passed], 0, &pend->j[n]);
@@ -576,7 +578,7 @@ __kernel void gather_grid_clusters(__global const pf_hitpoint* hps, __global con
  *
  * The hitpoints come split (pf_gather_site, read; pf_ppm_state, read and rewritten:
  * cl_pass_inputs.cpp splits and merges them): 72 bytes of traffic per hitpoint instead of 168 for
- * whole pf_hitpoint records (1080p gather on PoCL 56–64 → 57–59 ms, docs/BENCHMARKS.md).
+ * whole pf_hitpoint records (docs/BENCHMARKS.md "How hash-grid's pass is built").
  * One work-item owns one hitpoint for the whole pass, so the kernel also applies eq. 3.14–3.18 to
  * it (pf_ppm_update_state, the arithmetic of ppm_apply on the same sums: the same state) instead of
  * leaving m and τ_M in accumulators for ppm_apply, and it reduces the largest finite positive

@@ -12,8 +12,8 @@
  * program variant's options, ClContext::kernel), so every variant takes the same paths and
  * returns the same bits for that scene; a 0 merely lets the compiler drop branches the scene
  * never takes. That matters on PoCL, which vectorises a work-group's work-items together: a
- * branch one work-item could take costs every work-item its registers (issue 32 item 9: the PBR
- * gather made the diffuse hashed-grid gather 1.3× slower before this).
+ * branch one work-item could take costs every work-item its registers (docs/BENCHMARKS.md "Materials, alpha cut-outs and
+ * lights: a diffuse scene's pass rate").
  * Without options (PHOTONFLOW_KERNEL_DIR builds by hand, tests that build a program directly)
  * every feature is on, which is correct for every scene.
  */

@@ -1,5 +1,6 @@
-# accuracy.mk — speed against accuracy (issue 7, item 3): image error against a long reference as
-# a function of wall time and of passes, for every bundled scene and every method:
+# accuracy.mk — speed against accuracy (docs/RESULTS.md "Speed against accuracy"): image error
+# against a long reference as a function of wall time and of passes, for every bundled scene and
+# every method:
 #
 #   pt        path tracing (`pathtrace`), snapshots every PT_EVERY samples per pixel
 #   ppm       progressive photon mapping on the CPU (`render --method grid`, α = 0.7) with
@@ -27,7 +28,7 @@
 # so that their wall times do not disturb each other; each run records the load average before
 # and after. bench/accuracy.py collects the metrics into TSV files and draws the charts.
 #
-#   make -f pipelines/accuracy.mk BUILD=build-acc                 all (8.6 min here, load 1–3)
+#   make -f pipelines/accuracy.mk BUILD=build-acc                 all (about 10 minutes on 2 cores)
 #   make -f pipelines/accuracy.mk BUILD=build-acc report          charts and tables only
 #   make -f pipelines/accuracy.mk BUILD=build-acc SCENES=sds-pool one scene
 #   make -B -f pipelines/accuracy.mk ...                          measure everything again

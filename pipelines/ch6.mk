@@ -1,9 +1,9 @@
-# ch6.mk — the thesis's ch. 6.5 experiments on this machine (issue 7, item 4): spatial index
+# ch6.mk — the thesis's ch. 6.5 experiments on this machine: spatial index
 # (Table 6.1), photon-map build and k-nearest search with ANN, FLANN and nanoflann (Tables
 # 6.2–6.5), image error of approximate search (Fig. 6.8). Tables go to docs/results/ch6-*.md,
 # charts to docs/results/ch6-*.png; docs/results/ch6.md discusses them (written by hand).
 #
-#   make -f pipelines/ch6.mk                  everything (11 minutes on 2 cores shared at load 6)
+#   make -f pipelines/ch6.mk                  everything (about 10 minutes on 2 cores)
 #   make -f pipelines/ch6.mk index            Table 6.1 only
 #   make -f pipelines/ch6.mk BUILD=build-ch6 RUNS=5
 #

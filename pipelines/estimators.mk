@@ -1,7 +1,8 @@
 # estimators.mk — the estimators with a new eye pass every pass against the fixed one and against
 # path tracing, over ALL pixels (lights included) and over the pixels that see no emitter, at equal
 # rendering time; and SPPM's error against passes (does it reach a floor?). docs/RESULTS.md section
-# "SPPM and probabilistic PPM" quotes the report (docs/results/estimators.md).
+# "A new eye pass every pass: SPPM and probabilistic PPM" quotes the report
+# (docs/results/estimators.md).
 #
 #   make -f pipelines/estimators.mk                      all: TIME s per run, 512×512 (long: the
 #                                                         references take REF_PARTS × REF_TIME per scene)
@@ -43,7 +44,7 @@ REF_KIND_cornell-box     ?= pt
 REF_KIND_cornell-spheres ?= sppm
 REF_KIND_sds-pool        ?= sppm
 # Reference parts per scene: enough that the mean's own error is under a quarter of the SPPM error
-# it is compared with (measured at 512×512, TIME=30, REF_TIME=300; docs/RESULTS.md section 6).
+# it is compared with (measured at 512×512, TIME=30, REF_TIME=300; docs/RESULTS.md "A new eye pass every pass").
 REF_PARTS ?= 2
 REF_PARTS_cornell-box     ?= 8
 REF_PARTS_cornell-spheres ?= 4

@@ -1,4 +1,4 @@
-# ga.mk — evolutionary clustering of hitpoints (thesis ch. 8, issue 6): the thesis's Tables
+# ga.mk — evolutionary clustering of hitpoints (thesis ch. 8): the thesis's Tables
 # 8.1–8.4 on this machine, and the staged route that precomputes GA clusters once for a static
 # scene and camera and reuses them.
 #

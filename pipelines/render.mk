@@ -28,7 +28,9 @@
 # OpenCL gather of gather_method.h, e.g. grid-kmeans, with DEVICE=opencl), DEVICE (cpu | opencl |
 # auto), MAX_BINS, WG (work-group size of the clusters), EXPOSURE, BAKE_FLAGS (extra scene-bake
 # options, after the scene's own NAME.bake-options file, which scene-bake reads: pipelines/scene.mk;
-# SCENE_BAKE_OPTIONS= reads none), THREADS. The clustered OpenCL methods add the cluster stage to the DAG (clusters.h5).
+# SCENE_BAKE_OPTIONS= reads none), THREADS. With ESTIMATOR=ppm the clustered OpenCL methods add the
+# cluster stage to the DAG (clusters.h5); the other estimators go through the render driver, which
+# ignores METHOD.
 BIN        ?= build/bin
 SCENE      ?= cornell-box
 OUT        ?= out

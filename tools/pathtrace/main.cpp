@@ -1,6 +1,6 @@
 // pathtrace — unbiased path tracing of a baked scene (next-event estimation, optional MIS,
 // Russian roulette; pathtrace.h): the reference images and the speed–accuracy baseline that photon
-// mapping is compared against (issue 7). Progressive, with EXR snapshots of the running mean.
+// mapping is compared against. Progressive, with EXR snapshots of the running mean.
 #include <filesystem>
 #include <iostream>
 #include <string>

@@ -1,19 +1,13 @@
-// render_defaults.h — the defaults of render and of the staged route, chosen by measurement (issue
-// 34 item 1; docs/RESULTS.md "Defaults" has the scene set, the measurements and the commands).
+// render_defaults.h — the defaults of render and of the staged route, chosen by measurement at
+// equal time (docs/RESULTS.md "Defaults" has the scene set, the measurement behind each and the
+// commands).
 // One place defines them: render, the staged route (trace-hitpoints --estimator and --direct,
 // trace-photons --photons, illuminate --estimator) and pipelines/render.mk (which passes "auto")
 // take them from here, so a run without flags gets the same numbers by either route.
 //
 //   estimator   pppm (a new eye pass every pass, independent passes with a global radius
-//               schedule; mergeable). RESULTS.md section 6 (512×512, 30 s): sppm and pppm 7.9–14.6×
-//               less RMSE than ppm on the three scenes of data/. Section 8 (the same, with shadow
-//               rays, against Mitsuba references, medians of 3 runs): pppm below sppm on all
-//               three scenes measured there, by 9 % (diffuse box), 1–2 % (mirror and glass
-//               balls) and 5 % (the 205,663-triangle box) over all pixels and 4–10 % away from
-//               the lights; section 9 has the glossy showcase scenes)
-//   direct      shadow-rays (issue 34's side-by-side runs with sppm, 512×512, 30 s, 262,144
-//               photons: diffuse box 0.0080 → 0.0066 RMSE over all pixels, 0.0076 → 0.0056 away
-//               from the lights; 200k-triangle box 0.0132 → 0.0123 and 0.0120 → 0.0096)
+//               schedule; mergeable): the lowest error of ppm, sppm and pppm at equal time
+//   direct      shadow-rays: less error than direct light by photons at equal time
 //   photons     automatic, from the image size: twice the photons per pass at which tracing them
 //               costs as long as the pass's eye paths (kEyePixelCostInPhotons, measured;
 //               kAutoPhotonShare, measured; auto_photons)
@@ -24,10 +18,10 @@
 //               eye_pass.h): R0 = s · max(scene diagonal / 200, 4 · pixel angle · look-at
 //               distance), s = 2 in a scene of diffuse surfaces only, 1.5 with mirrors, glass
 //               or PBR materials (radius_scale: kRadiusScaleDiffuse, kRadiusScale), the factors
-//               since the surface gather area
+//               measured with the surface gather area
 //   gather-area surface for sppm and pppm (estimators/gather_area.h): the estimate divides by
-//               the surface the gather region holds, unbiased at corners and edges; measured in
-//               docs/RESULTS.md section 8, "Gather area"
+//               the surface the gather region holds, unbiased at corners and edges (docs/RESULTS.md
+//               "Gather area")
 //
 // No double counting with direct light by shadow rays (thesis eq. 3.7: L = L_e + L_direct +
 // L_specular + L_caustic + L_indirect; Hachisuka & Jensen 2009, section 4, SPPM's direct light
@@ -62,52 +56,36 @@ constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
 // Roughness below which SPPM's and PPPM's eye paths continue through a glossy point without a
 // diffuse base (a metal, or glass that transmits fully) by sampling its BSDF rather than making
 // their visible point there (EyePassOptions::glossy_threshold, pf_pbr_eye_continues); PPM's fixed
-// eye pass keeps 0. 0 (never) by measurement, docs/RESULTS.md section 9: on the showcase scenes at
-// equal time, thresholds 0.5 and 1 raised the RMSE 1.5–1.9× on data/showcase.gltf (rare, very
-// bright samples through the rough-glass sphere, e.g. one pass adding ~10^4 to a pixel) and
-// 1.03–1.08× on showcase-caustics; the option stays for scenes of smooth metal.
+// eye pass keeps 0. 0 (never): on the showcase scenes at equal time, higher thresholds raised the
+// error (rare, very bright samples through the rough-glass sphere; docs/RESULTS.md "Defaults");
+// the option stays for scenes of smooth metal.
 constexpr float kDefaultGlossyThreshold = 0.f;
 
 // Emission samples per pass in each pixel that sees an emitter directly or through mirrors and
-// glass (EyePassOptions::emission_spp, eye_pass.h emission_pixels), every estimator. 8 by
-// measurement, docs/RESULTS.md sections 7 and 8 (2026-12-03, 30 s at 512×512 against the Mitsuba
-// references, 2 runs a scene): the all-pixel RMSE of the mirror-and-glass box 0.73× (16: 0.72×),
-// the diffuse box 0.89×, the pass rate and the error away from the lights unchanged (±2 %).
+// glass (EyePassOptions::emission_spp, eye_pass.h emission_pixels), every estimator. 8: they lower
+// the error over all pixels at equal time and leave the pass rate and the error away from the
+// lights unchanged (docs/RESULTS.md "Emission samples").
 constexpr int kDefaultEmissionSpp = 8;
 
 // Light samples per visible point and pass with shadow rays (EyePassOptions::shadow_samples;
-// render's and trace-hitpoints' --shadow-samples auto). sppm and pppm: 1, by measurement
-// (docs/RESULTS.md sections 7 and 8, "Light samples", 2026-12-04, 30 s at 512×512 against the
-// Mitsuba references, medians of 3): with the pixel's Sobol points as light samples the variance
-// away from the lights at equal passes falls 2.3× at 1 sample a pass (1.4× at 4) on the diffuse
-// box (with 4× the photons, so that the light samples' share shows);
-// 1 sample against 4 at equal time, both with 366,592 photons: 0.99 / 0.99 (diffuse box, all
-// pixels / away from the lights), 1.00 / 1.00 (mirror and glass balls), 0.95 / 0.95 (205,663
-// triangles, where 1 sample runs 6–10 % more passes); 2 samples were worse than 1 on all three
-// (1.02–1.05). ppm: 4 (its one eye pass keeps them: they are the direct light's only samples for
-// the whole run).
+// render's and trace-hitpoints' --shadow-samples auto). sppm and pppm: 1, since the pixel's Sobol
+// points over the passes are its light samples, and at equal time one a pass does as well as more
+// (docs/RESULTS.md "Light samples and the photon share"). ppm: 4 (its one eye pass keeps them:
+// they are the direct light's only samples for the whole run).
 constexpr int kDefaultShadowSamples = 1;
 constexpr int kPpmShadowSamples = 4;
 
 // The eye pass of one pixel (one eye sample, its shadow rays and its gather: render's default
 // estimator and direct light) costs as much time as this many photons (each emitted, traced and
-// sorted into the pass's grid). Measured with
-//   bench/photon_balance.sh build        (WIDTH=512 HEIGHT=512 PASSES=12 FEW=16384 MANY=524288)
-// on the three scenes of data/, 2026-12-02, the 2-core machine at load 3.5–4 from other jobs: the
-// eye pass of a pixel cost 0.712 / 0.722 photons on cornell-box (two runs; eye pass 0.123 / 0.178
-// s, 0.66 / 0.94 µs a photon), 0.540 / 0.498 on cornell-spheres, 2.357 / 0.930 on sds-pool; the
-// median over the scenes, 0.712 / 0.722, rounded (docs/RESULTS.md section 7).
+// sorted into the pass's grid): the median over the three scenes of data/, rounded, measured by
+// bench/photon_balance.sh (docs/RESULTS.md "Defaults", the photon count per pass).
 constexpr double kEyePixelCostInPhotons = 0.7;
 // The automatic count spends this share of a pass's time tracing photons (the rest on the eye
 // pass): photons = share / (1 − share) · kEyePixelCostInPhotons · pixels. 2/3 (twice the
-// photons of an even split) by measurement, docs/RESULTS.md section 7 (2026-12-04, with emission
-// samples; 30 s at 512×512 against the Mitsuba references, medians of 3 runs): against 1/2,
-// 0.92 / 0.90 (diffuse box, all pixels / away from the lights), 1.01 / 0.98 (mirror and glass
-// balls), 0.97 / 0.94 (205,663 triangles); 3/4 gave 0.90 / 0.87, 1.07 / 1.00, 0.94 / 0.92. Before
-// the emission samples (section 7, 2026-12-03) the pixels that see a lamp converged only with the
-// passes and an even split was best over all pixels; they now converge 9× as densely, and more
-// photons a pass pay on the rest of the image. The optimum is flat and scene-dependent (issue 34:
-// 100,000 against 262,144 photons changed the error by 10–15 %, better or worse by scene).
+// photons of an even split), chosen at equal time against 1/2 and 3/4 (docs/RESULTS.md "Light
+// samples and the photon share"): with the emission samples the pixels that see a lamp converge
+// quickly, and more photons a pass pay on the rest of the image. The optimum is flat and
+// scene-dependent.
 constexpr double kAutoPhotonShare = 2.0 / 3.0;
 // The automatic count is a multiple of kAutoPhotonsStep within [kMinAutoPhotons, kMaxAutoPhotons].
 constexpr uint32_t kAutoPhotonsStep = 1024;

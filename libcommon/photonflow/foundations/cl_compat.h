@@ -1,6 +1,7 @@
 /*
  * cl_compat.h — the few macros that let one C source compile both as C++ (host) and as OpenCL C
- * 1.2 (kernels): rng.h, ppm.h, sampling_shared.h and intersect_shared.h use them.
+ * 1.2 (kernels): every header the kernels compile from the host's tree (the *_shared.h headers,
+ * rng.h, ppm.h, pixel_sampler.h) includes it.
  *
  *   PF_INLINE  function qualifier: `static inline` in OpenCL C (C99 inline semantics would
  *              otherwise ask for an external definition), `inline` in C++ (one definition across

@@ -191,7 +191,8 @@ typedef struct {
 /* A hitpoint as the hashed-grid gather keeps it on the device (cl_gather.h), split by access: the
  * fields a pass only reads, and the PPM state (R, N, τ: eq. 3.14–3.18) it reads and rewrites —
  * the same values as pf_hitpoint's. A pass moves 32 + 2·20 bytes per hitpoint instead of 2·84
- * (the gather's hitpoint stream is memory-bound on a CPU device, docs/BENCHMARKS.md). */
+ * (the gather's hitpoint stream is memory-bound on a CPU device: docs/BENCHMARKS.md "How
+ * hash-grid's pass is built"). */
 typedef struct {
   pf_float position[3];
   pf_float normal[3];

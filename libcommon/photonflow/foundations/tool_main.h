@@ -86,8 +86,7 @@ inline int run_tool(const char* tool, const std::function<int()>& body) {
   }
 }
 
-// An option's old spelling, still accepted for one release (issue 34: one vocabulary across the
-// tools): parse_options reads `--old_name V` (or `--old_name=V`) as `--new_name V`, says so in one
+// An option's old spelling, still accepted for one release (one vocabulary across the tools): parse_options reads `--old_name V` (or `--old_name=V`) as `--new_name V`, says so in one
 // line on stderr ("pathtrace: --time-limit is deprecated, use --time (accepted until the next
 // release)"), and lists the old spelling in --help under "Deprecated". Provenance and run records
 // carry the new name only; the command line as typed is kept in command_line.

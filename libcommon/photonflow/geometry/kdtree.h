@@ -36,14 +36,15 @@ constexpr int kKdBins = 64;
 // Nodes with fewer triangle references than this are split by the exact event sweep.
 constexpr size_t kKdExactMaxTriangles = 1024;
 
-// Defaults measured by rendering (docs/BENCHMARKS.md "kd-tree costs for the renderer"): with the
-// leaf test taking eight triangles per AVX operation and secondary rays starting their walk in
-// their origin's leaf (raycast.h), a traversal step costs about ten Havel–Herout tests and empty
-// space is cut off less eagerly: C_ts 10, empty bonus 0.2 make a tree of a quarter of the nodes
-// on the 200k-triangle box and render it 13 % faster (CPU and OpenCL) than C_ts 3, bonus 0.5
-// (the defaults until December 2026, chosen by bench/bench_raycast.cpp's single random rays);
-// the small scenes render as fast with either. Larger ratios C_i/C_ts (up to pbrt's 80) deepen
-// the tree (3–5× the nodes, slower build) for fewer triangle tests and no faster rays.
+// Defaults measured by rendering (docs/BENCHMARKS.md "Walks that start in the origin's leaf, and
+// kd-tree costs for the renderer"): with the leaf test taking eight triangles per AVX operation
+// and secondary rays starting their walk in their origin's leaf (raycast.h), a traversal step
+// costs about ten Havel–Herout tests and empty space is cut off less eagerly: C_ts 10, empty
+// bonus 0.2 make a tree of a quarter of the nodes on the 200k-triangle box and render it faster
+// (CPU and OpenCL) than C_ts 3, bonus 0.5 (what bench/bench_raycast.cpp's single random rays
+// favour); the small scenes render as fast with either. Larger ratios C_i/C_ts (up to pbrt's 80)
+// deepen the tree (several times the nodes, slower build) for fewer triangle tests and no faster
+// rays.
 struct KdBuildParams {
   float cost_traversal = 10.0f;  // C_ts of eq. 4.8 (cost of one traversal step)
   float cost_intersect = 1.0f;   // C_L, C_R weight per triangle of eq. 4.8

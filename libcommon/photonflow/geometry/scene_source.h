@@ -1,7 +1,7 @@
 // scene_source.h — a scene named on the command line: a baked scene.h5 or a scene source (any file
 // scene-bake reads: COLLADA, OBJ/MTL, glTF, PLY, ...), which is baked in this process with the
 // same options and the same function as scene-bake (bake_options.h, bake_scene). `render --scene`
-// takes either (issue 34: one command for any scene).
+// takes either, so one command renders any scene.
 #pragma once
 #include <string>
 #include <vector>

@@ -196,10 +196,10 @@ struct PngGuard {
   }
 };
 
-// Preview encoding: zlib level 1 with the Sub filter on every row. On a 1920x1080 render-like
-// preview (bench_io; docs/BENCHMARKS.md, "PNG, SHA-256 and JSON through libraries") it took about
-// 0.2 s for half the raw bytes; libpng's default (level 6, a filter chosen per row) about 1.8 s
-// for a file no smaller; stored blocks (level 0) 13 ms for the raw size.
+// Preview encoding: zlib level 1 with the Sub filter on every row: on a render-like preview it
+// halves the raw bytes, and libpng's default (level 6, a filter chosen per row) takes several
+// times as long for a file no smaller (bench_io; docs/BENCHMARKS.md, "PNG, SHA-256 and JSON
+// through libraries").
 constexpr int kPngZlibLevel = 1;
 constexpr int kPngFilters = PNG_FILTER_SUB;
 

@@ -1,4 +1,4 @@
-// image_metrics.h — error metrics between a rendered image and a reference (issue 7, imgcompare):
+// image_metrics.h — error metrics between a rendered image and a reference (what imgcompare prints):
 // RMSE, relative MSE, MAE, PSNR and SSIM, over all pixels or the pixels of a mask.
 //
 // Let P be the compared pixels (all, or those whose mask value is >= 0.5; pixels where either

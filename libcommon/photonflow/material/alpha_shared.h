@@ -1,6 +1,6 @@
 /*
  * material/alpha_shared.h — alpha cut-outs (glTF 2.0 alphaMode MASK, OBJ/MTL map_d), shared by
- * the C++ host and the OpenCL C 1.2 kernels (issue 32 item 3, first step).
+ * the C++ host and the OpenCL C 1.2 kernels.
  *
  * glTF 2.0 spec section 3.9.4 (alpha coverage): with alphaMode MASK, "the rendered output is
  * either fully opaque or fully transparent depending on the alpha value and the specified

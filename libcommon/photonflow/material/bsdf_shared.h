@@ -5,8 +5,10 @@
  * references, no std::; float contraction off).
  *
  * Layer: material model (libcommon/photonflow/material/). It depends only on cl_compat.h,
- * shared_types.h and sampling_shared.h (geometry helpers, the concentric disc); nothing in the
- * renderer includes it yet (issue 32: scene-bake and the tracers wire it in later).
+ * shared_types.h and sampling_shared.h (geometry helpers, the concentric disc). Used by
+ * scene-bake's material import (material_import.cpp), by geometry/surface.h (scattering at a hit:
+ * the photon pass, the eye passes and the path tracer) and, through pbr_point_shared.h and
+ * pbr_scatter_shared.h, by the OpenCL kernels.
  *
  * Parameters (pf_bsdf_params, the glTF material's values after texture lookup)
  *

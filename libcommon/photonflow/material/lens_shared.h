@@ -3,8 +3,8 @@
  * the OpenCL C 1.2 kernels.
  *
  * Layer: camera/material model (libcommon/photonflow/material/); depends on sampling_shared.h
- * (Shirley–Chiu concentric disc, vector helpers). Nothing in the renderer includes it yet
- * (issue 32 item 5: --aperture, --focus-distance and the eye passes wire it in).
+ * (Shirley–Chiu concentric disc, vector helpers). Used by the host's camera (geometry/camera.h,
+ * CameraFrame::ray) and the OpenCL eye pass (kernels/trace_hitpoints.cl) when --aperture > 0.
  *
  *   | parameter      | units        | meaning                                                |
  *   |----------------|--------------|--------------------------------------------------------|

@@ -3,7 +3,9 @@
  * wrap modes of glTF samplers, bilinear filtering, and the sRGB decode used at bake time.
  *
  * Layer: material model (libcommon/photonflow/material/); depends on cl_compat.h and
- * shared_types.h only. Nothing in the renderer includes it yet (issue 32 item 1 wires it in).
+ * shared_types.h only. Used by the scene (geometry/scene.h: the texture pool and its lookups),
+ * scene-bake's material and alpha import (material_import.cpp, alpha_import.cpp), alpha_shared.h,
+ * pbr_point_shared.h and the OpenCL kernels (kernels/trace_common.h).
  *
  * Storage: every texture of a scene lives in one pool of linear RGBA float texels (4 floats per
  * texel, row-major, row 0 first), PF_GLOBAL on the device; a texture is a pf_texture header:

@@ -1,4 +1,4 @@
-// cl_backend.h — the OpenCL backend of the render stages (issue 4; thesis ch. 7.2 GPU blocks):
+// cl_backend.h — the OpenCL backend of the render stages (thesis ch. 7.2 GPU blocks):
 // the same functions, options and results as the CPU backend (eye_pass.h, photon_pass.h,
 // illuminate.h, synthesize.h) with a device context as the last argument, so a tool or the render
 // driver switches backends with one pointer.
@@ -42,7 +42,8 @@ namespace pf {
 // " -DPF_SCENE_PBR=0" where no material is PF_MAT_PBR, " -DPF_SCENE_TEXTURES=0" without
 // textures, " -DPF_SCENE_ALPHA=0" without alpha masks; "" for a scene that has all three. Passed
 // as ClContext::kernel's variant, so a diffuse scene runs kernels without the branches of the
-// materials it lacks (issue 32 item 9), with the same results. "" too where dev has scene
+// materials it lacks, with the same results (the branches cost every work-item on PoCL:
+// kernels/scene_features.h). "" too where dev has scene
 // variants off (ClContext::scene_variants).
 std::string scene_kernel_variant(const Scene& scene, const ClContext& dev);
 

@@ -1,4 +1,4 @@
-// cl_gather.h — hitpoint illumination on the OpenCL device (issue 5; thesis ch. 7.3): the device
+// cl_gather.h — hitpoint illumination on the OpenCL device (thesis ch. 7.3): the device
 // photon orderings (kernels/build_grid.cl) and the gather methods of gather_method.h
 // (kernels/illuminate_methods.cl), behind cl_backend.h's ppm_pass(…, ClContext&).
 //

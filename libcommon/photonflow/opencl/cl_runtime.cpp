@@ -149,10 +149,10 @@ void cl_check(cl_int code, const char* what) {
 // ---- devices -----------------------------------------------------------------------------------
 
 // PoCL's default work-group method ("loopvec") vectorises the loop over a work-group's items; our
-// kernels diverge (rope traversal, bounce loops), and the masked vector code ran 1.3–1.9× slower
-// than plain work-item loops ("loops") on the benchmark (docs/BENCHMARKS.md). Set before the
-// platform is first queried; a POCL_WORK_GROUP_METHOD from the user's environment wins, and other
-// drivers ignore the variable.
+// kernels diverge (rope traversal, bounce loops), and the masked vector code runs slower than
+// plain work-item loops ("loops") on the benchmark (docs/BENCHMARKS.md "OpenCL backend"). Set
+// before the platform is first queried; a POCL_WORK_GROUP_METHOD from the user's environment
+// wins, and other drivers ignore the variable.
 void pocl_defaults() {
   static bool done = false;
   if (done) return;

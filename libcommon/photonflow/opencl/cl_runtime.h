@@ -1,4 +1,4 @@
-// cl_runtime.h — the OpenCL side of photonflow's device backend (issue 4; thesis ch. 7.2): device
+// cl_runtime.h — the OpenCL side of photonflow's device backend (thesis ch. 7.2): device
 // listing and choice (--device cpu|opencl|auto, --cl-platform, --cl-device), one context and
 // in-order queue, programs built from the embedded kernels (or from source under
 // PHOTONFLOW_KERNEL_DIR), buffers checked against the largest allocation the device allows, and

@@ -1,6 +1,6 @@
-// device_options.h — the backend options every render-stage tool shares (issue 4):
+// device_options.h — the backend options every render-stage tool shares:
 //   --device cpu|opencl|auto, --cl-platform, --cl-device, --work-group, --list-devices;
-// and --method, the gather method of the tools that illuminate hitpoints (issue 5).
+// and --method, the gather method of the tools that illuminate hitpoints.
 // Header-only so that only the tools (which link cxxopts) see cxxopts.
 #pragma once
 #include <cxxopts.hpp>

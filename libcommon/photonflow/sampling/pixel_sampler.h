@@ -157,12 +157,9 @@ PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint
  *                   pixel positions, which are dimensions 0 and 1 of i = pass·spp + s). The
  *                   samples of a pixel over all passes then stratify the light's area (u1, u2,
  *                   a (0,2)-sequence) and the choice among lights (ul) together, so a soft shadow
- *                   converges faster than with independent samples: docs/RESULTS.md section 8
- *                   ("Light samples") measured the diffuse box's variance away from the lights
- *                   at equal passes at 0.44× (1 sample a pass) and 0.73× (4); the direct light
- *                   alone at a floor point falls to 1/23 (tests/sampling/sobol_shared_test.cpp). Each point is
- *                   uniform (Owen scrambling), so
- *                   every estimate stays unbiased. j wraps past 2^32 samples per pixel (the
+ *                   converges faster than with independent samples (docs/RESULTS.md "Light
+ *                   samples and the photon share"; tests/sampling/sobol_shared_test.cpp). Each
+ *                   point is uniform (Owen scrambling), so every estimate stays unbiased. j wraps past 2^32 samples per pixel (the
  *                   sequence then repeats: after 10^9 passes of 4 samples).
  * Seeds: pf_rng_bits(sobol_key, pixel, 5) for the index, 6, 7, 8 for the three dimensions (0–4
  * serve the pixel position and the lens). */

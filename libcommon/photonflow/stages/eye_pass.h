@@ -63,9 +63,9 @@ struct EyePassOptions {
   // Every sample is an unbiased estimate of the pixel's emitted light, and the marks depend on
   // the scene and camera only, so the layer stays unbiased; the samples of a pixel over the passes
   // form one (0,2)-sequence (pixel_sampler.h). Pixels that see a lamp's outline, or a lamp through
-  // glass or in a mirror, converge with the eye samples (docs/RESULTS.md section 8: half the
-  // mirror-and-glass box's squared error sat in them); these samples cost one specular chain
-  // each, in about 1 % of the pixels of the scenes measured. 0: none (the eye samples alone).
+  // glass or in a mirror, otherwise converge only with the eye samples and hold much of a
+  // scene's error; these samples cost one specular chain each, in the few pixels marked
+  // (docs/RESULTS.md "Emission samples"). 0: none (the eye samples alone).
   // render's and trace-hitpoints' default: render_defaults.h kDefaultEmissionSpp.
   int emission_spp = 0;
   // emission_pixels(scene), kept by a caller that traces many eye passes (render); nullptr: the
@@ -105,13 +105,13 @@ int eye_strata_columns(int spp);
 // The automatic initial radius: a fraction of the scene, never below a few pixel footprints at
 // the camera-to-scene distance:  R0 = s · max(diag / 200, 4 · pixel_angle · |look_at − eye|),
 // s = kRadiusScaleDiffuse where every triangle is diffuse or an emitter (radius_scale), else
-// kRadiusScale. The factors came with the surface gather area (estimators/gather_area.h), which
-// removed the edge bias that had held the radius down (docs/RESULTS.md section 8, "Gather area"
-// and "The lamp's outline and the radius of diffuse scenes"): 1.5 gave, at equal time, 12–16 % less error over all
-// pixels and 23–32 % less away from the lights on the diffuse scenes, the mirror-and-glass box's
-// within 2 %; 2 is better still on the diffuse scenes, but blurs the caustics that mirrors and
-// glass focus (8 % worse on that box), and PBR scenes (glossy caustics) were not measured at 2.
-// ppm's fixed hitpoints start from the same R0 (not re-measured for ppm, which keeps the disc).
+// kRadiusScale. The factors go with the surface gather area (estimators/gather_area.h), which
+// removes the edge bias that holds a larger radius back: at equal time 1.5 lowers the error on
+// the diffuse scenes and leaves the mirror-and-glass box's unchanged; 2 is better still on the
+// diffuse scenes, but blurs the caustics that mirrors and glass focus, and PBR scenes (glossy
+// caustics) were not measured at 2 (docs/RESULTS.md "Gather area" and "The lamp's outline and
+// the radius of diffuse scenes"). ppm's fixed hitpoints start from the same R0 (not measured
+// separately for ppm, which keeps the disc).
 constexpr float kRadiusScale = 1.5f;
 constexpr float kRadiusScaleDiffuse = 2.f;
 float radius_scale(const Scene& scene);

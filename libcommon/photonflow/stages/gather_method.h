@@ -14,9 +14,9 @@
 // per-pixel state resident (DevicePpmState::sppm_pass), and render refuses any other --method with
 // them. The clustered methods and the GA's precomputed clusters (cluster stage) group FIXED
 // hitpoints: clusters of one pass's visible points would have to be made again every pass (k-means
-// of a 512×512 eye pass would take about 0.2 s, between the cluster stage's measured 0.05 s at
-// 320×280 and 0.95 s at 1920×1080 in docs/BENCHMARKS.md: about a whole SPPM pass on 2 cores, to
-// save part of one gather), so they are not offered for the moving estimators.
+// of an eye pass costs about a whole SPPM pass on 2 cores, docs/BENCHMARKS.md "Hitpoint clusters:
+// the `cluster` stage on the CPU", to save part of one gather), so they are not offered for the
+// moving estimators.
 //
 //   method               backend  photons read by a hitpoint                 thesis Table 7.3
 //   -------------------  -------  -----------------------------------------  ----------------

@@ -47,7 +47,7 @@ PF_INLINE pf_float pf_grid_clamp(pf_float c, pf_float top) {
  * overlapping an interval [x0, x1] are those from coord(x0) to coord(x1). NaN maps to 0.
  * The clamps are selects, not branches: photons on a scene's walls lie on the grid's faces, so
  * which side of a clamp a coordinate falls on is unpredictable, and branches mispredict on a
- * third of them (BENCHMARKS.md, issue 5, third round). */
+ * third of them (docs/BENCHMARKS.md "How hash-grid's pass is built"). */
 PF_INLINE pf_int pf_grid_coord(pf_float x, pf_float lo, pf_float bin_size, pf_int n) {
   return (pf_int)pf_grid_clamp((x - lo) / bin_size, (pf_float)(n - 1)); /* n − 1 exact: n <= 2^24 */
 }

@@ -16,7 +16,7 @@
 //           photons, written straight into the (mapped) device buffers: no photon upload apart
 //           from it, and no atomics. On a CPU device (PoCL) the kernels and the host share the
 //           same cores and memory, so this route saves the raw-photon copy and the atomic traffic
-//           (BENCHMARKS.md, issue 5); on a GPU the device builds it.
+//           (docs/BENCHMARKS.md "How hash-grid's pass is built"); on a GPU the device builds it.
 //
 // Parameters (PpmOptions, illuminate.h):
 // | option      | default | meaning                                                            |
@@ -85,8 +85,8 @@ std::vector<int32_t> hitpoint_cell_order(const std::vector<pf_hitpoint>& hitpoin
                                          const float origin[3], float cell);
 
 // The cell side of DevicePpmState's hitpoint order, in units of the largest radius: cells of 2
-// and 8 radii gave the same gather time within the spread on PoCL (1080p gather kernel 100–104 →
-// 89–93 ms either way, docs/BENCHMARKS.md); larger blocks keep more of a scanline together.
+// and 8 radii gather as fast on PoCL (docs/BENCHMARKS.md "How hash-grid's pass is built"); larger
+// blocks keep more of a scanline together.
 constexpr float kHitpointOrderCell = 8.f;
 
 

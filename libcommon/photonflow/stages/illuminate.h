@@ -93,7 +93,7 @@ void check_slab(float slab);
 void require_sphere(float slab);
 
 // The slab of sppm and pppm when --slab is not given: measured on the diffuse box, it removes the
-// bias of photons from a block's top face gathered below its edge (docs/RESULTS.md section 6)
+// bias of photons from a block's top face gathered below its edge (docs/RESULTS.md "A new eye pass every pass")
 // and leaves the spheres and the pool unchanged.
 constexpr float kDefaultSlab = 0.25f;
 

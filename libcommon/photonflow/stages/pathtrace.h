@@ -1,5 +1,5 @@
 // pathtrace.h — an unbiased path tracer over a baked scene: the reference and the baseline that
-// photon mapping is measured against (issue 7).
+// photon mapping is measured against (docs/RESULTS.md "Speed against accuracy").
 //
 // It estimates the rendering equation (Kajiya 1986)
 //   L_o(x, ω_o) = L_e(x, ω_o) + ∫_Ω f_r(x, ω_i, ω_o) L_i(x, ω_i) cos θ_i dω_i
