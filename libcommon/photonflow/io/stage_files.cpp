@@ -13,6 +13,7 @@
 #include "photonflow/stages/photon_pass.h"
 #include "photonflow/estimators/ppm.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/io/h5_types.h"
 #include "photonflow/geometry/surface.h"
 #include "photonflow/io/validate.h"
 
