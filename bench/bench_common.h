@@ -17,6 +17,7 @@
 
 #include "photonflow/opencl/cl_runtime.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
 
 namespace pf::bench {

@@ -13,6 +13,7 @@
 
 #include "photonflow/io/h5io.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/io/h5_types.h"
 #include "support.h"
 
 namespace pf::test {

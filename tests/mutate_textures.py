@@ -19,7 +19,7 @@ import sys
 
 BUILD = sys.argv[1] if len(sys.argv) > 1 else "build"
 TARGETS = "texture_image_test scene-bake render trace-hitpoints"
-S = "libcommon/src/"
+S = "libcommon/photonflow/"
 MUTATIONS = [
     # (file, name, original, mutated)
     (S + "stages/eye_pass.cpp", "eye pass: texture not in the hitpoint weight",
@@ -47,13 +47,13 @@ MUTATIONS = [
      "    feed(texels);\n", "\n"),
     (S + "geometry/scene.cpp", "scene id: UVs not covered",
      "    feed(uvs);\n", "\n"),
-    (S + "geometry/scene.cpp", "load: texel values unchecked",
+    (S + "geometry/scene_validate.cpp", "load: texel values unchecked",
      "for (size_t i = 0; i < pool; ++i) v.in_range(Name(P, i), &s.texels[4 * i], 4, 0.0, 1.0);",
      "for (size_t i = 0; i < 0; ++i) v.in_range(Name(P, i), &s.texels[4 * i], 4, 0.0, 1.0);"),
-    (S + "geometry/scene.cpp", "load: texture past the pool accepted",
+    (S + "geometry/scene_validate.cpp", "load: texture past the pool accepted",
      "if (uint64_t(t.offset) + uint64_t(t.width) * uint64_t(t.height) > pool)",
      "if (uint64_t(t.offset) > pool)"),
-    (S + "geometry/scene.cpp", "load: missing UVs accepted",
+    (S + "geometry/scene_validate.cpp", "load: missing UVs accepted",
      "if (textured && s.uvs.size() != s.triangles.size())",
      "if (textured && !s.uvs.empty() && s.uvs.size() != s.triangles.size())"),
     (S + "image/texture_image.cpp", "JPEG: corrupt-data warnings tolerated",

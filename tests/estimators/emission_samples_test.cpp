@@ -18,6 +18,7 @@
 #include "photonflow/estimators/pass_sums.h"
 #include "photonflow/io/stage_files.h"
 #include "photonflow/geometry/surface.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 #include "support_cl.h"
 

@@ -16,6 +16,7 @@
 #include "photonflow/geometry/procedural.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/sampling/sampling.h"
 #include "photonflow/io/validate.h"
 #include "support.h"

@@ -16,6 +16,7 @@
 #include "photonflow/foundations/error.h"
 #include "photonflow/image/image.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
 #include "support.h"
 

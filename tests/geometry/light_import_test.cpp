@@ -30,6 +30,8 @@
 #include "photonflow/sampling/sampling.h"
 #include "photonflow/geometry/scene_import.h"
 #include "photonflow/stages/synthesize.h"
+#include "photonflow/geometry/scene_file.h"
+#include "photonflow/io/h5_types.h"
 #include "support.h"
 #include "support_cl.h"
 

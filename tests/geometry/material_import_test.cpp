@@ -19,6 +19,8 @@
 #include "photonflow/image/image.h"
 #include "photonflow/material/texture_shared.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/io/h5_types.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
 #include "photonflow/geometry/surface.h"
 #include "support.h"

@@ -21,6 +21,8 @@
 #include "photonflow/stages/pathtrace.h"
 #include "photonflow/stages/photon_pass.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/io/h5_types.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
 #include "photonflow/image/texture_image.h"
 #include "support.h"

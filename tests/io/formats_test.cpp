@@ -8,6 +8,8 @@
 #include "photonflow/io/h5io.h"
 #include "photonflow/stages/photon_pass.h"
 #include "photonflow/io/stage_files.h"
+#include "photonflow/geometry/scene_file.h"
+#include "photonflow/io/h5_types.h"
 #include "support.h"
 
 using namespace pf;

@@ -19,6 +19,7 @@
 #include "photonflow/foundations/hash.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/io/h5_types.h"
 #include "support.h"
 
 namespace fs = std::filesystem;

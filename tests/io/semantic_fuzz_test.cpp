@@ -65,6 +65,8 @@
 #include "photonflow/io/stage_files.h"
 #include "photonflow/stages/synthesize.h"
 #include "photonflow/io/validate.h"
+#include "photonflow/geometry/scene_file.h"
+#include "photonflow/io/h5_types.h"
 #include "support.h"
 
 using namespace pf;

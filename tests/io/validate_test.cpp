@@ -24,6 +24,8 @@
 #include "photonflow/stages/photon_distribution.h"
 #include "photonflow/stages/photon_pass.h"
 #include "photonflow/io/stage_files.h"
+#include "photonflow/geometry/scene_file.h"
+#include "photonflow/io/h5_types.h"
 #include "h5edit.h"
 #include "support.h"
 

@@ -28,6 +28,7 @@
 #include "photonflow/stages/photon_pass.h"
 #include "photonflow/geometry/raycast.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
 #include "photonflow/geometry/surface.h"
 #include "support.h"

@@ -9,6 +9,7 @@
 #include "photonflow/stages/clusters.h"
 #include "photonflow/stages/eye_pass.h"
 #include "photonflow/io/h5io.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 
 using namespace pf;

@@ -29,6 +29,7 @@
 #include "photonflow/stages/photon_distribution.h"
 #include "photonflow/stages/photon_pass.h"
 #include "photonflow/stages/synthesize.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 #include "support_cl.h"
 

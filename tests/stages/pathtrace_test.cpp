@@ -27,6 +27,7 @@
 #include "photonflow/geometry/raycast.h"
 #include "photonflow/sampling/sampling.h"
 #include "photonflow/stages/synthesize.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 
 using namespace pf;

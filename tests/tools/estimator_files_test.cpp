@@ -32,6 +32,7 @@
 #include "photonflow/io/stage_files.h"
 #include "photonflow/stages/synthesize.h"
 #include "photonflow/io/validate.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 
 using namespace pf;

@@ -11,6 +11,7 @@
 #include "photonflow/io/h5io.h"
 #include "photonflow/image/image.h"
 #include "photonflow/io/stage_files.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 
 using namespace pf;

@@ -22,6 +22,7 @@
 #include "photonflow/estimators/pass_sums.h"
 #include "photonflow/estimators/render_driver.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/io/stage_files.h"
 #include "support.h"
 

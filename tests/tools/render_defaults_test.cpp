@@ -11,6 +11,7 @@
 #include "photonflow/estimators/pass_sums.h"
 #include "photonflow/estimators/render_defaults.h"
 #include "photonflow/io/stage_files.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 
 using namespace pf;

@@ -17,6 +17,7 @@
 #include "photonflow/io/provenance.h"
 #include "photonflow/estimators/render_driver.h"
 #include "photonflow/io/stage_files.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 
 using namespace pf;

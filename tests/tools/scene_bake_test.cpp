@@ -14,6 +14,7 @@
 #include "photonflow/io/h5io.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
 #include "support.h"
 

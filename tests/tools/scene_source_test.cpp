@@ -15,6 +15,7 @@
 #include "photonflow/io/h5io.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_source.h"
 #include "support.h"
 

@@ -18,6 +18,7 @@
 #include "photonflow/image/image.h"
 #include "photonflow/geometry/raycast.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/image/texture_image.h"
 #include "support.h"
 #include "support_cl.h"

@@ -15,6 +15,7 @@
 #include "photonflow/stages/illuminate.h"
 #include "photonflow/image/image.h"
 #include "photonflow/io/stage_files.h"
+#include "photonflow/geometry/scene_file.h"
 #include "support.h"
 
 using namespace pf;

@@ -12,6 +12,7 @@
 #include "photonflow/foundations/options.h"
 #include "photonflow/stages/photon_distribution.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/io/stage_files.h"
 #include "photonflow/foundations/tool_main.h"
 

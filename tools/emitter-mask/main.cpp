@@ -8,6 +8,7 @@
 #include "photonflow/stages/emitter_mask.h"
 #include "photonflow/foundations/options.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/foundations/tool_main.h"
 
 int main(int argc, char** argv) {

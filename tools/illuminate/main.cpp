@@ -22,6 +22,7 @@
 #include "photonflow/estimators/render_driver.h"
 #include "photonflow/estimators/sppm.h"
 #include "photonflow/foundations/tool_main.h"
+#include "photonflow/geometry/scene_file.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("illuminate", [&] {

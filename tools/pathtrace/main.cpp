@@ -11,6 +11,7 @@
 #include "photonflow/foundations/progress.h"
 #include "photonflow/foundations/text_file.h"
 #include "photonflow/foundations/tool_main.h"
+#include "photonflow/geometry/scene_file.h"
 
 namespace {
 

@@ -14,6 +14,7 @@
 #include "photonflow/foundations/progress.h"
 #include "photonflow/io/stage_files.h"
 #include "photonflow/foundations/tool_main.h"
+#include "photonflow/geometry/scene_file.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("photon-distribution", [&] {

@@ -24,6 +24,7 @@
 #include "photonflow/geometry/scene_source.h"
 #include "photonflow/stages/synthesize.h"
 #include "photonflow/foundations/tool_main.h"
+#include "photonflow/geometry/scene_file.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("render", [&] {

@@ -10,6 +10,7 @@
 #include "photonflow/foundations/options.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
 #include "photonflow/geometry/scene_source.h"
 #include "photonflow/foundations/tool_main.h"

@@ -12,6 +12,7 @@
 #include "photonflow/estimators/sppm.h"
 #include "photonflow/io/stage_files.h"
 #include "photonflow/foundations/tool_main.h"
+#include "photonflow/geometry/scene_file.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("trace-hitpoints", [&] {

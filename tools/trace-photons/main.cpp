@@ -12,6 +12,7 @@
 #include "photonflow/estimators/render_defaults.h"
 #include "photonflow/io/stage_files.h"
 #include "photonflow/foundations/tool_main.h"
+#include "photonflow/geometry/scene_file.h"
 
 int main(int argc, char** argv) {
   return pf::run_tool("trace-photons", [&] {

@@ -110,7 +110,7 @@ typedef struct {
  * Area and point lights have direction, cos_inner and cos_outer 0.
  * `power` is the luminance-weighted scalar used for sampling lights in proportion to power (rgb
  * weights 0.2126, 0.7152, 0.0722). The first five fields are the whole light of format versions
- * 1-4 (scene.h's h5_type_light_v4). */
+ * 1-4 (io/h5_types.h's h5_type_light_v4). */
 typedef struct {
   pf_int type;
   pf_int triangle;

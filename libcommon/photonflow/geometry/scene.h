@@ -7,7 +7,6 @@
 #include "photonflow/geometry/kdtree.h"
 #include "photonflow/material/alpha_shared.h"
 #include "photonflow/material/texture_shared.h"
-#include "photonflow/io/provenance.h"
 #include "photonflow/foundations/shared_types.h"
 #include "photonflow/foundations/vec.h"
 
@@ -186,17 +185,6 @@ void derive_lights(const std::vector<pf_triangle>& triangles,
 // Havel–Herout precomputation for one triangle (thesis eq. 4.3–4.7).
 pf_hh_triangle make_hh_triangle(const pf_triangle& t);
 
-// Writes scene.h5 (atomically) with provenance; see docs/FORMATS.md.
-void save_scene(const Scene& scene, const std::string& path, const Provenance& prov);
-// Reads and checks scene.h5 (format, version, array consistency, kd-tree structure).
-Scene load_scene(const std::string& path);
-// The checks load_scene applies to a scene's tables and values (validate.h): table lengths, every
-// index into them, material and light types, the camera's image size, the kd-tree, every value in
-// range. `s` must have its bounds computed (compute_bounds). save_scene applies them to what it
-// writes (written_check) and bake_scene to what it baked (InputError naming the source: a
-// coordinate or camera option beyond kMaxCoordinate). InputError naming `path`.
-void validate_scene(const Scene& s, const std::string& path);
-
 // The diffuse colour of material m (index `material`) at a hit on triangle `tri` with barycentrics
 // (u, v): m.color, times the base-colour texture's value there when the material has one (glTF's
 // baseColorFactor × baseColorTexture). The photon bounces and the path tracer ask this; the eye
@@ -209,20 +197,5 @@ inline Vec3 diffuse_color(const Scene& s, const pf_material& m, int material, in
   if (t < 0) return Vec3(m.color);
   return Vec3(m.color) * s.texture_value(t, size_t(tri), u, v);
 }
-
-// HDF5 compound types of the shared structs (named fields for h5dump/h5py).
-namespace h5 { class Compound; }
-const h5::Compound& h5_type_triangle();
-const h5::Compound& h5_type_hh_triangle();
-const h5::Compound& h5_type_material();
-const h5::Compound& h5_type_material_v4();  // format versions 1-4: no metallic-roughness fields
-const h5::Compound& h5_type_light();
-const h5::Compound& h5_type_light_v4();  // format versions 1-4: no direction or cone
-const h5::Compound& h5_type_camera();
-const h5::Compound& h5_type_camera_pinhole();  // format versions 1-3: no lens fields
-const h5::Compound& h5_type_kd_node();
-const h5::Compound& h5_type_hitpoint();
-const h5::Compound& h5_type_photon();
-const h5::Compound& h5_type_texture();
 
 }  // namespace pf

@@ -70,6 +70,7 @@
 #include "photonflow/image/texture_image.h"
 #include "photonflow/geometry/light_import.h"
 #include "photonflow/geometry/material_import.h"
+#include "photonflow/geometry/scene_validate.h"
 
 namespace pf {
 

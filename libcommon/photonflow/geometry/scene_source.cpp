@@ -10,6 +10,7 @@
 #include "photonflow/geometry/kdtree.h"
 #include "photonflow/foundations/options.h"
 #include "photonflow/io/output_file.h"
+#include "photonflow/geometry/scene_file.h"
 
 namespace pf {
 

@@ -13,6 +13,7 @@
 #include "photonflow/io/h5io.h"
 #include "photonflow/estimators/ppm.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/io/h5_types.h"
 #include "photonflow/io/stage_file_checks.h"
 #include "photonflow/io/validate.h"
 

@@ -7,6 +7,7 @@
 
 #include "photonflow/io/h5io.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/io/h5_types.h"
 #include "photonflow/io/stage_file_checks.h"
 #include "photonflow/io/validate.h"
 #include "photonflow/stages/photon_pass.h"
