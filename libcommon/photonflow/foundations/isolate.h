@@ -4,8 +4,8 @@
 // assimp 5.2.5 (Debian 12) crashes on damaged files: its PLY reader dereferences a bad pointer
 // (SIGSEGV) or loops forever on a damaged binary header, and a failed internal assertion
 // (ai_assert, e.g. TriangulateProcess.cpp:238) prints to stderr and aborts. None of these can be
-// caught in-process. scene-bake therefore imports in a child (scene_import.cpp) and receives the
-// imported scene as bytes.
+// caught in-process. scene-bake therefore imports in a child (scene_import_child.cpp) and receives
+// the imported scene as bytes.
 //
 // The child is a fork() of this process: it sees this process's memory as it was (copy-on-write)
 // and changes none of it. Its results travel through `send` into a memory file (memfd) that the

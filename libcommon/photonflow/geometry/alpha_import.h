@@ -1,6 +1,6 @@
 // alpha_import.h — what scene-bake reads of a material's alpha cut-out (rules in
 // docs/SCENES.md "Alpha cut-outs", shared test in material/alpha_shared.h). Internal to
-// libcommon/src/geometry (scene_import.cpp calls it; the texture loading stays there).
+// libcommon/photonflow/geometry (scene_flatten.cpp calls it; the texture loading stays there).
 #pragma once
 #include <assimp/material.h>
 

@@ -17,7 +17,9 @@
 #include <sstream>
 #include <utility>
 
+#include "photonflow/geometry/gltf_json.h"
 #include "photonflow/geometry/light_import.h"
+#include "photonflow/geometry/scene_inputs.h"
 #include "photonflow/foundations/error.h"
 #include "photonflow/geometry/scene_import.h"
 
@@ -168,9 +170,7 @@ void check_gltf_features(const std::string& file, std::vector<std::string>& warn
   // assimp's own message.
   json doc;
   try {
-    doc = json::parse(gltf_json_text(file));
-  } catch (const json::exception&) {
-    return;
+    doc = gltf_json(file);
   } catch (const InputError&) {
     return;
   }
@@ -270,12 +270,7 @@ void check_gltf_features(const std::string& file, std::vector<std::string>& warn
 void warn_unread_maps(const aiMaterial& am, const std::string& file, const std::string& material,
                       std::vector<std::string>& warnings) {
   if (is_gltf(file)) return;  // check_gltf_features says it from the JSON, by glTF's names
-  const bool obj = [&] {
-    const size_t dot = file.find_last_of('.');
-    std::string ext = dot == std::string::npos ? "" : file.substr(dot);
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext == ".obj";
-  }();
+  const bool obj = lower_extension(file) == ".obj";
   const std::pair<aiTextureType, const char*> maps[] = {
       {aiTextureType_SPECULAR, "specular map"},
       {aiTextureType_SHININESS, "shininess map"},

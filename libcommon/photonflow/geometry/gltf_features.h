@@ -1,6 +1,7 @@
 // gltf_features.h — what a scene file asks for that photonflow does not render, said once
 // (docs/SCENES.md, "What is honoured, warned about or refused"). Internal to
-// libcommon/src/geometry: scene_import.cpp calls these before it converts the materials.
+// libcommon/photonflow/geometry: the scene import (scene_import.cpp, scene_flatten.cpp) calls
+// these before it converts the materials.
 #pragma once
 #include <string>
 #include <vector>
@@ -30,9 +31,5 @@ void check_gltf_features(const std::string& file, std::vector<std::string>& warn
 // and a non-OBJ opacity map): one warning line per material and kind of map.
 void warn_unread_maps(const aiMaterial& am, const std::string& file, const std::string& material,
                       std::vector<std::string>& warnings);
-
-// The JSON text of a .gltf file, or the JSON chunk of a .glb (light_import.cpp). InputError when
-// the file cannot be read or its binary header is damaged.
-std::string gltf_json_text(const std::string& file);
 
 }  // namespace pf

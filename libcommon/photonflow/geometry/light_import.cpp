@@ -12,7 +12,8 @@
 // π/4) into mAngleInnerCone/mAngleOuterCone; mDirection is the light's local −z.
 #include "photonflow/geometry/light_import.h"
 
-#include "photonflow/geometry/gltf_features.h"
+#include "photonflow/geometry/gltf_json.h"
+#include "photonflow/geometry/scene_inputs.h"
 
 #include <assimp/scene.h>
 
@@ -49,11 +50,7 @@ std::string num(double v) {
 }  // namespace
 
 bool is_gltf(const std::string& file) {
-  const size_t dot = file.find_last_of('.');
-  const size_t slash = file.find_last_of('/');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return false;
-  std::string ext = file.substr(dot);
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lower_extension(file);
   return ext == ".gltf" || ext == ".glb";
 }
 
@@ -130,43 +127,9 @@ void add_lights(const aiScene& ai, const std::string& file, Scene& scene, BakeRe
   }
 }
 
-// The JSON of a .gltf file, or the JSON chunk of a .glb (glTF 2.0 §4.4: a 12-byte header "glTF",
-// version, length, then chunks of length, type, data; the first chunk is JSON).
-std::string gltf_json_text(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw input_error(file, "cannot read scene file", "check the path and its permissions");
-  const size_t dot = file.find_last_of('.');
-  std::string ext = dot == std::string::npos ? "" : file.substr(dot);
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (ext != ".glb") {
-    std::ostringstream os;
-    os << in.rdbuf();
-    return os.str();
-  }
-  unsigned char head[20];
-  if (!in.read(reinterpret_cast<char*>(head), sizeof head) || std::memcmp(head, "glTF", 4) != 0 ||
-      std::memcmp(head + 16, "JSON", 4) != 0)
-    throw input_error(file, "is not a binary glTF with a JSON chunk first", "export it again");
-  const uint32_t n = uint32_t(head[12]) | uint32_t(head[13]) << 8 | uint32_t(head[14]) << 16 |
-                     uint32_t(head[15]) << 24;
-  const uint32_t total = uint32_t(head[8]) | uint32_t(head[9]) << 8 | uint32_t(head[10]) << 16 |
-                         uint32_t(head[11]) << 24;
-  if (n > total) throw input_error(file, "its JSON chunk runs past the file", "export it again");
-  std::string text(n, '\0');
-  if (!in.read(&text[0], std::streamsize(n)))
-    throw input_error(file, "its JSON chunk runs past the file", "export it again");
-  return text;
-}
-
 std::map<std::string, float> gltf_emissive_strengths(const std::string& file) {
   if (!is_gltf(file)) return {};
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(gltf_json_text(file));
-  } catch (const nlohmann::json::exception& e) {
-    throw input_error(file, std::string("its glTF JSON cannot be read: ") + e.what(),
-                      "check that the file is valid glTF");
-  }
+  nlohmann::json doc = gltf_json(file);
   std::map<std::string, float> out;
   const auto mats = doc.find("materials");
   if (mats == doc.end() || !mats->is_array()) return out;

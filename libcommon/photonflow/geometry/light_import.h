@@ -1,4 +1,4 @@
-// light_import.h — the lights of an imported file (internal to scene_import.cpp; docs/SCENES.md,
+// light_import.h — the lights of an imported file (internal to the scene import, scene_flatten.cpp and scene_import.cpp; docs/SCENES.md,
 // "Lights"): assimp's aiLights (point lights of every format; glTF's KHR_lights_punctual spot and
 // directional lights) and glTF's KHR_materials_emissive_strength, which assimp 5.2.5 drops and
 // which is read from the file's JSON here.

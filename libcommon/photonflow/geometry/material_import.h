@@ -1,6 +1,6 @@
 // material_import.h — scene-bake's materials and textures: one assimp material → pf_material
 // (the mapping of docs/SCENES.md, "Materials") and its images → the scene's texel pool.
-// Private to the import (scene_import.cpp, material_import.cpp): it names assimp types.
+// Private to the import (scene_flatten.cpp, scene_import.cpp, material_import.cpp): it names assimp types.
 #pragma once
 #include <assimp/scene.h>
 

@@ -2,7 +2,7 @@
 // into a pf::Scene: one flat triangle array in world space, materials, lights, camera, derived
 // data (Havel–Herout planes, bounds, light CDF, kd-tree) and scene_id. This is the library side of
 // the scene-bake stage; the mapping from file materials to photonflow materials is documented in
-// scene_import.cpp and docs/SCENES.md.
+// material_import.cpp and docs/SCENES.md, the import's parts at the top of scene_import.cpp.
 #pragma once
 #include <optional>
 #include <string>

@@ -14,21 +14,13 @@
 #include <sstream>
 
 #include "photonflow/foundations/error.h"
+#include "photonflow/geometry/gltf_json.h"
 
 namespace pf {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string lower_ext(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
-  std::string ext = path.substr(dot);
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
 
 // The folder part of `file` with its '/' ("" for a bare name: the working folder).
 std::string folder_of(const std::string& file) {
@@ -75,23 +67,9 @@ std::string read_text(const std::string& path) {
   return os.str();
 }
 
-uint32_t le32(const unsigned char* p) {
-  return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
-}
-
-// The JSON of a .gltf, or the JSON chunk of a .glb (glTF 2.0 §4.4: a 12-byte header, then chunks
-// of length, type, data; the first is JSON).
-std::string gltf_json(const std::string& file) {
-  const std::string bytes = read_text(file);
-  if (lower_ext(file) != ".glb") return bytes;
-  const auto* b = reinterpret_cast<const unsigned char*>(bytes.data());
-  if (bytes.size() < 20 || std::memcmp(b, "glTF", 4) != 0 || std::memcmp(b + 16, "JSON", 4) != 0)
-    throw input_error(file, "is not a binary glTF with a JSON chunk first", "export it again");
-  const uint32_t n = le32(b + 12);
-  if (n > bytes.size() - 20) throw input_error(file, "its JSON chunk runs past the file",
-                                               "export it again");
-  return bytes.substr(20, n);
-}
+// How the check of a scene's references reads its glTF JSON (gltf_json.h): its own line for a
+// file it cannot open, and a .glb's JSON chunk bounded by the file alone.
+constexpr GltfJsonRead kReadAsReference{"cannot read the file", "check its permissions", false};
 
 // Whether a data: URI is one assimp can decode: "data:<mime>;base64,<base64>".
 bool good_data_uri(const std::string& uri) {
@@ -154,13 +132,7 @@ std::string texture_problem(const nlohmann::json& doc, const nlohmann::json& ref
 
 void gltf_references(const std::string& file, const InputPolicy& policy,
                      std::vector<std::string>& warnings, std::vector<SceneReference>& out) {
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(gltf_json(file));
-  } catch (const nlohmann::json::exception& e) {
-    throw input_error(file, std::string("its glTF JSON cannot be read: ") + e.what(),
-                      "check that the file is valid glTF");
-  }
+  nlohmann::json doc = gltf_json(file, kReadAsReference);
   if (!doc.is_object()) return;
   for (const char* key : {"buffers", "images"}) {
     const auto list = doc.find(key);
@@ -255,7 +227,7 @@ void collada_references(const std::string& file, std::vector<SceneReference>& ou
     if (ref.rfind("file://", 0) == 0) ref = ref.substr(7);
     // <init_from> of a surface names an <image> id, not a file: only names with an image
     // extension are files.
-    const std::string ext = lower_ext(ref);
+    const std::string ext = lower_extension(ref);
     if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".tga" && ext != ".bmp" &&
         ext != ".exr" && ext != ".tif" && ext != ".tiff")
       continue;
@@ -273,6 +245,15 @@ const char* kind_of(mode_t m) {
 }
 
 }  // namespace
+
+std::string lower_extension(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
+  std::string ext = path.substr(dot);
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
 
 std::string input_root(const std::string& scene_file) {
   const std::string dir = folder_of(scene_file);
@@ -317,7 +298,7 @@ std::vector<SceneReference> scene_references(const std::string& scene_file,
                                              const InputPolicy& policy, const std::string& root,
                                              std::vector<std::string>& warnings) {
   std::vector<SceneReference> out;
-  const std::string ext = lower_ext(scene_file);
+  const std::string ext = lower_extension(scene_file);
   if (ext == ".gltf" || ext == ".glb") gltf_references(scene_file, policy, warnings, out);
   if (ext == ".obj") obj_references(scene_file, policy, root, out);
   if (ext == ".dae") collada_references(scene_file, out);

@@ -45,6 +45,10 @@ bool check_input_file(const std::string& path, const std::string& role,
                       const std::string& scene_file, const InputPolicy& policy,
                       const std::string& root);
 
+// The extension of `path`, lower-case, with its dot (".dae" for "dir/scene.DAE"); "" when the
+// file name has none. The format of a scene file or a reference is told by it.
+std::string lower_extension(const std::string& path);
+
 // The folder that confines the inputs of `scene_file`: the realpath of its folder.
 std::string input_root(const std::string& scene_file);
 

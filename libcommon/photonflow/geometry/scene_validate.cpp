@@ -183,7 +183,7 @@ void check_scene_values(const Scene& s, const Validator& v) {
   if (!(total <= double(kMaxValue)))
     v.fail(L + ": the lights' total power " + value_text(total) + " exceeds " +
            value_text(kMaxValue));
-  // Camera: the values scene-bake refuses (scene_import.cpp).
+  // Camera: the values scene-bake refuses (camera_import.cpp).
   const pf_camera& cam = s.camera;
   v.position("camera.eye", cam.eye);
   v.position("camera.look_at", cam.look_at);

@@ -1,6 +1,6 @@
 // texture_image.h — decoding the image files of textures (PNG through libpng's simplified API,
 // JPEG through libjpeg-turbo; docs/DEPENDENCIES.md) into 8-bit RGBA, with a size limit checked
-// from the file's header before any pixel is decoded. scene-bake (scene_import.cpp) turns the
+// from the file's header before any pixel is decoded. scene-bake (material_import.cpp) turns the
 // result into linear texels (texture_shared.h's sRGB decode).
 #pragma once
 #include <cstdint>
