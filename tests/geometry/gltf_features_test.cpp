@@ -18,39 +18,15 @@
 #include "photonflow/geometry/scene.h"
 #include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
+#include "gltf_builder.h"
 #include "support.h"
 
 using namespace pf;
 using nlohmann::json;
 
+using namespace pf::test::gltf;  // q, write_text, base64 (gltf_builder.h)
+
 namespace {
-
-std::string q(const std::string& s) { return "'" + s + "'"; }
-
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-}
-
-std::string base64(const std::string& in) {
-  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  size_t i = 0;
-  for (; i + 2 < in.size(); i += 3) {
-    const uint32_t v = uint32_t(uint8_t(in[i])) << 16 | uint32_t(uint8_t(in[i + 1])) << 8 |
-                       uint32_t(uint8_t(in[i + 2]));
-    for (int k = 3; k >= 0; --k) out += t[(v >> (6 * k)) & 63];
-  }
-  const size_t rest = in.size() - i;
-  if (rest > 0) {
-    uint32_t v = uint32_t(uint8_t(in[i])) << 16;
-    if (rest == 2) v |= uint32_t(uint8_t(in[i + 1])) << 8;
-    out += t[(v >> 18) & 63];
-    out += t[(v >> 12) & 63];
-    out += rest == 2 ? t[(v >> 6) & 63] : '=';
-    out += '=';
-  }
-  return out;
-}
 
 std::string png_2x2() {
   const std::vector<uint8_t> rgb = {200, 100, 50, 50, 100, 200, 10, 20, 30, 90, 90, 90};
@@ -62,20 +38,11 @@ std::string png_2x2() {
 // x = 2k, with TEXCOORD_0 (and TEXCOORD_1 where `second_uv`), then an emitting triangle above
 // them (material "light"). Textures 0 and 1 are one 2×2 PNG.
 json document(const std::vector<json>& materials, bool second_uv = false) {
-  std::string bin;
-  auto f32 = [&bin](float v) { bin.append(reinterpret_cast<const char*>(&v), 4); };
   const size_t n = materials.size() + 1;
-  for (size_t k = 0; k < n; ++k) {
-    const bool light = k + 1 == n;
-    const float x = 2.f * float(k), y = light ? 5.f : 0.f;
-    for (float p : {x, y, 0.f, x + 1.f, y, 0.f, x, light ? y : y + 1.f, light ? 1.f : 0.f}) f32(p);
-  }
-  const size_t uv_offset = bin.size();
-  for (float t : {0.f, 0.f, 1.f, 0.f, 0.f, 1.f}) f32(t);
-  json g;
-  g["asset"] = {{"version", "2.0"}};
-  g["scene"] = 0;
-  g["scenes"] = json::array({{{"nodes", json::array()}}});
+  pf::test::gltf::TriangleRows rows = pf::test::gltf::triangle_rows(n);
+  std::string& bin = rows.bin;
+  const size_t uv_offset = rows.uv_offset;
+  json g = pf::test::gltf::document_head();
   json mats = json::array(), meshes = json::array(), nodes = json::array(),
        accessors = json::array(), views = json::array();
   for (size_t k = 0; k < n; ++k) {
@@ -93,13 +60,7 @@ json document(const std::vector<json>& materials, bool second_uv = false) {
     nodes.push_back({{"name", mats.back()["name"]}, {"mesh", k}});
     g["scenes"][0]["nodes"].push_back(k);
   }
-  views.push_back({{"buffer", 0}, {"byteOffset", uv_offset}, {"byteLength", 24}});
-  accessors.push_back({{"bufferView", n}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}});
-  g["materials"] = mats;
-  g["meshes"] = meshes;
-  g["nodes"] = nodes;
-  g["accessors"] = accessors;
-  g["bufferViews"] = views;
+  pf::test::gltf::put_arrays(g, mats, meshes, nodes, accessors, views, uv_offset, n);
   g["buffers"] = json::array({{{"byteLength", bin.size()},
                                {"uri", "data:application/octet-stream;base64," + base64(bin)}}});
   g["images"] = json::array({{{"uri", "data:image/png;base64," + base64(png_2x2())}}});

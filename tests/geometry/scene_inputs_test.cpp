@@ -18,34 +18,20 @@
 #include <vector>
 
 #include "photonflow/image/image.h"
+#include "gltf_builder.h"
 #include "support.h"
 
 using nlohmann::json;
 namespace fs = std::filesystem;
 
+using namespace pf::test::gltf;  // q, write_text, base64 (gltf_builder.h)
+
 namespace {
 
 constexpr int kSeconds = 20;  // far above a refusal's time; a hang is killed and fails
 
-std::string q(const std::string& s) { return "'" + s + "'"; }
-
 void write_bytes(const std::string& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary) << bytes;
-}
-
-std::string base64(const std::string& in) {
-  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  uint32_t v = 0;
-  int bits = 0;
-  for (unsigned char c : in) {
-    v = v << 8 | c;
-    bits += 8;
-    while (bits >= 6) out += t[(v >> (bits -= 6)) & 63];
-  }
-  if (bits) out += t[(v << (6 - bits)) & 63];
-  while (out.size() % 4) out += '=';
-  return out;
 }
 
 std::string png_of(int w, int h) {
@@ -82,20 +68,11 @@ std::string png_claiming(uint32_t w, uint32_t h) {
 // unless the name is given) or a data: URI when empty.
 std::string write_gltf(const std::string& dir, const std::vector<json>& images,
                        const std::string& buffer_uri = "", const std::string& name = "s.gltf") {
-  std::string bin;
-  auto f32 = [&bin](float v) { bin.append(reinterpret_cast<const char*>(&v), 4); };
   const size_t n = images.size() + 1;
-  for (size_t k = 0; k < n; ++k) {
-    const bool light = k + 1 == n;
-    const float x = 2.f * float(k), y = light ? 5.f : 0.f;
-    for (float p : {x, y, 0.f, x + 1.f, y, 0.f, x, light ? y : y + 1.f, light ? 1.f : 0.f}) f32(p);
-  }
-  const size_t uv_offset = bin.size();
-  for (float t : {0.f, 0.f, 1.f, 0.f, 0.f, 1.f}) f32(t);
-  json g;
-  g["asset"] = {{"version", "2.0"}};
-  g["scene"] = 0;
-  g["scenes"] = json::array({{{"nodes", json::array()}}});
+  pf::test::gltf::TriangleRows rows = pf::test::gltf::triangle_rows(n);
+  std::string& bin = rows.bin;
+  const size_t uv_offset = rows.uv_offset;
+  json g = pf::test::gltf::document_head();
   json mats = json::array(), meshes = json::array(), nodes = json::array(),
        accessors = json::array(), views = json::array(), imgs = json::array(),
        texs = json::array();
@@ -118,13 +95,7 @@ std::string write_gltf(const std::string& dir, const std::vector<json>& images,
       texs.push_back({{"source", k}});
     }
   }
-  views.push_back({{"buffer", 0}, {"byteOffset", uv_offset}, {"byteLength", 24}});
-  accessors.push_back({{"bufferView", n}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}});
-  g["materials"] = mats;
-  g["meshes"] = meshes;
-  g["nodes"] = nodes;
-  g["accessors"] = accessors;
-  g["bufferViews"] = views;
+  pf::test::gltf::put_arrays(g, mats, meshes, nodes, accessors, views, uv_offset, n);
   if (!imgs.empty()) {
     g["images"] = imgs;
     g["textures"] = texs;
