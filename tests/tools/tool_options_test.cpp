@@ -239,3 +239,28 @@ TEST_CASE("the defaults --help prints are the ones the run record says were used
   CHECK(check_defaults("pathtrace", test::run_tool("pathtrace", "--help", tmp).out,
                        json_parameters(tmp / "p.json"), {"scene", "output", "stats", "spp"}) >= 8);
 }
+
+TEST_CASE("a number option's value is a number to its last character", "[tool_options]") {
+  test::TempDir tmp("tool-options-number");
+  const std::string scene = std::string(PF_SOURCE_DIR) + "/data/cornell-box.dae";
+  // cxxopts alone reads the number at the front and drops the rest without a word.
+  for (const std::string& bad : {"0.1;", "0.1x", "0.1;touch", "1e-2.5"}) {
+    const auto bake = test::run_tool(
+        "scene-bake", "'" + scene + "' -o '" + (tmp / "s.h5") + "' --aperture '" + bad + "'", tmp);
+    INFO(bad << ": " << bake.err);
+    CHECK(bake.exit_code == 2);
+    CHECK(std::count(bake.err.begin(), bake.err.end(), '\n') == 1);
+    CHECK(bake.err.find("--aperture") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(tmp / "s.h5"));
+  }
+  const auto alpha = test::run_tool("render", "--scene '" + scene + "' -o '" + (tmp / "r.exr") +
+                                                  "' --passes 1 --width 8 --height 8 --alpha 0.7x",
+                                    tmp);
+  CHECK(alpha.exit_code == 2);
+  CHECK(alpha.err.find("--alpha must be a number, got '0.7x'") != std::string::npos);
+  // The same values written whole are taken.
+  const auto good = test::run_tool(
+      "scene-bake", "'" + scene + "' -o '" + (tmp / "s.h5") + "' --aperture 0.1", tmp);
+  CHECK(good.exit_code == 0);
+  CHECK(std::filesystem::exists(tmp / "s.h5"));
+}

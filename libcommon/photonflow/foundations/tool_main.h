@@ -132,6 +132,28 @@ inline std::vector<std::string> rewrite_deprecated(const std::string& program, i
   return args;
 }
 
+// A floating-point option's value must be a number to its last character: cxxopts reads the
+// number at the front of "0.1;" or "0.1x" and drops the rest without a word (an options file's
+// "--aperture 0.1; touch x" would bake with 0.1). Whole-number options are already read whole.
+inline void require_whole_number(const cxxopts::ParseResult& r, const std::string& key,
+                                 const std::string& value) {
+  bool floating = false;
+  for (auto is_type : {+[](const cxxopts::OptionValue& o) { (void)o.as<float>(); },
+                       +[](const cxxopts::OptionValue& o) { (void)o.as<double>(); }}) {
+    try {
+      is_type(r[key]);
+      floating = true;
+    } catch (const std::exception&) {
+    }
+  }
+  if (!floating) return;
+  char* end = nullptr;
+  std::strtod(value.c_str(), &end);
+  if (value.empty() || end != value.c_str() + value.size())
+    throw input_error("", "--" + key + " must be a number, got '" + value + "'",
+                      "give the number alone");
+}
+
 // Parses the command line and refuses what it does not take: a stray argument (also the value
 // "2" left over by "-o --spp 2", where --spp became the output's name) and a --threads option out
 // of 0..kMaxThreads. `deprecated`: the tool's old option spellings (DeprecatedOption).
@@ -151,8 +173,10 @@ inline cxxopts::ParseResult parse_options(cxxopts::Options& options, int argc, c
   if (!r.unmatched().empty())
     throw input_error("", "unexpected argument '" + r.unmatched().front() + "'",
                       "see " + options.program() + " --help");
-  for (const auto& kv : r.arguments())
+  for (const auto& kv : r.arguments()) {
     if (kv.key() == "threads") require_threads(kv.as<int>());
+    require_whole_number(r, kv.key(), kv.value());
+  }
   return r;
 }
 
