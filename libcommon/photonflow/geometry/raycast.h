@@ -11,7 +11,7 @@
 //           at one point, may get another of them from either traversal than the lowest index,
 //           with a t that differs in the last bits: a triangle that merely touches a leaf is not
 //           listed in it, and a walk through a leaf corner does not visit the diagonal leaf. Seen
-//           on 0.1–15 % of the vertex and edge rays of test_raycast's procedural meshes and on
+//           on some of the vertex and edge rays of raycast_test's procedural meshes and on
 //           251 of 2,048 rays at the vertices of a flat grid; those tests require only a hit;
 //   Brute — every triangle (the reference).
 // A secondary ray knows where its walk can start: its origin lies in the leaf where the ray

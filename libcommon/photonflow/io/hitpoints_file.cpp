@@ -20,7 +20,7 @@
 namespace pf {
 
 namespace {
-// Version 2 (issue 32): the optional dataset /hitpoint_bsdf (PF_MAT_PBR visible points). Version
+// Version 2: the optional dataset /hitpoint_bsdf (PF_MAT_PBR visible points). Version
 // 1 files are read as before (no table: refused by check_against_scene where the scene's
 // hitpoints need one).
 constexpr int kHitpointsVersion = 2;
