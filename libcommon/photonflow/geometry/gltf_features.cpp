@@ -163,15 +163,18 @@ const std::vector<std::string>& gltf_implemented_extensions() {
   return v;
 }
 
-void check_gltf_features(const std::string& file, std::vector<std::string>& warnings) {
+void check_gltf_features(const std::string& file, std::vector<std::string>& warnings,
+                         json* read) {
   if (!is_gltf(file)) return;
   // Runs before assimp reads the file (assimp turns an unknown light type into a spot, or
   // refuses it for want of spot parameters): a file whose JSON cannot be read is left to
   // assimp's own message.
-  json doc;
+  json own;
+  json& doc = read ? *read : own;  // parsed in place: the caller's copy is this one
   try {
     doc = gltf_json(file);
   } catch (const InputError&) {
+    doc = nullptr;
     return;
   }
   if (!doc.is_object()) return;

@@ -3,6 +3,7 @@
 // libcommon/photonflow/geometry: the scene import (scene_import.cpp, scene_flatten.cpp) calls
 // these before it converts the materials.
 #pragma once
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
@@ -23,8 +24,11 @@ const std::vector<std::string>& gltf_implemented_extensions();
 // Appends one warning line to `warnings` per owner (material, light, node, mesh, camera, texture,
 // the file) and feature it ignores: an extension it does not implement (KHR_texture_transform on
 // a texture reference included), a normal, occlusion, emissive or transmission texture, an
-// orthographic camera, animations, skins and morph targets.
-void check_gltf_features(const std::string& file, std::vector<std::string>& warnings);
+// orthographic camera, animations, skins and morph targets. The document it read goes to `doc`
+// (when given), so the import reads the file's JSON once; it is left alone when `file` is not
+// glTF or its JSON cannot be read (assimp then says why).
+void check_gltf_features(const std::string& file, std::vector<std::string>& warnings,
+                         nlohmann::json* doc = nullptr);
 
 // The textures of an OBJ/MTL, COLLADA or other non-glTF material that photonflow does not read
 // (bump, normal, specular, shininess, ambient, emissive, displacement, reflection, light maps,

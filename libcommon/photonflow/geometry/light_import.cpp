@@ -127,9 +127,12 @@ void add_lights(const aiScene& ai, const std::string& file, Scene& scene, BakeRe
   }
 }
 
-std::map<std::string, float> gltf_emissive_strengths(const std::string& file) {
+std::map<std::string, float> gltf_emissive_strengths(const std::string& file,
+                                                     const nlohmann::json* read) {
   if (!is_gltf(file)) return {};
-  nlohmann::json doc = gltf_json(file);
+  nlohmann::json own;
+  if (!read) own = gltf_json(file);
+  const nlohmann::json& doc = read ? *read : own;
   std::map<std::string, float> out;
   const auto mats = doc.find("materials");
   if (mats == doc.end() || !mats->is_array()) return out;

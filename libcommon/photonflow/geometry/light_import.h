@@ -3,6 +3,7 @@
 // directional lights) and glTF's KHR_materials_emissive_strength, which assimp 5.2.5 drops and
 // which is read from the file's JSON here.
 #pragma once
+#include <nlohmann/json_fwd.hpp>
 #include <map>
 #include <string>
 #include <vector>
@@ -27,7 +28,9 @@ void add_lights(const aiScene& ai, const std::string& file, Scene& scene, BakeRe
 // so the names match them; 1 where a material has none); empty for other formats. Throws
 // InputError for a value that is not a finite number >= 0, for two materials of one name with
 // different strengths (they could not be told apart), or a file whose JSON cannot be read.
-std::map<std::string, float> gltf_emissive_strengths(const std::string& file);
+// `doc`: the file's JSON when the caller has read it already (check_gltf_features), else null.
+std::map<std::string, float> gltf_emissive_strengths(const std::string& file,
+                                                     const nlohmann::json* doc = nullptr);
 
 // True for a .gltf or .glb file name.
 bool is_gltf(const std::string& file);

@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
 #include <cmath>
 #include <optional>
 #include <stdexcept>
@@ -119,12 +120,13 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
 
   Assimp::Importer importer;
   struct stat st {};
+  nlohmann::json gltf;  // the glTF JSON, read once: checked here, its emissive strengths below
   if (stat(file.c_str(), &st) == 0 && S_ISREG(st.st_mode))
-    check_gltf_features(file, report.warnings);  // refusals and warnings from the JSON
+    check_gltf_features(file, report.warnings, &gltf);  // refusals and warnings from the JSON
   const aiScene* ai = read_file(importer, file, ctx);
   TextureLoader textures(scene, report, options.inputs, input_root(file));
   textures.charge_budget(*ai, file);  // from the images' headers, before any is decoded
-  Flattener flattener(*ai, file, scene, report, textures);
+  Flattener flattener(*ai, file, scene, report, textures, gltf.is_null() ? nullptr : &gltf);
   flattener.run("", -1, scene.triangles, scene.uvs);
   if (scene.triangles.empty())
     throw input_error(file, "no triangles (" + std::to_string(report.triangles_read) +

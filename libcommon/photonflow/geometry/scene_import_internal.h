@@ -45,11 +45,12 @@ aiMatrix4x4 global_transform(const aiNode* node);
 // order of first use) materials to the Scene.
 class Flattener {
  public:
+  // `gltf`: the file's glTF JSON when the import has read it (check_gltf_features), else null.
   Flattener(const aiScene& ai, const std::string& file, Scene& scene, BakeReport& report,
-            TextureLoader& textures)
+            TextureLoader& textures, const nlohmann::json* gltf = nullptr)
       : ai_(ai), file_(file), scene_(scene), report_(report), textures_(textures),
         material_map_(ai.mNumMaterials, -1), uv_channel_(ai.mNumMaterials, 0),
-        checked_(ai.mNumMeshes, false), emissive_strength_(gltf_emissive_strengths(file)) {}
+        checked_(ai.mNumMeshes, false), emissive_strength_(gltf_emissive_strengths(file, gltf)) {}
 
   // Flattens the whole node graph into `out`, each triangle's texture coordinates into `uvs`
   // (zero where the mesh has none). Mesh names get `prefix` in front; material ≥ 0 replaces the
