@@ -135,18 +135,20 @@ inline std::vector<std::string> rewrite_deprecated(const std::string& program, i
 // A floating-point option's value must be a number to its last character: cxxopts reads the
 // number at the front of "0.1;" or "0.1x" and drops the rest without a word (an options file's
 // "--aperture 0.1; touch x" would bake with 0.1). Whole-number options are already read whole.
+// True when the option holds a T (cxxopts' as<T> refuses another type with std::bad_cast).
+template <typename T>
+bool option_holds(const cxxopts::OptionValue& o) {
+  try {
+    (void)o.as<T>();
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 inline void require_whole_number(const cxxopts::ParseResult& r, const std::string& key,
                                  const std::string& value) {
-  bool floating = false;
-  for (auto is_type : {+[](const cxxopts::OptionValue& o) { (void)o.as<float>(); },
-                       +[](const cxxopts::OptionValue& o) { (void)o.as<double>(); }}) {
-    try {
-      is_type(r[key]);
-      floating = true;
-    } catch (const std::exception&) {
-    }
-  }
-  if (!floating) return;
+  if (!option_holds<float>(r[key]) && !option_holds<double>(r[key])) return;
   char* end = nullptr;
   std::strtod(value.c_str(), &end);
   if (value.empty() || end != value.c_str() + value.size())
