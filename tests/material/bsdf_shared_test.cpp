@@ -148,6 +148,74 @@ TEST_CASE("bsdf: the metal, dielectric and rough-glass mixtures sample their mix
       }
 }
 
+TEST_CASE("bsdf: every sample's weight is bounded (visible normals, Fresnel choice)",
+          "[bsdf][bound]") {
+  // Heitz 2018 section 2 with the reflect-or-refract choice by the microfacet's Fresnel term
+  // (pf_bsdf_reflect_probability): a rough dielectric's sample weight f·|cos θi|/pdf is
+  // G2/G1 ≤ 1, times (η_o/η_i)² for radiance that crosses the interface (Veach 1997 §5.2;
+  // importance carries no such factor), and a conductor's is F(o·h)·G2/G1 ≤ F. A weight above
+  // these means the sampler and its pdf disagree (a choice by the Fresnel term at n·o instead
+  // of o·h gives weights near 50 at grazing angles and under total internal reflection).
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> uni(0.f, 1.f);
+  const float tol = 1e-3f;
+  double max_dielectric = 0, max_conductor = 0;
+  int transmitted = 0, reflected = 0, conductor_samples = 0;
+  for (float roughness : {0.05f, 0.1f, 0.2f, 0.3f, 0.5f, 0.7f, 1.f})
+    for (float cos_o : {0.02f, 0.1f, 0.3f, 0.6f, 0.9f, 1.f})
+      for (float side : {1.f, -1.f}) {
+        float wo[3];
+        dir_from(cos_o * side, 0.4f, wo);
+        for (float ior : {1.33f, 1.5f, 2.4f})
+          for (int mode : {PF_TRANSPORT_RADIANCE, PF_TRANSPORT_IMPORTANCE}) {
+            const pf_bsdf_params glass = material(1, 1, 1, 0, roughness, 1.f, ior);
+            const float eta_o = side > 0 ? 1.f : ior, eta_i = side > 0 ? ior : 1.f;
+            for (int k = 0; k < 400; ++k) {
+              pf_bsdf_sample_rec rec;
+              if (!pf_bsdf_sample(&glass, wo, uni(rng), uni(rng), uni(rng), mode, &rec)) continue;
+              const bool through = rec.wi[2] * wo[2] < 0.f;
+              (through ? transmitted : reflected)++;
+              const float eta2 = (through && mode == PF_TRANSPORT_RADIANCE)
+                                     ? (eta_o / eta_i) * (eta_o / eta_i)
+                                     : 1.f;
+              for (int c = 0; c < 3; ++c) {
+                INFO("glass roughness " << roughness << " ior " << ior << " wo.z " << wo[2]
+                                        << " mode " << mode << " through " << through);
+                REQUIRE(std::isfinite(rec.weight[c]));
+                CHECK(rec.weight[c] / eta2 <= 1.f + tol);
+                max_dielectric = std::max(max_dielectric, double(rec.weight[c] / eta2));
+              }
+            }
+          }
+        if (side < 0) continue;  // a conductor is two-sided: once
+        for (const pf_bsdf_params& metal :
+             {material(1, 1, 1, 1, roughness), material(1.f, 0.78f, 0.34f, 1, roughness)}) {
+          for (int k = 0; k < 1000; ++k) {
+            pf_bsdf_sample_rec rec;
+            if (!pf_bsdf_sample(&metal, wo, uni(rng), uni(rng), uni(rng), PF_TRANSPORT_RADIANCE,
+                                &rec))
+              continue;
+            ++conductor_samples;
+            float h[3] = {wo[0] + rec.wi[0], wo[1] + rec.wi[1], wo[2] + rec.wi[2]};
+            pf_normalize3(h);
+            const float w5 = pf_pow5(1.f - pf_bsdf_clamp01(pf_dot3(wo, h)));
+            for (int c = 0; c < 3; ++c) {
+              const float F = metal.base_color[c] + (1.f - metal.base_color[c]) * w5;
+              INFO("metal roughness " << roughness << " wo.z " << wo[2] << " channel " << c);
+              CHECK(rec.weight[c] <= F + tol);
+              max_conductor = std::max(max_conductor, double(rec.weight[c] / F));
+            }
+          }
+        }
+      }
+  CHECK(transmitted > 10000);
+  CHECK(reflected > 10000);
+  CHECK(conductor_samples > 50000);
+  // the bounds are reached, not only respected (G2/G1 → 1 at normal incidence, small α)
+  CHECK(max_dielectric > 0.95);
+  CHECK(max_conductor > 0.95);
+}
+
 TEST_CASE("bsdf: D and the visible-normal density integrate to 1", "[bsdf]") {
   // ∫ D(h) cosθh dω = 1 (projected microfacet area = 1) and ∫ D_o(h) dω = 1 for any o
   // (Heitz 2018 section 2): checks D, G1 and their normalizations together.

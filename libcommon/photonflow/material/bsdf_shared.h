@@ -304,15 +304,38 @@ typedef struct {
   float alpha;
   float metallic;
   float transmission; /* 0 unless the material transmits (and is not fully metallic) */
+  float t_lobe;       /* transmission, or 0 where its f is 0 (a black tint): the sampled share */
   float f0;           /* dielectric F0 from ior */
-  float p_diffuse, p_specular, p_transmission;
+  float metal_f0;     /* luminance of the base colour: the metal's F0 for the lobe choice */
+  float p_diffuse;    /* probability of the cosine lobe; 1 − p_diffuse the microfacet lobes */
 } pf_bsdf_ctx;
 
-/* Lobe-selection probabilities, from an estimate of each lobe's albedo at o (Schlick at n·o,
- * luminance of base colour): specular (1 − m) F + m F_metal, diffuse (1 − m)(1 − F)(1 − t) Y,
- * transmission (1 − m)(1 − F) t Y. Every lobe that can be non-zero gets at least 0.02 before
- * normalization, so that no direction where f > 0 has pdf 0. They depend on wo only, and pdf()
- * sums the lobes' pdfs with these weights (one-sample MIS), consistent with sample(). */
+/* The microfacet lobes are sampled together (Heitz 2018 section 2, Walter 2007 section 5.3):
+ * a visible normal h ~ D_o(h), then reflection about h with probability
+ *   P_r(h) = r / (r + t),  r = (1 − m) F(o·h) + m F_metal(o·h),  t = (1 − m)(1 − F(o·h)) T,
+ * refraction through h otherwise (F the dielectric Schlick Fresnel at the microfacet, T the
+ * transmission share, m metallic; F_metal Schlick with F0 the base colour's luminance). For a
+ * rough dielectric (m = 0, T = 1) P_r = F, the weight of either choice is then G2/G1 ≤ 1 (times
+ * (η_o/η_i)² for radiance crossing the interface, Veach 1997 §5.2), and for a conductor
+ * (m = 1) it is F_metal·G2/G1 ≤ F: every sample's weight is bounded. The colour of the base
+ * (the tint of the transmission) is left out of P_r, so a tinted glass's weight is the tint
+ * times the bound. Returns P_r at the microfacet cosine oh = o·h (1 when neither lobe can
+ * scatter, so that the pdf and the sampler agree). */
+PF_INLINE float pf_bsdf_reflect_probability(const pf_bsdf_ctx* c, float oh) {
+  const float fd = pf_fresnel_schlick_dielectric(oh, c->eta_o, c->eta_i, c->f0);
+  const float w5 = pf_pow5(1.0f - pf_bsdf_clamp01(oh));
+  const float fm = c->metal_f0 + (1.0f - c->metal_f0) * w5;
+  const float r = (1.0f - c->metallic) * fd + c->metallic * fm;
+  const float t = (1.0f - c->metallic) * (1.0f - fd) * c->t_lobe;
+  return r + t > 0.0f ? r / (r + t) : 1.0f;
+}
+
+/* The cosine lobe's probability, from an estimate of each lobe's albedo at o (Schlick at n·o,
+ * luminance Y of the base colour): diffuse (1 − m)(1 − F)(1 − T) Y against the microfacet lobes'
+ * specular (1 − m) F + m F_metal plus transmission (1 − m)(1 − F) T Y. Every lobe that can be
+ * non-zero gets at least 0.02 before normalization, so that no direction where f > 0 has pdf 0.
+ * It depends on wo only, and pdf() sums the lobes' pdfs with these weights (one-sample MIS),
+ * consistent with sample(). */
 PF_INLINE int pf_bsdf_setup(const pf_bsdf_params* m, const float* wo, pf_bsdf_ctx* c) {
   if (!(wo[2] != 0.0f)) return 0;
   c->flip = wo[2] < 0.0f ? -1.0f : 1.0f;
@@ -323,8 +346,12 @@ PF_INLINE int pf_bsdf_setup(const pf_bsdf_params* m, const float* wo, pf_bsdf_ct
   c->metallic = pf_bsdf_clamp01(m->metallic);
   float ior = m->ior;
   if (!(ior >= 1.0f)) ior = 1.5f; /* NaN or < 1: the glTF default */
+  const float y = pf_bsdf_clamp01(pf_luminance3(m->base_color));
   c->transmission = c->metallic < 1.0f ? pf_bsdf_clamp01(m->transmission) : 0.0f;
+  /* a transmission lobe is sampled only where its f can be non-zero (a black tint has none) */
+  c->t_lobe = y > 0.0f ? c->transmission : 0.0f;
   c->f0 = pf_f0_from_ior(ior);
+  c->metal_f0 = y;
   if (c->transmission > 0.0f && c->flip < 0.0f) {
     c->eta_o = ior;
     c->eta_i = 1.0f;
@@ -332,22 +359,17 @@ PF_INLINE int pf_bsdf_setup(const pf_bsdf_params* m, const float* wo, pf_bsdf_ct
     c->eta_o = 1.0f;
     c->eta_i = ior;
   }
-  const float y = pf_bsdf_clamp01(pf_luminance3(m->base_color));
   const float fd = pf_fresnel_schlick_dielectric(c->o[2], c->eta_o, c->eta_i, c->f0);
   const float fm = y + (1.0f - y) * pf_pow5(1.0f - pf_bsdf_clamp01(c->o[2]));
-  const float mm = c->metallic, t = c->transmission;
+  const float mm = c->metallic, t = c->t_lobe;
   float ps = (1.0f - mm) * fd + mm * fm;
-  float pd = (1.0f - mm) * (1.0f - fd) * (1.0f - t) * y;
+  float pd = (1.0f - mm) * (1.0f - fd) * (1.0f - c->transmission) * y;
   float pt = (1.0f - mm) * (1.0f - fd) * t * y;
-  const int has_d = (mm < 1.0f) && (t < 1.0f) && (y > 0.0f);
-  const int has_t = (mm < 1.0f) && (t > 0.0f) && (y > 0.0f);
+  const int has_d = (mm < 1.0f) && (c->transmission < 1.0f) && (y > 0.0f);
   ps = ps > 0.02f ? ps : 0.02f;
   pd = has_d ? (pd > 0.02f ? pd : 0.02f) : 0.0f;
-  pt = has_t ? (pt > 0.02f ? pt : 0.02f) : 0.0f;
-  const float sum = ps + pd + pt;
-  c->p_diffuse = pd / sum;
-  c->p_transmission = pt / sum;
-  c->p_specular = 1.0f - c->p_diffuse - c->p_transmission;
+  pt = t > 0.0f ? (pt > 0.02f ? pt : 0.02f) : 0.0f;
+  c->p_diffuse = pd / (ps + pd + pt);
   return 1;
 }
 
@@ -397,11 +419,26 @@ PF_INLINE void pf_bsdf_eval(const pf_bsdf_params* m, const float* wo, const floa
 
 PF_INLINE float pf_bsdf_pdf_ctx(const pf_bsdf_ctx* c, const float* wi) {
   const float i[3] = {wi[0], wi[1], wi[2] * c->flip};
-  if (i[2] > 0.0f)
+  const float p_micro = 1.0f - c->p_diffuse;
+  if (i[2] > 0.0f) {
+    float h[3] = {c->o[0] + i[0], c->o[1] + i[1], c->o[2] + i[2]};
+    pf_normalize3(h);
+    const float oh = pf_dot3(c->o, h);
+    if (!(oh > 0.0f)) return c->p_diffuse * pf_bsdf_pdf_cosine(i);
     return c->p_diffuse * pf_bsdf_pdf_cosine(i) +
-           c->p_specular * pf_ggx_pdf_reflection(c->o, i, c->alpha);
-  if (i[2] < 0.0f && c->p_transmission > 0.0f)
-    return c->p_transmission * pf_ggx_pdf_transmission(c->o, i, c->alpha, c->eta_o, c->eta_i);
+           p_micro * pf_bsdf_reflect_probability(c, oh) * pf_ggx_vndf_pdf(c->o, h, c->alpha) /
+               (4.0f * oh);
+  }
+  if (i[2] < 0.0f && c->t_lobe > 0.0f) {
+    float h[3];
+    if (!pf_bsdf_half_transmission(c->o, i, c->eta_o, c->eta_i, h)) return 0.0f;
+    const float oh = pf_dot3(c->o, h), ih = pf_dot3(i, h);
+    const float den = c->eta_o * oh + c->eta_i * ih;
+    if (!(den * den > 0.0f)) return 0.0f;
+    return p_micro * (1.0f - pf_bsdf_reflect_probability(c, oh)) *
+           pf_ggx_vndf_pdf(c->o, h, c->alpha) * (c->eta_i * c->eta_i * PF_S_FABS(ih)) /
+           (den * den);
+  }
   return 0.0f;
 }
 
@@ -414,9 +451,11 @@ PF_INLINE float pf_bsdf_pdf(const pf_bsdf_params* m, const float* wo, const floa
   return pf_bsdf_pdf_ctx(&c, wi);
 }
 
-/* Samples wi given wo: u3 chooses the lobe, (u1, u2) the direction within it. Returns 1 and fills
- * rec, or 0 (rec->lobe = NONE, weight 0) when the lobe's sample is lost (see the lobe samplers) —
- * the path then ends, which is the lobe's energy loss, not a bias. */
+/* Samples wi given wo: u3 chooses the lobe (the cosine lobe below p_diffuse; above it the
+ * visible normal h from (u1, u2), and u3 rescaled to [0, 1) chooses reflection about h or
+ * refraction through it with pf_bsdf_reflect_probability). Returns 1 and fills rec, or 0
+ * (rec->lobe = NONE, weight 0) when the sample is lost (a reflection under the horizon: the
+ * single-scattering loss) — the path then ends, which is the lobe's energy loss, not a bias. */
 PF_INLINE int pf_bsdf_sample(const pf_bsdf_params* m, const float* wo, float u1, float u2,
                              float u3, int mode, pf_bsdf_sample_rec* rec) {
   rec->lobe = PF_BSDF_LOBE_NONE;
@@ -432,12 +471,30 @@ PF_INLINE int pf_bsdf_sample(const pf_bsdf_params* m, const float* wo, float u1,
     lobe = PF_BSDF_LOBE_DIFFUSE;
     pf_bsdf_sample_cosine(u1, u2, i);
     ok = i[2] > 0.0f;
-  } else if (u3 < c.p_diffuse + c.p_specular || !(c.p_transmission > 0.0f)) {
-    lobe = PF_BSDF_LOBE_SPECULAR;
-    ok = pf_ggx_sample_reflection(c.o, c.alpha, u1, u2, i);
   } else {
-    lobe = PF_BSDF_LOBE_TRANSMISSION;
-    ok = pf_ggx_sample_transmission(c.o, c.alpha, c.eta_o, c.eta_i, u1, u2, i);
+    float h[3];
+    pf_ggx_sample_vndf(c.o, c.alpha, u1, u2, h);
+    const float oh = pf_dot3(c.o, h);
+    if (!(oh > 0.0f)) return 0;
+    float v = (u3 - c.p_diffuse) / (1.0f - c.p_diffuse); /* uniform on [0, 1) again */
+    v = v < 1.0f ? v : 0.99999994f;
+    if (v < pf_bsdf_reflect_probability(&c, oh)) {
+      lobe = PF_BSDF_LOBE_SPECULAR;
+      for (int k = 0; k < 3; ++k) i[k] = 2.0f * oh * h[k] - c.o[k];
+      ok = i[2] > 0.0f;
+    } else {
+      lobe = PF_BSDF_LOBE_TRANSMISSION;
+      const float e = c.eta_o / c.eta_i;
+      const float sin2_t = e * e * pf_max0(1.0f - oh * oh);
+      ok = sin2_t < 1.0f; /* P_r = 1 under total internal reflection: never taken there */
+      if (ok) {
+        const float cos_t = PF_S_SQRT(1.0f - sin2_t);
+        const float s = e * oh - cos_t;
+        for (int k = 0; k < 3; ++k) i[k] = -e * c.o[k] + s * h[k];
+        pf_normalize3(i);
+        ok = i[2] < 0.0f;
+      }
+    }
   }
   if (!ok) return 0;
   const float wi[3] = {i[0], i[1], i[2] * c.flip};
