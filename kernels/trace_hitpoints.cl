@@ -93,11 +93,12 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
  * = (1/n) Σ f(wo, w_l)·L_e·|cos θ_x|·G/p with the BSDF in radiance mode (pf_pbr_eval_world: front
  * shading normal ns, front geometric normal ng); light from behind counts where the BSDF
  * transmits, and the shadow ray leaves on w_l's side. Adds weight · L_direct to `direct`. The
- * numbers come from `rng` (the shadow stream at a visible point, the eye stream at a glossy point
- * an eye path goes through); delta_only: a sample that picks an area light adds nothing. */
+ * numbers come from `draws` (the pixel's light draws at a visible point, the eye stream at a
+ * glossy vertex an eye path goes on from); mis: an area light's sample is weighted against the
+ * BSDF's sample by the power heuristic with n·p_light (eye_pass.h direct_light_pbr). */
 static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const float* ng,
                                 const float* ns, const pf_bsdf_params* bp, const float* wo,
-                                int samples, pf_light_draws* draws, int delta_only, float eps,
+                                int samples, pf_light_draws* draws, int mis, float eps,
                                 const float* weight, float* direct, int leaf) {
   if (s->light_count <= 0 || samples <= 0) return;
   float sum[3] = {0.0f, 0.0f, 0.0f};
@@ -107,24 +108,43 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
     float p_light;
     const int li = pf_pick_light(s, ul, &p_light);
     if (p_light <= 0.0f) continue;
-    if (delta_only && s->lights[li].type == PF_LIGHT_AREA) continue;
     float q[3], w[3];
     const float g = pf_light_incident_at(s, li, p, u1, u2, w, q);
     if (!(g > 0.0f)) continue;
     float f[3];
     pf_pbr_eval_world(bp, ns, ng, wo, w, f); /* 0 for a pair the normals disagree on */
     if (!(f[0] > 0.0f || f[1] > 0.0f || f[2] > 0.0f)) continue;
+    float wmis = 1.0f;
+    if (mis && s->lights[li].type == PF_LIGHT_AREA)
+      wmis = pf_power_heuristic((float)samples * p_light / g,
+                                pf_pbr_pdf_world(bp, ns, ng, wo, w));
     const float e = pf_dot3(w, ng) >= 0.0f ? eps : -eps;
     float o[3], sd[3];
     for (int k = 0; k < 3; ++k) o[k] = p[k] + ng[k] * e;
     for (int k = 0; k < 3; ++k) sd[k] = q[k] - o[k];
     pf_ray_hit hit;
     if (pf_trace_from(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit, leaf, 0)) continue;
-    const float gp = fabs(pf_dot3(w, ns)) * g / p_light;
+    const float gp = fabs(pf_dot3(w, ns)) * g / p_light * wmis;
     for (int k = 0; k < 3; ++k) sum[k] = sum[k] + f[k] * s->lights[li].radiance[k] * gp;
   }
   const float inv = 1.0f / (float)samples;
   for (int k = 0; k < 3; ++k) direct[k] = direct[k] + weight[k] * (sum[k] * inv);
+}
+
+/* EyeTracer::emitter_hit_weight: the BSDF sample's power-heuristic weight against next-event
+ * estimation's n light samples at the vertex it left, for an emitter hit at distance dist along
+ * unit direction d (triangle tri, front geometric normal ng); 1 where the triangle is no light. */
+static float pf_emitter_hit_weight(const pf_scene_view* s, __global const int* tri_light, int tri,
+                                   const float* d, const float* ng, float dist, float bsdf_pdf,
+                                   int samples) {
+  const int li = tri_light[tri];
+  if (li < 0) return 1.0f;
+  __global const pf_light* l = &s->lights[li];
+  const float cos_l = -pf_dot3(d, ng);
+  if (!(cos_l > 0.0f) || !(l->area > 0.0f)) return 1.0f;
+  const float p_pick = s->light_cdf[li] - (li ? s->light_cdf[li - 1] : 0.0f);
+  const float p_light = p_pick * dist * dist / (l->area * cos_l);
+  return pf_power_heuristic(bsdf_pdf, (float)samples * p_light);
 }
 
 /* CameraFrame::ray: the ray through image point (px, py) (pixels, y down) and, for a thin lens
@@ -204,14 +224,15 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
                               __global const float* cam,
                               int width, int height,
                               int spp, int columns, int max_depth, int shadow_rays,
-                              int shadow_samples, float radius, float glossy_threshold,
+                              int shadow_samples, float radius, int glossy_mis,
                               uint seed, uint pass,
                               int sampler, float eps,
                               int pixel_offset, int pixel_count, __global pf_hitpoint* slots,
                               __global int* used, __global float* emitted_out,
                               __global float* direct_out, int has_pbr,
                               __global pf_pbr_point* pbr_slots,
-                              __global const uchar* emit_pixels, int emission_spp) {
+                              __global const uchar* emit_pixels, int emission_spp,
+                              __global const int* tri_light) {
   const int local_pix = (int)get_global_id(0);
   if (local_pix >= pixel_count) return;
   PF_SCENE_VIEW(s);
@@ -234,7 +255,10 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
     pf_camera_ray(cam, width, height, (float)x + jx, (float)y + jy, u1, u2, o, d);
     const float w0 = 1.0f / (float)spp;
     float T[3] = {w0, w0, w0};
-    int glossy = 0; /* the path went on through a glossy point: its emitters go to `direct` */
+    /* eye_pass.cpp EyeTracer::sample: from_glossy, last, merged, glossy, glossy_pdf, T_direct */
+    int from_glossy = 0, last = 0, merged = 0, glossy = 0;
+    float glossy_pdf = 0.0f;
+    float Td[3] = {0.0f, 0.0f, 0.0f};
     int leaf = -1;  /* the kd leaf of the last hit: the next ray's start (pf_trace_from) */
     for (int depth = 0; depth <= max_depth; ++depth) {
       pf_ray_hit h;
@@ -243,60 +267,99 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
       pf_surface_at(&s, o, d, &h, &sh);
       __global const pf_material* m = &s.mats[sh.material];
       if (m->type == PF_MAT_EMITTER && sh.front) {
-        float* layer = glossy ? direct : emitted;
-        for (int k = 0; k < 3; ++k) layer[k] = layer[k] + T[k] * m->emission[k];
+        if (from_glossy) {
+          const float wl = pf_emitter_hit_weight(&s, tri_light, h.tri, d, sh.ng, h.t, glossy_pdf,
+                                                 shadow_samples);
+          for (int k = 0; k < 3; ++k) direct[k] = direct[k] + Td[k] * m->emission[k] * wl;
+        } else {
+          float* layer = glossy ? direct : emitted;
+          for (int k = 0; k < 3; ++k) layer[k] = layer[k] + T[k] * m->emission[k];
+        }
       }
+      if (last) break; /* the ray was traced for the emitter's light only */
+      from_glossy = 0;
       float n[3];
       for (int k = 0; k < 3; ++k) n[k] = sh.front ? sh.ns[k] : -sh.ns[k];
       const int pbr = PF_SCENE_PBR && m->type == PF_MAT_PBR; /* scene_features.h */
       if (pbr || pf_is_diffuse(m)) {
         /* Diffuse: the texture's value joins the weight (eye_pass.cpp): the gathers' f_r =
-         * color/π. PBR (non-delta, the visible point sits here): the weight carries no texture
-         * factor; the point's BSDF parameters do (pbr_point_shared.h, a table parallel to the
-         * hitpoints, written for every hitpoint of a scene with a PBR material). */
+         * color/π. PBR: the weight carries no texture factor; the point's BSDF parameters do
+         * (pbr_point_shared.h, a table parallel to the hitpoints, written for every hitpoint of a
+         * scene with a PBR material). */
         float tf[3];
         pf_pbr_point pt;
+        float hw[3] = {T[0], T[1], T[2]}; /* the hitpoint's weight */
+        float nd[3] = {d[0], d[1], d[2]};
+        if (depth > 0) pf_normalize3(nd); /* the camera ray's is unit already */
+        const float wo[3] = {-nd[0], -nd[1], -nd[2]};
+        int merge = 1;
+        float q = 1.0f, o_loc[3];
         if (pbr) {
           pf_pbr_params_hit(textures, texels, mat_tex, uvs, mr_tex, s.mats, sh.material, &h,
                             &pt.params);
-          pt.outside = sh.front ? 1 : 0;
-          if (pf_pbr_eye_continues(&pt.params, glossy_threshold)) {
-            /* eye_pass.cpp: on by the BSDF's sample (radiance mode, u1, u2, u3 from the eye
-             * stream), as through a mirror; the visible point sits further on */
-            float wo[3] = {d[0], d[1], d[2]};
-            if (depth > 0) pf_normalize3(wo); /* the camera ray's is unit already */
-            for (int k = 0; k < 3; ++k) wo[k] = -wo[k];
-            /* point, spot and directional lights by next-event estimation first (the sample
-             * never hits them), from the eye stream; area lights by the sample's hit */
-            pf_light_draws gd = pf_light_draws_from(rng);
-            pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &gd, 1,
-                                eps, T, direct, leaf);
-            rng = gd.rng;
-            const float u1 = pf_rng_next(&rng);
-            const float u2 = pf_rng_next(&rng);
-            const float u3 = pf_rng_next(&rng);
-            float wi[3], wt[3], pdf;
-            if (!pf_pbr_scatter(&pt.params, sh.ns, sh.ng, wo, u1, u2, u3, PF_TRANSPORT_RADIANCE,
-                                wi, wt, &pdf))
-              break;
-            for (int k = 0; k < 3; ++k) T[k] = T[k] * wt[k];
-            if (pf_luminance3(T) <= 0.0f) break;
-            for (int k = 0; k < 3; ++k) d[k] = wi[k];
-            pf_offset_origin(&sh, d, eps, o);
-            glossy = 1;
-            continue;
+          pt.outside = sh.front ? PF_PBR_POINT_OUTSIDE : 0;
+          if (glossy_mis) {
+            /* merge_weight_shared.h: the merge probability, then the choice */
+            pf_bsdf_to_local(sh.ns, wo, o_loc);
+            q = pf_merge_probability(&pt.params, o_loc);
+            const float u_merge = pf_rng_next(&rng);
+            merge = q >= 1.0f || (q > 0.0f && u_merge < q);
+            if (merge) {
+              pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
+                                                          (uint)pix, smp, spp, shadow_samples);
+              pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws,
+                                  1, eps, T, direct, leaf);
+            } else {
+              pf_light_draws gd = pf_light_draws_from(rng);
+              pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &gd, 1,
+                                  eps, T, direct, leaf);
+              rng = gd.rng;
+            }
           }
         } else if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf)) {
           for (int k = 0; k < 3; ++k) T[k] = T[k] * tf[k];
+          for (int k = 0; k < 3; ++k) hw[k] = T[k];
+        }
+        /* the BSDF's sample at a glossy vertex (GlossyMerge::Mis) */
+        float wi[3], wt[3], pdf = 0.0f;
+        int sampled = 0;
+        if (pbr && glossy_mis) {
+          const float u1 = pf_rng_next(&rng);
+          const float u2 = pf_rng_next(&rng);
+          const float u3 = pf_rng_next(&rng);
+          sampled = pf_pbr_scatter(&pt.params, sh.ns, sh.ng, wo, u1, u2, u3,
+                                   PF_TRANSPORT_RADIANCE, wi, wt, &pdf);
+        }
+        if (!merge) {
+          if (!sampled) break;
+          float share = 1.0f;
+          if (q > 0.0f) {
+            float il[3];
+            pf_bsdf_to_local(sh.ns, wi, il);
+            share = (1.0f - pf_merge_weight(&pt.params, o_loc, il)) / (1.0f - q);
+          }
+          for (int k = 0; k < 3; ++k) {
+            Td[k] = T[k] * wt[k];
+            T[k] = Td[k] * share;
+          }
+          glossy_pdf = pdf;
+          from_glossy = glossy = 1;
+          if (!(pf_luminance3(Td) > 0.0f)) break;
+          last = !(pf_luminance3(T) > 0.0f);
+          for (int k = 0; k < 3; ++k) d[k] = wi[k];
+          pf_offset_origin(&sh, d, eps, o);
+          continue;
+        }
+        if (pbr && glossy_mis && q < 1.0f) {
+          pt.outside |= PF_PBR_POINT_MERGE_WEIGHTED;
+          for (int k = 0; k < 3; ++k) hw[k] = T[k] * (1.0f / q);
         }
         pf_hitpoint hp;
-        float nd[3] = {d[0], d[1], d[2]};
-        if (depth > 0) pf_normalize3(nd); /* the camera ray's is unit already */
         for (int k = 0; k < 3; ++k) {
           hp.position[k] = sh.p[k];
           hp.normal[k] = n[k];
           hp.dir[k] = nd[k];
-          hp.weight[k] = T[k];
+          hp.weight[k] = hw[k];
           hp.flux[k] = 0.0f;
         }
         hp.radius = radius;
@@ -315,8 +378,17 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
           }
           pbr_slots[slot] = pt;
         }
+        if (pbr && glossy_mis) {
+          /* the BSDF's sample is traced for the emitter it may hit (its MIS-weighted light) */
+          if (!sampled) break;
+          for (int k = 0; k < 3; ++k) Td[k] = T[k] * wt[k];
+          glossy_pdf = pdf;
+          from_glossy = last = merged = 1;
+          for (int k = 0; k < 3; ++k) d[k] = wi[k];
+          pf_offset_origin(&sh, d, eps, o);
+          continue;
+        }
         if (shadow_rays && pbr) {
-          const float wo[3] = {-nd[0], -nd[1], -nd[2]};
           pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
                                                       (uint)pix, smp, spp, shadow_samples);
           pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws, 0,

@@ -31,9 +31,9 @@ inline std::unique_ptr<ClContext> test_device() {
 // that the device's equals it up to float rounding (relative RMSE ≤ 1e-3).
 inline void check_device_route(const Scene& s, Estimator e, GatherMethod device_method,
                                int passes, uint32_t photons, ClContext& dev,
-                               float glossy_threshold = 0.f) {
+                               GlossyMerge glossy = GlossyMerge::First) {
   RenderOptions opt;
-  opt.eye.glossy_threshold = glossy_threshold;
+  opt.eye.glossy = glossy;
   opt.estimator = e;
   opt.passes = passes;
   opt.photons.photons = photons;

@@ -164,10 +164,11 @@ TEST_CASE("emission samples: the emitted layer keeps its mean and loses variance
 
 TEST_CASE("emission samples: light found after a glossy continuation stays whole, in the direct "
           "layer",
-          "[emission][glossy-threshold]") {
-  // A smooth metal sphere (PF_MAT_PBR, roughness 0.05) continued by glossy_threshold 0.5: the lamp
-  // it reflects is found by the BSDF's sample and goes to `direct`, which emission samples (mirror
-  // and glass only) leave alone: emitted + direct keep their mean.
+          "[emission][glossy-merge]") {
+  // A smooth metal sphere (PF_MAT_PBR, roughness 0.05) that eye paths go on from
+  // (GlossyMerge::Mis): the lamp it reflects is found by the BSDF's sample and next-event
+  // estimation and goes to `direct`, which emission samples (mirror and glass only) leave
+  // alone: emitted + direct keep their mean.
   Scene s = lamp_room(PF_MAT_DIFFUSE, 32);
   pf_material& metal = s.materials[2];
   metal.type = PF_MAT_PBR;
@@ -177,7 +178,8 @@ TEST_CASE("emission samples: light found after a glossy continuation stays whole
   finish_scene(s);
   EyePassOptions o;
   o.sampler = PixelSampler::Sobol;
-  o.glossy_threshold = 0.5f;
+  o.glossy = GlossyMerge::Mis;
+  o.direct = DirectMode::ShadowRays;
   o.seed = 5;
   double sum[2] = {0, 0}, direct_sum = 0;
   for (int k = 0; k < 2; ++k)

@@ -478,10 +478,11 @@ TEST_CASE("glossy room: SPPM, PPPM and the path tracer agree within their noise"
     RenderOptions so = render_options(Estimator::Sppm, 8, 12000, 0.04f, seed);
     so.eye.direct = DirectMode::ShadowRays;
     sppm.push_back(region_means(render_image(s, so)));
-    // Eye paths through the gold block and the glass ball (both below the threshold 1, neither
-    // with a diffuse base): visible points beyond them (eye_pass.h glossy_threshold).
+    // Eye paths that share the light of the gold block, the ball and the glass between the
+    // gather there and their continuation (eye_pass.h GlossyMerge::Mis), with direct light at
+    // those vertices by next-event estimation and the BSDF's sample under MIS.
     RenderOptions through = so;
-    through.eye.glossy_threshold = 1.f;
+    through.eye.glossy = GlossyMerge::Mis;
     sppm_through.push_back(region_means(render_image(s, through)));
     so.eye.radius = 0.02f;
     sppm_half.push_back(region_means(render_image(s, so)));
@@ -571,10 +572,10 @@ struct Pass {
   uint64_t emitted = 0;
 };
 Pass pass_inputs(const Scene& s, uint32_t pass, DirectMode mode, float radius0,
-                 float glossy_threshold = 0.f) {
+                 GlossyMerge glossy = GlossyMerge::First) {
   Pass p;
   p.eye.pass = pass;
-  p.eye.glossy_threshold = glossy_threshold;
+  p.eye.glossy = glossy;
   p.eye.direct = mode;
   p.eye.sampler = PixelSampler::Sobol;
   p.eye.radius = radius0;
@@ -598,9 +599,11 @@ TEST_CASE("PBR visible points: SPPM and PPPM traced as they gather equal the sta
   // gathered from its entry in another route's order.
   const Scene s = glossy_room(20, 14, true);
   const DirectMode mode = GENERATE(DirectMode::Photons, DirectMode::ShadowRays);
-  // 1: eye paths through the rough glass ball and the gold block (eye_pass.h glossy_threshold).
-  const float threshold = GENERATE(0.f, 1.f);
-  INFO(direct_mode_name(mode) << ", glossy threshold " << threshold);
+  // Mis: eye paths that share the light of the rough glass ball and the gold block with their
+  // continuation (eye_pass.h GlossyMerge; shadow rays only).
+  const GlossyMerge glossy = GENERATE(GlossyMerge::First, GlossyMerge::Mis);
+  if (glossy == GlossyMerge::Mis && mode != DirectMode::ShadowRays) return;
+  INFO(direct_mode_name(mode) << ", glossy merge " << glossy_merge_name(glossy));
   const float r0 = 0.05f;
   HitpointSet staged = make_sppm_state(s, r0, mode), traced = staged, filed = staged;
   REQUIRE(staged.bsdf.size() == staged.hitpoints.size());
@@ -609,7 +612,7 @@ TEST_CASE("PBR visible points: SPPM and PPPM traced as they gather equal the sta
   ppm.slab = kDefaultSlab;
   test::TempDir tmp("glossy-sppm");
   for (uint32_t pass = 0; pass < 3; ++pass) {
-    const Pass in = pass_inputs(s, pass, mode, r0, threshold);
+    const Pass in = pass_inputs(s, pass, mode, r0, glossy);
     const EyePassResult eye = trace_hitpoints(s, in.eye);
     REQUIRE(eye.bsdf.size() == eye.hitpoints.size());
     sppm_pass(s, staged, eye, in.grid, in.emitted, ppm);

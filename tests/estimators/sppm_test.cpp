@@ -679,28 +679,35 @@ TEST_CASE("slab: photons of another face of the same mesh are left out, the site
   CHECK_THROWS_AS(check_options(ppm), InputError);
 }
 
-TEST_CASE("glossy threshold option: auto by estimator, checked, recorded only where eye paths use it, "
-          "and read back from the staged eye pass",
-          "[sppm][glossy-threshold]") {
-  CHECK(parse_glossy_threshold("auto", Estimator::Sppm) == kDefaultGlossyThreshold);
-  CHECK(parse_glossy_threshold("auto", Estimator::Pppm) == kDefaultGlossyThreshold);
-  CHECK(parse_glossy_threshold("auto", Estimator::Ppm) == 0.f);  // its one sample never converges
-  CHECK(parse_glossy_threshold("0.4", Estimator::Ppm) == 0.4f);
-  for (const std::string text : {"", "x", "0.3r", "--1"}) {
+TEST_CASE("glossy merge option: auto by estimator and direct light, checked, recorded only where "
+          "eye paths use it, and read back from the staged eye pass",
+          "[sppm][glossy-merge]") {
+  const DirectMode rays = DirectMode::ShadowRays, photons_mode = DirectMode::Photons;
+  CHECK(parse_glossy_merge_option("auto", Estimator::Sppm, rays) == kDefaultGlossyMerge);
+  CHECK(parse_glossy_merge_option("auto", Estimator::Pppm, rays) == kDefaultGlossyMerge);
+  // ppm's one eye pass never converges a continuation; photons that carry direct light would
+  // count the glossy vertex's next-event estimate twice
+  CHECK(parse_glossy_merge_option("auto", Estimator::Ppm, rays) == GlossyMerge::First);
+  CHECK(parse_glossy_merge_option("auto", Estimator::Pppm, photons_mode) == GlossyMerge::First);
+  CHECK(parse_glossy_merge_option("first", Estimator::Ppm, rays) == GlossyMerge::First);
+  CHECK(parse_glossy_merge_option("mis", Estimator::Sppm, rays) == GlossyMerge::Mis);
+  CHECK_THROWS_AS(parse_glossy_merge_option("mis", Estimator::Ppm, rays), InputError);
+  for (const std::string text : {"", "x", "0.3", "MIS"}) {
     INFO("'" << text << "'");
-    CHECK_THROWS_AS(parse_glossy_threshold(text, Estimator::Sppm), InputError);
+    CHECK_THROWS_AS(parse_glossy_merge_option(text, Estimator::Sppm, rays), InputError);
   }
   EyePassOptions eo;
-  for (float bad : {-0.1f, 1.5f, std::nanf("")}) {
-    eo.glossy_threshold = bad;
-    CHECK_THROWS_AS(check_options(eo), InputError);
-  }
-  // A state records the threshold when it is used, so that a checkpoint or pppm part of another
-  // one is not continued or merged with it; runs without it keep the parameters they had.
+  eo.glossy = GlossyMerge::Mis;
+  eo.direct = DirectMode::Photons;
+  CHECK_THROWS_AS(check_options(eo), InputError);
+  eo.direct = DirectMode::ShadowRays;
+  CHECK_NOTHROW(check_options(eo));
+  // A state records the rule when it is not "first", so that a checkpoint or pppm part of
+  // another one is not continued or merged with it; runs without it keep their parameters.
   RenderOptions a = options(Estimator::Pppm, 1, 100, 0.f), b = a;
-  CHECK(state_parameters(a).count("glossy-threshold") == 0);
-  a.eye.glossy_threshold = 0.5f;
-  CHECK(state_parameters(a).at("glossy-threshold") == "0.5");
+  CHECK(state_parameters(a).count("glossy-merge") == 0);
+  a.eye.glossy = GlossyMerge::Mis;
+  CHECK(state_parameters(a).at("glossy-merge") == "mis");
   CHECK(state_parameters(a) != state_parameters(b));
   // The staged route (trace-hitpoints records it when it is used) gives render's parameters.
   Provenance eye, photons;
@@ -715,7 +722,7 @@ TEST_CASE("glossy threshold option: auto by estimator, checked, recorded only wh
                                    b.ppm.alpha, b.ppm.slab, b.ppm.gather_area);
   };
   CHECK(staged(eye) == state_parameters(b));
-  eye.parameters["glossy-threshold"] = "0.5";
+  eye.parameters["glossy-merge"] = "mis";
   CHECK(staged(eye) == state_parameters(a));
 }
 

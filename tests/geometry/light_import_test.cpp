@@ -524,19 +524,15 @@ TEST_CASE("punctual lights: path tracing, SPPM and PPPM agree on a glossy floor 
   const Image pppm = synthesize(render_pppm(s, pp, false, Provenance{}));
   check_agrees("sppm", ref, sppm, 0.03, 0.12);
   check_agrees("pppm", ref, pppm, 0.03, 0.12);
-  // Eye paths through the metal floor (glossy_threshold above its roughness): the floor's
-  // reflection of the delta lights comes from next-event estimation at the glossy point (a BSDF
-  // sample never hits them; without it the spot's highlight is lost, as the showcase-caustics
-  // bench first showed), the rest from the visible points beyond it.
-  for (const DirectMode mode : {DirectMode::Photons, DirectMode::ShadowRays}) {
-    RenderOptions through = o;
-    through.eye.direct = mode;
-    through.eye.glossy_threshold = 1.f;
-    const Image img = synthesize(render_progressive(s, through, false, Provenance{}));
-    check_agrees(mode == DirectMode::Photons ? "sppm through glossy, direct photons"
-                                             : "sppm through glossy, shadow rays",
-                 ref, img, 0.03, 0.12);
-  }
+  // Eye paths that share the metal floor's light with their continuation (GlossyMerge::Mis):
+  // the floor's reflection of the delta lights comes from next-event estimation at the glossy
+  // vertex (a BSDF sample never hits them; without it the spot's highlight is lost), the rest
+  // from the gather there and the visible points beyond it.
+  RenderOptions through = o;
+  through.eye.direct = DirectMode::ShadowRays;
+  through.eye.glossy = GlossyMerge::Mis;
+  const Image img = synthesize(render_progressive(s, through, false, Provenance{}));
+  check_agrees("sppm through glossy, shadow rays", ref, img, 0.03, 0.12);
 }
 
 TEST_CASE("punctual lights: OpenCL photons and direct light equal the CPU's", "[lights][opencl]") {

@@ -310,18 +310,22 @@ TEST_CASE("OpenCL PBR: the render driver's SPPM, PPPM and PPM device routes give
   test::check_device_route(s, Estimator::Pppm, GatherMethod::HashGrid, 4, 6000, *dev);
   test::check_device_route(s, Estimator::Ppm, GatherMethod::HashGrid, 4, 6000, *dev);
   test::check_device_route(s, Estimator::Ppm, GatherMethod::GridKmeans, 4, 6000, *dev);
-  // Eye paths through the glass sphere and the metal block (glossy_threshold above their
-  // roughness: eye_pass.h) on both backends.
-  test::check_device_route(s, Estimator::Sppm, GatherMethod::HashGrid, 4, 6000, *dev, 0.5f);
+  // Eye paths that share the glass sphere's and the metal block's light with their continuation
+  // (eye_pass.h GlossyMerge::Mis) on both backends.
+  test::check_device_route(s, Estimator::Sppm, GatherMethod::HashGrid, 4, 6000, *dev,
+                           GlossyMerge::Mis);
+  test::check_device_route(s, Estimator::Pppm, GatherMethod::HashGrid, 4, 6000, *dev,
+                           GlossyMerge::Mis);
 }
 
-TEST_CASE("OpenCL PBR: eye paths continue through glossy metal and glass below the glossy "
-          "threshold as on the CPU",
-          "[pbr][opencl][glossy-threshold]") {
-  // glossy_threshold 0.5: the rough glass sphere (0.3, transmission 1) and the metal block (0.35,
-  // metallic 1) have no visible point of their own; the eye paths go on by the BSDF's sample to
-  // the walls and the box (partly metallic: a diffuse base, so its visible points stay). The
-  // device's hitpoints equal the CPU's one for one (the same draws from the eye stream).
+TEST_CASE("OpenCL PBR: eye paths share glossy vertices' light with their continuation as on the "
+          "CPU",
+          "[pbr][opencl][glossy-merge]") {
+  // GlossyMerge::Mis: at the rough glass sphere (0.3, transmission 1) and the metal block (0.35,
+  // metallic 1) an eye path makes its visible point with the merge probability (marked
+  // merge-weighted) or goes on by the BSDF's sample to the walls and the box. The device's
+  // hitpoints, their BSDF records with the marks, and the direct layer (next-event estimation
+  // and BSDF samples under MIS) equal the CPU's one for one (the same draws from the eye stream).
   auto dev = test::test_device();
   if (!dev) return;
   const Scene s = pbr_room(48, 36);
@@ -331,29 +335,33 @@ TEST_CASE("OpenCL PBR: eye paths continue through glossy metal and glass below t
   eo.pass = 2;
   eo.sampler = PixelSampler::Sobol;
   const EyePassResult stop = trace_hitpoints(s, eo);
-  eo.glossy_threshold = 0.5f;
+  eo.glossy = GlossyMerge::Mis;
   const EyePassResult cpu = trace_hitpoints(s, eo);
   const EyePassResult gpu = trace_hitpoints(s, eo, *dev);
   REQUIRE(cpu.hitpoints.size() == gpu.hitpoints.size());
   REQUIRE(gpu.bsdf.size() == gpu.hitpoints.size());
   const float tol = 1e-4f * length(s.bounds.extent());
-  size_t same = 0, on_glossy = 0, stopped_glossy = 0;
+  size_t same = 0, on_glossy = 0, stopped_glossy = 0, weighted = 0;
   for (const pf_hitpoint& h : stop.hitpoints)
     stopped_glossy += h.material == kSphere || h.material == kBlock;
   for (size_t i = 0; i < cpu.hitpoints.size(); ++i) {
     const pf_hitpoint &a = cpu.hitpoints[i], &b = gpu.hitpoints[i];
     on_glossy += a.material == kSphere || a.material == kBlock || b.material == kSphere ||
                  b.material == kBlock;
-    bool ok = a.pixel_x == b.pixel_x && a.pixel_y == b.pixel_y && a.material == b.material;
+    bool ok = a.pixel_x == b.pixel_x && a.pixel_y == b.pixel_y && a.material == b.material &&
+              cpu.bsdf[i].outside == gpu.bsdf[i].outside;
+    weighted += (cpu.bsdf[i].outside & PF_PBR_POINT_MERGE_WEIGHTED) != 0;
     for (int c = 0; c < 3; ++c)
       ok = ok && std::fabs(a.position[c] - b.position[c]) <= tol &&
            close(a.weight[c], b.weight[c], 1e-4f);
     same += ok;
   }
   INFO("hitpoints " << cpu.hitpoints.size() << ", of which the same on the device " << same
-                    << "; without the threshold " << stopped_glossy << " on the sphere and block");
+                    << "; with the first rule " << stopped_glossy << " on the sphere and block, "
+                    << "with mis " << on_glossy << " (" << weighted << " merge-weighted)");
   CHECK(stopped_glossy > 40);
-  CHECK(on_glossy == 0);
+  CHECK(on_glossy < stopped_glossy);  // many paths go on from the narrow lobes
+  CHECK(weighted > 0);
   CHECK(same >= cpu.hitpoints.size() * 995 / 1000);
   REQUIRE(test::sum_squares(cpu.direct) > 0);
   CHECK(test::relative_rmse(gpu.direct, cpu.direct) <= 1e-3);

@@ -253,12 +253,12 @@ TEST_CASE("render: options out of range are refused as the stages refuse them",
   check_refused(run_tool("render", base + "--max-bounces -5", tmp), tmp, "--max-bounces", none);
   check_refused(run_tool("render", base + "--shadow-samples 0 --direct shadow-rays", tmp), tmp,
                 "--shadow-samples", none);
-  check_refused(run_tool("render", base + "--glossy-threshold -0.5", tmp), tmp,
-                "--glossy-threshold", none);
-  check_refused(run_tool("render", base + "--glossy-threshold 1.5", tmp), tmp,
-                "--glossy-threshold", none);
-  check_refused(run_tool("render", base + "--glossy-threshold rough", tmp), tmp,
-                "--glossy-threshold", none);
+  check_refused(run_tool("render", base + "--glossy-merge rough", tmp), tmp, "--glossy-merge",
+                none);
+  check_refused(run_tool("render", base + "--glossy-merge mis --estimator ppm", tmp), tmp,
+                "--glossy-merge", none);
+  check_refused(run_tool("render", base + "--glossy-merge mis --direct photons", tmp), tmp,
+                "--glossy-merge", none);
   check_refused(run_tool("render", base + "--checkpoint " + (tmp / "ck.h5") +
                                        " --checkpoint-every 0", tmp),
                 tmp, "--checkpoint-every", none);

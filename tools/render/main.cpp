@@ -49,10 +49,11 @@ int main(int argc, char** argv) {
        cxxopts::value<int>()->default_value("0"))
       ("sums", "pppm: write the partial result (per-pixel sums of the passes, for merge) here",
        cxxopts::value<std::string>()->default_value(""))
-      ("glossy-threshold", "roughness below which eye paths continue through a metal or a "
-       "fully transmissive glass by sampling its BSDF instead of making the visible point there "
-       "(0 = never), or auto: " + pf::default_text(pf::kDefaultGlossyThreshold) +
-       " for sppm and pppm, 0 for ppm (render_defaults.h)",
+      ("glossy-merge", "at a glossy (PBR) point: first = make the visible point there; mis = "
+       "share its light between the gather there and continuing the eye path, by the merge "
+       "weight of each direction, with direct light by MIS (sppm and pppm, --direct "
+       "shadow-rays); or auto: mis for sppm and pppm with shadow rays, else first "
+       "(render_defaults.h)",
        cxxopts::value<std::string>()->default_value("auto"))
       ("emission-spp", "eye paths more per pass, through mirrors and glass only, in the pixels "
        "that see an emitter that way or directly (their emitted light converges faster; 0 = "
@@ -147,8 +148,8 @@ int main(int argc, char** argv) {
     opt.eye.radius = pf::parse_radius_option(a["radius"].as<std::string>());
     opt.eye.seed = seed;
     opt.eye.threads = threads;
-    opt.eye.glossy_threshold =
-        pf::parse_glossy_threshold(a["glossy-threshold"].as<std::string>(), opt.estimator);
+    opt.eye.glossy = pf::parse_glossy_merge_option(a["glossy-merge"].as<std::string>(),
+                                                   opt.estimator, opt.eye.direct);
     opt.eye.emission_spp = pf::parse_emission_spp(a["emission-spp"].as<std::string>());
     opt.eye.sampler = sampler == "auto" ? (opt.estimator == pf::Estimator::Ppm
                                                ? pf::PixelSampler::Strata

@@ -45,9 +45,9 @@ int main(int argc, char** argv) {
        cxxopts::value<std::string>()->default_value(pf::estimator_name(pf::kDefaultEstimator)))
       ("pass", "sppm/pppm: which eye pass (0-based; the photon pass it meets has the same index)",
        cxxopts::value<int>()->default_value("0"))
-      ("glossy-threshold", "roughness below which eye paths continue through a metal or a "
-       "fully transmissive glass by sampling its BSDF instead of stopping there (0 = never), or "
-       "auto: " + pf::default_text(pf::kDefaultGlossyThreshold) + " for sppm and pppm, 0 for ppm",
+      ("glossy-merge", "at a glossy (PBR) point: first = make the visible point there; mis = "
+       "share its light between the gather there and continuing the eye path (sppm and pppm, "
+       "--direct shadow-rays); or auto: mis for sppm and pppm with shadow rays, else first",
        cxxopts::value<std::string>()->default_value("auto"))
       ("emission-spp", "eye paths more per pass, through mirrors and glass only, in the pixels "
        "that see an emitter that way or directly (their emitted light converges faster; 0 = "
@@ -93,7 +93,8 @@ int main(int argc, char** argv) {
     opt.sampler = sampler != "auto" ? pf::parse_pixel_sampler(sampler)
                   : estimator == pf::Estimator::Ppm ? pf::PixelSampler::Strata
                                                     : pf::PixelSampler::Sobol;
-    opt.glossy_threshold = pf::parse_glossy_threshold(a["glossy-threshold"].as<std::string>(), estimator);
+    opt.glossy = pf::parse_glossy_merge_option(a["glossy-merge"].as<std::string>(), estimator,
+                                               opt.direct);
     opt.emission_spp = pf::parse_emission_spp(a["emission-spp"].as<std::string>());
     opt.shadow_samples = pf::parse_shadow_samples(a["shadow-samples"].as<std::string>(), estimator);
     pf::check_options(opt);
@@ -116,9 +117,9 @@ int main(int argc, char** argv) {
     prov.parameters["pixel-sampler"] = pf::pixel_sampler_name(opt.sampler);  // auto resolved
     prov.parameters["shadow-samples"] = std::to_string(opt.shadow_samples);  // likewise
     // auto resolved; only where it is used (render_driver.cpp state_parameters reads it back)
-    prov.parameters.erase("glossy-threshold");
-    if (opt.glossy_threshold > 0.f)
-      prov.parameters["glossy-threshold"] = pf::default_text(opt.glossy_threshold);
+    prov.parameters.erase("glossy-merge");
+    if (opt.glossy != pf::GlossyMerge::First)
+      prov.parameters["glossy-merge"] = pf::glossy_merge_name(opt.glossy);
     prov.parameters.erase("emission-spp");  // likewise: auto resolved, only where used
     if (opt.emission_spp > 0) prov.parameters["emission-spp"] = std::to_string(opt.emission_spp);
     pf::record_backend(prov, dev.get());

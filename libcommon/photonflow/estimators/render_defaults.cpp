@@ -72,13 +72,15 @@ bool whole_float(const std::string& text, float& out) {
 }
 }  // namespace
 
-float parse_glossy_threshold(const std::string& text, Estimator e) {
-  if (text == "auto") return e == Estimator::Ppm ? 0.f : kDefaultGlossyThreshold;
-  float t = 0.f;
-  if (!whole_float(text, t))
-    throw input_error("", "--glossy-threshold must be a roughness in [0, 1] or auto, got '" +
-                              text + "'");
-  return t;
+GlossyMerge parse_glossy_merge_option(const std::string& text, Estimator e, DirectMode d) {
+  if (text == "auto")
+    return e == Estimator::Ppm || d != DirectMode::ShadowRays ? GlossyMerge::First
+                                                               : kDefaultGlossyMerge;
+  const GlossyMerge g = parse_glossy_merge(text);
+  if (g == GlossyMerge::Mis && e == Estimator::Ppm)
+    throw input_error("", "--glossy-merge mis needs a new eye pass every pass (sppm or pppm)",
+                      "ppm's one eye pass would keep one sample of each glossy lobe for good");
+  return g;
 }
 
 namespace {

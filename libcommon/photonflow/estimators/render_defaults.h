@@ -53,13 +53,12 @@ namespace pf {
 constexpr Estimator kDefaultEstimator = Estimator::Pppm;
 constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
 
-// Roughness below which SPPM's and PPPM's eye paths continue through a glossy point without a
-// diffuse base (a metal, or glass that transmits fully) by sampling its BSDF rather than making
-// their visible point there (EyePassOptions::glossy_threshold, pf_pbr_eye_continues); PPM's fixed
-// eye pass keeps 0. 0 (never): on the showcase scenes at equal time, higher thresholds raised the
-// error (rare, very bright samples through the rough-glass sphere; docs/RESULTS.md "Defaults");
-// the option stays for scenes of smooth metal.
-constexpr float kDefaultGlossyThreshold = 0.f;
+// What SPPM's and PPPM's eye paths do at a glossy (PBR) vertex (EyePassOptions::glossy,
+// eye_pass.h GlossyMerge): share its light between the gather there and the continuation by the
+// merge weight (material/merge_weight_shared.h), with direct light by next-event estimation and
+// the BSDF's sample under MIS (docs/RESULTS.md "Glossy points"). PPM's fixed eye pass keeps
+// GlossyMerge::First.
+constexpr GlossyMerge kDefaultGlossyMerge = GlossyMerge::Mis;
 
 // Emission samples per pass in each pixel that sees an emitter directly or through mirrors and
 // glass (EyePassOptions::emission_spp, eye_pass.h emission_pixels), every estimator. 8: they lower
@@ -114,10 +113,10 @@ RenderDefaults choose_defaults(const Scene& scene);
 // --photons of render and trace-photons: "auto" (returns 0: choose_defaults decides once the
 // scene is read) or a count in [1, 2^32); InputError naming --photons otherwise.
 uint32_t parse_photons_option(const std::string& text);
-// --glossy-threshold of render and trace-hitpoints: "auto" (kDefaultGlossyThreshold for sppm and
-// pppm, 0 for ppm) or a number (its range is check_options' of eye_pass.h); InputError naming
-// --glossy-threshold for what is not a number.
-float parse_glossy_threshold(const std::string& text, Estimator e);
+// --glossy-merge of render and trace-hitpoints: "auto" (kDefaultGlossyMerge for sppm and pppm
+// with direct light by shadow rays, First for ppm or direct light by photons), "first" or "mis"
+// (not with ppm); InputError naming --glossy-merge otherwise.
+GlossyMerge parse_glossy_merge_option(const std::string& text, Estimator e, DirectMode d);
 // --emission-spp of render and trace-hitpoints: "auto" (kDefaultEmissionSpp) or a count (its range
 // is check_options' of eye_pass.h); InputError naming --emission-spp for what is not an integer.
 int parse_emission_spp(const std::string& text);

@@ -257,9 +257,10 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
     // Only with the surface (states and sums made before the option existed divided by the disc).
     if (opt.ppm.gather_area == GatherArea::Surface) p["gather-area"] = "surface";
   }
-  // Only where eye paths continue through glossy points (eye_pass.h): the states and sums of
-  // runs without it, and those written before it existed, keep their parameters.
-  if (opt.eye.glossy_threshold > 0.f) p["glossy-threshold"] = default_text(opt.eye.glossy_threshold);
+  // Only where glossy vertices share their light with the continuation (eye_pass.h GlossyMerge):
+  // the states and sums of runs without it, and those written before it existed, keep their
+  // parameters.
+  if (opt.eye.glossy != GlossyMerge::First) p["glossy-merge"] = glossy_merge_name(opt.eye.glossy);
   // Likewise only where eye passes take emission samples (files made before them have none).
   if (opt.eye.emission_spp > 0) p["emission-spp"] = std::to_string(opt.eye.emission_spp);
   return p;
@@ -270,7 +271,7 @@ const char* const kStateParameterPrefix = "state.";
 std::optional<std::string> state_parameter_unrecorded_value(const std::string& name) {
   // The options state_parameters leaves out at these values (above): a file without the entry
   // was made with them (or before the option existed, which is the same).
-  if (name == "glossy-threshold") return std::string("0");
+  if (name == "glossy-merge") return std::string("first");
   if (name == "emission-spp") return std::string("0");
   if (name == "gather-area") return std::string("disc");
   if (name == "estimator") return std::string("ppm");  // ppm's record has no estimator
@@ -343,8 +344,8 @@ std::map<std::string, std::string> staged_state_parameters(
   o.eye.radius = float(number(eye, eye_path, "radius"));
   o.eye.seed = uint32_t(number(eye, eye_path, "seed"));
   o.eye.sampler = parse_pixel_sampler(text(eye, eye_path, "pixel-sampler"));
-  if (eye.parameters.count("glossy-threshold"))  // absent from files made before it existed
-    o.eye.glossy_threshold = float(number(eye, eye_path, "glossy-threshold"));
+  if (eye.parameters.count("glossy-merge"))  // absent from files made before it existed
+    o.eye.glossy = parse_glossy_merge(text(eye, eye_path, "glossy-merge"));
   if (eye.parameters.count("emission-spp"))  // absent from files made before it existed
     o.eye.emission_spp = int(number(eye, eye_path, "emission-spp"));
   o.photons.photons = uint32_t(number(photons, photons_path, "photons"));

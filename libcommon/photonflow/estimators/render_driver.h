@@ -159,7 +159,7 @@ void check_options(const RenderOptions& opt);
 // The options a PPM state depends on, as canonical text under their tool option names ("alpha" →
 // "0.7", "seed", "photons", "spp", "max-depth", "max-bounces", "direct", "shadow-samples",
 // "radius", "pixel-sampler"; with sppm and pppm also "estimator" and "slab", and "gather-area"
-// when it is the surface; "glossy-threshold" and "emission-spp" when above 0). render_progressive
+// when it is the surface; "glossy-merge" when not "first" and "emission-spp" when above 0). render_progressive
 // records them in every checkpoint's provenance parameters as
 // "state.<name>" and resumes only a checkpoint whose record equals this run's
 // (require_same_state_parameters): a state continued under other options would be neither run's
@@ -171,7 +171,7 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt);
 extern const char* const kStateParameterPrefix;
 
 // The value an option that state_parameters leaves out of the record at its "off" value stands
-// for when a file has no entry for it ("emission-spp" → "0", "glossy-threshold" → "0",
+// for when a file has no entry for it ("emission-spp" → "0", "glossy-merge" → "first",
 // "gather-area" → "disc", "estimator" → "ppm"); nullopt for an option that every record has.
 std::optional<std::string> state_parameter_unrecorded_value(const std::string& name);
 

@@ -66,7 +66,7 @@ inline pf_bsdf_params bsdf_params_at(const Scene& s, const pf_material& m, const
 inline pf_pbr_point pbr_point_at(const Scene& s, const pf_material& m, const SurfaceHit& sh) {
   pf_pbr_point pt;
   pt.params = bsdf_params_at(s, m, sh);
-  pt.outside = sh.front ? 1 : 0;
+  pt.outside = sh.front ? PF_PBR_POINT_OUTSIDE : 0;
   return pt;
 }
 

@@ -37,7 +37,7 @@ constexpr double kMaxPbrIor = 10.0;
 
 // The table's own checks (docs/FORMATS.md): one entry per hitpoint; each entry all zero or the
 // parameters of a PBR point in range (base colour, metallic, roughness, transmission in [0, 1],
-// ior in [1, kMaxPbrIor], outside 0 or 1). Which entries must be zero is the scene's
+// ior in [1, kMaxPbrIor], outside's bits PF_PBR_POINT_OUTSIDE and PF_PBR_POINT_MERGE_WEIGHTED only). Which entries must be zero is the scene's
 // (check_against_scene).
 void check_bsdf_table(const HitpointSet& h, const Validator& v) {
   if (h.bsdf.empty()) return;
@@ -53,9 +53,9 @@ void check_bsdf_table(const HitpointSet& h, const Validator& v) {
     v.in_range(Name(B, i, "roughness"), &b.params.roughness, 1, 0.0, 1.0);
     v.in_range(Name(B, i, "transmission"), &b.params.transmission, 1, 0.0, 1.0);
     v.in_range(Name(B, i, "ior"), &b.params.ior, 1, 1.0, kMaxPbrIor);
-    if (b.outside != 0 && b.outside != 1)
+    if (b.outside & ~(PF_PBR_POINT_OUTSIDE | PF_PBR_POINT_MERGE_WEIGHTED))
       v.fail(Validator::element(B, i, "outside") + " = " + std::to_string(b.outside) +
-             " is neither 0 nor 1");
+             " has bits other than 1 (outside) and 2 (merge-weighted)");
   }
 }
 
@@ -120,8 +120,9 @@ void check_state_counts(const HitpointSet& h, const Validator& v) {
 
 // One hitpoint's values (validate.h): directions, weight finite and ≥ 0 (the eye path's
 // throughput times the pixel filter weight: at most 1 through mirrors and glass, but a BSDF's
-// sampled continuation through a glossy point (EyePassOptions::glossy_threshold) weighs
-// f·|cos|/pdf, which may exceed 1), R, N and τ of eq. 3.14–3.18, and its radiance of eq. 3.19
+// sampled continuation through a glossy point (EyePassOptions::glossy) weighs
+// f·|cos|/pdf, which may exceed 1 where radiance leaves a denser medium, and the merge
+// probability divides a shared point's weight), R, N and τ of eq. 3.14–3.18, and its radiance of eq. 3.19
 // finite. A fresh state has R = R0, N = 0, τ = 0; an SPPM pixel without a diffuse
 // surface (no_surface) has N = 0 and τ = 0 and no normal.
 void check_hitpoint_values(const HitpointSet& h, size_t i, bool no_surface, const Validator& v) {

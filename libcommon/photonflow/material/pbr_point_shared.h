@@ -14,21 +14,31 @@
  *
  * The side: pf_hitpoint.normal faces the incoming ray (as for diffuse hitpoints, so the gathers'
  * normal tests are unchanged). A transmissive surface has sides (bsdf_shared.h: +z outside, IOR 1),
- * so `outside` says whether the facing normal is the outside (1) or the inside (0).
+ * so `outside`'s bit PF_PBR_POINT_OUTSIDE says whether the facing normal is the outside or the
+ * inside. Its bit PF_PBR_POINT_MERGE_WEIGHTED marks a point where the eye pass shares the light
+ * between this gather and the continuation of its path (merge_weight_shared.h): the gather then
+ * weights each photon's f by w_m(ω_o, ω_p).
  */
 #ifndef PHOTONFLOW_MATERIAL_PBR_POINT_SHARED_H
 #define PHOTONFLOW_MATERIAL_PBR_POINT_SHARED_H
 
 #include "photonflow/material/bsdf_shared.h"
+#include "photonflow/material/merge_weight_shared.h"
 #include "photonflow/material/texture_shared.h"
 
 #ifdef __OPENCL_VERSION__
 #pragma OPENCL FP_CONTRACT OFF
 #endif
 
+/* pf_pbr_point::outside's bits. */
+#define PF_PBR_POINT_OUTSIDE 1 /* the hitpoint's (facing) normal is the outside (else the inside) */
+#define PF_PBR_POINT_MERGE_WEIGHTED 2 /* the gather weights each photon by w_m of its direction
+                                       * (merge_weight_shared.h (1)); the eye pass has divided the
+                                       * hitpoint's weight by the merge probability q */
+
 typedef struct {
   pf_bsdf_params params; /* textures applied (surface.h bsdf_params_at) */
-  pf_int outside;        /* 1: the hitpoint's (facing) normal is the outside, 0: the inside */
+  pf_int outside;        /* PF_PBR_POINT_* bits */
 } pf_pbr_point;
 
 #ifndef __OPENCL_VERSION__
@@ -84,12 +94,13 @@ typedef struct {
 static_assert(sizeof(pf_pbr_site) == 48, "pf_pbr_site layout");
 #endif
 
-/* f(ω_o, ω_i) at the point, rgb, radiance mode. n_facing: the hitpoint's unit normal (facing the
- * incoming ray); wo, wi: unit world directions away from the surface. */
+/* f(ω_o, ω_i) at the point, rgb, radiance mode, times w_m(ω_o, ω_i) at a merge-weighted point
+ * (the photon's share of merge_weight_shared.h (2)). n_facing: the hitpoint's unit normal (facing
+ * the incoming ray); wo, wi: unit world directions away from the surface. */
 PF_INLINE void pf_pbr_point_eval(const pf_pbr_point* pt, const float* n_facing, const float* wo,
                                  const float* wi, float* f) {
   float n[3] = {n_facing[0], n_facing[1], n_facing[2]};
-  if (!pt->outside) {
+  if (!(pt->outside & PF_PBR_POINT_OUTSIDE)) {
     n[0] = -n[0];
     n[1] = -n[1];
     n[2] = -n[2];
@@ -98,6 +109,13 @@ PF_INLINE void pf_pbr_point_eval(const pf_pbr_point* pt, const float* n_facing, 
   pf_bsdf_to_local(n, wo, o);
   pf_bsdf_to_local(n, wi, i);
   pf_bsdf_eval(&pt->params, o, i, PF_TRANSPORT_RADIANCE, f);
+  if (pt->outside & PF_PBR_POINT_MERGE_WEIGHTED) {
+    if (!(f[0] > 0.0f || f[1] > 0.0f || f[2] > 0.0f)) return;
+    const float w = pf_merge_weight(&pt->params, o, i);
+    f[0] = f[0] * w;
+    f[1] = f[1] * w;
+    f[2] = f[2] * w;
+  }
 }
 
 #endif /* PHOTONFLOW_MATERIAL_PBR_POINT_SHARED_H */

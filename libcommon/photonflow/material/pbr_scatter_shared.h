@@ -67,18 +67,6 @@ PF_INLINE int pf_pbr_scatter(const pf_bsdf_params* p, const float* ns, const flo
   return weight[0] > 0.0f || weight[1] > 0.0f || weight[2] > 0.0f;
 }
 
-/* Whether an eye path (SPPM's and PPPM's eye pass, eye_pass.cpp and trace_hitpoints.cl)
- * continues through a PF_MAT_PBR point by sampling its BSDF, as through a mirror, instead of
- * making its visible point there: the point has no diffuse base ((1 − metallic)·(1 − transmission)
- * = 0: a metal, or a dielectric that transmits fully, glTF appendix B) and its roughness is below
- * `threshold`. A narrow glossy lobe makes the photon gather a narrow density estimate, few of the
- * photons within the radius falling in the lobe (docs/materials: pbrt-v3's SPPM continues through
- * every BSDF without a diffuse component); the visible point then sits at the next non-delta
- * vertex. threshold 0 never continues. */
-PF_INLINE int pf_pbr_eye_continues(const pf_bsdf_params* p, float threshold) {
-  return p->roughness < threshold && (1.0f - p->metallic) * (1.0f - p->transmission) <= 0.0f;
-}
-
 /* f(wo, wi) in radiance mode at a PBR surface (world directions, front shading normal ns),
  * 0 for an inconsistent pair (above). The shadow rays' direct light and NEE use it. */
 PF_INLINE void pf_pbr_eval_world(const pf_bsdf_params* p, const float* ns, const float* ng,

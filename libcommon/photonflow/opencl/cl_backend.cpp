@@ -185,6 +185,16 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
   ClBuffer emit_pixels = dev.buffer(opt.emission_spp > 0 ? npix : 1,
                                     opt.emission_spp > 0 ? marks->data() : &none,
                                     CL_MEM_READ_ONLY);
+  // The area light of each emissive triangle (EyeTracer's tri_light_) for the MIS weight of an
+  // emitter that a glossy vertex's BSDF sample hits; a one-element stand-in otherwise.
+  const cl_int glossy_mis = opt.glossy == GlossyMerge::Mis && sb.has_pbr ? 1 : 0;
+  std::vector<cl_int> tri_light_host(glossy_mis ? scene.triangles.size() : 1, -1);
+  if (glossy_mis)
+    for (size_t li = 0; li < scene.lights.size(); ++li)
+      if (scene.lights[li].type == PF_LIGHT_AREA)
+        tri_light_host[size_t(scene.lights[li].triangle)] = cl_int(li);
+  ClBuffer tri_light = dev.buffer(tri_light_host.size() * sizeof(cl_int), tri_light_host.data(),
+                                  CL_MEM_READ_ONLY);
   std::vector<cl_int> flags;
   res.hitpoints.reserve(npix * size_t(spp));
   if (sb.has_pbr) res.bsdf.reserve(npix * size_t(spp));
@@ -196,9 +206,9 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
              sb.light_cdf, sb.light_count, sb.textures, sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex,
              sb.alpha_mats, sb.alpha_on, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
-             opt.glossy_threshold, cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps, cl_int(off),
-             count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr, emit_pixels,
-             cl_int(opt.emission_spp));
+             glossy_mis, cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps,
+             cl_int(off), count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr,
+             emit_pixels, cl_int(opt.emission_spp), tri_light);
     dev.run(k, size_t(count));
     const size_t nslots = size_t(count) * size_t(spp);
     flags.resize(nslots);

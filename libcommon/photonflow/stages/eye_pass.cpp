@@ -10,6 +10,7 @@
 
 #include "photonflow/geometry/camera.h"
 #include "photonflow/geometry/light_shared.h"
+#include "photonflow/material/merge_weight_shared.h"
 #include "photonflow/material/pbr_scatter_shared.h"
 #include "photonflow/foundations/options.h"
 #include "photonflow/foundations/rng.h"
@@ -30,6 +31,13 @@ const char* pixel_sampler_name(PixelSampler s) {
     case PixelSampler::Sobol: return "sobol";
   }
   return "?";
+}
+
+const char* glossy_merge_name(GlossyMerge g) { return g == GlossyMerge::First ? "first" : "mis"; }
+
+GlossyMerge parse_glossy_merge(const std::string& name) {
+  require_choice("glossy-merge", name, {"first", "mis"});
+  return name == "first" ? GlossyMerge::First : GlossyMerge::Mis;
 }
 
 PixelSampler parse_pixel_sampler(const std::string& name) {
@@ -113,7 +121,7 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
 // counts where the BSDF transmits (the shadow ray leaves on its side).
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_light_draws& draws, bool delta_only, int32_t leaf) {
+                      int samples, pf_light_draws& draws, bool mis, int32_t leaf) {
   if (scene.lights.empty() || samples <= 0) return {};
   const float eps = ray_epsilon(scene);
   float ns[3], ng[3], o[3];
@@ -126,15 +134,18 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
     pf_light_draws_next(&draws, &ul, &u1, &u2);
     Scene::LightSample ls;
     if (!scene.sample_light(ul, u1, u2, p, ls)) continue;
-    if (delta_only && scene.lights[ls.light].type == PF_LIGHT_AREA) continue;
     float wl[3], f[3];
     ls.w.store(wl);
     pf_pbr_eval_world(&params, ns, ng, o, wl, f);  // 0 for a pair the normals disagree on
     if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) continue;
+    float w = 1.f;
+    if (mis && scene.lights[ls.light].type == PF_LIGHT_AREA)
+      w = pf_power_heuristic(float(samples) * ls.p_light / ls.g,
+                             pf_pbr_pdf_world(&params, ns, ng, o, wl));
     const Vec3 origin = p + ng_front * (dot(ls.w, ng_front) >= 0.f ? eps : -eps);
     if (intersect_any(scene, Ray{origin, ls.q - origin, 0.f, 1.f - 1e-4f, leaf})) continue;
     sum += Vec3(f) * Vec3(scene.lights[ls.light].radiance) *
-           (std::fabs(dot(ls.w, ns_front)) * ls.g / ls.p_light);
+           (std::fabs(dot(ls.w, ns_front)) * ls.g / ls.p_light * w);
   }
   return sum * (1.f / float(samples));
 }
@@ -148,10 +159,10 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
 
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_rng& rng, bool delta_only, int32_t leaf) {
+                      int samples, pf_rng& rng, bool mis, int32_t leaf) {
   pf_light_draws draws = pf_light_draws_from(rng);
   const Vec3 l = direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, draws,
-                                  delta_only, leaf);
+                                  mis, leaf);
   rng = draws.rng;  // the caller's stream goes on after the draws
   return l;
 }
@@ -170,11 +181,11 @@ void check_options(const EyePassOptions& opt) {
     throw input_error("", "--emission-spp must be in [0, " + std::to_string(kMaxEmissionSpp) +
                               "], got " + std::to_string(opt.emission_spp),
                       "0 leaves the emitted light to the eye samples");
-  // A perceptual roughness (glTF: [0, 1]); above 1 every metal and clear glass would continue.
-  if (!(opt.glossy_threshold >= 0.f && opt.glossy_threshold <= 1.f))
-    throw input_error("", "--glossy-threshold must be a roughness in [0, 1], got " +
-                              value_text(opt.glossy_threshold),
-                      "0 keeps every visible point at the first non-delta vertex");
+  // The shared light of a glossy vertex leaves its direct light to next-event estimation there
+  // (merge_weight_shared.h): photons that carry direct light would count it twice.
+  if (opt.glossy == GlossyMerge::Mis && opt.direct != DirectMode::ShadowRays)
+    throw input_error("", "--glossy-merge mis needs --direct shadow-rays",
+                      "use --glossy-merge first with --direct photons");
   // R0² must stay a normal float (validate.h kMinRadius): 1e-23 squared is 0 in float, and
   // every radiance of eq. 3.19 would divide by it.
   if (!(opt.radius == 0.f || (opt.radius >= kMinRadius && opt.radius <= kMaxRadius)))
@@ -217,6 +228,12 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
       camera_leaf_(caster_.leaf_at(Vec3(scene.camera.eye))),
       emit_pixels_(nullptr) {
   check_eye_samples(scene, opt);
+  if (opt.glossy == GlossyMerge::Mis && scene.has_pbr()) {
+    tri_light_.assign(scene.triangles.size(), -1);
+    for (size_t li = 0; li < scene.lights.size(); ++li)
+      if (scene.lights[li].type == PF_LIGHT_AREA)
+        tri_light_[size_t(scene.lights[li].triangle)] = int32_t(li);
+  }
   if (opt.emission_spp > 0) {
     const size_t n = size_t(scene.camera.width) * size_t(scene.camera.height);
     if (opt.emission_pixels && opt.emission_pixels->size() != n)
@@ -245,13 +262,28 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
   ray.leaf = camera_leaf_;
   const float w = 1.f / float(spp_);
   Vec3 T(w, w, w);  // throughput × box filter weight
-  bool glossy = false;  // the path went on through a glossy point (glossy_threshold)
+  // GlossyMerge::Mis: the ray was sampled by the BSDF at a PBR vertex (`from_glossy`), with
+  // solid-angle density `glossy_pdf`; an emitter it hits adds its light times `T_direct` (the
+  // throughput up to that vertex times the sample's weight, not shared with the gather) and the
+  // power-heuristic weight. `last`: the ray was traced only for this (`merged`: that vertex made
+  // the visible point; otherwise nothing was left for the path to carry). `glossy`: the path went
+  // on through a PBR vertex; the emitters it finds then go to `direct`.
+  bool from_glossy = false, last = false, merged = false, glossy = false;
+  float glossy_pdf = 0.f;
+  Vec3 T_direct;
   for (int depth = 0; depth <= opt_.max_depth; ++depth) {
     Hit h;
-    if (!caster_.closest(ray, h)) return false;
+    if (!caster_.closest(ray, h)) return merged;
     SurfaceHit sh = surface_at(scene_, ray, h);
     const pf_material& m = scene_.materials[size_t(sh.material)];
-    if (m.type == PF_MAT_EMITTER && sh.front) (glossy ? direct : emitted) += T * Vec3(m.emission);
+    if (m.type == PF_MAT_EMITTER && sh.front) {
+      if (from_glossy)
+        direct += T_direct * Vec3(m.emission) * emitter_hit_weight(ray, h, sh, glossy_pdf);
+      else
+        (glossy ? direct : emitted) += T * Vec3(m.emission);
+    }
+    if (last) return merged;
+    from_glossy = false;
     if (is_diffuse(m)) {
       Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
       // A textured material's texture value at the hit joins the weight: every gather's
@@ -279,61 +311,114 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
     }
     if (m.type == PF_MAT_PBR) {
       const Vec3 d = depth > 0 ? normalize(ray.d) : ray.d;  // camera rays are unit
-      const pf_pbr_point pt = pbr_point_at(scene_, m, sh);
-      if (pf_pbr_eye_continues(&pt.params, opt_.glossy_threshold)) {
-        // A near-specular point without a diffuse base (pbr_scatter_shared.h): the path goes on
-        // by the BSDF's sample in radiance mode (u1, u2, u3 from the eye stream, after the
-        // glass choices before it), T ·= f·|cos θ|/pdf, as through a mirror; an emitter it then
-        // hits adds its light (L G E, as L S E above) and the visible point sits further on.
-        // The sample never hits a point, spot or directional light, so their light reflected
-        // here is next-event estimated first, with shadow_samples light samples from the eye
-        // stream (ul, u1, u2 each); a sample that picks an area light adds nothing, the BSDF's
-        // sample finding those (one strategy per light type: nothing counted twice, no MIS).
-        direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
-                                       opt_.shadow_samples, rng, true, sh.leaf);
-        float ns[3], ng[3], wo[3], wi[3], wt[3], pdf;
-        sh.ns.store(ns);
-        sh.ng.store(ng);
-        (-d).store(wo);
-        const float u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng), u3 = pf_rng_next(&rng);
-        if (!pf_pbr_scatter(&pt.params, ns, ng, wo, u1, u2, u3, PF_TRANSPORT_RADIANCE, wi, wt,
-                            &pdf))
-          return false;
-        T = T * Vec3(wt);
-        if (luminance(T) <= 0.f) return false;
-        const Vec3 dir(wi);
-        ray = spawn_ray(sh, dir, eps_);
-        glossy = true;
-        continue;
+      pf_pbr_point pt = pbr_point_at(scene_, m, sh);
+      // The visible point's record (HJ09 section 4): the hitpoint as at a diffuse surface, its
+      // weight the throughput alone, the BSDF's textured parameters beside it; every gather
+      // evaluates f per photon (pbr_point_shared.h).
+      auto visible_point = [&](const Vec3& weight) {
+        const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
+        hp = pf_hitpoint{};
+        sh.p.store(hp.position);
+        n.store(hp.normal);
+        d.store(hp.dir);
+        weight.store(hp.weight);
+        hp.radius = radius_;
+        hp.pixel_x = x;
+        hp.pixel_y = y;
+        hp.mesh = sh.mesh;
+        hp.material = sh.material;
+        if (pbr) *pbr = pt;
+      };
+      if (opt_.glossy == GlossyMerge::First) {
+        // No random number is drawn here; direct light by light sampling alone.
+        visible_point(T);
+        if (opt_.direct == DirectMode::ShadowRays) {
+          pf_light_draws draws = light_draws(pix, s);
+          direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
+                                         opt_.shadow_samples, draws, false, sh.leaf);
+        }
+        return true;
       }
-      // A glossy visible point (HJ09 section 4): the hitpoint as at a diffuse surface, its weight
-      // the throughput alone, the BSDF's textured parameters beside it; every gather evaluates f
-      // per photon (pbr_point_shared.h). No random number is drawn here.
-      const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
-      hp = pf_hitpoint{};
-      sh.p.store(hp.position);
-      n.store(hp.normal);
-      d.store(hp.dir);
-      T.store(hp.weight);
-      hp.radius = radius_;
-      hp.pixel_x = x;
-      hp.pixel_y = y;
-      hp.mesh = sh.mesh;
-      hp.material = sh.material;
-      if (pbr) *pbr = pt;
-      if (opt_.direct == DirectMode::ShadowRays) {
+      // GlossyMerge::Mis (merge_weight_shared.h). The merge probability q of the vertex, in the
+      // BSDF's frame (the front shading normal), then the choice (one number of the eye stream).
+      float ns[3], ng[3], wo[3], o[3];
+      sh.ns.store(ns);
+      sh.ng.store(ng);
+      (-d).store(wo);
+      pf_bsdf_to_local(ns, wo, o);
+      const float q = pf_merge_probability(&pt.params, o);
+      const float u_merge = pf_rng_next(&rng);
+      const bool merge = q >= 1.f || (q > 0.f && u_merge < q);
+      // Direct light: next-event estimation weighted against the BSDF's sample below (from the
+      // pixel's light draws where the point is the visible point, as at a diffuse one, from the
+      // eye stream where the path goes on).
+      if (merge) {
         pf_light_draws draws = light_draws(pix, s);
         direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
-                                       opt_.shadow_samples, draws, false, sh.leaf);
+                                       opt_.shadow_samples, draws, true, sh.leaf);
+      } else {
+        direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
+                                       opt_.shadow_samples, rng, true, sh.leaf);
       }
-      return true;
+      // The BSDF's sample (radiance mode, u1, u2, u3 from the eye stream): the direct light's
+      // second strategy, and where the path goes on.
+      float wi[3], wt[3], pdf;
+      const float u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng), u3 = pf_rng_next(&rng);
+      const bool sampled =
+          pf_pbr_scatter(&pt.params, ns, ng, wo, u1, u2, u3, PF_TRANSPORT_RADIANCE, wi, wt, &pdf);
+      if (merge) {
+        // (3): the gather's share w_m per photon, the hitpoint's weight divided by q
+        if (q < 1.f) pt.outside |= PF_PBR_POINT_MERGE_WEIGHTED;
+        visible_point(q < 1.f ? T * (1.f / q) : T);
+        if (!sampled) return true;
+        T_direct = T * Vec3(wt);
+        glossy_pdf = pdf;
+        from_glossy = last = merged = true;
+        ray = spawn_ray(sh, Vec3(wi), eps_);
+        continue;  // the next hit adds an emitter's MIS-weighted light, and returns
+      }
+      if (!sampled) return false;
+      // (3): the continuation's share w_c of the sampled direction, divided by 1 − q
+      float share = 1.f;
+      if (q > 0.f) {
+        float i[3];
+        pf_bsdf_to_local(ns, wi, i);
+        share = (1.f - pf_merge_weight(&pt.params, o, i)) / (1.f - q);
+      }
+      T_direct = T * Vec3(wt);
+      T = T_direct * share;
+      glossy_pdf = pdf;
+      from_glossy = glossy = true;
+      if (!(luminance(T_direct) > 0.f)) return false;
+      last = !(luminance(T) > 0.f);  // w_m = 1 here: only the emitter's light is left
+      ray = spawn_ray(sh, Vec3(wi), eps_);
+      continue;
     }
     if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;  // black emitter
     Vec3 d = specular_bounce(m, sh, normalize(ray.d), &rng, T);
     if (luminance(T) <= 0.f) return false;
     ray = spawn_ray(sh, d, eps_);
   }
-  return false;
+  return merged;
+}
+
+// The BSDF sample's weight against next-event estimation's n = shadow_samples light samples at
+// the vertex it left (direct_light_pbr with mis): the power heuristic of the BSDF's density
+// against n p_light, p_light = P(pick) · d² / (A cos θ_y) per unit solid angle (Veach 1997
+// eq. 9.13; pathtrace.cpp's emitter hits). An emitter triangle that is no light (none in
+// Scene::lights) was not sampled by NEE: weight 1.
+float EyeTracer::emitter_hit_weight(const Ray& ray, const Hit& h, const SurfaceHit& sh,
+                                    float bsdf_pdf) const {
+  const int32_t li = tri_light_.empty() ? -1 : tri_light_[size_t(sh.tri)];
+  if (li < 0) return 1.f;
+  const pf_light& l = scene_.lights[size_t(li)];
+  const Vec3 d = normalize(ray.d);
+  const float cos_l = -dot(d, sh.ng);
+  if (!(cos_l > 0.f) || !(l.area > 0.f)) return 1.f;
+  const float p_pick = scene_.light_cdf[size_t(li)] - (li ? scene_.light_cdf[size_t(li) - 1] : 0.f);
+  const float dist = h.t * length(ray.d);
+  const float p_light = p_pick * dist * dist / (l.area * cos_l);
+  return pf_power_heuristic(bsdf_pdf, float(opt_.shadow_samples) * p_light);
 }
 
 // Emission sample k of pixel (x, y) (pixel_sampler.h PF_EMISSION_STREAM): the camera ray through

@@ -20,6 +20,8 @@
 
 namespace pf {
 
+struct SurfaceHit;  // geometry/surface.h
+
 enum class DirectMode {
   Photons,     // all light at hitpoints comes from photons (PPM's usual choice)
   ShadowRays,  // direct light by area-light sampling with shadow rays; photons carry the rest
@@ -36,6 +38,23 @@ const char* pixel_sampler_name(PixelSampler s);
 // "strata" | "random" | "sobol" (InputError naming --pixel-sampler otherwise).
 PixelSampler parse_pixel_sampler(const std::string& name);
 
+// The visible point of an eye path at a PF_MAT_PBR surface.
+enum class GlossyMerge {
+  // At the first non-delta vertex, PBR or diffuse (HJ09 section 4); direct light there by
+  // light sampling alone (DirectMode::ShadowRays).
+  First,
+  // At a PBR vertex the light is shared between gathering there and continuing by the BSDF's
+  // sample, by the merge weight of each direction (material/merge_weight_shared.h): the path
+  // makes its visible point there with the merge probability q, and goes on otherwise, to the
+  // next diffuse or PBR vertex. Direct light at every PBR vertex by next-event estimation and
+  // the BSDF's sample, weighted by the power heuristic (all light types; delta lights by
+  // next-event estimation alone). Needs DirectMode::ShadowRays (check_options).
+  Mis,
+};
+const char* glossy_merge_name(GlossyMerge g);
+// "first" | "mis" (InputError naming --glossy-merge otherwise).
+GlossyMerge parse_glossy_merge(const std::string& name);
+
 struct EyePassOptions {
   int spp = 1;             // eye samples per pixel (1: pixel centre; n > 1: stratified jitter)
   int max_depth = 16;      // specular bounces before a path is dropped
@@ -50,12 +69,10 @@ struct EyePassOptions {
   // same index) otherwise: pixel_sampler.h pf_light_draws); PPM's one eye pass is pass 0.
   uint32_t pass = 0;
   PixelSampler sampler = PixelSampler::Strata;
-  // Roughness below which an eye path continues through a PF_MAT_PBR point without a diffuse
-  // base (a metal, or glass that transmits fully) by sampling its BSDF, instead of making its
-  // visible point there (pf_pbr_eye_continues, pbr_scatter_shared.h); 0 = never (the visible
-  // point at the first non-delta vertex). A fixed eye pass (PPM) keeps 0: its one sample of the
-  // lobe would never converge. render's and trace-hitpoints' default: render_defaults.h.
-  float glossy_threshold = 0.f;
+  // What an eye path does at a PF_MAT_PBR point (GlossyMerge below). render's and
+  // trace-hitpoints' default: render_defaults.h kDefaultGlossyMerge for sppm and pppm; a fixed
+  // eye pass (PPM) keeps First, since its one sample of a lobe would never converge.
+  GlossyMerge glossy = GlossyMerge::First;
   // Emission samples: in each pixel that emission_pixels marks, this many eye paths more per pass
   // that only follow mirrors and glass to the emitters they see (no visible point, shadow ray or
   // gather), averaged with the pass's spp eye samples into the emitted layer:
@@ -147,10 +164,10 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
 // is inside the parameters); at any other it is set to all zeros. No random number is drawn at
 // the visible point, PBR or not. sample() adds the emitted light the path sees through mirrors
 // and glass (times its throughput and the box filter weight 1/spp) to `emitted` and, with
-// DirectMode::ShadowRays, the direct light at its visible point to `direct`; light from an
-// emitter found after a glossy continuation (glossy_threshold) goes to `direct` too, beside the
-// next-event estimate made there, since emission samples stand in only for the mirror-and-glass
-// part (emitted_layer). It returns whether the path found a visible point, written to `hp`
+// DirectMode::ShadowRays, the direct light at its visible point to `direct`; under
+// GlossyMerge::Mis, the direct light of every PBR vertex and light from an emitter found after a
+// glossy continuation go to `direct` too, since emission samples stand in only for the
+// mirror-and-glass part (emitted_layer). It returns whether the path found a visible point, written to `hp`
 // (radius R0 = radius()). The estimators that gather as they trace (sppm_pass_traced) call it
 // pixel by pixel, then emitted_layer; the bits are those of trace_hitpoints_into.
 class EyeTracer {
@@ -177,7 +194,12 @@ class EyeTracer {
   int32_t camera_leaf_;  // the kd leaf of the eye point: the camera rays' Ray::leaf
   std::vector<uint8_t> own_pixels_;          // emission_pixels, when the caller gave none
   const std::vector<uint8_t>* emit_pixels_;  // the marks in use (nullptr: no emission samples)
+  std::vector<int32_t> tri_light_;  // area light of an emissive triangle, −1 otherwise (Mis)
   Vec3 emission_sample(int x, int y, int k) const;
+  // The power-heuristic weight of an emitter hit by a glossy vertex's BSDF sample (GlossyMerge::
+  // Mis): against the shadow_samples light samples next-event estimation drew there.
+  float emitter_hit_weight(const Ray& ray, const Hit& h, const SurfaceHit& sh,
+                           float bsdf_pdf) const;
   // The light samples of eye sample s of pixel `pix` (pixel_sampler.h pf_light_draws_start).
   pf_light_draws light_draws(size_t pix, int s) const {
     return pf_light_draws_start(int(opt_.sampler), opt_.seed, sobol_key_, opt_.pass,
@@ -202,16 +224,19 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
                       int samples, uint32_t seed, uint32_t pass, uint32_t index);
-// The same sum with `samples` light samples from `draws` (ul, u1, u2 each); with delta_only a
-// sample that picks an area light adds nothing (eye paths through glossy points: the BSDF's
-// sample finds area lights, next-event estimation the point, spot and directional ones).
+// The same sum with `samples` light samples from `draws` (ul, u1, u2 each); with `mis` each
+// sample of an area light is weighted against the BSDF's sample of the same point by the power
+// heuristic (Veach 1997 eq. 9.13, with n light samples against one BSDF sample):
+//   w_light = (n p_light)² / ((n p_light)² + p_bsdf²),  p_light per unit solid angle,
+// the BSDF sample that hits the light taking the complement (EyeTracer::emitter_hit_weight);
+// point, spot and directional lights keep weight 1 (no BSDF sample hits them).
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_light_draws& draws, bool delta_only, int32_t leaf = -1);
-// The same drawing from `rng` (a glossy point's samples come from the eye stream), which comes
+                      int samples, pf_light_draws& draws, bool mis, int32_t leaf = -1);
+// The same drawing from `rng` (a glossy vertex's samples come from the eye stream), which comes
 // back advanced past the draws.
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_rng& rng, bool delta_only, int32_t leaf = -1);
+                      int samples, pf_rng& rng, bool mis, int32_t leaf = -1);
 
 }  // namespace pf
