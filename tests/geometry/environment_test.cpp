@@ -6,14 +6,19 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <functional>
 #include <random>
 #include <vector>
 
 #include "chi2.h"
+#include "support.h"
 #include "photonflow/geometry/environment.h"
 #include "photonflow/geometry/environment_shared.h"
 #include "photonflow/geometry/procedural.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
+#include "photonflow/io/provenance.h"
+#include "photonflow/io/validate.h"
 #include "photonflow/stages/pathtrace.h"
 #include "photonflow/stages/photon_pass.h"
 
@@ -281,5 +286,43 @@ TEST_CASE("environment: a diffuse sphere in a constant environment (furnace)", "
       CHECK(centre / n == Approx(rho * L).epsilon(0.03));
       CHECK(img.get(0, 0).y == Approx(L).epsilon(1e-6));
     }
+  }
+}
+
+TEST_CASE("environment: scene.h5 keeps it and refuses a damaged one on read", "[environment]") {
+  test::TempDir tmp("env-h5");
+  Environment e = map_with_texel(32, 0.3f, 5, 4, 20.f);
+  e.strength = 1.5f;
+  e.rotation_deg = 12.f;
+  pf_camera cam{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, 40.f, 4, 4};
+  const Scene s = env_scene(e, cam);
+  save_scene(s, tmp / "s.h5", Provenance{});
+  const Scene r = load_scene(tmp / "s.h5");
+  CHECK(r.environment.texels == s.environment.texels);
+  CHECK(r.environment.rotation_deg == 12.f);
+  CHECK(r.env_packed == s.env_packed);  // the tables rebuilt on read are the baker's
+  CHECK(r.scene_id == s.scene_id);
+  // An environment changes the id; a scene without one keeps the id it had.
+  Scene plain = s;
+  plain.environment = Environment();
+  plain.compute_light_cdf();
+  plain.compute_scene_id();
+  CHECK(plain.scene_id != s.scene_id);
+  const UncheckedWritesForTests unchecked;  // save_scene itself refuses these scenes
+  struct Edit {
+    const char* says;
+    std::function<void(Scene&)> change;
+  };
+  for (const Edit& edit :
+       {Edit{"NaN", [](Scene& d) { d.environment.texels[7] = std::nanf(""); }},
+        Edit{"negative", [](Scene& d) { d.environment.texels[7] = -2.f; }},
+        Edit{"strength", [](Scene& d) { d.environment.strength = 0.f; }},
+        Edit{"map and the scene's bounds give", [](Scene& d) { d.lights.back().power *= 2.f; }},
+        Edit{"lights", [](Scene& d) { d.environment = Environment(); }}}) {
+    Scene d = s;
+    edit.change(d);
+    save_scene(d, tmp / "d.h5", Provenance{});
+    INFO(edit.says);
+    CHECK_THROWS_WITH(load_scene(tmp / "d.h5"), Catch::Contains(edit.says));
   }
 }

@@ -102,7 +102,7 @@ inline void add_bake_options(cxxopts::Options& o, const std::string& group = "")
                        "folder; for services that render scenes from strangers")
     ("environment", "environment light around the scene: an equirectangular (2:1, at most "
                     "8192x4096) radiance map, .exr or .hdr, or a constant colour R,G,B in "
-                    "W/(sr m^2) (default: none; docs/SCENES.md \"Environment\")",
+                    "W/(sr m^2); without it, none (docs/SCENES.md, Environment)",
      cxxopts::value<std::string>())
     ("environment-strength", "factor on the environment's radiance, > 0",
      cxxopts::value<float>()->default_value("1"))

@@ -60,10 +60,11 @@ void check_environment(const Environment& env, const std::string& file, const st
   }
   for (size_t i = 0; i < env.texels.size() && !light; i += 3) light = lum(&env.texels[i]) > 0.0;
   if (!(std::isfinite(env.strength) && env.strength > 0.f))
-    throw input_error(file, "--environment-strength must be finite and > 0, got " +
-                                std::to_string(env.strength));
+    throw input_error(file, "the environment's strength (--environment-strength) must be finite "
+                            "and > 0, got " + std::to_string(env.strength));
   if (!std::isfinite(env.rotation_deg))
-    throw input_error(file, "--environment-rotate must be a finite angle in degrees");
+    throw input_error(file, "the environment's rotation (--environment-rotate) must be a finite "
+                            "angle in degrees");
   if (!light)
     throw input_error(file, what + " is black: the environment would send no light",
                       "give a map or colour with some light");
