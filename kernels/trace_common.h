@@ -54,6 +54,7 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
 #include "photonflow/foundations/rng.h"
 #include "photonflow/sampling/sampling_shared.h"
 #include "photonflow/geometry/light_shared.h"
+#include "photonflow/geometry/environment_shared.h"
 
 struct pf_trace_hit_s {
   pf_ray_hit hit; /* first */
@@ -148,6 +149,7 @@ typedef struct {
   __global const pf_material* mats;
   __global const pf_light* lights;
   __global const float* light_cdf;
+  __global const float* env; /* the environment (environment_shared.h; width 0 = none) */
   int node_count;
   int light_count;
   pf_alpha_view alpha; /* read only when alpha_on (PF_ALPHA_VIEW) */
@@ -160,7 +162,7 @@ typedef struct {
       __global const pf_kd_node *nodes, int node_count, __global const pf_int *leaf_tris,  \
       __global const pf_int *group_of_first, __global const float4 *leaf_groups,           \
       __global const pf_material *mats, __global const pf_light *lights,                   \
-      __global const float *light_cdf, int light_count
+      __global const float *light_cdf, int light_count, __global const float *env
 
 #define PF_SCENE_VIEW(s)   \
   pf_scene_view s;         \
@@ -173,6 +175,7 @@ typedef struct {
   s.mats = mats;           \
   s.lights = lights;       \
   s.light_cdf = light_cdf; \
+  s.env = env;             \
   s.node_count = node_count; \
   s.light_count = light_count; \
   s.alpha_on = 0

@@ -72,6 +72,15 @@ __kernel void trace_photons(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAMS,
       o[k] = p[k] + n[k] * eps;
       flux[k] = l->radiance[k] * f;
     }
+  } else if (l->type == PF_LIGHT_ENVIRONMENT) {
+    /* the map (environment_shared.h pf_env_emit; photon_pass.cpp's emit) */
+    float power[3];
+    if (!pf_env_emit(s.env, u1, u2, u3, u4, o, d, power)) {
+      stored[local_i] = 0;
+      return;
+    }
+    const float inv = 1.0f / p_light;
+    for (int k = 0; k < 3; ++k) flux[k] = power[k] * inv;
   } else if (l->type != PF_LIGHT_POINT) { /* spot, directional (light_shared.h) */
     const float lp[3] = {l->position[0], l->position[1], l->position[2]};
     const float ld[3] = {l->direction[0], l->direction[1], l->direction[2]};

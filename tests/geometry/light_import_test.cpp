@@ -711,7 +711,7 @@ TEST_CASE("punctual lights: scene.h5 version 5 keeps spot and directional lights
   CHECK(std::memcmp(r.lights.data(), s.lights.data(), s.lights.size() * sizeof(pf_light)) == 0);
   CHECK(r.light_cdf == s.light_cdf);
   CHECK(r.scene_id == s.scene_id);
-  CHECK(kSceneFormatVersion == 5);
+  CHECK(kSceneFormatVersion == 6);  // 6 added the environment, not written without one
 
   SECTION("the id of a scene of area and point lights is the one format version 4 gave") {
     Scene a = floor_scene({point_light(Vec3(0, 1, 0), 2.f)});
@@ -757,7 +757,7 @@ TEST_CASE("punctual lights: scene.h5 version 5 keeps spot and directional lights
     REQUIRE(back.lights.size() == 1);
     CHECK(std::memcmp(back.lights.data(), a.lights.data(), sizeof(pf_light)) == 0);
     CHECK(back.scene_id == a.scene_id);
-    test::set_int_attr(old, "/", "format_version", 6);
+    test::set_int_attr(old, "/", "format_version", 7);
     CHECK_THROWS_AS(load_scene(old), InputError);
   }
   SECTION("bad values on read are refused with one line naming the light") {

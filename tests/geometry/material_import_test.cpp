@@ -619,7 +619,7 @@ TEST_CASE("a version-4 scene.h5 (32-byte materials, no metallic-roughness table)
   }
   CHECK(r.material_mr_texture.empty());
   CHECK(r.scene_id == s.scene_id);
-  test::set_int_attr(f, "/", "format_version", 6);
+  test::set_int_attr(f, "/", "format_version", 7);
   CHECK(!refusal(f).empty());  // a later version is refused by its number
 }
 

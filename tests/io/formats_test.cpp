@@ -60,8 +60,8 @@ TEST_CASE("scene.h5 round-trips every dataset", "[formats][scene]") {
   // Versions 1 (variable-length names, h5io.cpp reads both kinds), 2 (no textures), 3 (no
   // lens: the camera's pinhole fields only) and 4 (no alpha cut-outs, no spot/directional light
   // fields; the materials without the metallic-roughness fields of version 5: test_pbr_import)
-  // are still read; a later version is refused by its number.
-  CHECK(kSceneFormatVersion == 5);
+  // are still read, and 5 (no environment); a later version is refused by its number.
+  CHECK(kSceneFormatVersion == 6);
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 1);
   CHECK(load_scene(tmp / "scene.h5").mesh_names == s.mesh_names);
   test::set_int_attr(tmp / "scene.h5", "/", "format_version", 2);
@@ -72,7 +72,10 @@ TEST_CASE("scene.h5 round-trips every dataset", "[formats][scene]") {
   CHECK(load_scene(tmp / "scene.h5").scene_id == s.scene_id);
   CHECK(load_scene(tmp / "scene.h5").material_alpha.empty());
   CHECK(same_bytes(load_scene(tmp / "scene.h5").lights, s.lights));
-  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 6);
+  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 5);
+  CHECK(load_scene(tmp / "scene.h5").scene_id == s.scene_id);
+  CHECK(!load_scene(tmp / "scene.h5").environment.present());
+  test::set_int_attr(tmp / "scene.h5", "/", "format_version", 7);
   CHECK_THROWS_AS(load_scene(tmp / "scene.h5"), InputError);
 }
 

@@ -225,6 +225,7 @@ TEST_CASE("scene-bake: --help explains every option", "[scene_bake_tool]") {
        {"--output", "--eye", "--look-at", "--up", "--fov", "--width", "--height", "--insert",
         "--insert-box", "--insert-material", "--up-axis", "--kd-ct", "--kd-ci", "--kd-empty-bonus",
         "--kd-max-depth", "--kd-max-leaf", "--import-memory-mb", "--import-seconds", "--threads",
+        "--environment", "--environment-strength", "--environment-rotate",
         "--help", "INPUT", "degrees", "pixels",
         "default"}) {
     INFO(opt);

@@ -73,6 +73,7 @@ std::map<std::string, std::string> help_defaults(const std::string& help) {
 const std::set<std::string> kNoDefault = {
     "scene", "output", "hitpoints", "photons", "grid", "state", "clusters", "distribution",
     "input", "eye", "look-at", "up", "fov", "focus-distance", "insert", "insert-box", "insert-material",
+    "environment",
     "checkpoint", "sums", "range", "parts", "reference", "test", "mask", "json", "time-limit",
     "out", "options-file"};
 

@@ -37,11 +37,12 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
   int area = 0, point = 0, spot = 0, directional = 0;
   double power = 0;
   for (auto& l : s.lights) {
+    power += l.power;
+    if (l.type == PF_LIGHT_ENVIRONMENT) continue;  // its own line below
     (l.type == PF_LIGHT_AREA    ? area
      : l.type == PF_LIGHT_SPOT  ? spot
      : l.type == PF_LIGHT_POINT ? point
                                 : directional)++;
-    power += l.power;
   }
   size_t leaves = 0;
   for (auto& n : s.kd.nodes) leaves += n.axis == PF_KD_LEAF;
@@ -67,7 +68,12 @@ void print_summary(const pf::Scene& s, const pf::BakeReport& r, const std::strin
   }
   std::printf("\n  lights     %zu (%d area, %d point", s.lights.size(), area, point);
   if (spot + directional > 0) std::printf(", %d spot, %d directional", spot, directional);
+  if (s.environment.present()) std::printf(", 1 environment");
   std::printf("), power %.4g W (luminance)\n", power);
+  if (s.environment.present())
+    std::printf("  environment %s, %dx%d, strength %g, rotated %g deg\n",
+                s.environment.source.c_str(), s.environment.width, s.environment.height,
+                s.environment.strength, s.environment.rotation_deg);
   std::printf("  camera     eye %g,%g,%g look-at %g,%g,%g up %g,%g,%g fov %.4g deg %dx%d (%s)\n",
               c.eye[0], c.eye[1], c.eye[2], c.look_at[0], c.look_at[1], c.look_at[2], c.up[0],
               c.up[1], c.up[2], c.fov_y_deg, c.width, c.height, r.camera_source.c_str());

@@ -97,6 +97,7 @@ typedef struct {
 #define PF_LIGHT_POINT 1       /* isotropic point light */
 #define PF_LIGHT_SPOT 2        /* KHR_lights_punctual spot (format version 5; light_shared.h) */
 #define PF_LIGHT_DIRECTIONAL 3 /* KHR_lights_punctual directional (format version 5) */
+#define PF_LIGHT_ENVIRONMENT 4 /* the environment map (format version 6; environment_shared.h) */
 
 /* A light. Area light: triangle index, its area (m^2), radiance (W/(sr m^2)); power = π·area·L.
  * Point light: position and intensity (W/sr); power = 4π·I.
@@ -107,7 +108,11 @@ typedef struct {
  * Directional light (version 5): irradiance E (W/m^2, on a plane facing it) travelling along
  * `direction` (unit); photons leave a disc of area `area` = π·R² (R the radius of the scene's
  * bounding sphere) centred at `position`, outside the bounds against the light; power = E·π·R².
- * Area and point lights have direction, cos_inner and cos_outer 0.
+ * Environment (version 6, at most one, the last light): the map around the scene (scene.h5
+ * /environment; its radiance is the map's, so `radiance` is 0 here), `position` the centre c and
+ * `area` = π·R² the photons' disc of the scene's bounding sphere; power = π·R²·∫ L dω
+ * (geometry/environment.h environment_luminance_integral).
+ * Area, point and environment lights have direction, cos_inner and cos_outer 0.
  * `power` is the luminance-weighted scalar used for sampling lights in proportion to power (rgb
  * weights 0.2126, 0.7152, 0.0722). The first five fields are the whole light of format versions
  * 1-4 (io/h5_types.h's h5_type_light_v4). */

@@ -31,7 +31,8 @@ inline const std::vector<std::string>& bake_option_names() {
   static const std::vector<std::string> names = {
       "eye", "look-at", "up", "fov", "aperture", "focus-distance", "width", "height", "insert", "insert-box", "up-axis",
       "insert-material", "kd-ct", "kd-ci", "kd-empty-bonus", "kd-max-depth", "kd-max-leaf",
-      "import-memory-mb", "import-seconds", "missing-textures", "confine-inputs"};
+      "import-memory-mb", "import-seconds", "missing-textures", "confine-inputs", "environment",
+      "environment-strength", "environment-rotate"};
   return names;
 }
 
@@ -98,7 +99,16 @@ inline void add_bake_options(cxxopts::Options& o, const std::string& group = "")
      cxxopts::value<std::string>()->default_value("error"))
     ("confine-inputs", "every file the scene references (buffers, images, material libraries) "
                        "and every --insert must resolve, after symlinks, inside the scene file's "
-                       "folder; for services that render scenes from strangers");
+                       "folder; for services that render scenes from strangers")
+    ("environment", "environment light around the scene: an equirectangular (2:1, at most "
+                    "8192x4096) radiance map, .exr or .hdr, or a constant colour R,G,B in "
+                    "W/(sr m^2); without it, none (docs/SCENES.md, Environment)",
+     cxxopts::value<std::string>())
+    ("environment-strength", "factor on the environment's radiance, > 0",
+     cxxopts::value<float>()->default_value("1"))
+    ("environment-rotate", "rotation of the environment about the up axis +y, degrees "
+                           "(counter-clockwise seen from above)",
+     cxxopts::value<float>()->default_value("0"));
   // clang-format on
 }
 
@@ -193,6 +203,15 @@ inline BakeOptions bake_options(const cxxopts::ParseResult& a, const std::string
   require_choice("missing-textures", missing, {"error", "warn"});
   o.inputs.missing_textures_warn = missing == "warn";
   o.inputs.confine = a.count("confine-inputs") > 0;
+  if (a.count("environment")) {
+    o.environment = a["environment"].as<std::string>();
+    if (o.environment.empty())
+      throw input_error("", "--environment is empty", "give a .exr or .hdr map or a colour R,G,B");
+  }
+  o.environment_strength = a["environment-strength"].as<float>();
+  o.environment_rotate_deg = a["environment-rotate"].as<float>();
+  if ((a.count("environment-strength") || a.count("environment-rotate")) && o.environment.empty())
+    throw input_error("", "--environment-strength and --environment-rotate need --environment");
   std::vector<std::string> inserts, materials;
   std::vector<float> boxes;
   if (a.count("insert")) inserts = a["insert"].as<std::vector<std::string>>();

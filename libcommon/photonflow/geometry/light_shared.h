@@ -141,11 +141,13 @@ PF_INLINE float pf_punctual_incident(int type, const float* position, const floa
  *   spot:        q = position, G = falloff / |q − p|² (pf_punctual_incident);
  *   directional: q on the emitting disc's plane, G = 1 (parallel light).
  * Returns 0 (nothing lit) for p on the light, the back of a one-sided area light, a point outside
- * a spot's cone or behind a directional light's disc. */
+ * a spot's cone or behind a directional light's disc, and for PF_LIGHT_ENVIRONMENT, whose sample
+ * needs the map: pf_env_incident (environment_shared.h), which Scene::light_incident calls. */
 PF_INLINE float pf_light_incident(int type, const float* position, const float* direction,
                                   float cos_inner, float cos_outer, float area, const float* v0,
                                   const float* v1, const float* v2, const float* nl,
                                   const float* p, float u1, float u2, float* w, float* q) {
+  if (type == PF_LIGHT_ENVIRONMENT) return 0.0f;
   if (type == PF_LIGHT_SPOT || type == PF_LIGHT_DIRECTIONAL)
     return pf_punctual_incident(type, position, direction, cos_inner, cos_outer, p, w, q);
   if (type == PF_LIGHT_AREA) {

@@ -8,6 +8,7 @@
 #include <cstddef>
 
 #include "photonflow/foundations/hash.h"
+#include "photonflow/geometry/environment_shared.h"
 #include "photonflow/geometry/light_shared.h"
 
 namespace pf {
@@ -16,6 +17,9 @@ namespace {
 float luminance(const float* c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 constexpr float kPi = 3.14159265358979323846f;
 }  // namespace
+
+static_assert(PF_ENV_HEADER == 16, "Scene::kNoEnvironment is one header");
+const float Scene::kNoEnvironment[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, -1, 0, 0, 0, 0, 0};
 
 void Scene::compute_hh() {
   hh.resize(triangles.size());
@@ -39,7 +43,8 @@ void Scene::compute_bounds() {
 
 void derive_lights(const std::vector<pf_triangle>& triangles,
                    const std::vector<pf_material>& materials, const std::vector<pf_light>& given,
-                   std::vector<pf_light>& lights, std::vector<float>& cdf) {
+                   std::vector<pf_light>& lights, std::vector<float>& cdf,
+                   const Environment* env) {
   // Keep point, spot and directional lights, rebuild area lights from emitter triangles.
   std::vector<pf_light> kept;
   for (auto& l : given)
@@ -87,6 +92,17 @@ void derive_lights(const std::vector<pf_triangle>& triangles,
     }
     lights.push_back(l);
   }
+  if (env && env->present()) {
+    // The environment (format version 6): photons leave the disc of the bounding sphere, so its
+    // flux is π·R²·∫ L dω (pbrt-v3 InfiniteAreaLight::Power).
+    pf_light l{};
+    l.type = PF_LIGHT_ENVIRONMENT;
+    l.triangle = -1;
+    centre.store(l.position);
+    l.area = kPi * radius * radius;
+    l.power = float(double(l.area) * environment_luminance_integral(*env));
+    lights.push_back(l);
+  }
   cdf.assign(lights.size(), 0.f);
   double total = 0;
   for (auto& l : lights) total += l.power;
@@ -101,14 +117,48 @@ void derive_lights(const std::vector<pf_triangle>& triangles,
 void Scene::compute_light_cdf() {
   std::vector<pf_light> given;
   given.swap(lights);
-  derive_lights(triangles, materials, given, lights, light_cdf);
+  derive_lights(triangles, materials, given, lights, light_cdf, &environment);
+  pack_environment_buffer();
+}
+
+void Scene::pack_environment_buffer() {
+  int li = -1;
+  for (size_t i = 0; i < lights.size(); ++i)
+    if (lights[i].type == PF_LIGHT_ENVIRONMENT) li = int(i);
+  float p_pick = 0.f;
+  if (li >= 0 && size_t(li) < light_cdf.size())
+    p_pick = light_cdf[size_t(li)] - (li ? light_cdf[size_t(li) - 1] : 0.f);
+  const Vec3 centre = li >= 0 ? Vec3(lights[size_t(li)].position) : Vec3();
+  const float radius = li >= 0 ? std::sqrt(lights[size_t(li)].area / kPi) : 0.f;
+  env_packed = pack_environment(environment, centre, radius, li, p_pick);
+}
+
+Vec3 Scene::environment_radiance(const Vec3& d) const {
+  const float fd[3] = {d.x, d.y, d.z};
+  float le[3];
+  pf_env_radiance(env_data(), fd, le);
+  return Vec3(le);
+}
+
+float Scene::environment_light_pdf(const Vec3& d) const {
+  const float fd[3] = {d.x, d.y, d.z};
+  return pf_env_light_pdf(env_data(), fd);
 }
 
 float Scene::light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& w,
-                           Vec3& q) const {
+                           Vec3& q, Vec3* le) const {
   const pf_light& l = lights[li];
   const float fp[3] = {p.x, p.y, p.z};
   float fw[3], fq[3], nl[3] = {0.f, 0.f, 0.f};
+  if (l.type == PF_LIGHT_ENVIRONMENT) {
+    float fl[3];
+    const float g = pf_env_incident(env_data(), fp, u1, u2, fw, fq, fl);
+    w = Vec3(fw);
+    q = Vec3(fq);
+    if (le) *le = Vec3(fl);
+    return g;
+  }
+  if (le) *le = Vec3(l.radiance);
   const float none[3] = {0.f, 0.f, 0.f};
   const float *v0 = none, *v1 = none, *v2 = none;
   if (l.type == PF_LIGHT_AREA) {
@@ -137,7 +187,7 @@ bool Scene::sample_light(float ul, float u1, float u2, const Vec3& p, LightSampl
   if (lights.empty()) return false;
   s.light = pick_light(ul, s.p_light);
   if (!(s.p_light > 0.f)) return false;
-  s.g = light_incident(s.light, p, u1, u2, s.w, s.q);
+  s.g = light_incident(s.light, p, u1, u2, s.w, s.q, &s.le);
   return s.g > 0.f;
 }
 
@@ -206,6 +256,15 @@ void Scene::compute_scene_id() {
   bool masked = false;
   for (const pf_alpha_material& a : material_alpha) masked = masked || pf_alpha_masked(a.cutoff);
   if (masked) feed(material_alpha);
+  // The environment (format version 6): only where there is one, so that every scene without it
+  // keeps its version-5 id.
+  if (environment.present()) {
+    const int32_t size[2] = {environment.width, environment.height};
+    h.update(size, sizeof size);
+    feed(environment.texels);
+    const float sr[2] = {environment.strength, environment.rotation_deg};
+    h.update(sr, sizeof sr);
+  }
   scene_id = h.hex();
 }
 

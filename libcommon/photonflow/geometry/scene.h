@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "photonflow/geometry/environment.h"
 #include "photonflow/geometry/kdtree.h"
 #include "photonflow/material/alpha_shared.h"
 #include "photonflow/material/texture_shared.h"
@@ -13,15 +14,17 @@
 namespace pf {
 
 constexpr const char* kSceneFormat = "photonflow.scene";
-// 5: metallic-roughness materials (PF_MAT_PBR; materials metallic, roughness, transmission;
+// 6: the environment light (/environment: texels, strength, rotation; a PF_LIGHT_ENVIRONMENT
+// light last in lights; only in a scene baked with --environment, so a scene without one differs
+// from version 5 in its version number alone); 5: metallic-roughness materials (PF_MAT_PBR; materials metallic, roughness, transmission;
 // materials/metallic_roughness_texture), alpha cut-outs (materials/alpha_cutoff, alpha_factor,
 // alpha_texture; only when some material is masked) and spot and directional lights (lights
 // direction, cos_inner, cos_outer); 4: the thin-lens camera (camera aperture, focus_distance);
 // 3: base-colour textures (textures/*, materials/texture, geometry/uvs); 2: names as fixed-length
 // strings; 1: variable-length names. Versions 1 to 4 are still read (no PBR fields: read as 0;
 // opaque; lights all area or point through h5_type_light_v4; versions 1-3 a pinhole camera;
-// versions 1 and 2 without textures).
-constexpr int kSceneFormatVersion = 5;
+// versions 1 and 2 without textures; versions 1 to 5 without an environment).
+constexpr int kSceneFormatVersion = 6;
 
 // A directional light's emitting disc lies this many bounding-sphere radii before the bounds'
 // centre, against the light (> 1: outside the bounds; derive_lights).
@@ -81,6 +84,12 @@ struct Scene {
   // masked), or empty when no material is masked (the rays' fast path: no alpha test at all).
   // A masked material's alpha texture needs uvs, like a base-colour texture.
   std::vector<pf_alpha_material> material_alpha;
+  // The environment light (format version 6; environment.h): the map, or !present() for none;
+  // with one, lights holds a PF_LIGHT_ENVIRONMENT light last (derive_lights). env_packed is
+  // derived (pack_environment, by compute_light_cdf and load_scene; not serialised): the buffer
+  // the shared sampling reads (environment_shared.h), the header alone without an environment.
+  Environment environment;
+  std::vector<float> env_packed;
   std::string scene_id;            // SHA-256 of the baked content (see compute_scene_id)
   std::string source;              // path of the file it was baked from
 
@@ -97,13 +106,31 @@ struct Scene {
   // Recomputes bounds from triangles.
   void compute_bounds();
   // Builds lights[] and light_cdf[] from emissive triangles (area lights) plus point lights
-  // already in lights[] (kept), sampled in proportion to power.
+  // already in lights[] (kept) and the environment, sampled in proportion to power; then
+  // env_packed (pack_environment_buffer).
   void compute_light_cdf();
+  // env_packed from environment, bounds, lights and light_cdf.
+  void pack_environment_buffer();
+  // The packed environment buffer for the shared functions (environment_shared.h), never null
+  // once compute_light_cdf or load_scene ran (the header alone, width 0, without an environment).
+  const float* env_data() const { return env_packed.empty() ? kNoEnvironment : env_packed.data(); }
+  static const float kNoEnvironment[16];  // PF_ENV_HEADER zeros, light −1
+  // For the eye pass (and any ray that leaves the scene): the radiance the environment sends
+  // along the unit direction d of an escaping ray (pf_env_radiance: texel-constant × strength;
+  // 0 without an environment), and the density with which next-event estimation (sample_light)
+  // draws d, per unit solid angle, including the environment's pick probability
+  // (pf_env_light_pdf), for weighing an escaping BSDF sample against NEE by MIS.
+  Vec3 environment_radiance(const Vec3& d) const;
+  float environment_light_pdf(const Vec3& d) const;
   // One next-event sample of light `li` at point p from two uniform numbers (light_shared.h
   // pf_light_incident, the one sampling of every light type for host and kernels): writes w (unit,
   // p → light) and q (the shadow ray's end) and returns G, with L_direct ≈ L_e·f·|cos θ_x|·G /
-  // p_light; 0 when the light sends nothing to p.
-  float light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& w, Vec3& q) const;
+  // p_light; 0 when the light sends nothing to p. The environment (PF_LIGHT_ENVIRONMENT):
+  // pf_env_incident (environment_shared.h), G = 1/pdf_ω, q beyond the scene's bounding sphere.
+  // le (optional): the radiance arriving along w — the light's `radiance` for every type but the
+  // environment, whose radiance is the map's along w.
+  float light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& w, Vec3& q,
+                       Vec3* le = nullptr) const;
   // True when area light li's point for (u1, u2) (sample_triangle's) lies on a cut-away texel of
   // its alpha-masked material (pf_alpha_light_point_cut_away): no light leaves it, so
   // light_incident gives 0 there and photon emission sends nothing. False in a scene without
@@ -117,6 +144,8 @@ struct Scene {
     float p_light = 0.f;  // the pick's probability
     float g = 0.f;        // light_incident's G
     Vec3 w, q;            // unit direction to the light, the shadow ray's end
+    Vec3 le;              // radiance arriving along w (light_incident's le): multiply by this,
+                          // not by lights[light].radiance, which is 0 for the environment
   };
   bool sample_light(float ul, float u1, float u2, const Vec3& p, LightSample& s) const;
   // Picks a light in proportion to power for a uniform u in [0, 1): the first i with
@@ -178,9 +207,12 @@ void finish_scene(Scene& scene, const KdBuildParams& kd = {});
 // triangles first, in triangle order, then the others, their power derived (a directional light's
 // disc too, from the triangles' bounds: shared_types.h); load_scene compares a file's lights and
 // CDF with them.
+// With an environment (env present), a PF_LIGHT_ENVIRONMENT light comes last: position the
+// bounding sphere's centre, area π·R², power π·R²·∫ L dω (environment_luminance_integral).
 void derive_lights(const std::vector<pf_triangle>& triangles,
                    const std::vector<pf_material>& materials, const std::vector<pf_light>& given,
-                   std::vector<pf_light>& lights, std::vector<float>& cdf);
+                   std::vector<pf_light>& lights, std::vector<float>& cdf,
+                   const Environment* env = nullptr);
 
 // Havel–Herout precomputation for one triangle (thesis eq. 4.3–4.7).
 pf_hh_triangle make_hh_triangle(const pf_triangle& t);

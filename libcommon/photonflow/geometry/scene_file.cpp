@@ -74,6 +74,25 @@ Scene load_scene(const std::string& path) {
     }
   }
 
+  if (r.version() >= 6) {  // the environment light (versions 1-5: none)
+    const std::vector<std::string> root = r.children("/");
+    if (std::find(root.begin(), root.end(), "environment") != root.end()) {
+      const std::vector<size_t> shape = r.shape("/environment/texels");
+      // The shape first (a 2:1 map within the bound), so that no damaged file allocates more.
+      if (shape.size() != 3 || shape[2] != 3 || shape[1] != 2 * shape[0] ||
+          shape[1] > size_t(kMaxEnvironmentWidth) || shape[0] == 0)
+        throw input_error(path, "dataset /environment/texels must be H x 2H x 3 with 2H at most " +
+                                    std::to_string(kMaxEnvironmentWidth),
+                          "the file is damaged; rebake it with scene-bake");
+      s.environment.height = int(shape[0]);
+      s.environment.width = int(shape[1]);
+      s.environment.texels = r.read<float>("/environment/texels", shape);
+      s.environment.strength = float(r.attr_double("/environment", "strength"));
+      s.environment.rotation_deg = float(r.attr_double("/environment", "rotation_deg"));
+      s.environment.source = r.attr_string("/environment", "source");
+    }
+  }
+
   // Bounds and face normals first (plain arithmetic on any values), then the checks, which
   // read them (validate_scene).
   s.compute_bounds();
@@ -83,6 +102,7 @@ Scene load_scene(const std::string& path) {
   bool masked = false;
   for (const pf_alpha_material& a : s.material_alpha) masked = masked || pf_alpha_masked(a.cutoff);
   if (!masked) s.material_alpha.clear();
+  s.pack_environment_buffer();  // derived: the sampling tables (environment_shared.h)
   s.kd.bounds.lo = Vec3(s.kd.nodes[0].lo);
   s.kd.bounds.hi = Vec3(s.kd.nodes[0].hi);
   // The id names the content: a file edited after baking (or damaged) no longer matches it.
@@ -169,12 +189,26 @@ void save_scene(const Scene& s, const std::string& path, const Provenance& prov)
                "texture (textures/textures) whose alpha channel multiplies alpha_factor, -1 = none");
   }
 
+  // Format version 6: the environment light, only when there is one.
+  if (s.environment.present()) {
+    const Environment& e = s.environment;
+    w.write("/environment/texels", e.texels, {size_t(e.height), size_t(e.width), 3});
+    w.describe("/environment/texels", "W/(sr m^2), before strength",
+               "equirectangular RGB radiance, H x 2H x 3, row 0 = the top (v = 0, +y); u = "
+               "atan2(d.x, -d.z)/2pi, v = acos(d.y)/pi of the direction turned back by "
+               "rotation_deg about +y (docs/SCENES.md)");
+    w.attr("/environment", "strength", double(e.strength));
+    w.attr("/environment", "rotation_deg", double(e.rotation_deg));
+    w.attr("/environment", "source", e.source);
+  }
+
   w.write("/lights/lights", h5_type_light(), s.lights);
   w.describe("/lights/lights",
              "area: m^2, power: W (luminance), radiance: W/(sr m^2) (area), W/sr (point, spot) or "
              "W/m^2 (directional), direction: unit, cos_inner/cos_outer: 1",
              "type 0 area (emissive triangle), 1 point, 2 spot, 3 directional (format version 5: "
-             "direction, cos_inner, cos_outer; docs/FORMATS.md)");
+             "direction, cos_inner, cos_outer; docs/FORMATS.md), 4 environment (version 6: "
+             "/environment; radiance 0, position and area its photons' disc)");
   w.write("/lights/cdf", s.light_cdf);
   w.describe("/lights/cdf", "1", "cumulative power fraction, sampling lights by power");
 

@@ -170,9 +170,9 @@ Scene import_scene(const BakeOptions& options, BakeReport& report, const ImportC
   bool emitter = !scene.lights.empty();
   for (size_t i = 0; i < scene.triangles.size() && !emitter; ++i)
     emitter = scene.materials[size_t(scene.triangles[i].material)].type == PF_MAT_EMITTER;
-  if (!emitter)
-    throw input_error(file, "no light: no emissive material (Ke > 0) and no point, spot or directional light",
-                      "give a surface an emissive colour or add a point light");
+  if (!emitter && options.environment.empty())
+    throw input_error(file, "no light: no emissive material (Ke > 0), no point, spot or directional light and no --environment",
+                      "give a surface an emissive colour, add a point light or give --environment");
 
   scene.compute_bounds();
   scene.camera = resolve_camera(options, file_camera, scene.bounds, file);
@@ -215,7 +215,22 @@ Scene bake_scene(const BakeOptions& options, BakeReport& report) {
   std::vector<std::string> inserts, warnings;
   for (const MeshInsert& ins : options.inserts) inserts.push_back(ins.path);
   check_scene_inputs(options.input, inserts, options.inputs, warnings);
+  // The environment map, before the import (a bad map is refused without waiting for it), in
+  // this process: OpenEXR and stb_image read the header and check the size before decoding
+  // (environment_image.h). With --confine-inputs the map must lie in the scene's folder too.
+  Environment environment;
+  if (!options.environment.empty()) {
+    float rgb[3];
+    const bool colour = parse_environment_colour(options.environment, rgb);
+    if (!colour && options.inputs.confine &&
+        !check_input_file(options.environment, "environment map", "", options.inputs,
+                          input_root(options.input)))
+      throw input_error(options.environment, "environment map: no such file", "check the path");
+    environment = load_environment(options.environment, options.environment_strength,
+                                   options.environment_rotate_deg);
+  }
   Scene scene = import::import_isolated(options, report);
+  scene.environment = std::move(environment);
   report.warnings.insert(report.warnings.begin(), warnings.begin(), warnings.end());
   report.import_seconds = import_clock.seconds();
   finish_scene(scene, options.kd);

@@ -77,6 +77,12 @@ struct BakeOptions {
   // What the bake does with the files the scene references (scene_inputs.h): --confine-inputs,
   // --missing-textures.
   InputPolicy inputs;
+  // The environment light (environment.h load_environment): --environment, a .exr or .hdr map
+  // or "R,G,B" ("" none), its --environment-strength and --environment-rotate (degrees about +y).
+  // A scene with one needs no other light.
+  std::string environment;
+  float environment_strength = 1.f;
+  float environment_rotate_deg = 0.f;
 };
 
 // What the bake found and did, for the tool's summary and warnings.

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 
@@ -27,6 +28,10 @@ void check_bake_options(const BakeOptions& o) {
   if (o.kd.max_depth < 0 || o.kd.max_depth > kKdMaxDepth)
     throw input_error("", "--kd-max-depth must be in 0.." + std::to_string(kKdMaxDepth));
   require_positive("kd-max-leaf", o.kd.max_leaf_size);
+  if (!(std::isfinite(o.environment_strength) && o.environment_strength > 0.f))
+    throw input_error("", "--environment-strength must be a finite number > 0");
+  if (!(std::isfinite(o.environment_rotate_deg) && std::fabs(o.environment_rotate_deg) <= 1e6f))
+    throw input_error("", "--environment-rotate must be a finite angle in degrees, |angle| <= 1e6");
   if (!(o.aperture >= 0.f && o.aperture <= kMaxLensLength))
     throw input_error("", "--aperture must be 0 (pinhole) or a lens radius in (0, 1e12] scene units",
                       "give the lens radius in scene units");
@@ -95,6 +100,9 @@ OpenedScene open_scene(const std::string& path, BakeOptions bake,
 
 void add_bake_inputs(Provenance& prov, const BakeOptions& bake) {
   prov.add_input("source", bake.input);
+  float rgb[3];
+  if (!bake.environment.empty() && !parse_environment_colour(bake.environment, rgb))
+    prov.add_input("environment", bake.environment);
   for (size_t i = 0; i < bake.inserts.size(); ++i)
     prov.add_input("insert" + std::to_string(i), bake.inserts[i].path);
 }
@@ -102,9 +110,13 @@ void add_bake_inputs(Provenance& prov, const BakeOptions& bake) {
 void add_scene_inputs(Provenance& prov, const std::string& path, const OpenedScene& s,
                       const BakeOptions& bake) {
   prov.add_input("scene", path, s.baked_here ? "" : kSceneFormat, s.scene.scene_id);
-  if (s.baked_here)
+  if (s.baked_here) {
     for (size_t i = 0; i < bake.inserts.size(); ++i)
       prov.add_input("insert" + std::to_string(i), bake.inserts[i].path);
+    float rgb[3];
+    if (!bake.environment.empty() && !parse_environment_colour(bake.environment, rgb))
+      prov.add_input("environment", bake.environment);
+  }
 }
 
 std::vector<std::string> bake_warnings(const BakeOptions& bake, const BakeReport& report) {

@@ -38,9 +38,9 @@ void check_light_cone(const pf_light& l, const Validator& v, const std::string& 
   const float* f = l.direction;
   const bool zero = f[0] == 0.f && f[1] == 0.f && f[2] == 0.f && l.cos_inner == 0.f &&
                     l.cos_outer == 0.f;
-  if (l.type == PF_LIGHT_AREA || l.type == PF_LIGHT_POINT) {
+  if (l.type == PF_LIGHT_AREA || l.type == PF_LIGHT_POINT || l.type == PF_LIGHT_ENVIRONMENT) {
     if (!zero)
-      v.fail(at + ": an area or point light has a direction or cone (direction " + vec_text(f) +
+      v.fail(at + ": an area, point or environment light has a direction or cone (direction " + vec_text(f) +
              ", cos_inner " + value_text(l.cos_inner) + ", cos_outer " + value_text(l.cos_outer) +
              "); they must be 0");
     return;
@@ -135,7 +135,9 @@ void check_scene_values(const Scene& s, const Validator& v) {
     v.in_range(Name(L, i, "power"), &l.power, 1, 0.0, kMaxValue);
     if (l.type != PF_LIGHT_AREA && l.triangle != -1)
       v.fail(Validator::element(L, i, "triangle") + " of a " +
-             (l.type == PF_LIGHT_POINT ? "point" : "spot or directional") + " light is " +
+             (l.type == PF_LIGHT_POINT         ? "point"
+              : l.type == PF_LIGHT_ENVIRONMENT ? "environment"
+                                               : "spot or directional") + " light is " +
              std::to_string(l.triangle) + ", not -1");
     check_light_cone(l, v, Validator::element(L, i));
   }
@@ -148,10 +150,10 @@ void check_scene_values(const Scene& s, const Validator& v) {
            value_text(s.light_cdf.back()) + ", the last entry must be 1");
   std::vector<pf_light> lights;
   std::vector<float> cdf;
-  derive_lights(s.triangles, s.materials, s.lights, lights, cdf);
+  derive_lights(s.triangles, s.materials, s.lights, lights, cdf, &s.environment);
   if (lights.size() != s.lights.size())
     v.fail(L + " holds " + std::to_string(s.lights.size()) + " lights, the emitter triangles and "
-           "point lights give " + std::to_string(lights.size()));
+           "point lights and the environment give " + std::to_string(lights.size()));
   const bool none = s.bounds.empty();  // no triangles
   const double reach =
       1e-5 * (1.0 + (none ? 0.0 : std::max(length(s.bounds.lo), length(s.bounds.hi))));
@@ -173,6 +175,7 @@ void check_scene_values(const Scene& s, const Validator& v) {
       v.fail(at + " (power " + value_text(a.power) + ") differs from the light its " +
              (b.type == PF_LIGHT_AREA          ? "triangle and material give"
               : b.type == PF_LIGHT_DIRECTIONAL ? "irradiance and the scene's bounds give"
+              : b.type == PF_LIGHT_ENVIRONMENT ? "map and the scene's bounds give"
                                                : "intensity and cone give") +
              " (power " + value_text(b.power) + ")");
     if (!nearly_equal(s.light_cdf[i], cdf[i], 0.0, 1e-5))
@@ -376,7 +379,7 @@ void validate_scene(const Scene& s, const std::string& path) {
   for (size_t i = 0; i < s.lights.size(); ++i) {
     const pf_light& l = s.lights[i];
     const std::string at = Validator::element("lights/lights", i);
-    if (l.type < PF_LIGHT_AREA || l.type > PF_LIGHT_DIRECTIONAL)
+    if (l.type < PF_LIGHT_AREA || l.type > PF_LIGHT_ENVIRONMENT)
       v.fail(at + ": a light has unknown type " + std::to_string(l.type));
     if (l.type == PF_LIGHT_AREA && (l.triangle < 0 || size_t(l.triangle) >= s.triangles.size()))
       v.fail(at + ": an area light's triangle id is out of range (" + std::to_string(l.triangle) +
@@ -389,6 +392,10 @@ void validate_scene(const Scene& s, const std::string& path) {
                                 std::to_string(s.camera.height) + " is outside 1 … " +
                                 std::to_string(kMaxImageSide) + " pixels",
                       hint);
+  // The environment (format version 6): its map's shape and values (environment.h), before the
+  // lights are compared with the ones it gives.
+  if (s.environment.present() || !s.environment.texels.empty())
+    check_environment(s.environment, path, "environment/texels");
   std::string problem = validate_kdtree(s.kd, s.triangles.size());
   if (!problem.empty()) throw input_error(path, "invalid kd-tree: " + problem, hint);
   check_scene_values(s, v);

@@ -16,6 +16,7 @@ namespace pf {
 // The baked scene on the device, uploaded once per context (and again when the scene changes).
 struct ClSceneBuffers {
   ClBuffer tris, hh, nodes, leaf_tris, group_of_first, leaf_groups, mats, lights, light_cdf;
+  ClBuffer env;  // the environment's packed buffer (environment_shared.h), the header alone without
   ClBuffer textures, texels, mat_tex, uvs, mr_tex;  // textures (PF_TEXTURE_PARAMS)
   bool has_pbr = false;  // a PF_MAT_PBR material: the eye pass writes a pf_pbr_point table
   ClBuffer alpha_mats;   // alpha cut-outs (PF_ALPHA_PARAMS)
@@ -83,6 +84,11 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
   s->mats = upload_array(dev, scene.materials, "materials");
   s->lights = upload_array(dev, scene.lights, "lights");
   s->light_cdf = upload_array(dev, scene.light_cdf, "light CDF");
+  {
+    std::vector<float> env = scene.env_packed;
+    if (env.empty()) env.assign(Scene::kNoEnvironment, Scene::kNoEnvironment + 16);
+    s->env = upload_array(dev, env, "environment map");
+  }
   {  // Textures: every material's entry (−1 without), and one-element stand-ins where the scene
      // has no textures or UVs (a buffer is never empty; the kernels read them only through a
      // material whose entry is ≥ 0, and load_scene guarantees the UVs then).
@@ -203,7 +209,7 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
     const cl_int count = cl_int(std::min(batch, npix - off));
     dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
              sb.leaf_groups, sb.mats, sb.lights,
-             sb.light_cdf, sb.light_count, sb.textures, sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex,
+             sb.light_cdf, sb.light_count, sb.env, sb.textures, sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex,
              sb.alpha_mats, sb.alpha_on, cam, cl_int(W), cl_int(H), cl_int(spp), cl_int(columns),
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              glossy_mis, cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps,
@@ -256,7 +262,7 @@ void trace_photon_batch(const Scene& scene, uint32_t pass, const PhotonPassOptio
   cl_kernel k = dev.kernel("trace_photons", "trace_photons",
                            scene_kernel_variant(scene, dev));
   dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
-           sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.textures,
+           sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.env, sb.textures,
            sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, sb.alpha_mats, sb.alpha_on, cl_uint(opt.seed),
            cl_uint(pass), cl_int(opt.max_bounces), ray_epsilon(scene), cl_uint(first),
            cl_int(count), slots, stored);
@@ -443,7 +449,7 @@ std::vector<ClRayHit> cast_rays(const Scene& scene, const std::vector<float>& ra
     const cl_int count = cl_int(std::min(batch, n - off));
     dev.write(rb, size_t(count) * 8 * sizeof(float), &rays[off * 8]);
     dev.args(k, sb.tris, sb.hh, sb.nodes, sb.node_count, sb.leaf_tris, sb.group_of_first,
-             sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.textures,
+             sb.leaf_groups, sb.mats, sb.lights, sb.light_cdf, sb.light_count, sb.env, sb.textures,
              sb.texels, sb.mat_tex, sb.uvs, sb.mr_tex, sb.alpha_mats, sb.alpha_on, rb, count,
              cl_int(any_hit ? 1 : 0), hb);
     dev.run(k, size_t(count));

@@ -58,7 +58,8 @@ class PathTracer {
         opt_(opt),
         eps_(ray_epsilon(scene)),
         caster_(scene),
-        camera_leaf_(caster_.leaf_at(Vec3(scene.camera.eye))) {
+        camera_leaf_(caster_.leaf_at(Vec3(scene.camera.eye))),
+        env_(scene.environment.present()) {
     tri_light_.assign(scene.triangles.size(), -1);
     light_normal_.resize(scene.lights.size());
     for (size_t li = 0; li < scene.lights.size(); ++li) {
@@ -86,7 +87,23 @@ class PathTracer {
     for (int depth = 0;; ++depth) {
       Hit h;
       ++rays;
-      if (!caster_.closest(ray, h)) break;  // no environment light
+      if (!caster_.closest(ray, h)) {
+        // The ray leaves the scene: the environment's radiance along it (0 without one;
+        // environment_shared.h), fully after the camera or a specular bounce, MIS-weighted
+        // against NEE (which samples the environment by pf_env_sample, density p_pick·pdf_ω)
+        // after a diffuse or PBR bounce, and not at all there with MIS off (NEE alone).
+        if (env_) {
+          const Vec3 d = normalize(ray.d);
+          const Vec3 le = scene_.environment_radiance(d);
+          if (specular) {
+            L += T * le;
+          } else if (opt_.mis == MisMode::Power) {
+            const float light_pdf = nee_could ? scene_.environment_light_pdf(d) : 0.f;
+            L += T * le * power_heuristic(bsdf_pdf, light_pdf);
+          }
+        }
+        break;
+      }
       const SurfaceHit sh = surface_at(scene_, ray, h);
       const pf_material& m = scene_.materials[size_t(sh.material)];
       const Vec3 d = normalize(ray.d);
@@ -170,6 +187,12 @@ class PathTracer {
   }
 
  private:
+  // Lights a BSDF-sampled ray can reach (area lights, the environment): their NEE samples are
+  // MIS-weighted; the others are delta lights, NEE's alone.
+  static bool hittable(const pf_light& l) {
+    return l.type == PF_LIGHT_AREA || l.type == PF_LIGHT_ENVIRONMENT;
+  }
+
   float pick_probability(size_t li) const {
     return scene_.light_cdf[li] - (li ? scene_.light_cdf[li - 1] : 0.f);
   }
@@ -187,8 +210,9 @@ class PathTracer {
 
   // One light sample for a diffuse point p (shading normal n and geometric normal ng on the side
   // of the arriving ray): incident radiance times cos θ_x over the sample's density (solid angle),
-  // MIS-weighted for area lights under MisMode::Power. Multiply by f_r for L_direct. The same
-  // estimator as eye_pass.cpp's direct_light (one sample; its shadow ray and cut-offs).
+  // MIS-weighted for area lights and the environment under MisMode::Power. Multiply by f_r for
+  // L_direct. The same estimator as eye_pass.cpp's direct_light (one sample; its shadow ray and
+  // cut-offs), with the sample's radiance ls.le (the map's, for the environment).
   Vec3 sample_light(const Vec3& p, const Vec3& n, const Vec3& ng, int32_t leaf, pf_rng& rng,
                     uint64_t& rays) const {
     const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
@@ -199,19 +223,19 @@ class PathTracer {
     if (cos_x <= 0.f || dot(ls.w, ng) <= 0.f) return {};
     const float g = cos_x * ls.g / ls.p_light;  // cos θ_x / density, without visibility
     float w = 1.f;  // MIS weight; delta lights: NEE is their only strategy
-    if (l.type == PF_LIGHT_AREA && opt_.mis == MisMode::Power)  // solid-angle densities
+    if (hittable(l) && opt_.mis == MisMode::Power)  // solid-angle densities
       w = power_heuristic(ls.p_light / ls.g, pdf_cosine_hemisphere(cos_x));
     const Vec3 o = p + ng * eps_;
     ++rays;
     if (caster_.any(Ray{o, ls.q - o, 0.f, 1.f - 1e-4f, leaf})) return {};
-    return Vec3(l.radiance) * (g * w);
+    return ls.le * (g * w);
   }
 
   // NEE at a PF_MAT_PBR point (radiance mode): sample_light's draws, light choice and point, and
   // its shadow ray, with f(wo, w_l) of the BSDF instead of ρ/π and |cos θ_x| at the shading
   // normal; a light behind the surface counts where the BSDF transmits (the shadow ray leaves on
-  // its side). Area lights are MIS-weighted against the BSDF's density pf_bsdf_pdf (power
-  // heuristic); point, spot and directional lights are NEE's alone. Returns
+  // its side). Area lights and the environment are MIS-weighted against the BSDF's density
+  // pf_bsdf_pdf (power heuristic); point, spot and directional lights are NEE's alone. Returns
   // f·L_e·|cos θ_x|·w / density.
   struct PbrFrame {
     float ns[3], ng[3], wo[3];  // front shading and geometric normals, direction to the eye
@@ -229,12 +253,12 @@ class PathTracer {
     if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) return {};
     const float g = std::fabs(dot(ls.w, Vec3(fr.ns))) * ls.g / ls.p_light;
     float w = 1.f;
-    if (l.type == PF_LIGHT_AREA && opt_.mis == MisMode::Power)
+    if (hittable(l) && opt_.mis == MisMode::Power)
       w = power_heuristic(ls.p_light / ls.g, pf_pbr_pdf_world(&params, fr.ns, fr.ng, fr.wo, wv));
     const Vec3 o = p + ng_front * (dot(ls.w, ng_front) >= 0.f ? eps_ : -eps_);
     ++rays;
     if (caster_.any(Ray{o, ls.q - o, 0.f, 1.f - 1e-4f, leaf})) return {};
-    return Vec3(f) * Vec3(l.radiance) * (g * w);
+    return Vec3(f) * ls.le * (g * w);
   }
 
   const Scene& scene_;
@@ -242,6 +266,7 @@ class PathTracer {
   const float eps_;
   const RayCaster caster_;
   const int32_t camera_leaf_;
+  const bool env_;                  // the scene has an environment light
   std::vector<int32_t> tri_light_;  // light index of an emissive triangle, −1 otherwise
   std::vector<Vec3> light_normal_;  // unit front normal of each area light
 };

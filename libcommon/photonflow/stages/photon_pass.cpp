@@ -10,6 +10,7 @@
 #include <string>
 
 #include "photonflow/foundations/error.h"
+#include "photonflow/geometry/environment_shared.h"
 #include "photonflow/geometry/light_shared.h"
 #include "photonflow/foundations/options.h"
 #include "photonflow/foundations/rng.h"
@@ -50,6 +51,14 @@ bool emit(const Scene& scene, const std::vector<LightInfo>& info, pf_rng& rng, R
     ray = Ray{Vec3(l.position), sample_uniform_sphere(u1, u2)};
     ray.leaf = info[li].leaf;
     flux = Vec3(l.radiance) * (4.f * kPi / p_light);  // Φ = 4π · I
+  } else if (l.type == PF_LIGHT_ENVIRONMENT) {
+    // The map (environment_shared.h pf_env_emit, pbrt-v3 InfiniteAreaLight::Sample_Le): ω by
+    // (u1, u2), the origin on the bounding sphere's disc by (u3, u4), flux L·πR²/(pdf_ω·p_light).
+    float o[3], d[3], power[3];
+    if (!pf_env_emit(scene.env_data(), u1, u2, u3, u4, o, d, power)) return false;
+    ray = Ray{Vec3(o), Vec3(d)};
+    ray.leaf = -1;  // outside the bounds, as a directional light's photons
+    flux = Vec3(power) * (1.f / p_light);
   } else {  // spot or directional (light_shared.h; the kernel's twin in trace_photons.cl)
     float o[3], d[3];
     const float f = pf_punctual_emit(l.type, l.position, l.direction, l.cos_inner, l.cos_outer,
