@@ -22,10 +22,10 @@
 #   pt.exr        pathtrace --time TIME, seed SEED (its defaults otherwise)
 #   <m>.exr       render --time TIME, seed SEED, for each method m of METHODS:
 #                   defaults   render's defaults (render_defaults.h: estimator, shadow rays,
-#                              photons per pass, radius and glossy threshold automatic)
+#                              photons per pass, radius and glossy merge rule automatic)
 #                   sppm, pppm --estimator sppm / pppm (the rest automatic)
 #                   <name>     render $FLAGS_<name> (a shell identifier; e.g.
-#                              FLAGS_sppm_g1="--estimator sppm --glossy-threshold 1")
+#                              FLAGS_first="--glossy-merge first")
 # and prints, all pixels and masked: each method's RMSE against the mean reference, the same net
 # of the reference's noise (imgcompare "RMSE net"), method / pt, and the reference's own error.
 # The timed runs go one after another, each with the load average before and after it
