@@ -23,11 +23,14 @@
 #define PF_EYE_STREAM 0xE7E0000u
 
 /* Scene::light_incident on the device: one next-event sample of light li at p (light_shared.h
- * pf_light_incident, the host's sampling of every light type; 0 from a cut-away texel of a masked
- * emitter). Writes w and q, returns G. */
+ * pf_light_incident, the host's sampling of every light type; the environment's
+ * pf_env_incident; 0 from a cut-away texel of a masked emitter). Writes w, q and le (the
+ * radiance arriving along w), returns G. */
 static float pf_light_incident_at(const pf_scene_view* s, int li, const float* p, float u1,
-                                  float u2, float* w, float* q) {
+                                  float u2, float* w, float* q, float* le) {
   __global const pf_light* l = &s->lights[li];
+  if (l->type == PF_LIGHT_ENVIRONMENT) return pf_env_incident(s->env, p, u1, u2, w, q, le);
+  for (int k = 0; k < 3; ++k) le[k] = l->radiance[k];
   float v0[3] = {0.0f, 0.0f, 0.0f}, v1[3] = {0.0f, 0.0f, 0.0f}, v2[3] = {0.0f, 0.0f, 0.0f};
   float nl[3] = {0.0f, 0.0f, 0.0f};
   if (l->type == PF_LIGHT_AREA) {
@@ -73,7 +76,8 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     const int li = pf_pick_light(s, ul, &p_light);
     if (p_light <= 0.0f) continue;
     float q[3], w[3];
-    const float g = pf_light_incident_at(s, li, p, u1, u2, w, q);
+    float le[3];
+    const float g = pf_light_incident_at(s, li, p, u1, u2, w, q, le);
     const float cos_x = pf_dot3(w, ns);
     if (!(g > 0.0f) || cos_x <= 0.0f || pf_dot3(w, ng) <= 0.0f) continue;
     float o[3], sd[3];
@@ -82,7 +86,7 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     pf_ray_hit hit;
     if (pf_trace_from(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit, leaf, 0)) continue;
     const float f = cos_x * g / p_light;
-    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + s->lights[li].radiance[k] * f;
+    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + le[k] * f;
   }
   const float inv = 1.0f / (float)samples;
   for (int k = 0; k < 3; ++k)
@@ -109,13 +113,14 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
     const int li = pf_pick_light(s, ul, &p_light);
     if (p_light <= 0.0f) continue;
     float q[3], w[3];
-    const float g = pf_light_incident_at(s, li, p, u1, u2, w, q);
+    float le[3];
+    const float g = pf_light_incident_at(s, li, p, u1, u2, w, q, le);
     if (!(g > 0.0f)) continue;
     float f[3];
     pf_pbr_eval_world(bp, ns, ng, wo, w, f); /* 0 for a pair the normals disagree on */
     if (!(f[0] > 0.0f || f[1] > 0.0f || f[2] > 0.0f)) continue;
     float wmis = 1.0f;
-    if (mis && s->lights[li].type == PF_LIGHT_AREA)
+    if (mis && (s->lights[li].type == PF_LIGHT_AREA || s->lights[li].type == PF_LIGHT_ENVIRONMENT))
       wmis = pf_power_heuristic((float)samples * p_light / g,
                                 pf_pbr_pdf_world(bp, ns, ng, wo, w));
     const float e = pf_dot3(w, ng) >= 0.0f ? eps : -eps;
@@ -125,7 +130,7 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
     pf_ray_hit hit;
     if (pf_trace_from(s, o, sd, 0.0f, 1.0f - 1e-4f, 1, &hit, leaf, 0)) continue;
     const float gp = fabs(pf_dot3(w, ns)) * g / p_light * wmis;
-    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + f[k] * s->lights[li].radiance[k] * gp;
+    for (int k = 0; k < 3; ++k) sum[k] = sum[k] + f[k] * le[k] * gp;
   }
   const float inv = 1.0f / (float)samples;
   for (int k = 0; k < 3; ++k) direct[k] = direct[k] + weight[k] * (sum[k] * inv);
@@ -194,7 +199,15 @@ static void pf_emission_sample(const pf_scene_view* s, __global const float* cam
   int leaf = -1; /* the kd leaf of the last hit: the next ray's start (pf_trace_from) */
   for (int depth = 0; depth <= max_depth; ++depth) {
     pf_ray_hit h;
-    if (!pf_trace_from(s, o, d, 0.0f, INFINITY, 0, &h, leaf, &leaf)) break;
+    if (!pf_trace_from(s, o, d, 0.0f, INFINITY, 0, &h, leaf, &leaf)) {
+      if (pf_env_width(s->env) > 0) { /* the environment, as the eye samples add it */
+        float dn[3] = {d[0], d[1], d[2]}, le[3];
+        pf_normalize3(dn);
+        pf_env_radiance(s->env, dn, le);
+        for (int c = 0; c < 3; ++c) L[c] = L[c] + T[c] * le[c];
+      }
+      break;
+    }
     pf_surface sh;
     pf_surface_at(s, o, d, &h, &sh);
     __global const pf_material* m = &s->mats[sh.material];
@@ -262,7 +275,23 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
     int leaf = -1;  /* the kd leaf of the last hit: the next ray's start (pf_trace_from) */
     for (int depth = 0; depth <= max_depth; ++depth) {
       pf_ray_hit h;
-      if (!pf_trace_from(&s, o, d, 0.0f, INFINITY, 0, &h, leaf, &leaf)) break;
+      if (!pf_trace_from(&s, o, d, 0.0f, INFINITY, 0, &h, leaf, &leaf)) {
+        /* eye_pass.cpp: the environment along the escaping ray */
+        if (pf_env_width(s.env) > 0) {
+          float dn[3] = {d[0], d[1], d[2]}, le[3];
+          pf_normalize3(dn);
+          pf_env_radiance(s.env, dn, le);
+          if (from_glossy) {
+            const float wl = pf_power_heuristic(
+                glossy_pdf, (float)shadow_samples * pf_env_light_pdf(s.env, dn));
+            for (int k = 0; k < 3; ++k) direct[k] = direct[k] + Td[k] * le[k] * wl;
+          } else {
+            float* layer = glossy ? direct : emitted;
+            for (int k = 0; k < 3; ++k) layer[k] = layer[k] + T[k] * le[k];
+          }
+        }
+        break;
+      }
       pf_surface sh;
       pf_surface_at(&s, o, d, &h, &sh);
       __global const pf_material* m = &s.mats[sh.material];

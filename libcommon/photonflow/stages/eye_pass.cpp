@@ -104,7 +104,7 @@ Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3&
     if (cos_x <= 0.f || dot(ls.w, ng) <= 0.f) continue;
     const Vec3 o = p + ng * eps;
     if (intersect_any(scene, Ray{o, ls.q - o, 0.f, 1.f - 1e-4f, leaf})) continue;
-    sum += Vec3(scene.lights[ls.light].radiance) * (cos_x * ls.g / ls.p_light);
+    sum += ls.le * (cos_x * ls.g / ls.p_light);
   }
   return mat_color(m) * kInvPi * sum * (1.f / float(samples));
 }
@@ -139,13 +139,13 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
     pf_pbr_eval_world(&params, ns, ng, o, wl, f);  // 0 for a pair the normals disagree on
     if (!(f[0] > 0.f || f[1] > 0.f || f[2] > 0.f)) continue;
     float w = 1.f;
-    if (mis && scene.lights[ls.light].type == PF_LIGHT_AREA)
+    const int type = scene.lights[ls.light].type;
+    if (mis && (type == PF_LIGHT_AREA || type == PF_LIGHT_ENVIRONMENT))
       w = pf_power_heuristic(float(samples) * ls.p_light / ls.g,
                              pf_pbr_pdf_world(&params, ns, ng, o, wl));
     const Vec3 origin = p + ng_front * (dot(ls.w, ng_front) >= 0.f ? eps : -eps);
     if (intersect_any(scene, Ray{origin, ls.q - origin, 0.f, 1.f - 1e-4f, leaf})) continue;
-    sum += Vec3(f) * Vec3(scene.lights[ls.light].radiance) *
-           (std::fabs(dot(ls.w, ns_front)) * ls.g / ls.p_light * w);
+    sum += Vec3(f) * ls.le * (std::fabs(dot(ls.w, ns_front)) * ls.g / ls.p_light * w);
   }
   return sum * (1.f / float(samples));
 }
@@ -273,7 +273,22 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
   Vec3 T_direct;
   for (int depth = 0; depth <= opt_.max_depth; ++depth) {
     Hit h;
-    if (!caster_.closest(ray, h)) return merged;
+    if (!caster_.closest(ray, h)) {
+      // The environment along the escaping ray (none: 0): seen directly or through mirrors and
+      // glass it is emitted light, after a glossy vertex's BSDF sample it is that vertex's
+      // direct light, weighted against next-event estimation of the environment there.
+      if (scene_.environment.present()) {
+        const Vec3 d = normalize(ray.d);
+        const Vec3 le = scene_.environment_radiance(d);
+        if (from_glossy)
+          direct += T_direct * le *
+                    pf_power_heuristic(glossy_pdf, float(opt_.shadow_samples) *
+                                                       scene_.environment_light_pdf(d));
+        else
+          (glossy ? direct : emitted) += T * le;
+      }
+      return merged;
+    }
     SurfaceHit sh = surface_at(scene_, ray, h);
     const pf_material& m = scene_.materials[size_t(sh.material)];
     if (m.type == PF_MAT_EMITTER && sh.front) {
@@ -441,7 +456,10 @@ Vec3 EyeTracer::emission_sample(int x, int y, int k) const {
   Vec3 T(1.f, 1.f, 1.f), L;
   for (int depth = 0; depth <= opt_.max_depth; ++depth) {
     Hit h;
-    if (!caster_.closest(ray, h)) break;
+    if (!caster_.closest(ray, h)) {  // the environment, as sample() adds it to `emitted`
+      if (scene_.environment.present()) L += T * scene_.environment_radiance(normalize(ray.d));
+      break;
+    }
     SurfaceHit sh = surface_at(scene_, ray, h);
     const pf_material& m = scene_.materials[size_t(sh.material)];
     if (m.type == PF_MAT_EMITTER && sh.front) L += T * Vec3(m.emission);
