@@ -245,7 +245,8 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
                               __global float* direct_out, int has_pbr,
                               __global pf_pbr_point* pbr_slots,
                               __global const uchar* emit_pixels, int emission_spp,
-                              __global const int* tri_light) {
+                              __global const int* tri_light, __global const uchar* glossy_pixels,
+                              int glossy_spp) {
   const int local_pix = (int)get_global_id(0);
   if (local_pix >= pixel_count) return;
   PF_SCENE_VIEW(s);
@@ -253,20 +254,42 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
   const int pix = pixel_offset + local_pix;
   const int x = pix % width, y = pix / width;
   float emitted[3] = {0.0f, 0.0f, 0.0f}, direct[3] = {0.0f, 0.0f, 0.0f};
-  for (int smp = 0; smp < spp; ++smp) {
-    const uint index = (uint)pix * (uint)spp + (uint)smp;
-    const size_t slot = (size_t)local_pix * (size_t)spp + (size_t)smp;
+  /* EyeTracer::samples: spp, and glossy_spp more in a marked pixel; slots per pixel: spp +
+   * glossy_spp (the host's layout), the unused ones flagged 0 */
+  const int slots_per_pixel = spp + glossy_spp;
+  const int n_samples = spp + (glossy_spp > 0 && glossy_pixels[pix] ? glossy_spp : 0);
+  for (int smp = spp; smp < slots_per_pixel; ++smp)
+    used[(size_t)local_pix * (size_t)slots_per_pixel + (size_t)smp] = 0;
+  for (int smp = 0; smp < n_samples; ++smp) {
+    const size_t slot = (size_t)local_pix * (size_t)slots_per_pixel + (size_t)smp;
     used[slot] = 0;
-    pf_rng rng = pf_rng_start(seed, PF_EYE_STREAM + pass, index);
+    pf_rng rng;
+    pf_light_draws own_draws;
     float jx, jy;
-    pf_eye_jitter(sampler, seed, pass, (uint)pix, smp, spp, columns, &rng, &jx, &jy);
     /* thin lens: its point is drawn after the jitter (pixel_sampler.h) */
     float u1 = 0.5f, u2 = 0.5f;
-    if (cam[14] > 0.0f)
-      pf_eye_lens_keyed(sampler, pf_sobol_key(seed), pass, (uint)pix, smp, spp, &rng, &u1, &u2);
+    const int extra = smp >= spp;
+    if (!extra) {
+      const uint index = (uint)pix * (uint)spp + (uint)smp;
+      rng = pf_rng_start(seed, PF_EYE_STREAM + pass, index);
+      pf_eye_jitter(sampler, seed, pass, (uint)pix, smp, spp, columns, &rng, &jx, &jy);
+      if (cam[14] > 0.0f)
+        pf_eye_lens_keyed(sampler, pf_sobol_key(seed), pass, (uint)pix, smp, spp, &rng, &u1, &u2);
+    } else { /* a glossy sample (pixel_sampler.h PF_GLOSSY_STREAM) */
+      const int k = smp - spp;
+      const uint index = (uint)pix * (uint)glossy_spp + (uint)k;
+      rng = pf_rng_start(seed, PF_GLOSSY_STREAM + pass, index);
+      own_draws = pf_light_draws_from(pf_rng_start(seed, PF_GLOSSY_LIGHT_STREAM + pass, index));
+      pf_sobol_pixel_sample_keyed(pf_glossy_sobol_key(seed), (uint)pix,
+                                  pass * (uint)glossy_spp + (uint)k, &jx, &jy);
+      if (cam[14] > 0.0f) {
+        u1 = pf_rng_next(&rng);
+        u2 = pf_rng_next(&rng);
+      }
+    }
     float o[3], d[3];
     pf_camera_ray(cam, width, height, (float)x + jx, (float)y + jy, u1, u2, o, d);
-    const float w0 = 1.0f / (float)spp;
+    const float w0 = 1.0f / (float)n_samples;
     float T[3] = {w0, w0, w0};
     /* eye_pass.cpp EyeTracer::sample: from_glossy, last, merged, glossy, glossy_pdf, T_direct */
     int from_glossy = 0, last = 0, merged = 0, glossy = 0;
@@ -334,8 +357,11 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
             const float u_merge = pf_rng_next(&rng);
             merge = q >= 1.0f || (q > 0.0f && u_merge < q);
             if (merge) {
-              pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
-                                                          (uint)pix, smp, spp, shadow_samples);
+              pf_light_draws draws = extra ? own_draws
+                                                  : pf_light_draws_start(sampler, seed,
+                                                                         pf_sobol_key(seed), pass,
+                                                                         (uint)pix, smp, spp,
+                                                                         shadow_samples);
               pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws,
                                   1, eps, T, direct, leaf);
             } else {
@@ -418,15 +444,21 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
           continue;
         }
         if (shadow_rays && pbr) {
-          pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
-                                                      (uint)pix, smp, spp, shadow_samples);
+          pf_light_draws draws = extra ? own_draws
+                                              : pf_light_draws_start(sampler, seed,
+                                                                     pf_sobol_key(seed), pass,
+                                                                     (uint)pix, smp, spp,
+                                                                     shadow_samples);
           pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws, 0,
                               eps, T, direct, leaf);
         } else if (shadow_rays) {
           float ng[3];
           for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
-          pf_light_draws draws = pf_light_draws_start(sampler, seed, pf_sobol_key(seed), pass,
-                                                      (uint)pix, smp, spp, shadow_samples);
+          pf_light_draws draws = extra ? own_draws
+                                              : pf_light_draws_start(sampler, seed,
+                                                                     pf_sobol_key(seed), pass,
+                                                                     (uint)pix, smp, spp,
+                                                                     shadow_samples);
           pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, &draws, eps, T, direct, leaf);
         }
         break;
@@ -450,8 +482,8 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
     for (int k = 0; k < emission_spp; ++k)
       pf_emission_sample(&s, cam, width, height, pix, k, emission_spp, seed, pass, max_depth, eps,
                          sum);
-    const float inv = 1.0f / (float)(spp + emission_spp);
-    for (int k = 0; k < 3; ++k) emitted[k] = emitted[k] * ((float)spp * inv) + sum[k] * inv;
+    const float inv = 1.0f / (float)(n_samples + emission_spp);
+    for (int k = 0; k < 3; ++k) emitted[k] = emitted[k] * ((float)n_samples * inv) + sum[k] * inv;
   }
   for (int k = 0; k < 3; ++k) {
     emitted_out[3 * (size_t)local_pix + k] = emitted[k];

@@ -259,6 +259,9 @@ TEST_CASE("render: options out of range are refused as the stages refuse them",
                 "--glossy-merge", none);
   check_refused(run_tool("render", base + "--glossy-merge mis --direct photons", tmp), tmp,
                 "--glossy-merge", none);
+  check_refused(run_tool("render", base + "--glossy-spp 2 --estimator sppm", tmp), tmp,
+                "--glossy-spp", none);
+  check_refused(run_tool("render", base + "--glossy-spp 65", tmp), tmp, "--glossy-spp", none);
   check_refused(run_tool("render", base + "--checkpoint " + (tmp / "ck.h5") +
                                        " --checkpoint-every 0", tmp),
                 tmp, "--checkpoint-every", none);

@@ -55,6 +55,11 @@ int main(int argc, char** argv) {
        "shadow-rays); or auto: mis for sppm and pppm with shadow rays, else first "
        "(render_defaults.h)",
        cxxopts::value<std::string>()->default_value("auto"))
+      ("glossy-spp", "pppm: eye samples more per pass in the pixels that see a glossy point "
+       "their eye paths go on from (--glossy-merge mis), or auto: " +
+       std::to_string(pf::kDefaultGlossySpp) + " for pppm with --glossy-merge mis, else 0 "
+       "(render_defaults.h)",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("emission-spp", "eye paths more per pass, through mirrors and glass only, in the pixels "
        "that see an emitter that way or directly (their emitted light converges faster; 0 = "
        "none), or auto: " + std::to_string(pf::kDefaultEmissionSpp) + " (render_defaults.h)",
@@ -151,6 +156,8 @@ int main(int argc, char** argv) {
     opt.eye.glossy = pf::parse_glossy_merge_option(a["glossy-merge"].as<std::string>(),
                                                    opt.estimator, opt.eye.direct);
     opt.eye.emission_spp = pf::parse_emission_spp(a["emission-spp"].as<std::string>());
+    opt.eye.glossy_spp = pf::parse_glossy_spp(a["glossy-spp"].as<std::string>(), opt.estimator,
+                                              opt.eye.glossy);
     opt.eye.sampler = sampler == "auto" ? (opt.estimator == pf::Estimator::Ppm
                                                ? pf::PixelSampler::Strata
                                                : pf::PixelSampler::Sobol)

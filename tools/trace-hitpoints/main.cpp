@@ -49,6 +49,10 @@ int main(int argc, char** argv) {
        "share its light between the gather there and continuing the eye path (sppm and pppm, "
        "--direct shadow-rays); or auto: mis for sppm and pppm with shadow rays, else first",
        cxxopts::value<std::string>()->default_value("auto"))
+      ("glossy-spp", "pppm: eye samples more per pass in the pixels that see a glossy point "
+       "their eye paths go on from (--glossy-merge mis), or auto: " +
+       std::to_string(pf::kDefaultGlossySpp) + " for pppm with --glossy-merge mis, else 0",
+       cxxopts::value<std::string>()->default_value("auto"))
       ("emission-spp", "eye paths more per pass, through mirrors and glass only, in the pixels "
        "that see an emitter that way or directly (their emitted light converges faster; 0 = "
        "none), or auto: " + std::to_string(pf::kDefaultEmissionSpp) + " (render_defaults.h)",
@@ -96,6 +100,10 @@ int main(int argc, char** argv) {
     opt.glossy = pf::parse_glossy_merge_option(a["glossy-merge"].as<std::string>(), estimator,
                                                opt.direct);
     opt.emission_spp = pf::parse_emission_spp(a["emission-spp"].as<std::string>());
+    opt.glossy_spp = pf::parse_glossy_spp(a["glossy-spp"].as<std::string>(), estimator, opt.glossy);
+    if (opt.glossy_spp > 0 && estimator != pf::Estimator::Pppm)
+      throw pf::input_error("", "--glossy-spp applies to --estimator pppm",
+                            "sppm keeps one visible point per pixel and ppm one eye pass");
     opt.shadow_samples = pf::parse_shadow_samples(a["shadow-samples"].as<std::string>(), estimator);
     pf::check_options(opt);
 
@@ -120,6 +128,8 @@ int main(int argc, char** argv) {
     prov.parameters.erase("glossy-merge");
     if (opt.glossy != pf::GlossyMerge::First)
       prov.parameters["glossy-merge"] = pf::glossy_merge_name(opt.glossy);
+    prov.parameters.erase("glossy-spp");  // likewise: auto resolved, only where used
+    if (opt.glossy_spp > 0) prov.parameters["glossy-spp"] = std::to_string(opt.glossy_spp);
     prov.parameters.erase("emission-spp");  // likewise: auto resolved, only where used
     if (opt.emission_spp > 0) prov.parameters["emission-spp"] = std::to_string(opt.emission_spp);
     pf::record_backend(prov, dev.get());

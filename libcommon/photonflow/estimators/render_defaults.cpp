@@ -102,6 +102,11 @@ int count_or_auto(const std::string& text, const char* option, long lo, long hi,
 }
 }  // namespace
 
+int parse_glossy_spp(const std::string& text, Estimator e, GlossyMerge g) {
+  const int automatic = e == Estimator::Pppm && g == GlossyMerge::Mis ? kDefaultGlossySpp : 0;
+  return count_or_auto(text, "glossy-spp", 0, kMaxGlossySpp, automatic);
+}
+
 int parse_emission_spp(const std::string& text) {
   return count_or_auto(text, "emission-spp", 0, kMaxEmissionSpp, kDefaultEmissionSpp);
 }

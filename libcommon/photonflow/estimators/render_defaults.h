@@ -60,6 +60,11 @@ constexpr DirectMode kDefaultDirect = DirectMode::ShadowRays;
 // GlossyMerge::First.
 constexpr GlossyMerge kDefaultGlossyMerge = GlossyMerge::Mis;
 
+// Glossy samples per pass in each pixel whose first glossy vertex continues (EyePassOptions::
+// glossy_spp, eye_pass.h glossy_pixels), pppm with GlossyMerge::Mis only (docs/RESULTS.md
+// "Glossy points").
+constexpr int kDefaultGlossySpp = 4;
+
 // Emission samples per pass in each pixel that sees an emitter directly or through mirrors and
 // glass (EyePassOptions::emission_spp, eye_pass.h emission_pixels), every estimator. 8: they lower
 // the error over all pixels at equal time and leave the pass rate and the error away from the
@@ -120,6 +125,10 @@ GlossyMerge parse_glossy_merge_option(const std::string& text, Estimator e, Dire
 // --emission-spp of render and trace-hitpoints: "auto" (kDefaultEmissionSpp) or a count (its range
 // is check_options' of eye_pass.h); InputError naming --emission-spp for what is not an integer.
 int parse_emission_spp(const std::string& text);
+// --glossy-spp of render and trace-hitpoints: "auto" (kDefaultGlossySpp for pppm with
+// GlossyMerge::Mis, else 0) or a count (its range is check_options' of eye_pass.h, and only pppm
+// takes more than 0: render_driver.h check_options); InputError naming --glossy-spp otherwise.
+int parse_glossy_spp(const std::string& text, Estimator e, GlossyMerge g);
 // --shadow-samples of render and trace-hitpoints: "auto" (kDefaultShadowSamples for sppm and
 // pppm, kPpmShadowSamples for ppm) or a count (its range is check_options' of eye_pass.h);
 // InputError naming --shadow-samples for what is not an integer.

@@ -39,6 +39,17 @@ std::shared_ptr<const std::vector<uint8_t>> keep_emission_pixels(const Scene& sc
   return marks;
 }
 
+// The pixels with glossy samples, likewise once for all of a pppm run's eye passes.
+std::shared_ptr<const std::vector<uint8_t>> keep_glossy_pixels(const Scene& scene,
+                                                               RenderOptions& opt) {
+  if (opt.eye.glossy_spp <= 0 || opt.eye.glossy != GlossyMerge::Mis || opt.eye.glossy_pixels ||
+      !scene.has_pbr())
+    return nullptr;
+  auto marks = std::make_shared<const std::vector<uint8_t>>(glossy_pixels(scene));
+  opt.eye.glossy_pixels = marks.get();
+  return marks;
+}
+
 HitpointSet fresh_state(const Scene& scene, const RenderOptions& opt) {
   if (opt.estimator == Estimator::Sppm)
     return make_sppm_state(scene, initial_radius(scene, opt.eye), opt.eye.direct);
@@ -151,6 +162,7 @@ PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt)
     : scene_(scene),
       opt_(opt),
       emission_marks_(keep_emission_pixels(scene, opt_)),
+      glossy_marks_(keep_glossy_pixels(scene, opt_)),
       sums_(make_pass_sums(scene.camera.width, scene.camera.height, opt.first_pass,
                            initial_radius(scene, opt.eye), opt.ppm.alpha, opt.eye.direct,
                            scene.scene_id, state_parameters(opt))) {}
@@ -160,6 +172,7 @@ PppmRenderer::PppmRenderer(const Scene& scene, const RenderOptions& opt, PassSum
     : scene_(scene),
       opt_(opt),
       emission_marks_(keep_emission_pixels(scene, opt_)),
+      glossy_marks_(keep_glossy_pixels(scene, opt_)),
       sums_(std::move(sums)) {
   if (sums_.width != scene.camera.width || sums_.height != scene.camera.height)
     throw input_error(path, "is " + std::to_string(sums_.width) + "x" +
@@ -230,6 +243,9 @@ void check_options(const RenderOptions& opt) {
   if (opt.estimator == Estimator::Sppm && opt.eye.spp != 1)
     throw input_error("", "--estimator sppm takes one eye sample per pixel and pass",
                       "drop --spp: every pass traces a new sample in each pixel");
+  if (opt.eye.glossy_spp > 0 && opt.estimator != Estimator::Pppm)
+    throw input_error("", "--glossy-spp applies to --estimator pppm",
+                      "sppm keeps one visible point per pixel and ppm one eye pass");
   for (int p : opt.snapshot_at)
     if (p < 1 || p > opt.passes)
       throw input_error("", "--snapshot-at " + std::to_string(p) +
@@ -263,6 +279,7 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
   if (opt.eye.glossy != GlossyMerge::First) p["glossy-merge"] = glossy_merge_name(opt.eye.glossy);
   // Likewise only where eye passes take emission samples (files made before them have none).
   if (opt.eye.emission_spp > 0) p["emission-spp"] = std::to_string(opt.eye.emission_spp);
+  if (opt.eye.glossy_spp > 0) p["glossy-spp"] = std::to_string(opt.eye.glossy_spp);
   return p;
 }
 
@@ -273,6 +290,7 @@ std::optional<std::string> state_parameter_unrecorded_value(const std::string& n
   // was made with them (or before the option existed, which is the same).
   if (name == "glossy-merge") return std::string("first");
   if (name == "emission-spp") return std::string("0");
+  if (name == "glossy-spp") return std::string("0");
   if (name == "gather-area") return std::string("disc");
   if (name == "estimator") return std::string("ppm");  // ppm's record has no estimator
   return std::nullopt;
@@ -348,6 +366,8 @@ std::map<std::string, std::string> staged_state_parameters(
     o.eye.glossy = parse_glossy_merge(text(eye, eye_path, "glossy-merge"));
   if (eye.parameters.count("emission-spp"))  // absent from files made before it existed
     o.eye.emission_spp = int(number(eye, eye_path, "emission-spp"));
+  if (eye.parameters.count("glossy-spp"))  // likewise
+    o.eye.glossy_spp = int(number(eye, eye_path, "glossy-spp"));
   o.photons.photons = uint32_t(number(photons, photons_path, "photons"));
   o.photons.max_bounces = int(number(photons, photons_path, "max-bounces"));
   o.photons.seed = uint32_t(number(photons, photons_path, "seed"));

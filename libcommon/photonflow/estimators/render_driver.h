@@ -122,6 +122,7 @@ class PppmRenderer {
   RenderOptions opt_;
   // emission_pixels, once per run; opt_.eye points at it (on the heap: stays put when moved)
   std::shared_ptr<const std::vector<uint8_t>> emission_marks_;
+  std::shared_ptr<const std::vector<uint8_t>> glossy_marks_;  // glossy_pixels, likewise
   PassSums sums_;
   uint64_t photons_stored_ = 0;
   EyePassResult eye_;  // the device's eye pass
@@ -159,7 +160,7 @@ void check_options(const RenderOptions& opt);
 // The options a PPM state depends on, as canonical text under their tool option names ("alpha" →
 // "0.7", "seed", "photons", "spp", "max-depth", "max-bounces", "direct", "shadow-samples",
 // "radius", "pixel-sampler"; with sppm and pppm also "estimator" and "slab", and "gather-area"
-// when it is the surface; "glossy-merge" when not "first" and "emission-spp" when above 0). render_progressive
+// when it is the surface; "glossy-merge" when not "first", "emission-spp" and "glossy-spp" when above 0). render_progressive
 // records them in every checkpoint's provenance parameters as
 // "state.<name>" and resumes only a checkpoint whose record equals this run's
 // (require_same_state_parameters): a state continued under other options would be neither run's

@@ -343,7 +343,6 @@ void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& 
       eye.pass != uint32_t(sums.end_pass()) || eye.direct != sums.direct_mode)
     throw std::invalid_argument("pppm_pass_traced: the eye pass does not fit the sums");
   const EyeTracer tracer(scene, eye);
-  const int spp = tracer.spp();
   const float r = pppm_pass_radius(sums);
   const bool pbr_scene = scene.has_pbr();
   const bool skip = sums.direct_mode == DirectMode::ShadowRays;
@@ -353,11 +352,12 @@ void pppm_pass_traced(const Scene& scene, PassSums& sums, const EyePassOptions& 
 #pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(opt.threads))
   for (int y = 0; y < H; ++y) {
     thread_local std::vector<float> tau_beta;  // β·τ_M of the pixel's visible samples, in order
-    tau_beta.resize(size_t(spp) * 3);
+    tau_beta.resize(size_t(tracer.max_samples()) * 3);
     for (int x = 0; x < W; ++x) {
       const size_t px = size_t(y) * size_t(W) + size_t(x);
       Vec3 e, d;
       int visible = 0;
+      const int spp = tracer.samples(x, y);
       for (int s = 0; s < spp; ++s) {
         pf_hitpoint v;
         pf_pbr_point pt;

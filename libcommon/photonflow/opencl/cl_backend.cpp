@@ -162,24 +162,38 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
   res.emitted.assign(npix * 3, 0.f);
   res.direct.assign(npix * 3, 0.f);
   if (npix == 0) return res;
-  if (npix * size_t(spp) > size_t(INT32_MAX))
-    throw input_error("", "too many pixel samples for the OpenCL backend", "use --device cpu");
   const float eps = ray_epsilon(scene);
   ClSceneBuffers& sb = scene_buffers(scene, dev);
+  // Glossy samples (eye_pass.h EyePassOptions::glossy_spp): the marked pixels (computed on the
+  // host, as EyeTracer does), or a one-byte stand-in; every pixel gets spp + G slots.
+  const bool glossy_on = opt.glossy_spp > 0 && opt.glossy == GlossyMerge::Mis && sb.has_pbr;
+  std::vector<uint8_t> own_glossy;
+  const std::vector<uint8_t>* gmarks = opt.glossy_pixels;
+  if (glossy_on && !gmarks) gmarks = &(own_glossy = glossy_pixels(scene));
+  if (glossy_on && gmarks->size() != npix)
+    throw std::invalid_argument("trace_hitpoints: glossy_pixels is not the image's size");
+  const uint8_t gnone = 0;
+  ClBuffer glossy_marks = dev.buffer(glossy_on ? npix : 1, glossy_on ? gmarks->data() : &gnone,
+                                     CL_MEM_READ_ONLY);
+  const int G = glossy_on ? opt.glossy_spp : 0;
+  const int per_pixel = spp + G;  // slots per pixel
+  if (npix * size_t(per_pixel) > size_t(INT32_MAX))
+    throw input_error("", "too many pixel samples for the OpenCL backend", "use --device cpu");
   std::vector<float> frame = camera_frame(scene.camera);
   ClBuffer cam = dev.buffer(frame.size() * sizeof(float), frame.data(), CL_MEM_READ_ONLY);
   cl_kernel k = dev.kernel("trace_hitpoints", "trace_hitpoints",
                            scene_kernel_variant(scene, dev));
 
-  // Batches of pixels: the slot array (spp hitpoints per pixel) is the largest buffer.
-  const size_t batch = dev.batch_items(size_t(spp) * sizeof(pf_hitpoint), npix);
-  const ClBuffer& slots = dev.scratch("eye.slots", batch * size_t(spp) * sizeof(pf_hitpoint));
-  const ClBuffer& used = dev.scratch("eye.used", batch * size_t(spp) * sizeof(cl_int));
+  // Batches of pixels: the slot array (spp + G hitpoints per pixel) is the largest buffer.
+  const size_t batch = dev.batch_items(size_t(per_pixel) * sizeof(pf_hitpoint), npix);
+  const ClBuffer& slots = dev.scratch("eye.slots", batch * size_t(per_pixel) * sizeof(pf_hitpoint));
+  const ClBuffer& used = dev.scratch("eye.used", batch * size_t(per_pixel) * sizeof(cl_int));
   const ClBuffer& emitted = dev.scratch("eye.emitted", batch * 3 * sizeof(float));
   const ClBuffer& direct = dev.scratch("eye.direct", batch * 3 * sizeof(float));
   // The PBR table (parallel to the hitpoints) only for a scene with a PF_MAT_PBR material; else a
   // one-element stand-in the kernel never writes.
-  const ClBuffer& pbr = dev.scratch("eye.pbr", (sb.has_pbr ? batch * size_t(spp) : 1) * sizeof(pf_pbr_point));
+  const ClBuffer& pbr =
+      dev.scratch("eye.pbr", (sb.has_pbr ? batch * size_t(per_pixel) : 1) * sizeof(pf_pbr_point));
   // The pixels with emission samples (eye_pass.h emission_pixels; computed on the host), or a
   // one-byte stand-in the kernel never reads.
   std::vector<uint8_t> own_marks;
@@ -214,9 +228,9 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              glossy_mis, cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps,
              cl_int(off), count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr,
-             emit_pixels, cl_int(opt.emission_spp), tri_light);
+             emit_pixels, cl_int(opt.emission_spp), tri_light, glossy_marks, cl_int(G));
     dev.run(k, size_t(count));
-    const size_t nslots = size_t(count) * size_t(spp);
+    const size_t nslots = size_t(count) * size_t(per_pixel);
     flags.resize(nslots);
     dev.read(used, nslots * sizeof(cl_int), flags.data());
     ClMapping map(dev, slots, nslots * sizeof(pf_hitpoint), ClMapping::Mode::Read);

@@ -57,6 +57,15 @@ PF_INLINE pf_uint pf_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B0000
 #define PF_EMISSION_STREAM 0xE3E0000U
 PF_INLINE pf_uint pf_emission_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B1000U); }
 
+/* Glossy samples (eye_pass.h, EyePassOptions::glossy_spp): eye samples more in the pixels whose
+ * first glossy vertex continues. Sample k of G of pixel `pixel` in pass `pass` jitters by point
+ * pass·G + k of a third scrambled (0,2)-sequence of the pixel (key pf_glossy_sobol_key, pass slot
+ * 0x50B2000) and draws everything else from stream (seed, PF_GLOSSY_STREAM + pass, pixel·G + k),
+ * its light samples from stream (seed, PF_GLOSSY_LIGHT_STREAM + pass, same index). */
+#define PF_GLOSSY_STREAM 0xE6E0000U
+#define PF_GLOSSY_LIGHT_STREAM 0xE6F0000U
+PF_INLINE pf_uint pf_glossy_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B2000U); }
+
 /* The numbers of emission sample k of pixel `pixel`: stream (seed, PF_EMISSION_STREAM + pass,
  * pixel) from dimension k·(max_depth + 3). A sample draws at most two for the lens and one per
  * glass bounce (max_depth + 1 bounces), so the samples of a pixel never share a number, and the

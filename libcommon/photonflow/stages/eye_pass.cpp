@@ -177,6 +177,10 @@ void check_options(const EyePassOptions& opt) {
     throw input_error("", "--shadow-samples must be at most " + std::to_string(kMaxShadowSamples) +
                               ", got " + std::to_string(opt.shadow_samples),
                       "run more passes instead");
+  if (opt.glossy_spp < 0 || opt.glossy_spp > kMaxGlossySpp)
+    throw input_error("", "--glossy-spp must be in [0, " + std::to_string(kMaxGlossySpp) +
+                              "], got " + std::to_string(opt.glossy_spp),
+                      "0 takes no glossy samples");
   if (opt.emission_spp < 0 || opt.emission_spp > kMaxEmissionSpp)
     throw input_error("", "--emission-spp must be in [0, " + std::to_string(kMaxEmissionSpp) +
                               "], got " + std::to_string(opt.emission_spp),
@@ -211,6 +215,14 @@ void check_eye_samples(const Scene& scene, const EyePassOptions& opt) {
                               std::to_string(scene.camera.height) +
                               " image, more than the 2^32 sample streams of a pass",
                       "lower --spp, or run more passes");
+  const uint64_t glossy = uint64_t(scene.camera.width) * uint64_t(scene.camera.height) *
+                          uint64_t(std::max(0, opt.glossy_spp));
+  if (glossy > uint64_t(UINT32_MAX) + 1)
+    throw input_error("", "--glossy-spp " + std::to_string(opt.glossy_spp) + " gives more than the "
+                              "2^32 glossy sample streams of a pass for the " +
+                              std::to_string(scene.camera.width) + "x" +
+                              std::to_string(scene.camera.height) + " image",
+                      "lower --glossy-spp");
 }
 
 EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
@@ -226,8 +238,17 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
       cam_(scene.camera),
       caster_(scene),
       camera_leaf_(caster_.leaf_at(Vec3(scene.camera.eye))),
-      emit_pixels_(nullptr) {
+      emit_pixels_(nullptr),
+      glossy_pixels_(nullptr),
+      glossy_key_(pf_glossy_sobol_key(opt.seed)) {
   check_eye_samples(scene, opt);
+  if (opt.glossy_spp > 0 && opt.glossy == GlossyMerge::Mis && scene.has_pbr()) {
+    const size_t n = size_t(scene.camera.width) * size_t(scene.camera.height);
+    if (opt.glossy_pixels && opt.glossy_pixels->size() != n)
+      throw std::invalid_argument("EyeTracer: glossy_pixels is not the image's size");
+    if (!opt.glossy_pixels) own_glossy_ = glossy_pixels(scene);
+    glossy_pixels_ = opt.glossy_pixels ? opt.glossy_pixels : &own_glossy_;
+  }
   if (opt.glossy == GlossyMerge::Mis && scene.has_pbr()) {
     tri_light_.assign(scene.triangles.size(), -1);
     for (size_t li = 0; li < scene.lights.size(); ++li)
@@ -246,21 +267,40 @@ EyeTracer::EyeTracer(const Scene& scene, const EyePassOptions& opt)
 bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3& direct,
                        pf_pbr_point* pbr) const {
   const size_t pix = size_t(y) * size_t(scene_.camera.width) + size_t(x);
-  const uint32_t index = uint32_t(pix * size_t(spp_) + size_t(s));
-  pf_rng rng{eye_key_, index, 0};  // = pf_rng_start(seed, kEyeStream + pass, index)
+  const bool extra = s >= spp_;  // a glossy sample (EyePassOptions::glossy_spp)
+  pf_rng rng;
   float jx, jy;
-  pf_eye_jitter_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_, columns_,
-                      &rng, &jx, &jy);
-  // A thin lens draws its point on the lens next (pixel_sampler.h); a pinhole draws nothing, so
-  // its streams (and images) are those of the pinhole eye pass.
   float u1 = 0.5f, u2 = 0.5f;
-  if (cam_.lens())
-    pf_eye_lens_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_, &rng, &u1,
-                      &u2);
+  // The light samples of a visible point: the pixel's (pixel_sampler.h pf_light_draws_start),
+  // or a glossy sample's own stream.
+  pf_light_draws own_draws{};
+  if (!extra) {
+    const uint32_t index = uint32_t(pix * size_t(spp_) + size_t(s));
+    rng = pf_rng{eye_key_, index, 0};  // = pf_rng_start(seed, kEyeStream + pass, index)
+    pf_eye_jitter_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_,
+                        columns_, &rng, &jx, &jy);
+    // A thin lens draws its point on the lens next (pixel_sampler.h); a pinhole draws nothing,
+    // so its streams (and images) are those of the pinhole eye pass.
+    if (cam_.lens())
+      pf_eye_lens_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_, &rng,
+                        &u1, &u2);
+  } else {
+    const int G = opt_.glossy_spp, k = s - spp_;
+    const uint32_t index = uint32_t(pix * size_t(G) + size_t(k));
+    rng = pf_rng_start(opt_.seed, PF_GLOSSY_STREAM + opt_.pass, index);
+    own_draws = pf_light_draws_from(pf_rng_start(opt_.seed, PF_GLOSSY_LIGHT_STREAM + opt_.pass, index));
+    pf_sobol_pixel_sample_keyed(glossy_key_, uint32_t(pix), opt_.pass * uint32_t(G) + uint32_t(k),
+                                &jx, &jy);
+    if (cam_.lens()) {
+      u1 = pf_rng_next(&rng);
+      u2 = pf_rng_next(&rng);
+    }
+  }
+  auto draws_here = [&]() { return extra ? own_draws : light_draws(pix, s); };
   Ray ray;
   cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
   ray.leaf = camera_leaf_;
-  const float w = 1.f / float(spp_);
+  const float w = 1.f / float(samples(x, y));
   Vec3 T(w, w, w);  // throughput × box filter weight
   // GlossyMerge::Mis: the ray was sampled by the BSDF at a PBR vertex (`from_glossy`), with
   // solid-angle density `glossy_pdf`; an emitter it hits adds its light times `T_direct` (the
@@ -317,7 +357,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       hp.mesh = sh.mesh;
       hp.material = sh.material;
       if (opt_.direct == DirectMode::ShadowRays) {
-        pf_light_draws draws = light_draws(pix, s);
+        pf_light_draws draws = draws_here();
         direct += T * direct_light(scene_, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
                                    opt_.shadow_samples, draws, sh.leaf);
       }
@@ -348,7 +388,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         // No random number is drawn here; direct light by light sampling alone.
         visible_point(T);
         if (opt_.direct == DirectMode::ShadowRays) {
-          pf_light_draws draws = light_draws(pix, s);
+          pf_light_draws draws = draws_here();
           direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
                                          opt_.shadow_samples, draws, false, sh.leaf);
         }
@@ -368,7 +408,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       // pixel's light draws where the point is the visible point, as at a diffuse one, from the
       // eye stream where the path goes on).
       if (merge) {
-        pf_light_draws draws = light_draws(pix, s);
+        pf_light_draws draws = draws_here();
         direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
                                        opt_.shadow_samples, draws, true, sh.leaf);
       } else {
@@ -477,8 +517,9 @@ Vec3 EyeTracer::emitted_layer(int x, int y, const Vec3& emitted) const {
   const int K = opt_.emission_spp;
   Vec3 sum;
   for (int k = 0; k < K; ++k) sum += emission_sample(x, y, k);
-  const float inv = 1.f / float(spp_ + K);
-  return emitted * (float(spp_) * inv) + sum * inv;
+  const int n = samples(x, y);
+  const float inv = 1.f / float(n + K);
+  return emitted * (float(n) * inv) + sum * inv;
 }
 
 namespace {
@@ -511,6 +552,66 @@ bool reaches_emitter(const Scene& scene, const RayCaster& caster, const Ray& ray
 }
 }  // namespace
 
+namespace {
+// Whether a ray meets, directly or through mirrors and glass (both branches, the bounds of
+// reaches_emitter), a PF_MAT_PBR vertex whose merge probability is below 1 (glossy_pixels).
+bool reaches_glossy(const Scene& scene, const RayCaster& caster, const Ray& ray, float eps,
+                    int depth, int& rays) {
+  Hit h;
+  if (depth > kEmissionDepth || rays <= 0) return false;
+  --rays;
+  if (!caster.closest(ray, h)) return false;
+  const SurfaceHit sh = surface_at(scene, ray, h);
+  const pf_material& m = scene.materials[size_t(sh.material)];
+  const Vec3 d = normalize(ray.d);
+  if (m.type == PF_MAT_PBR) {
+    const pf_pbr_point pt = pbr_point_at(scene, m, sh);
+    float ns[3], wo[3], o[3];
+    sh.ns.store(ns);
+    (-d).store(wo);
+    pf_bsdf_to_local(ns, wo, o);
+    return pf_merge_probability(&pt.params, o) < 1.f;
+  }
+  if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;
+  const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the ray
+  if (reaches_glossy(scene, caster, spawn_ray(sh, reflect(d, n), eps), eps, depth + 1, rays))
+    return true;
+  if (m.type != PF_MAT_GLASS) return false;
+  Vec3 t;
+  const float eta = sh.front ? 1.f / m.ior : m.ior;
+  if (!refract(d, n, eta, t)) return false;
+  return reaches_glossy(scene, caster, spawn_ray(sh, t, eps), eps, depth + 1, rays);
+}
+}  // namespace
+
+std::vector<uint8_t> glossy_pixels(const Scene& scene) {
+  const int W = scene.camera.width, H = scene.camera.height;
+  const CameraFrame cam(scene.camera);
+  const RayCaster caster(scene);
+  const int32_t camera_leaf = caster.leaf_at(Vec3(scene.camera.eye));
+  const float eps = ray_epsilon(scene);
+  std::vector<uint8_t> centre(size_t(W) * size_t(H), 0), marks(centre.size(), 0);
+  if (!scene.has_pbr()) return marks;
+#pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(0))
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      Ray ray;
+      cam.ray(float(x) + 0.5f, float(y) + 0.5f, 0.5f, 0.5f, ray.o, ray.d);  // the lens centre
+      ray.leaf = camera_leaf;
+      int rays = kEmissionRays;
+      centre[size_t(y) * size_t(W) + size_t(x)] = reaches_glossy(scene, caster, ray, eps, 0, rays);
+    }
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      uint8_t m = 0;
+      for (int yy = std::max(0, y - 1); yy <= std::min(H - 1, y + 1); ++yy)
+        for (int xx = std::max(0, x - 1); xx <= std::min(W - 1, x + 1); ++xx)
+          m |= centre[size_t(yy) * size_t(W) + size_t(xx)];
+      marks[size_t(y) * size_t(W) + size_t(x)] = m;
+    }
+  return marks;
+}
+
 std::vector<uint8_t> emission_pixels(const Scene& scene) {
   const int W = scene.camera.width, H = scene.camera.height;
   const CameraFrame cam(scene.camera);
@@ -542,7 +643,6 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
                           EyePassWork& work) {
   const int W = scene.camera.width, H = scene.camera.height;
   const EyeTracer tracer(scene, opt);
-  const int spp = tracer.spp();
   res.width = W;
   res.height = H;
   res.radius = tracer.radius();
@@ -567,6 +667,7 @@ void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePass
     if (pbr_buf) pbr_buf->clear();
     for (int x = 0; x < W; ++x) {
       Vec3 emitted, direct;
+      const int spp = tracer.samples(x, y);
       for (int s = 0; s < spp; ++s) {
         pf_hitpoint& hp = row_buf.emplace_back();  // written in place (no copy of a temporary)
         if (pbr_buf) {

@@ -88,7 +88,27 @@ struct EyePassOptions {
   // emission_pixels(scene), kept by a caller that traces many eye passes (render); nullptr: the
   // eye pass computes it (when emission_spp > 0).
   const std::vector<uint8_t>* emission_pixels = nullptr;
+  // Glossy samples (GlossyMerge::Mis, pppm only): in each pixel that glossy_pixels marks, this
+  // many eye samples more per pass, full eye paths like the spp ones (visible points, shadow
+  // rays, gathers), all of the pixel's samples weighted 1/(spp + glossy_spp) (box filter). A
+  // glossy vertex that continues samples its lobe once per eye sample, which leaves the pixels
+  // that see a narrow lobe with the noise of a path tracer of `passes` samples; these pixels are
+  // few, and their samples cost eye paths only (docs/RESULTS.md "Glossy points"). The marks
+  // depend on the scene and camera only, so the pass stays unbiased. 0: none.
+  // render's and trace-hitpoints' default: render_defaults.h kDefaultGlossySpp.
+  int glossy_spp = 0;
+  // glossy_pixels(scene), kept by a caller that traces many eye passes; nullptr: computed here.
+  const std::vector<uint8_t>* glossy_pixels = nullptr;
 };
+
+// --glossy-spp at most.
+constexpr int kMaxGlossySpp = 64;
+
+// The pixels that take glossy samples: those whose centre ray (through the lens centre) meets,
+// directly or through mirrors and glass (both branches at glass, as emission_pixels), a PF_MAT_PBR
+// vertex whose merge probability is below 1 (the eye path goes on from it in some passes:
+// material/merge_weight_shared.h), and their eight neighbours. Row-major, width × height.
+std::vector<uint8_t> glossy_pixels(const Scene& scene);
 
 // --emission-spp at most: more do not pay for their chains in any scene measured.
 constexpr int kMaxEmissionSpp = 1024;
@@ -181,6 +201,14 @@ class EyeTracer {
   Vec3 emitted_layer(int x, int y, const Vec3& emitted) const;
   float radius() const { return radius_; }
   int spp() const { return spp_; }
+  // The eye samples of pixel (x, y) in this pass: spp, plus glossy_spp in a marked pixel.
+  int samples(int x, int y) const {
+    return glossy_pixels_ && (*glossy_pixels_)[size_t(y) * size_t(scene_.camera.width) + size_t(x)]
+               ? spp_ + opt_.glossy_spp
+               : spp_;
+  }
+  // The most samples a pixel takes (spp + glossy_spp where any pixel is marked).
+  int max_samples() const { return glossy_pixels_ ? spp_ + opt_.glossy_spp : spp_; }
 
  private:
   const Scene& scene_;
@@ -195,6 +223,9 @@ class EyeTracer {
   std::vector<uint8_t> own_pixels_;          // emission_pixels, when the caller gave none
   const std::vector<uint8_t>* emit_pixels_;  // the marks in use (nullptr: no emission samples)
   std::vector<int32_t> tri_light_;  // area light of an emissive triangle, −1 otherwise (Mis)
+  std::vector<uint8_t> own_glossy_;            // glossy_pixels, when the caller gave none
+  const std::vector<uint8_t>* glossy_pixels_;  // the marks in use (nullptr: no glossy samples)
+  pf_uint glossy_key_;                         // the glossy samples' scrambling key
   Vec3 emission_sample(int x, int y, int k) const;
   // The power-heuristic weight of an emitter hit by a glossy vertex's BSDF sample (GlossyMerge::
   // Mis): against the shadow_samples light samples next-event estimation drew there.
