@@ -34,6 +34,7 @@ std::optional<std::string> other_value(const std::string& name, const std::strin
       {"gather-area", {{"surface", "disc"}, {"disc", "surface"}}},
       {"estimator", {{"sppm", "ppm"}, {"ppm", "sppm"}, {"pppm", "sppm"}}},
       {"glossy-merge", {{"mis", "first"}, {"first", "mis"}}},
+      {"photon-guide", {{"visibility", "uniform"}, {"uniform", "visibility"}}},
   };
   const auto c = choices.find(name);
   if (c != choices.end()) {

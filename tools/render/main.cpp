@@ -82,6 +82,9 @@ int main(int argc, char** argv) {
        cxxopts::value<int>()->default_value("1"))
       ("max-depth", "specular bounces of eye paths", cxxopts::value<int>()->default_value("16"))
       ("max-bounces", "bounces of photon paths", cxxopts::value<int>()->default_value("16"))
+      ("photon-guide", "uniform | visibility: photons from the lights as they come, or Markov "
+       "chains of photon paths that reach the pass's visible points (Hachisuka & Jensen 2011; "
+       "CPU only)", cxxopts::value<std::string>()->default_value("uniform"))
       ("direct", "direct light: photons | shadow-rays (light sampling at the visible points; "
        "photons then carry the rest, nothing counted twice)",
        cxxopts::value<std::string>()->default_value(pf::direct_mode_name(pf::kDefaultDirect)))
@@ -165,6 +168,7 @@ int main(int argc, char** argv) {
     opt.photons.photons = photons > 0 ? photons : pf::kMinAutoPhotons;  // auto: set below
     opt.photons.seed = seed;
     opt.photons.max_bounces = a["max-bounces"].as<int>();
+    opt.photons.guide = pf::parse_photon_guide(a["photon-guide"].as<std::string>());
     opt.photons.threads = threads;
     opt.ppm.alpha = a["alpha"].as<float>();
     opt.ppm.slab = pf::parse_slab(a["slab"].as<std::string>(), opt.estimator != pf::Estimator::Ppm);
@@ -335,6 +339,9 @@ int main(int argc, char** argv) {
               << scene.camera.height << ", " << pf::describe_choices(chosen) << ", "
               << status.passes << " passes" << (status.budget_reached ? " (--time reached)" : "")
               << ", " << status.photons_emitted << " photons, " << clock.seconds() << " s)\n";
+    if (status.guide.uniform > 0)
+      std::cout << "render: photon guide: visible fraction " << status.guide.visible_fraction()
+                << " of the uniform photons, acceptance " << status.guide.acceptance() << "\n";
     return 0;
   });
 }

@@ -29,6 +29,11 @@ int main(int argc, char** argv) {
       ("max-bounces", "bounces before a photon is dropped",
        cxxopts::value<int>()->default_value("16"))
       ("seed", "random seed", cxxopts::value<uint32_t>()->default_value("1"))
+      ("photon-guide", "uniform | visibility: photons as they come, or Markov chains of photon "
+       "paths that reach the visible points of --hitpoints (Hachisuka & Jensen 2011; CPU only)",
+       cxxopts::value<std::string>()->default_value("uniform"))
+      ("hitpoints", "with --photon-guide visibility: the eye pass (trace-hitpoints) whose visible "
+       "points guide the photons", cxxopts::value<std::string>())
       ("threads", "worker threads, 0 = all cores (results do not depend on it)",
        cxxopts::value<int>()->default_value("0"))
       ("h,help", "print this help");
@@ -37,7 +42,7 @@ int main(int argc, char** argv) {
     if (a.count("help")) { std::cout << o.help() << "\n"; return 0; }
     if (pf::list_devices_requested(a)) return 0;
     pf::require_options(o, a, {"scene", "output"});
-    pf::check_output_options(a, {"scene"}, {"output"});
+    pf::check_output_options(a, {"scene", "hitpoints"}, {"output"});
     // 0: automatic, chosen from the scene once it is read (render_defaults.h).
     const uint32_t given = pf::parse_photons_option(a["photons"].as<std::string>());
     int passes = a["passes"].as<int>(), first = a["first-pass"].as<int>();
@@ -48,7 +53,12 @@ int main(int argc, char** argv) {
     opt.seed = a["seed"].as<uint32_t>();
     opt.max_bounces = a["max-bounces"].as<int>();
     opt.threads = a["threads"].as<int>();
+    opt.guide = pf::parse_photon_guide(a["photon-guide"].as<std::string>());
     pf::check_options(opt);
+    const bool guided = opt.guide == pf::PhotonGuide::Visibility;
+    if (guided != (a.count("hitpoints") > 0))
+      throw pf::input_error("", guided ? "--photon-guide visibility needs --hitpoints FILE"
+                                       : "--hitpoints applies to --photon-guide visibility");
 
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();
@@ -56,14 +66,30 @@ int main(int argc, char** argv) {
     if (given == 0) opt.photons = pf::choose_defaults(scene).photons;
     const uint32_t photons = opt.photons;
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "trace-photons");
+    if (guided && dev)
+      throw pf::input_error("", "--photon-guide visibility traces photons on the CPU only",
+                            "drop --device opencl, or use --photon-guide uniform");
+    pf::VisibleSet visible;
+    std::string hitpoints_path;
+    pf::HitpointSet eye;
+    if (guided) {
+      hitpoints_path = a["hitpoints"].as<std::string>();
+      eye = pf::load_hitpoints(hitpoints_path);
+      pf::require_scene(hitpoints_path, eye.scene_id, scene.scene_id, scene.source);
+      pf::guide_points_from_file(eye, hitpoints_path, first, passes, visible);
+    }
+    pf::PhotonGuideStats guide;
     pf::PhotonSet set;
     set.first_pass = first;
     set.seed = opt.seed;
     set.scene_id = scene.scene_id;
     pf::Progress progress("pass", passes, "photons");
     for (int p = 0; p < passes; ++p) {
+      pf::PhotonGuideStats gs;
       pf::PhotonPassResult r = dev ? pf::trace_photons(scene, uint32_t(first + p), opt, *dev)
-                                   : pf::trace_photons(scene, uint32_t(first + p), opt);
+                                   : pf::trace_photons(scene, uint32_t(first + p), opt,
+                                                       guided ? &visible : nullptr, &gs);
+      guide.add(gs);
       set.append_pass(r.photons, r.emitted);
       progress.update(p + 1, double(photons) * (p + 1));
     }
@@ -78,10 +104,18 @@ int main(int argc, char** argv) {
     pf::record_backend(prov, dev.get());
     prov.command_line = pf::join_command_line(argc, argv);
     prov.add_input("scene", scene_path, pf::kSceneFormat, scene.scene_id);
+    if (guided) {  // what the chains did, all passes of the file (photon_guide.h)
+      prov.add_input("hitpoints", hitpoints_path, pf::kHitpointsFormat, eye.scene_id);
+      prov.parameters["guide.visible_fraction"] = std::to_string(guide.visible_fraction());
+      prov.parameters["guide.acceptance"] = std::to_string(guide.acceptance());
+    }
     prov.wall_time_s = clock.seconds();
     pf::save_photons(set, a["output"].as<std::string>(), prov);
     std::cout << "trace-photons: " << passes << " pass(es) x " << photons << " photons, "
               << set.photons.size() << " stored, " << clock.seconds() << " s\n";
+    if (guided)
+      std::cout << "trace-photons: photon guide: visible fraction " << guide.visible_fraction()
+                << " of the uniform photons, acceptance " << guide.acceptance() << "\n";
     return 0;
   });
 }

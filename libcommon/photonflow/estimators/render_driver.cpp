@@ -58,17 +58,38 @@ HitpointSet fresh_state(const Scene& scene, const RenderOptions& opt) {
 }  // namespace
 
 uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
-                           float radius0, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored) {
+                           float radius0, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored,
+                           const VisibleSet* visible, PhotonGuideStats* stats) {
   PhotonGridParams gp;
   gp.max_bins = opt.ppm.max_bins;
   gp.default_radius = radius0;  // the smallest bin size, as ppm_grid_params
-  const uint64_t emitted = trace_photons_into(scene, pass, opt.photons, chunks);
+  const uint64_t emitted = trace_photons_into(scene, pass, opt.photons, chunks, visible, stats);
   stored = chunks.size();
   const std::vector<PhotonSpan> spans = chunks.spans();
   build_photon_grid_into(grid, spans.data(), spans.size(), int(scene.mesh_names.size()), gp,
                          opt.ppm.threads);
   return emitted;
 }
+
+namespace {
+// The pass's visible points for --photon-guide visibility (photon_guide.h), each with the radius
+// its gather uses: an SPPM pixel's own R (`state`, one hitpoint per pixel), a PPPM pass's r_i
+// (`radius`), PPM's fixed hitpoints their own R.
+void sppm_visible(const EyePassResult& eye, const HitpointSet& state, VisibleSet& out) {
+  std::vector<float> r(eye.hitpoints.size());
+  for (size_t i = 0; i < r.size(); ++i) {
+    const pf_hitpoint& v = eye.hitpoints[i];
+    r[i] = state.hitpoints[size_t(v.pixel_y) * size_t(state.width) + size_t(v.pixel_x)].radius;
+  }
+  out.build(eye.hitpoints, r);
+}
+void own_radius_visible(const std::vector<pf_hitpoint>& points, VisibleSet& out) {
+  std::vector<float> r(points.size());
+  for (size_t i = 0; i < r.size(); ++i) r[i] = points[i].radius;
+  out.build(points, r);
+}
+bool guided(const RenderOptions& opt) { return opt.photons.guide == PhotonGuide::Visibility; }
+}  // namespace
 
 // Both constructors check the state's ids against the scene once; a pass never changes them, so
 // the CPU grid gather of every pass skips that check (ppm_pass_grid_prechecked).
@@ -108,6 +129,23 @@ void ProgressiveRenderer::run_iteration() {
     device_state_->sppm_pass(eye, pass, opt_.ppm);
     return;
   }
+  if (opt_.estimator == Estimator::Sppm && guided(opt_)) {
+    // Photons where the camera looks: the eye pass first, its visible points (each at its
+    // pixel's R) guide the photons, then the gather (sppm_pass: the bits of sppm_pass_traced).
+    size_t stored = 0;
+    const uint32_t pass = uint32_t(state_.passes);
+    EyePassOptions eo = opt_.eye;
+    eo.pass = pass;
+    trace_hitpoints_into(scene_, eo, eye_, eye_work_);
+    sppm_visible(eye_, state_, visible_);
+    PhotonGuideStats gs;
+    const uint64_t emitted = trace_photon_pass(scene_, opt_, pass, state_.radius0, photon_chunks_,
+                                               grid_, stored, &visible_, &gs);
+    guide_.add(gs);
+    photons_stored_ += stored;
+    sppm_pass(scene_, state_, eye_, grid_, emitted, opt_.ppm);
+    return;
+  }
   if (opt_.estimator == Estimator::Sppm) {  // the pass's photons, then a new eye pass gathering
     size_t stored = 0;
     const uint32_t pass = uint32_t(state_.passes);
@@ -144,8 +182,12 @@ void ProgressiveRenderer::run_iteration() {
   }
   // The same photons and the same gather as trace_photons + ppm_pass, without the copies: the
   // grid is sorted straight out of the per-chunk buffers, and every buffer is reused.
+  PhotonGuideStats gs;
+  if (guided(opt_)) own_radius_visible(state_.hitpoints, visible_);  // R shrinks pass by pass
   const uint64_t emitted =
-      trace_photons_into(scene_, uint32_t(state_.passes), opt_.photons, photon_chunks_);
+      trace_photons_into(scene_, uint32_t(state_.passes), opt_.photons, photon_chunks_,
+                         guided(opt_) ? &visible_ : nullptr, &gs);
+  guide_.add(gs);
   photons_stored_ += photon_chunks_.size();
   if (opt_.ppm.method == GatherMethod::Grid) {
     const std::vector<PhotonSpan> spans = photon_chunks_.spans();
@@ -198,6 +240,21 @@ void PppmRenderer::run_iteration() {
   }
   size_t stored = 0;  // the pass's photons, then a new eye pass gathering
   const uint32_t pass = uint32_t(sums_.end_pass());
+  if (guided(opt_)) {
+    // Photons where the camera looks: the eye pass first, its visible points at r_i guide the
+    // photons, then the gather (pppm_pass: the bits of pppm_pass_traced).
+    EyePassOptions eo = opt_.eye;
+    eo.pass = pass;
+    trace_hitpoints_into(scene_, eo, eye_, eye_work_);
+    visible_.build(eye_.hitpoints, {pppm_pass_radius(sums_)});
+    PhotonGuideStats gs;
+    const uint64_t emitted = trace_photon_pass(scene_, opt_, pass, sums_.radius1, photon_chunks_,
+                                               grid_, stored, &visible_, &gs);
+    guide_.add(gs);
+    photons_stored_ += stored;
+    pppm_pass(scene_, sums_, eye_, grid_, emitted, opt_.ppm);
+    return;
+  }
   const uint64_t emitted =
       trace_photon_pass(scene_, opt_, pass, sums_.radius1, photon_chunks_, grid_, stored);
   photons_stored_ += stored;
@@ -225,6 +282,9 @@ void check_options(const RenderOptions& opt) {
     throw input_error("", "--gather-area surface applies to --estimator sppm and pppm",
                       "ppm's fixed hitpoints divide by the disc, the thesis's eq. 3.17");
   require_positive("max-bins", opt.ppm.max_bins);
+  if (opt.device && opt.photons.guide == PhotonGuide::Visibility)
+    throw input_error("", "--photon-guide visibility traces photons on the CPU only",
+                      "drop --device opencl, or use --photon-guide uniform");
   if (!opt.checkpoint.empty()) require_positive("checkpoint-every", opt.checkpoint_every);
   if (opt.snapshot_every < 0) throw input_error("", "--snapshot-every must be >= 0");
   if (!(opt.time_budget >= 0) || !std::isfinite(opt.time_budget))
@@ -280,6 +340,9 @@ std::map<std::string, std::string> state_parameters(const RenderOptions& opt) {
   // Likewise only where eye passes take emission samples (files made before them have none).
   if (opt.eye.emission_spp > 0) p["emission-spp"] = std::to_string(opt.eye.emission_spp);
   if (opt.eye.glossy_spp > 0) p["glossy-spp"] = std::to_string(opt.eye.glossy_spp);
+  // Only for guided photons (photon_guide.h): every file before the option had uniform ones.
+  if (opt.photons.guide != PhotonGuide::Uniform)
+    p["photon-guide"] = photon_guide_name(opt.photons.guide);
   return p;
 }
 
@@ -293,6 +356,7 @@ std::optional<std::string> state_parameter_unrecorded_value(const std::string& n
   if (name == "glossy-spp") return std::string("0");
   if (name == "gather-area") return std::string("disc");
   if (name == "estimator") return std::string("ppm");  // ppm's record has no estimator
+  if (name == "photon-guide") return std::string("uniform");
   return std::nullopt;
 }
 
@@ -371,6 +435,8 @@ std::map<std::string, std::string> staged_state_parameters(
   o.photons.photons = uint32_t(number(photons, photons_path, "photons"));
   o.photons.max_bounces = int(number(photons, photons_path, "max-bounces"));
   o.photons.seed = uint32_t(number(photons, photons_path, "seed"));
+  if (photons.parameters.count("photon-guide"))  // absent from files made before it existed
+    o.photons.guide = parse_photon_guide(text(photons, photons_path, "photon-guide"));
   o.ppm.alpha = alpha;
   o.ppm.slab = slab;
   o.ppm.gather_area = area;
@@ -447,6 +513,7 @@ State drive(const RenderOptions& opt, std::unique_ptr<Renderer> r, Make&& make,
     st.passes = r->passes_done();
     st.photons_emitted = r->photons_emitted();
     st.photons_stored = r->photons_traced();
+    st.guide = r->guide_stats();
     st.build_seconds = opt.device ? opt.device->build_seconds() - build0 : 0.0;
     st.seconds = clock.seconds() - aside - st.build_seconds;
   };
@@ -676,6 +743,10 @@ std::string render_record_json(const Provenance& prov, const std::vector<RenderI
     entry["build_seconds"] = json_value(s.build_seconds);
     entry["mean_radius"] = json_value(s.mean_radius);
     entry["resumed"] = s.resumed;
+    if (s.guide.uniform > 0) {  // --photon-guide visibility (photon_guide.h)
+      entry["visible_fraction"] = json_value(s.guide.visible_fraction());
+      entry["acceptance"] = json_value(s.guide.acceptance());
+    }
     list.push_back(std::move(entry));
   }
   doc["images"] = std::move(list);

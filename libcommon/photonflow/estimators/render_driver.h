@@ -10,7 +10,10 @@
 // `trace-photons --first-pass p` writes, and gathers them exactly as `illuminate` does, so both
 // routes give the same image. On the CPU, sppm and pppm trace each pass's photons first and then
 // the eye pass pixel by pixel as they gather (sppm_pass_traced, pppm_pass_traced: no eye pass is
-// kept), the same bits as the staged route's eye pass file read by illuminate.
+// kept), the same bits as the staged route's eye pass file read by illuminate. With
+// --photon-guide visibility (photon_guide.h) the order turns round: the pass's eye pass first
+// (trace_hitpoints_into), its visible points guide the photons, then sppm_pass / pppm_pass gather
+// them (ppm's fixed hitpoints guide every pass); CPU only (check_options refuses a device).
 #pragma once
 #include <functional>
 #include <map>
@@ -71,6 +74,8 @@ class ProgressiveRenderer {
     return state_;
   }
   uint64_t photons_traced() const { return photons_stored_; }
+  // What the guided photon passes of this process did (photon_guide.h; zero when uniform).
+  const PhotonGuideStats& guide_stats() const { return guide_; }
 
   // Writes the hitpoint state atomically to `path` with provenance `prov`.
   void save_state(const std::string& path, const Provenance& prov) const;
@@ -86,6 +91,11 @@ class ProgressiveRenderer {
   PhotonBuffers photon_chunks_;   // the pass's photons, per chunk as traced
   PhotonGrid grid_;               // their grid (GatherMethod::Grid), built straight from the chunks
   std::vector<pf_photon> photons_;  // their concatenation (GatherMethod::Flann)
+  // --photon-guide visibility: sppm's eye pass (traced before the photons), the visible points
+  PhotonGuideStats guide_;
+  EyePassResult eye_;
+  EyePassWork eye_work_;
+  VisibleSet visible_;
   // Clusters of a clustered device method, made once from the eye pass (or the checkpoint's
   // hitpoints, which have the same positions) when opt.ppm.clusters is not given.
   std::unique_ptr<ClusterSet> clusters_;
@@ -99,8 +109,11 @@ class ProgressiveRenderer {
 // the eye pass as it gathers.
 // Returns the photons emitted; `stored` gets the photons stored. The buffers (chunks, grid) keep
 // their storage from the last pass, so a pass allocates nothing new.
+// With opt.photons.guide visibility, `visible` holds the pass's visible points and `stats` gets
+// what the chains did (photon_guide.h).
 uint64_t trace_photon_pass(const Scene& scene, const RenderOptions& opt, uint32_t pass,
-                           float radius0, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored);
+                           float radius0, PhotonBuffers& chunks, PhotonGrid& grid, size_t& stored,
+                           const VisibleSet* visible = nullptr, PhotonGuideStats* stats = nullptr);
 
 // The pppm estimator: sums of the pass estimates over passes [first_pass, first_pass + passes).
 class PppmRenderer {
@@ -114,6 +127,7 @@ class PppmRenderer {
   int passes_done() const { return sums_.passes; }
   uint64_t photons_emitted() const { return sums_.photons_emitted; }
   uint64_t photons_traced() const { return photons_stored_; }
+  const PhotonGuideStats& guide_stats() const { return guide_; }
   const PassSums& state() const { return sums_; }
   void save_state(const std::string& path, const Provenance& prov) const;
 
@@ -125,8 +139,11 @@ class PppmRenderer {
   std::shared_ptr<const std::vector<uint8_t>> glossy_marks_;  // glossy_pixels, likewise
   PassSums sums_;
   uint64_t photons_stored_ = 0;
-  EyePassResult eye_;  // the device's eye pass
+  EyePassResult eye_;  // the device's eye pass; the CPU's with --photon-guide visibility
   PhotonBuffers photon_chunks_;
+  PhotonGuideStats guide_;
+  EyePassWork eye_work_;
+  VisibleSet visible_;
   PhotonGrid grid_;
 };
 
@@ -146,6 +163,8 @@ struct RenderStatus {
   double mean_radius = 0;         // mean gather radius R of the hitpoints or pixels (eq. 3.16),
                                   // pppm: r_i of the last pass (KZ11 eq. 19), world units
   bool resumed = false;           // the run continued a checkpoint
+  PhotonGuideStats guide;         // --photon-guide visibility: this process's passes together
+                                  // (visible fraction of the uniform photons, acceptance rate)
   bool stopped = false;           // on_pass asked to stop before opt.passes (an interrupt)
   bool budget_reached = false;    // the run ended at opt.time_budget before opt.passes
 };

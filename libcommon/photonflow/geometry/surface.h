@@ -91,8 +91,11 @@ inline Ray spawn_ray(const SurfaceHit& sh, const Vec3& d, float eps) {
 // `rng`, and only for glass, so the kernels' draw order matches) and refracts otherwise; total
 // internal reflection reflects. Choosing by probability needs no weight correction:
 // F/F = (1 − F)/(1 − F) = 1.
-inline Vec3 specular_bounce(const pf_material& m, const SurfaceHit& sh, const Vec3& d,
-                            pf_rng* rng, Vec3& weight) {
+// `next()` gives the one random number (specular_bounce_with: any source of draws, e.g. the
+// photon tracer's stored primary samples, photon_pass.h; specular_bounce: a pf_rng stream).
+template <class Next>
+inline Vec3 specular_bounce_with(const pf_material& m, const SurfaceHit& sh, const Vec3& d,
+                                 Next&& next, Vec3& weight) {
   Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the incoming ray
   if (m.type == PF_MAT_MIRROR) {
     weight = weight * Vec3(m.color);
@@ -101,9 +104,13 @@ inline Vec3 specular_bounce(const pf_material& m, const SurfaceHit& sh, const Ve
   float eta_i = sh.front ? 1.f : m.ior, eta_t = sh.front ? m.ior : 1.f;
   float F = fresnel_dielectric(-dot(d, n), eta_i, eta_t);
   Vec3 t;
-  if (pf_rng_next(rng) < F || !refract(d, n, eta_i / eta_t, t)) return reflect(d, n);
+  if (next() < F || !refract(d, n, eta_i / eta_t, t)) return reflect(d, n);
   weight = weight * Vec3(m.color);
   return normalize(t);
+}
+inline Vec3 specular_bounce(const pf_material& m, const SurfaceHit& sh, const Vec3& d,
+                            pf_rng* rng, Vec3& weight) {
+  return specular_bounce_with(m, sh, d, [rng] { return pf_rng_next(rng); }, weight);
 }
 
 }  // namespace pf

@@ -35,11 +35,16 @@
 //
 // Randomness is counter-based: photon i of pass p uses the stream (seed, p, i), so the photons do
 // not depend on the thread count (and equal the OpenCL backend's up to float rounding).
+//
+// One function traces a photon from a source of draws (its primary samples u, in the order
+// above): the stream (seed, p, i) for uniform photons, or a stored vector u that a Markov chain
+// mutates for `--photon-guide visibility` (photons where the camera looks, photon_guide.h).
 #pragma once
 #include <cstdint>
 #include <vector>
 
 #include "photonflow/stages/photon_grid.h"
+#include "photonflow/stages/photon_guide.h"
 #include "photonflow/geometry/scene.h"
 
 namespace pf {
@@ -49,6 +54,8 @@ struct PhotonPassOptions {
   uint32_t seed = 1;
   int max_bounces = 16;       // diffuse + specular bounces before a photon is dropped
   int threads = 0;            // 0 = all cores
+  PhotonGuide guide = PhotonGuide::Uniform;  // uniform photons, or chains where the camera looks
+                                             // (photon_guide.h)
 };
 
 struct PhotonPassResult {
@@ -71,11 +78,16 @@ inline bool pass_indices_fit(int64_t first, int64_t count) {
   return count <= 0 || first + count - 1 <= int64_t(INT32_MAX);
 }
 
-PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt);
+// With opt.guide visibility, `visible` holds the pass's visible points (std::invalid_argument
+// without) and the photons are the chains' (photon_guide.h); `stats`, when given, gets what the
+// pass did (all zero for uniform photons).
+PhotonPassResult trace_photons(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
+                               const VisibleSet* visible = nullptr,
+                               PhotonGuideStats* stats = nullptr);
 
 // The photons of a pass as traced: one buffer per chunk of kChunk emitted photons (chunk c holds
-// the photons of indices [kChunk·c, kChunk·(c+1)), in order); their concatenation is
-// PhotonPassResult::photons. Buffers keep their capacity from pass to pass.
+// the photons of indices [kChunk·c, kChunk·(c+1)), in order; a guided pass: one buffer per chain,
+// chain c's slots, photon_guide.h); their concatenation is PhotonPassResult::photons. Buffers keep their capacity from pass to pass.
 struct PhotonBuffers {
   static constexpr uint32_t kChunk = 1024;
   std::vector<std::vector<pf_photon>> chunks;
@@ -87,6 +99,7 @@ struct PhotonBuffers {
 // trace_photons into reusable buffers (no allocation once they have grown); returns the number
 // of photons emitted.
 uint64_t trace_photons_into(const Scene& scene, uint32_t pass, const PhotonPassOptions& opt,
-                            PhotonBuffers& out);
+                            PhotonBuffers& out, const VisibleSet* visible = nullptr,
+                            PhotonGuideStats* stats = nullptr);
 
 }  // namespace pf
