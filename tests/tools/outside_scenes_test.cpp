@@ -1,0 +1,160 @@
+// The two data/ scenes lit from outside (issue 50 item 5): data/make_outside.py writes exactly the
+// committed files (sky.hdr, window-room.gltf, hdri-object.gltf, outside.bin and their bake
+// options), the window room bakes with the environment as its only light, sunlight comes in
+// through the window onto a floor the camera sees, and a short render is not black inside.
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <vector>
+
+#include "photonflow/geometry/raycast.h"
+#include "photonflow/geometry/scene.h"
+#include "photonflow/geometry/scene_file.h"
+#include "photonflow/image/image.h"
+#include "support.h"
+
+using namespace pf;
+
+namespace {
+
+std::string data_dir() { return test::source_dir() + "/data"; }
+
+std::string python3() {
+  return std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+}
+
+// Bakes data/<scene>.gltf as make render and docs/SCENES.md do: from the repository root, with
+// its NAME.bake-options (whose --environment data/sky.hdr is relative to the working folder).
+Scene bake_from_root(const test::TempDir& tmp, const std::string& scene, const std::string& extra) {
+  const std::string out = tmp / (scene + ".h5"), log = tmp / (scene + ".log");
+  const std::string cmd = "cd '" + test::source_dir() + "' && '" + test::bin_dir() +
+                          "/scene-bake' data/" + scene + ".gltf -o '" + out + "' " + extra + " > '" +
+                          log + "' 2>&1";
+  const int status = std::system(cmd.c_str());
+  INFO(cmd << "\n" << test::file_bytes(log));
+  REQUIRE(status == 0);
+  std::filesystem::remove(log);
+  return load_scene(out);
+}
+
+float luminance(const float* c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
+
+// The direction of texel (row, col)'s centre (docs/SCENES.md, "Environment": Mitsuba 3's envmap).
+Vec3 texel_direction(const Environment& env, int row, int col) {
+  const float theta = 3.14159265f * (float(row) + 0.5f) / float(env.height);
+  const float phi = 2.f * 3.14159265f * (float(col) + 0.5f) / float(env.width);
+  return Vec3(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
+}
+
+}  // namespace
+
+TEST_CASE("make_outside.py writes exactly the committed sky and outside scenes", "[outside]") {
+  test::TempDir tmp("outside-gen");
+  const std::string cmd = python3() + " " + data_dir() + "/make_outside.py --out " +
+                          tmp.dir.string() + " > " + (tmp / "log.txt") + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  INFO(cmd << "\n" << test::file_bytes(tmp / "log.txt"));
+  REQUIRE(status == 0);
+  // Byte for byte, the sky too: its RGBE bytes are written by the script (no compressor).
+  for (const char* name : {"sky.hdr", "window-room.gltf", "hdri-object.gltf", "outside.bin",
+                           "window-room.bake-options", "hdri-object.bake-options"}) {
+    INFO(name << ": data/ differs from what data/make_outside.py writes; run it and commit");
+    const std::string committed = test::file_bytes(data_dir() + "/" + name);
+    CHECK(!committed.empty());
+    CHECK(test::file_bytes(tmp / name) == committed);
+  }
+  CHECK(tmp.file_count() == 7);  // the 6 files and the log: the script writes nothing else
+}
+
+TEST_CASE("the window room: the sky is its one light, the sun comes in through the window",
+          "[outside]") {
+  test::TempDir tmp("outside-room");
+  const Scene s = bake_from_root(tmp, "window-room", "--width 32 --height 32");
+
+  // Exactly one light, the environment; no emitter.
+  REQUIRE(s.lights.size() == 1u);
+  CHECK(s.lights[0].type == PF_LIGHT_ENVIRONMENT);
+  for (const pf_material& m : s.materials) CHECK(m.type != PF_MAT_EMITTER);
+  const Environment& env = s.environment;
+  REQUIRE(env.present());
+  CHECK(env.width == 512);
+  CHECK(env.height == 256);
+  CHECK(env.source == "data/sky.hdr");
+  CHECK(env.strength > 1.f);
+
+  // The sun: the brightest texel, 10^3 .. 10^4 times the zenith's radiance, above the horizon.
+  size_t sun = 0;
+  for (size_t i = 0; i < size_t(env.width) * size_t(env.height); ++i)
+    if (luminance(&env.texels[3 * i]) > luminance(&env.texels[3 * sun])) sun = i;
+  const float zenith = luminance(&env.texels[3 * size_t(env.width / 2)]);
+  const float ratio = luminance(&env.texels[3 * sun]) / zenith;
+  CHECK(ratio > 1e3f);
+  CHECK(ratio < 1e4f);
+  const Vec3 to_sun = texel_direction(env, int(sun) / env.width, int(sun) % env.width);
+  CHECK(to_sun.y > 0.3f);
+
+  // Sunlight through the window: floor points that see the sun (a ray towards it leaves the room),
+  // and the camera sees some of them (its ray to the point hits the floor there).
+  int sunlit = 0, seen = 0;
+  const Vec3 eye(s.camera.eye);
+  for (int i = 0; i < 40; ++i)
+    for (int k = 0; k < 50; ++k) {
+      const Vec3 p(s.bounds.lo.x + (float(i) + 0.5f) / 40.f * (s.bounds.hi.x - s.bounds.lo.x), 1e-3f,
+                   s.bounds.lo.z + (float(k) + 0.5f) / 50.f * (s.bounds.hi.z - s.bounds.lo.z));
+      if (intersect_any(s, Ray{p, to_sun})) continue;
+      ++sunlit;
+      const Vec3 d = p - eye;
+      Hit h;
+      REQUIRE(intersect_closest(s, Ray{eye, normalize(d)}, h));
+      seen += std::fabs(h.t - std::sqrt(dot(d, d))) < 1e-2f;
+    }
+  INFO(sunlit << " of 2000 floor points in the sun, " << seen << " of them in view");
+  CHECK(sunlit > 40);
+  CHECK(sunlit < 1000);  // the walls shade the rest: the room is closed but for the window
+  CHECK(seen > sunlit / 2);
+
+  // A short render: finite, and light everywhere inside (the shade too, from light that came in
+  // through the window and bounced: the photons of the environment).
+  const test::ToolRun r = test::run_tool(
+      "render", "--scene " + (tmp / "window-room.h5") + " -o " + (tmp / "r.exr") +
+                    " --passes 8 --threads 2", tmp);
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  const Image img = read_exr(tmp / "r.exr");
+  std::vector<float> lum;
+  for (size_t i = 0; i < img.rgb.size(); i += 3) {
+    for (int c = 0; c < 3; ++c) REQUIRE(std::isfinite(img.rgb[i + size_t(c)]));
+    lum.push_back(luminance(&img.rgb[i]));
+  }
+  std::sort(lum.begin(), lum.end());
+  const float median = lum[lum.size() / 2], tenth = lum[lum.size() / 10];
+  INFO("median " << median << ", 10th percentile " << tenth << ", brightest " << lum.back());
+  CHECK(tenth > 0.f);
+  CHECK(median > 0.01f);
+  CHECK(lum.back() > 10.f * median);  // the sky seen through the window, or the sun patch
+}
+
+TEST_CASE("the object outdoors: the sky is its one light, and it renders", "[outside]") {
+  test::TempDir tmp("outside-object");
+  const Scene s = bake_from_root(tmp, "hdri-object", "--width 24 --height 24");
+  REQUIRE(s.lights.size() == 1u);
+  CHECK(s.lights[0].type == PF_LIGHT_ENVIRONMENT);
+  CHECK(s.environment.source == "data/sky.hdr");
+  CHECK(s.has_pbr());  // the glossy metal and the plastic
+  const test::ToolRun r = test::run_tool(
+      "render", "--scene " + (tmp / "hdri-object.h5") + " -o " + (tmp / "r.exr") +
+                    " --passes 2 --threads 2", tmp);
+  INFO(r.out << r.err);
+  REQUIRE(r.exit_code == 0);
+  const Image img = read_exr(tmp / "r.exr");
+  double sum = 0;
+  for (float x : img.rgb) {
+    REQUIRE(std::isfinite(x));
+    sum += x;
+  }
+  CHECK(sum > 0);
+}
