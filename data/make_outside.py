@@ -22,7 +22,7 @@ outside").
     1, roughness 0.3) in the sun, and a rough-glass sphere that focuses the sun on the floor.
   * hdri-object.gltf: outdoors under the same sky, a glossy metal sphere and a red plastic rounded
     box on a finite 12 m x 12 m diffuse floor.
-  * window-room.bake-options, hdri-object.bake-options: --environment data/sky.hdr with a strength
+  * window-room.bake-options, hdri-object.bake-options: --environment sky.hdr (resolved against the options file's folder) with a strength
     (scene-bake resolves a relative map path against its working folder, so these name it from
     the repository root, where make render and the commands of docs/SCENES.md run).
 
@@ -247,8 +247,8 @@ def bake_options(scene, strength, what):
     return ("# scene-bake options of data/%s.gltf (written by data/make_outside.py; read by\n"
             "# scene-bake and render --scene beside the scene file, also for make render).\n"
             "# %s\n"
-            "# A relative map path is resolved against the working folder (the repository root).\n"
-            "--environment data/sky.hdr --environment-strength %s\n" % (scene, what, num(strength)))
+            "# A relative map path is resolved against this file's folder.\n"
+            "--environment sky.hdr --environment-strength %s\n" % (scene, what, num(strength)))
 
 
 def main():

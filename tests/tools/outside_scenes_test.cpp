@@ -28,7 +28,7 @@ std::string python3() {
 }
 
 // Bakes data/<scene>.gltf as make render and docs/SCENES.md do: from the repository root, with
-// its NAME.bake-options (whose --environment data/sky.hdr is relative to the working folder).
+// its NAME.bake-options (whose --environment sky.hdr is resolved against the options file's folder).
 Scene bake_from_root(const test::TempDir& tmp, const std::string& scene, const std::string& extra) {
   const std::string out = tmp / (scene + ".h5"), log = tmp / (scene + ".log");
   const std::string cmd = "cd '" + test::source_dir() + "' && '" + test::bin_dir() +

@@ -14,6 +14,7 @@
 #pragma once
 #include <cxxopts.hpp>
 #include <sstream>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -149,7 +150,15 @@ inline cxxopts::ParseResult parse_bake_command_line(cxxopts::Options& o, int arg
   if (file.empty()) return a;
   std::vector<std::string> words = {argv[0]};
   for (const OptionsFileOption& opt : read_options_file(file, bake_option_names())) {
-    const std::string word = "--" + opt.name + "=" + opt.value;
+    // A relative map path in an options file is the file's neighbour (as a glTF's buffers and
+    // images are the scene's): resolved against the options file's folder, not the working one.
+    // A colour "R,G,B" stays as it is.
+    std::string value = opt.value;
+    if (opt.name == "environment" && !value.empty() &&
+        value.find_first_not_of("0123456789.,+-eE ") != std::string::npos &&
+        std::filesystem::path(value).is_relative())
+      value = (std::filesystem::path(file).parent_path() / value).lexically_normal().string();
+    const std::string word = "--" + opt.name + "=" + value;
     const char* one[] = {argv[0], word.c_str(), nullptr};
     try {
       o.parse(2, one);
