@@ -63,7 +63,7 @@ constexpr GlossyMerge kDefaultGlossyMerge = GlossyMerge::Mis;
 // Glossy samples per pass in each pixel whose first glossy vertex continues (EyePassOptions::
 // glossy_spp, eye_pass.h glossy_pixels), pppm with GlossyMerge::Mis only (docs/RESULTS.md
 // "Glossy points").
-constexpr int kDefaultGlossySpp = 4;
+constexpr int kDefaultGlossySpp = 8;
 
 // Emission samples per pass in each pixel that sees an emitter directly or through mirrors and
 // glass (EyePassOptions::emission_spp, eye_pass.h emission_pixels), every estimator. 8: they lower

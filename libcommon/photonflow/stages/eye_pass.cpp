@@ -554,7 +554,8 @@ bool reaches_emitter(const Scene& scene, const RayCaster& caster, const Ray& ray
 
 namespace {
 // Whether a ray meets, directly or through mirrors and glass (both branches, the bounds of
-// reaches_emitter), a PF_MAT_PBR vertex whose merge probability is below 1 (glossy_pixels).
+// reaches_emitter), a PF_MAT_PBR vertex whose merge probability is below kGlossySampleMaxMerge
+// (glossy_pixels).
 bool reaches_glossy(const Scene& scene, const RayCaster& caster, const Ray& ray, float eps,
                     int depth, int& rays) {
   Hit h;
@@ -570,7 +571,7 @@ bool reaches_glossy(const Scene& scene, const RayCaster& caster, const Ray& ray,
     sh.ns.store(ns);
     (-d).store(wo);
     pf_bsdf_to_local(ns, wo, o);
-    return pf_merge_probability(&pt.params, o) < 1.f;
+    return pf_merge_probability(&pt.params, o) < kGlossySampleMaxMerge;
   }
   if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;
   const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the ray

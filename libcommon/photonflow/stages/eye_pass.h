@@ -106,8 +106,10 @@ constexpr int kMaxGlossySpp = 64;
 
 // The pixels that take glossy samples: those whose centre ray (through the lens centre) meets,
 // directly or through mirrors and glass (both branches at glass, as emission_pixels), a PF_MAT_PBR
-// vertex whose merge probability is below 1 (the eye path goes on from it in some passes:
-// material/merge_weight_shared.h), and their eight neighbours. Row-major, width × height.
+// vertex whose merge probability is below kGlossySampleMaxMerge (the eye path goes on from it in
+// most passes: material/merge_weight_shared.h; a rough plastic floor, mostly gathered, is not
+// marked), and their eight neighbours. Row-major, width × height.
+constexpr float kGlossySampleMaxMerge = 0.5f;
 std::vector<uint8_t> glossy_pixels(const Scene& scene);
 
 // --emission-spp at most: more do not pay for their chains in any scene measured.
