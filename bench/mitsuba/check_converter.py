@@ -184,8 +184,8 @@ print("\n%s: %dx%d, %d spp x 2 seeds (mi, pt), sppm %d passes" % (name, W, H, a.
 # Camera: emitter pixels.
 em = np.asarray(mats["emission"]).max()
 # Mitsuba's image has no "seen directly" flag: leave out the pixels whose primary rays (centre or a
-# corner) hit a mirror or glass, where the lamp's reflection is as bright.
-spec_mats = [k for k in range(len(mats)) if int(mats["type"][k]) in (1, 2)]
+# corner) hit a mirror, glass or a glossy (PBR) surface, where the lamp's reflection is as bright.
+spec_mats = [k for k in range(len(mats)) if int(mats["type"][k]) in (1, 2, 4)]
 spec_px = np.isin(labels, spec_mats).any(axis=0)
 mi_light = (MI.max(axis=2) > 0.5 * em) & ~spec_px
 pf_light = (mask_direct < 0.5) & ~spec_px
@@ -218,7 +218,7 @@ def compare(label, sel):
 
 compare("mean (all pixels)", np.ones((H, W), bool))
 compare("mean (no emitter seen)", mask >= 0.5)
-kinds = {0: "diffuse", 1: "mirror", 2: "glass", 3: "emitter"}
+kinds = {0: "diffuse", 1: "mirror", 2: "glass", 3: "emitter", 4: "pbr"}
 for k in range(len(mats)):
     sel = region == k
     if sel.sum() >= 50:
