@@ -24,7 +24,11 @@ depends on it. For one scene source it bakes scene.h5, converts it, renders
           difference confined to a few pixels (the camera, a flipped normal) shows here.
 
   check_converter.py --scene data/cornell-box.dae [--build build] [--out DIR] [--size 512]
-      [--spp 64] [--passes 64] [--threads 2]
+      [--spp 64] [--passes 64] [--threads 2] [--spot exact|mitsuba] [--bake-arg=--no-options-file]
+
+--passes 0 leaves SPPM out (its checks are not made). check.json holds the verdict, the RMSE
+figures and every region's pixel count, means (mi, pt) and standard error of mi − pt per channel
+(bench/mitsuba/model_diff.py reads them).
 
 Exit 0 when every check passes, 1 otherwise.
 """
@@ -49,6 +53,10 @@ ap.add_argument("--size", type=int, default=512)
 ap.add_argument("--spp", type=int, default=64)
 ap.add_argument("--passes", type=int, default=64)
 ap.add_argument("--threads", type=int, default=2)
+ap.add_argument("--spot", choices=["exact", "mitsuba"], default="exact", help="scene_to_mitsuba.py --spot")
+ap.add_argument("--photonflow-only", action="store_true",
+                help="make photonflow's images and exit (no Mitsuba render, no checks)")
+ap.add_argument("--bake-arg", action="append", default=[], help="one more scene-bake argument (repeatable)")
 ap.add_argument("--mutate", choices=["fov", "emitter-side", "swap-walls"], default=None,
                 help="break the conversion on purpose (fov 2 %% wider; the emitter's triangles flipped; "
                      "materials 1 and 2 exchanged) to show that the checks fail")
@@ -76,8 +84,8 @@ h5 = os.path.join(out, "scene.h5")
 if a.scene.endswith(".h5"):
     h5 = a.scene
 else:
-    need(h5, [B + "/scene-bake", a.scene, "-o", h5, "--width", str(a.size), "--height", str(a.size)])
-xml = scene_to_mitsuba.convert(h5, os.path.join(out, "mi"))
+    need(h5, [B + "/scene-bake", a.scene, "-o", h5, "--width", str(a.size), "--height", str(a.size)] + a.bake_arg)
+xml = scene_to_mitsuba.convert(h5, os.path.join(out, "mi"), spot=a.spot)
 if a.mutate:
     import re
     src = open(xml).read()
@@ -94,20 +102,23 @@ if a.mutate:
             open(p, "w").write("\n".join(re.sub(r"^f (\S+) (\S+) (\S+)$", r"f \1 \3 \2", x) for x in lines) + "\n")
     open(xml, "w").write(src)
 T = ["--threads", str(a.threads)]
-need(os.path.join(out, "mi-s1.exr"),
+need(os.path.join(out, "mi-s1.exr") if not a.photonflow_only else h5,
      [sys.executable, os.path.join(HERE, "mi_render.py"), xml, os.path.join(out, "mi.exr"), "--time", "0",
       "--spp-per-pass", str(a.spp), "--streams", "2", "--seed-base", "7001"] + T)
 for s in (1, 2):
     need(os.path.join(out, "pt%d.exr" % s),
          [B + "/pathtrace", "--scene", h5, "-o", os.path.join(out, "pt%d.exr" % s), "--spp", str(a.spp),
           "--seed", str(s), "--png", "none"] + T)
-need(os.path.join(out, "sppm.exr"),
-     [B + "/render", "--scene", h5, "-o", os.path.join(out, "sppm.exr"), "--passes", str(a.passes)] + T)
+if a.passes > 0:
+    need(os.path.join(out, "sppm.exr"),
+         [B + "/render", "--scene", h5, "-o", os.path.join(out, "sppm.exr"), "--passes", str(a.passes)] + T)
 need(os.path.join(out, "mask.exr"),
      [B + "/emitter-mask", "--scene", h5, "-o", os.path.join(out, "mask.exr"), "--spp", "64", "--dilate", "0"] + T)
 need(os.path.join(out, "mask-direct.exr"),  # the emitters seen directly (no mirror or glass between)
      [B + "/emitter-mask", "--scene", h5, "-o", os.path.join(out, "mask-direct.exr"), "--spp", "64", "--dilate", "0",
       "--max-depth", "0"] + T)
+if a.photonflow_only:
+    sys.exit(0)
 
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
@@ -125,7 +136,7 @@ def load(p):
 
 mi0, mi1 = load(os.path.join(out, "mi-s0.exr")), load(os.path.join(out, "mi-s1.exr"))
 pt1, pt2 = load(os.path.join(out, "pt1.exr")), load(os.path.join(out, "pt2.exr"))
-sppm = load(os.path.join(out, "sppm.exr"))
+sppm = load(os.path.join(out, "sppm.exr")) if a.passes > 0 else None
 mask = load(os.path.join(out, "mask.exr")).mean(axis=2)  # 1 = sees no emitter
 mask_direct = load(os.path.join(out, "mask-direct.exr")).mean(axis=2)  # 1 = sees no emitter directly
 MI, PT = (mi0 + mi1) / 2, (pt1 + pt2) / 2
@@ -136,6 +147,7 @@ H, W, _ = MI.shape
 with h5py.File(h5, "r") as f:
     cam = f["camera"][0]
     mats = f["materials/materials"][:]
+    mat_names = [x.decode() if isinstance(x, bytes) else str(x) for x in f["materials/names"][:]]
     tris = f["geometry/triangles"][:]
     if cam["aperture"] > 0:
         raise SystemExit("check_converter: the region check needs a pinhole camera")
@@ -184,8 +196,8 @@ print("\n%s: %dx%d, %d spp x 2 seeds (mi, pt), sppm %d passes" % (name, W, H, a.
 # Camera: emitter pixels.
 em = np.asarray(mats["emission"]).max()
 # Mitsuba's image has no "seen directly" flag: leave out the pixels whose primary rays (centre or a
-# corner) hit a mirror or glass, where the lamp's reflection is as bright.
-spec_mats = [k for k in range(len(mats)) if int(mats["type"][k]) in (1, 2)]
+# corner) hit a mirror, glass or a glossy (PBR) surface, where the lamp's reflection is as bright.
+spec_mats = [k for k in range(len(mats)) if int(mats["type"][k]) in (1, 2, 4)]
 spec_px = np.isin(labels, spec_mats).any(axis=0)
 mi_light = (MI.max(axis=2) > 0.5 * em) & ~spec_px
 pf_light = (mask_direct < 0.5) & ~spec_px
@@ -201,12 +213,23 @@ if len(rows) and len(rows_m):
           % (rows[0], rows[-1], rows_m[0], rows_m[-1], cols[0], cols[-1], cols_m[0], cols_m[-1]))
 
 
-def compare(label, sel):
+regions = {}
+
+
+def compare(label, sel, mat_name=None):
     n = sel.sum()
-    m_mi, m_pt, m_sp = (X[sel].mean(axis=0) for X in (MI, PT, sppm))
+    m_mi, m_pt = MI[sel].mean(axis=0), PT[sel].mean(axis=0)
     se = np.sqrt(V[sel].sum(axis=0)) / n
     tol = 4 * se + 0.002 * np.abs(m_pt)
     good_pt = np.all(np.abs(m_mi - m_pt) <= tol)
+    regions[label] = {"name": mat_name, "pixels": int(n), "mi": m_mi.tolist(), "pt": m_pt.tolist(), "se": se.tolist()}
+    if sppm is None:
+        print("%-24s %7d px  mi %s  pt %s  (mi-pt)/se %s %s  (mi-pt)/pt %s"
+              % (label, n, np.array2string(m_mi, precision=4), np.array2string(m_pt, precision=4),
+                 np.array2string((m_mi - m_pt) / np.maximum(se, 1e-12), precision=1), verdict(good_pt),
+                 np.array2string((m_mi - m_pt) / np.maximum(np.abs(m_pt), 1e-12), precision=4)))
+        return
+    m_sp = sppm[sel].mean(axis=0)
     rel_sp = np.abs(m_sp - m_mi) / np.maximum(np.abs(m_mi), 1e-6)
     good_sp = np.all(rel_sp <= 0.03)
     print("%-24s %7d px  mi %s  pt %s  (mi-pt)/se %s %s  sppm %s  (sppm-mi)/mi %s %s"
@@ -218,19 +241,21 @@ def compare(label, sel):
 
 compare("mean (all pixels)", np.ones((H, W), bool))
 compare("mean (no emitter seen)", mask >= 0.5)
-kinds = {0: "diffuse", 1: "mirror", 2: "glass", 3: "emitter"}
+kinds = {0: "diffuse", 1: "mirror", 2: "glass", 3: "emitter", 4: "pbr"}
 for k in range(len(mats)):
     sel = region == k
     if sel.sum() >= 50:
-        compare("material %d %s" % (k, kinds.get(int(mats["type"][k]), "?")), sel)
+        compare("material %d %s" % (k, kinds.get(int(mats["type"][k]), "?")), sel, mat_names[k])
 print("%-24s %7d px" % ("edge pixels (mixed)", np.sum(region == -2)))
 d = np.sqrt(np.mean((MI - PT) ** 2))
 pred = np.sqrt(np.mean(V))
 print("rmse    RMSE(mi - pt) %.5f, predicted from the seeds' spread %.5f, ratio %.3f  %s"
       % (d, pred, d / pred, verdict(d / pred <= 1.1)))
-print("rmse    RMSE(sppm - mi) %.5f (all), %.5f (no emitter seen)"
-      % (np.sqrt(np.mean((sppm - MI) ** 2)), np.sqrt(np.mean(((sppm - MI) ** 2)[mask >= 0.5]))))
+if sppm is not None:
+    print("rmse    RMSE(sppm - mi) %.5f (all), %.5f (no emitter seen)"
+          % (np.sqrt(np.mean((sppm - MI) ** 2)), np.sqrt(np.mean(((sppm - MI) ** 2)[mask >= 0.5]))))
 print("%s: %s" % (name, "all checks PASS" if ok else "some checks FAIL"))
 with open(os.path.join(out, "check.json"), "w") as o:
-    json.dump({"scene": a.scene, "ok": ok, "jaccard": float(jac), "rmse_mi_pt": float(d), "rmse_pred": float(pred)}, o)
+    json.dump({"scene": a.scene, "ok": ok, "jaccard": float(jac), "rmse_mi_pt": float(d), "rmse_pred": float(pred),
+               "spp": a.spp, "size": [W, H], "spot": a.spot, "regions": regions}, o, indent=1)
 sys.exit(0 if ok else 1)

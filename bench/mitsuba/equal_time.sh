@@ -6,6 +6,9 @@
 #
 #   bench/mitsuba/equal_time.sh [SCENE ...]            (default: cornell-box cornell-spheres box-200k)
 #
+# SCENE is any scene make_refs.sh knows: cornell-box, cornell-spheres, box-200k, glossy-room,
+# showcase (its thin lens from data/showcase.bake-options is in the baked scene.h5 every method
+# renders), showcase-caustics.
 # Per scene, REFS/<scene>/ must hold scene.h5 (the baked scene the reference was rendered from)
 # and ref/ref-s0.exr, ref/ref-s1.exr (two references from disjoint seeds: bench/mitsuba/make_refs.sh
 # makes all of it). Per run r = 1..RUNS, round robin (run 1 of every method, then run 2, ...), so

@@ -10,7 +10,11 @@
 # Scenes: cornell-box (data/cornell-box.dae), cornell-spheres (data/cornell-spheres.dae: mirror
 # and glass balls), box-200k (cornell-box with the four meshes of ../shared/scenes inserted:
 # ogre 124,008 + bunny 69,451 + teapot 6,320 + spot 5,856 triangles, 205,663 in all after 4
-# zero-area ones are dropped; skipped with a message where ../shared/scenes is absent).
+# zero-area ones are dropped; skipped with a message where ../shared/scenes is absent);
+# glossy-room (bench/scenes/glossy-room.gltf: a white metal and a rough-glass ball), showcase
+# (data/showcase.gltf with data/showcase.bake-options: textures, an alpha-masked fence, a spot
+# light, the thin lens) and showcase-caustics (data/showcase-caustics.gltf: pinhole, the spot 3x,
+# the ceiling light dimmed). These three are not in the default list.
 #
 #   bench/mitsuba/make_refs.sh [SCENE ...]                  (default: all three, one after another)
 #   RESUME=1 REF_TIME=3600 bench/mitsuba/make_refs.sh S     (render REF_TIME more seconds onto S's reference)
@@ -48,6 +52,12 @@ bake() {  # $1 scene name, $2 output
         --insert "$M/stanford-bunny.obj" --insert-box 0.55,0,0.03,0.97,0.45,0.48 \
         --insert "$M/teapot.obj" --insert-box 0.58,0.297,0.61,0.75,0.5,0.78 \
         --insert "$M/spot.obj" --insert-box 0.25,0.595,0.28,0.42,0.8,0.45 ;;
+    glossy-room) "$BIN/scene-bake" bench/scenes/glossy-room.gltf -o "$2" --width 512 --height 512 ;;
+    # data/showcase.bake-options (the thin lens) is read by scene-bake beside the source, named here
+    # so that a missing file fails the bake instead of silently giving a pinhole.
+    showcase) "$BIN/scene-bake" data/showcase.gltf --options-file data/showcase.bake-options -o "$2" \
+                --width 512 --height 512 ;;
+    showcase-caustics) "$BIN/scene-bake" data/showcase-caustics.gltf -o "$2" --width 512 --height 512 ;;
     *) echo "make_refs.sh: unknown scene $1" >&2; return 2 ;;
   esac
 }
@@ -58,7 +68,7 @@ for s in $SCENES; do
   if [ "${RESUME:-0}" != 1 ]; then
     set +e; bake "$s" "$D/scene.h5" > "$D/bake.log" 2>&1; rc=$?; set -e
     if [ $rc != 0 ]; then cat "$D/bake.log" >&2; [ $rc = 3 ] && continue; exit $rc; fi
-    grep -E "triangles|scene_id" "$D/bake.log"
+    grep -E "triangles|camera|scene_id" "$D/bake.log"
     "$PY" "$HERE/scene_to_mitsuba.py" "$D/scene.h5" "$D/mi" > /dev/null
   fi
   cmd=(nice -n 19 "$PY" "$HERE/mi_render.py" "$D/mi/scene.xml" "$D/ref/ref.exr" --time "$REF_TIME"
