@@ -523,121 +523,87 @@ Vec3 EyeTracer::emitted_layer(int x, int y, const Vec3& emitted) const {
 }
 
 namespace {
-// Whether a ray reaches an emitter's front through mirrors and glass, following both branches at
-// glass, reflection first (emission_pixels): at most kEmissionDepth bounces deep and
+// Whether a ray meets a surface that `found` accepts, directly or through mirrors and glass,
+// following both branches at glass, reflection first: at most kEmissionDepth bounces deep and
 // kEmissionRays rays per pixel in all (`rays` counts them down), so a scene full of glass costs
-// a bounded, deterministic search; a chain past either bound counts as not reaching one.
+// a bounded, deterministic search; a chain past either bound counts as not meeting one.
+// found(sh, m, d) is asked at every hit that is neither mirror nor glass (d the unit ray
+// direction); the search ends there either way.
 constexpr int kEmissionDepth = 8;
 constexpr int kEmissionRays = 32;
-bool reaches_emitter(const Scene& scene, const RayCaster& caster, const Ray& ray, float eps,
-                     int depth, int& rays) {
+template <class Found>
+bool reaches(const Scene& scene, const RayCaster& caster, const Ray& ray, float eps, int depth,
+             int& rays, const Found& found) {
   Hit h;
   if (depth > kEmissionDepth || rays <= 0) return false;
   --rays;
   if (!caster.closest(ray, h)) return false;
   const SurfaceHit sh = surface_at(scene, ray, h);
   const pf_material& m = scene.materials[size_t(sh.material)];
-  if (m.type == PF_MAT_EMITTER) return sh.front;
-  if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;
   const Vec3 d = normalize(ray.d);
+  if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return found(sh, m, d);
   const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the ray
-  const Vec3 r = reflect(d, n);
-  if (reaches_emitter(scene, caster, spawn_ray(sh, r, eps), eps, depth + 1, rays))
+  if (reaches(scene, caster, spawn_ray(sh, reflect(d, n), eps), eps, depth + 1, rays, found))
     return true;
   if (m.type != PF_MAT_GLASS) return false;
   Vec3 t;
   const float eta = sh.front ? 1.f / m.ior : m.ior;
   if (!refract(d, n, eta, t)) return false;  // total internal reflection: the branch above
-  return reaches_emitter(scene, caster, spawn_ray(sh, t, eps), eps, depth + 1, rays);
+  return reaches(scene, caster, spawn_ray(sh, t, eps), eps, depth + 1, rays, found);
+}
+
+// The pixels whose centre ray (through the lens centre) `reaches` a surface `found` accepts, and
+// their eight neighbours (an object's outline may cover a pixel whose centre misses it).
+// Row-major, width × height, 1 = marked.
+template <class Found>
+std::vector<uint8_t> centre_ray_marks(const Scene& scene, const Found& found) {
+  const int W = scene.camera.width, H = scene.camera.height;
+  const CameraFrame cam(scene.camera);
+  const RayCaster caster(scene);
+  const int32_t camera_leaf = caster.leaf_at(Vec3(scene.camera.eye));
+  const float eps = ray_epsilon(scene);
+  std::vector<uint8_t> centre(size_t(W) * size_t(H), 0), marks(centre.size(), 0);
+#pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(0))
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      Ray ray;
+      cam.ray(float(x) + 0.5f, float(y) + 0.5f, 0.5f, 0.5f, ray.o, ray.d);  // the lens centre
+      ray.leaf = camera_leaf;
+      int rays = kEmissionRays;
+      centre[size_t(y) * size_t(W) + size_t(x)] = reaches(scene, caster, ray, eps, 0, rays, found);
+    }
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      uint8_t m = 0;
+      for (int yy = std::max(0, y - 1); yy <= std::min(H - 1, y + 1); ++yy)
+        for (int xx = std::max(0, x - 1); xx <= std::min(W - 1, x + 1); ++xx)
+          m |= centre[size_t(yy) * size_t(W) + size_t(xx)];
+      marks[size_t(y) * size_t(W) + size_t(x)] = m;
+    }
+  return marks;
 }
 }  // namespace
 
-namespace {
-// Whether a ray meets, directly or through mirrors and glass (both branches, the bounds of
-// reaches_emitter), a PF_MAT_PBR vertex whose merge probability is below kGlossySampleMaxMerge
-// (glossy_pixels).
-bool reaches_glossy(const Scene& scene, const RayCaster& caster, const Ray& ray, float eps,
-                    int depth, int& rays) {
-  Hit h;
-  if (depth > kEmissionDepth || rays <= 0) return false;
-  --rays;
-  if (!caster.closest(ray, h)) return false;
-  const SurfaceHit sh = surface_at(scene, ray, h);
-  const pf_material& m = scene.materials[size_t(sh.material)];
-  const Vec3 d = normalize(ray.d);
-  if (m.type == PF_MAT_PBR) {
+std::vector<uint8_t> glossy_pixels(const Scene& scene) {
+  if (!scene.has_pbr())
+    return std::vector<uint8_t>(size_t(scene.camera.width) * size_t(scene.camera.height), 0);
+  // A PF_MAT_PBR vertex whose merge probability is below kGlossySampleMaxMerge.
+  return centre_ray_marks(scene, [&](const SurfaceHit& sh, const pf_material& m, const Vec3& d) {
+    if (m.type != PF_MAT_PBR) return false;
     const pf_pbr_point pt = pbr_point_at(scene, m, sh);
     float ns[3], wo[3], o[3];
     sh.ns.store(ns);
     (-d).store(wo);
     pf_bsdf_to_local(ns, wo, o);
     return pf_merge_probability(&pt.params, o) < kGlossySampleMaxMerge;
-  }
-  if (m.type != PF_MAT_MIRROR && m.type != PF_MAT_GLASS) return false;
-  const Vec3 n = sh.front ? sh.ns : -sh.ns;  // facing the ray
-  if (reaches_glossy(scene, caster, spawn_ray(sh, reflect(d, n), eps), eps, depth + 1, rays))
-    return true;
-  if (m.type != PF_MAT_GLASS) return false;
-  Vec3 t;
-  const float eta = sh.front ? 1.f / m.ior : m.ior;
-  if (!refract(d, n, eta, t)) return false;
-  return reaches_glossy(scene, caster, spawn_ray(sh, t, eps), eps, depth + 1, rays);
-}
-}  // namespace
-
-std::vector<uint8_t> glossy_pixels(const Scene& scene) {
-  const int W = scene.camera.width, H = scene.camera.height;
-  const CameraFrame cam(scene.camera);
-  const RayCaster caster(scene);
-  const int32_t camera_leaf = caster.leaf_at(Vec3(scene.camera.eye));
-  const float eps = ray_epsilon(scene);
-  std::vector<uint8_t> centre(size_t(W) * size_t(H), 0), marks(centre.size(), 0);
-  if (!scene.has_pbr()) return marks;
-#pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(0))
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      Ray ray;
-      cam.ray(float(x) + 0.5f, float(y) + 0.5f, 0.5f, 0.5f, ray.o, ray.d);  // the lens centre
-      ray.leaf = camera_leaf;
-      int rays = kEmissionRays;
-      centre[size_t(y) * size_t(W) + size_t(x)] = reaches_glossy(scene, caster, ray, eps, 0, rays);
-    }
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      uint8_t m = 0;
-      for (int yy = std::max(0, y - 1); yy <= std::min(H - 1, y + 1); ++yy)
-        for (int xx = std::max(0, x - 1); xx <= std::min(W - 1, x + 1); ++xx)
-          m |= centre[size_t(yy) * size_t(W) + size_t(xx)];
-      marks[size_t(y) * size_t(W) + size_t(x)] = m;
-    }
-  return marks;
+  });
 }
 
 std::vector<uint8_t> emission_pixels(const Scene& scene) {
-  const int W = scene.camera.width, H = scene.camera.height;
-  const CameraFrame cam(scene.camera);
-  const RayCaster caster(scene);
-  const int32_t camera_leaf = caster.leaf_at(Vec3(scene.camera.eye));
-  const float eps = ray_epsilon(scene);
-  std::vector<uint8_t> centre(size_t(W) * size_t(H), 0), marks(centre.size(), 0);
-#pragma omp parallel for schedule(dynamic, 4) num_threads(worker_threads(0))
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      Ray ray;
-      cam.ray(float(x) + 0.5f, float(y) + 0.5f, 0.5f, 0.5f, ray.o, ray.d);  // the lens centre
-      ray.leaf = camera_leaf;
-      int rays = kEmissionRays;
-      centre[size_t(y) * size_t(W) + size_t(x)] = reaches_emitter(scene, caster, ray, eps, 0, rays);
-    }
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      uint8_t m = 0;
-      for (int yy = std::max(0, y - 1); yy <= std::min(H - 1, y + 1); ++yy)
-        for (int xx = std::max(0, x - 1); xx <= std::min(W - 1, x + 1); ++xx)
-          m |= centre[size_t(yy) * size_t(W) + size_t(xx)];
-      marks[size_t(y) * size_t(W) + size_t(x)] = m;
-    }
-  return marks;
+  // An emitter's front.
+  return centre_ray_marks(scene, [](const SurfaceHit& sh, const pf_material& m, const Vec3&) {
+    return m.type == PF_MAT_EMITTER && sh.front;
+  });
 }
 
 void trace_hitpoints_into(const Scene& scene, const EyePassOptions& opt, EyePassResult& res,
