@@ -44,15 +44,17 @@ ap.add_argument("--spp", type=int, default=256)
 ap.add_argument("--threads", type=int, default=2)
 ap.add_argument("--photonflow-only", action="store_true",
                 help="write, bake and render the variants in photonflow only (no Mitsuba, no table)")
+ap.add_argument("--table-only", action="store_true", help="print the table from the check.json files in OUT")
 ap.add_argument("--variants", default="exact,gold,plastic,striped,tint,spot,showcase")
 a = ap.parse_args()
 
 SRC = json.load(open(os.path.join(ROOT, "data", "showcase.gltf")))
 Y = np.array([0.2126, 0.7152, 0.0722])
 # the material each variant changes (by name in the glTF and in scene.h5); for `exact`, its glossy ones
-CHANGED = {"exact": ["gold, glossy metal", "striped metal and plastic", "rough glass"],
+GLOSSY = ["floor tiles", "fence", "gold, glossy metal", "rough glass", "striped metal and plastic"]
+CHANGED = {"exact": GLOSSY,
            "gold": ["gold, glossy metal"], "plastic": ["floor tiles", "fence"],
-           "striped": ["striped metal and plastic"], "tint": ["rough glass"], "spot": [], "showcase": []}
+           "striped": ["striped metal and plastic"], "tint": ["rough glass"], "spot": [], "showcase": GLOSSY}
 WHAT = {"exact": "all materials mapped exactly (reference row; the gold and striped materials are white "
                  "metals here, the glass untinted)",
         "gold": "coloured metal: principled metal (Schlick F0 = base colour, separable Smith G)",
@@ -94,34 +96,46 @@ def lum(x):
     return float(np.dot(Y, x))
 
 
-rows = []
+def rel(r):
+    mi, pt = lum(r["mi"]), lum(r["pt"])
+    return 100 * (mi - pt) / pt, 100 * np.sqrt(np.dot(Y ** 2, np.square(r["se"]))) / pt
+
+
+results = {}
 for v in a.variants.split(","):
     d = os.path.join(a.out, v)
-    os.makedirs(d, exist_ok=True)
-    for f in ("showcase.bin", "showcase_tiles.png", "showcase_fence.png", "showcase_mr.png"):
-        shutil.copyfile(os.path.join(ROOT, "data", f), os.path.join(d, f))
-    src = os.path.join(d, "scene.gltf")
-    json.dump(variant(v), open(src, "w"), indent=1)
-    h5 = os.path.join(d, "scene.h5")
-    if not os.path.exists(h5):
-        subprocess.run([os.path.join(a.build, "bin", "scene-bake"), src, "--no-options-file", "-o", h5,
-                        "--width", str(a.size), "--height", str(a.size)], check=True, stdout=subprocess.DEVNULL)
-    cmd = [sys.executable, os.path.join(HERE, "check_converter.py"), "--scene", h5, "--out", d, "--build", a.build,
-           "--spp", str(a.spp), "--passes", "0", "--threads", str(a.threads),
-           "--spot", "mitsuba" if v == "spot" else "exact"] + (["--photonflow-only"] if a.photonflow_only else [])
-    subprocess.run(cmd, stdout=subprocess.DEVNULL)  # its verdict is not this script's: read check.json
-    if a.photonflow_only:
-        continue
+    if not a.table_only:
+        os.makedirs(d, exist_ok=True)
+        for f in ("showcase.bin", "showcase_tiles.png", "showcase_fence.png", "showcase_mr.png"):
+            shutil.copyfile(os.path.join(ROOT, "data", f), os.path.join(d, f))
+        src = os.path.join(d, "scene.gltf")
+        json.dump(variant(v), open(src, "w"), indent=1)
+        h5 = os.path.join(d, "scene.h5")
+        if not os.path.exists(h5):
+            subprocess.run([os.path.join(a.build, "bin", "scene-bake"), src, "--no-options-file", "-o", h5,
+                            "--width", str(a.size), "--height", str(a.size)], check=True, stdout=subprocess.DEVNULL)
+        cmd = [sys.executable, os.path.join(HERE, "check_converter.py"), "--scene", h5, "--out", d, "--build", a.build,
+               "--spp", str(a.spp), "--passes", "0", "--threads", str(a.threads),
+               "--spot", "mitsuba" if v == "spot" else "exact"] + (["--photonflow-only"] if a.photonflow_only else [])
+        subprocess.run(cmd, stdout=subprocess.DEVNULL)  # its verdict is not this script's: read check.json
+        if a.photonflow_only:
+            continue
     R = json.load(open(os.path.join(d, "check.json")))["regions"]
-
-    def rel(r):
-        mi, pt, se = (lum(r[k]) for k in ("mi", "pt", "se"))
-        return "%+.2f %% ± %.2f" % (100 * (mi - pt) / pt, 100 * np.sqrt(np.dot(Y ** 2, np.square(r["se"]))) / pt)
-    regs = [r for r in R.values() if r.get("name") in CHANGED[v]]
-    rows.append((v, WHAT[v], rel(R["mean (all pixels)"]),
-                 "; ".join("%s %s" % (r["name"], rel(r)) for r in regs) or "—"))
-
-print("| variant | what differs from `exact` | image mean (mi − pt)/pt | the changed material's pixels |")
+    results[v] = {"image": rel(R["mean (all pixels)"]),
+                  "materials": {r["name"]: rel(r) for r in R.values() if r.get("name")}}
+if a.photonflow_only:
+    sys.exit(0)
+print("| variant | what differs from `exact` | image mean (mi − pt)/pt, % | the changed materials' pixels: "
+      "(mi − pt)/pt, %, and (its change from `exact`) |")
 print("|---|---|---|---|")
-for r in rows:
-    print("| %s | %s | %s | %s |" % r)
+E = results.get("exact")
+for v, res in results.items():
+    cells = []
+    for name in CHANGED[v]:
+        x, se = res["materials"][name]
+        c = "%s %+.2f ± %.2f" % (name, x, se)
+        if E and v != "exact":
+            x0, se0 = E["materials"][name]
+            c += " (%+.2f ± %.2f)" % (x - x0, np.hypot(se, se0))
+        cells.append(c)
+    print("| %s | %s | %+.2f ± %.2f | %s |" % ((v, WHAT[v]) + res["image"] + ("; ".join(cells) or "—",)))

@@ -34,27 +34,33 @@ rows are in bench/mitsuba/README.md):
                      grazing angles: a cosine-weighted albedo of F0 instead of F0 + (1 − F0)/21,
                      −8.6 % at gold's blue F0 0.336; a conductor with k = 0 and the eta of F0 has
                      a Brewster dip, −5 % at F0 0.766.)                              approximate
-    metallic 0, transmission 0, no metallic-roughness texture
-                  -> twosided(roughplastic distribution=ggx alpha=α int_ior=ior nonlinear=false
-                     diffuse_reflectance=base [texture]): the specular coat as glTF's, but the
-                     base under it differs: glTF's fresnel_mix weights base/π by 1 − F_Schlick(v·h);
-                     roughplastic by the rough coat's transmittance in and out / (1 − the
-                     interior's diffuse reflectance) / η² (Weidlich–Wilkie style). Mitsuba's
-                     principled was the other candidate; its Disney diffuse adds a retro-reflection
-                     that grows with roughness (the bundled plastics have roughness 0.8–0.9).
-                                                                                     approximate
+    metallic 0, transmission 0, no metallic-roughness texture (glTF's dielectric, fresnel_mix:
+    (1 − F_Schlick(v·h)) base/π + F_Schlick(v·h) D V)
+                  -> twosided(blendbsdf weight 0.5 of diffuse reflectance=2·W·base [texture] and
+                     roughconductor ggx alpha=α eta=ior k=0 specular_reflectance=2): the coat
+                     with the exact dielectric Fresnel of ior (a conductor with k = 0), the base
+                     weighted by W = the mean of 1 − F_Schlick(v·h) over cosine-weighted view and
+                     light directions (diffuse_weight; 0.9565 at ior 1.5, the same at every
+                     roughness) instead of its value per direction pair. Tried and not used:
+                     roughplastic (nonlinear=false), albedo 0.47 for a white base at α 0.64 where
+                     glTF's is 0.98 (the showcase 11 % dark), and principled, whose Disney
+                     diffuse adds a retro-reflection (albedo 1.04–1.07).            approximate
     transmission 1, metallic 0, no metallic-roughness texture
                   -> roughdielectric distribution=ggx alpha=α int_ior=ior ext_ior=1
                      specular_transmittance=base (KHR_materials_transmission's BTDF tinted by the
                      base colour at each crossing, as Mitsuba's specular_transmittance; the
                      reflection untinted in both). Exact Fresnel in Mitsuba, Schlick (at the
                      cosine on the lower-index side) in photonflow.             near-exact model
-    anything else (a metallic-roughness texture, 0 < metallic < 1, 0 < transmission < 1)
-                  -> principled base_color metallic roughness eta=ior spec_trans=transmission
-                     (twosided when spec_trans = 0): metallic and roughness as textures where the
-                     material has a metallic-roughness texture (metallic = factor × B,
-                     roughness = factor × G, the texel filter and wrap of the scene).
+    a metallic-roughness texture, or 0 < metallic < 1, no transmission
+                  -> twosided(blendbsdf weight=metallic [texture] of the dielectric blend above
+                     and the metal above), the roughness as textures where the material has a
+                     metallic-roughness texture (metallic = factor × B, roughness = factor × G,
+                     α = (factor × G)² per texel, the texel filter and wrap of the scene; with a
+                     bilinear filter α is interpolated where photonflow interpolates G).
                                                                                      approximate
+    0 < transmission < 1, or transmission with a metallic-roughness texture
+                  -> principled base_color metallic roughness eta=ior spec_trans=transmission
+                     (not in the bundled scenes; not measured).                     approximate
     Every Mitsuba microfacet plugin uses the separable Smith G1(o)·G1(i); photonflow the
     height-correlated one (slightly more reflection at grazing angles, both single-scattering).
   textures -> bitmap textures read from PFM files (32-bit float, linear): scene.h5 stores its
@@ -69,9 +75,9 @@ rows are in bench/mitsuba/README.md):
   alpha cut-outs (/materials/alpha_*) -> mask(opacity=...) around the BSDF, the opacity a 0/1
               map (nearest filter) of "alpha = factor × texel alpha ≥ cutoff" evaluated at
               MASK_SUPERSAMPLE² points per texel with photonflow's bilinear filter, so the outline
-              is photonflow's to 1/MASK_SUPERSAMPLE texel. Mitsuba's `path` integrator does not
-              let shadow rays through a mask's holes; a scene with a mask is rendered with
-              `volpath` (no media: the same estimator, null surfaces passed in shadow rays too).
+              is photonflow's to 1/MASK_SUPERSAMPLE texel. A scene with a mask is rendered
+              with `volpath` (no media here: the same estimator as `path`), whose shadow rays
+              pass null surfaces, a mask's holes; `path`'s shadow rays stop at them.
   point lights (type 1) -> point emitter, intensity = the stored intensity (W/sr).         exact
   spot lights (type 2)  -> spot emitter aimed along `direction`. KHR_lights_punctual's falloff
               is smooth in cos θ, clamp((cos θ − cos_outer)/(cos_inner − cos_outer), 0, 1)²;
