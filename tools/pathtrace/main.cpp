@@ -48,7 +48,11 @@ int main(int argc, char** argv) {
       ("mis", "power: next-event estimation and emitters hit after a diffuse bounce combined by "
        "the power heuristic; off: after a diffuse bounce only next-event estimation counts",
        cxxopts::value<std::string>()->default_value("power"))
-      ("seed", "random seed (sample s of pixel p uses stream (seed, s, p))",
+      ("sampler", "sobol: every decision of a path (pixel position, lens, light, BSDF "
+       "direction, lobe, roulette) its own per-pixel Owen-scrambled Sobol sequence over the "
+       "pixel's samples (stratified); independent: independent numbers",
+       cxxopts::value<std::string>()->default_value("sobol"))
+      ("seed", "random seed (with the pixel and sample number, it fixes every number a path draws)",
        cxxopts::value<uint32_t>()->default_value("1"))
       ("snapshot-every", "write the running image every K samples per pixel; 0 = no snapshots",
        cxxopts::value<int>()->default_value("0"))
@@ -84,6 +88,10 @@ int main(int argc, char** argv) {
     const std::string mis = a["mis"].as<std::string>();
     pf::require_choice("mis", mis, {"power", "off"});
     opt.mis = mis == "off" ? pf::MisMode::Off : pf::MisMode::Power;
+    const std::string sampler = a["sampler"].as<std::string>();
+    pf::require_choice("sampler", sampler, {"sobol", "independent"});
+    opt.sampler = sampler == "independent" ? pf::PathSamplerKind::Independent
+                                           : pf::PathSamplerKind::Sobol;
     pf::require_positive("spp", opt.spp);
     if (opt.max_depth < 0) throw pf::input_error("", "--max-depth must be >= 0");
     if (opt.rr_depth < 0) throw pf::input_error("", "--rr-depth must be >= 0");

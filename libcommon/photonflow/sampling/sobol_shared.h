@@ -106,13 +106,18 @@ PF_CONSTANT pf_uint pf_sobol_matrix[PF_SOBOL_DIMS * 32] = {
 };
 #undef PF_CONSTANT
 
-/* Bits of x in reverse order. */
+/* Bits of x in reverse order: bits within nibbles, nibbles within bytes, then the bytes (the host
+ * reverses the bytes with one bswap; the same bits either way). */
 PF_INLINE pf_uint pf_reverse_bits32(pf_uint x) {
   x = ((x >> 1) & 0x55555555U) | ((x & 0x55555555U) << 1);
   x = ((x >> 2) & 0x33333333U) | ((x & 0x33333333U) << 2);
   x = ((x >> 4) & 0x0f0f0f0fU) | ((x & 0x0f0f0f0fU) << 4);
+#ifdef __OPENCL_VERSION__
   x = ((x >> 8) & 0x00ff00ffU) | ((x & 0x00ff00ffU) << 8);
   return (x >> 16) | (x << 16);
+#else
+  return __builtin_bswap32(x);
+#endif
 }
 
 /* Point i of Sobol dimension d (d < PF_SOBOL_DIMS) as 32 fraction bits: the XOR of the columns

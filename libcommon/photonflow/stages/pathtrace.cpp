@@ -19,6 +19,7 @@
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/raycast.h"
 #include "photonflow/foundations/rng.h"
+#include "photonflow/sampling/path_sampler.h"
 #include "photonflow/sampling/sampling.h"
 #include "photonflow/geometry/surface.h"
 #include "photonflow/foundations/threads.h"
@@ -74,9 +75,10 @@ class PathTracer {
   // The kd leaf of the eye point: the camera rays' Ray::leaf.
   int32_t camera_leaf() const { return camera_leaf_; }
 
-  // One camera path starting with `ray` (unit direction). Returns its radiance estimate
-  // (W/(sr m²)); `rays` counts the rays it cast.
-  Vec3 radiance(Ray ray, pf_rng& rng, uint64_t& rays) const {
+  // One camera path starting with `ray` (unit direction), its numbers from `ps` (the bounce
+  // dimensions of path_sampler.h). Returns its radiance estimate (W/(sr m²)); `rays` counts the
+  // rays it cast.
+  Vec3 radiance(Ray ray, const PathSampler& ps, uint64_t& rays) const {
     Vec3 L, T(1.f, 1.f, 1.f);  // radiance so far; throughput of the path prefix
     // How the current ray was generated: by the camera or a specular bounce (an emitter it hits
     // counts fully), or by a diffuse bounce with solid-angle density `bsdf_pdf` (an emitter it hits
@@ -136,12 +138,12 @@ class PathTracer {
         const Vec3 ng = sh.front ? sh.ng : -sh.ng;  // geometric normal on the same side
         const Vec3 albedo = diffuse_color(scene_, m, sh);  // textured albedo
         // Next-event estimation: L_direct = f_r · (one light sample), f_r = ρ/π.
-        L += T * albedo * kInvPi * sample_light(sh.p, n, ng, sh.leaf, rng, rays);
+        L += T * albedo * kInvPi * sample_light(sh.p, n, ng, sh.leaf, ps, depth, rays);
         // Continue with f_r·cos/pdf = ρ (cosine sampling around n), after Russian roulette.
         T = T * albedo;
-        if (!(max3(T) > 0.f) || !roulette(depth, T, rng)) break;
-        const float u1 = pf_rng_next(&rng);
-        const float u2 = pf_rng_next(&rng);
+        if (!(max3(T) > 0.f) || !roulette(depth, T, ps)) break;
+        float u1, u2;
+        ps.get2(PathSampler::at(depth, PathSampler::kBsdfDirection), u1, u2);
         const Vec3 wi = sample_cosine_hemisphere(n, u1, u2);
         const float cos_x = dot(wi, n);
         if (!(cos_x > 0.f)) break;  // grazing: density 0
@@ -151,32 +153,33 @@ class PathTracer {
         ray = spawn_ray(sh, wi, eps_);
       } else if (m.type == PF_MAT_PBR) {
         // The glTF BSDF (bsdf_shared.h) in the front shading frame (pbr_scatter_shared.h):
-        // NEE with f (draws ul, u1, u2 as sample_light), then the BSDF's sample (u1, u2, u3),
-        // then Russian roulette (roulette's draw when it applies).
+        // NEE with f (the light dimensions, as sample_light), then the BSDF's sample (its
+        // direction dimension u1, u2 and its lobe dimension u3), then Russian roulette.
         const pf_bsdf_params params = bsdf_params_at(scene_, m, sh);
         PbrFrame fr;
         sh.ns.store(fr.ns);
         sh.ng.store(fr.ng);
         (-d).store(fr.wo);
-        L += T * sample_light_pbr(sh.p, sh.ng, sh.leaf, params, fr, rng, rays);
-        const float u1 = pf_rng_next(&rng);
-        const float u2 = pf_rng_next(&rng);
-        const float u3 = pf_rng_next(&rng);
+        L += T * sample_light_pbr(sh.p, sh.ng, sh.leaf, params, fr, ps, depth, rays);
+        float u1, u2;
+        ps.get2(PathSampler::at(depth, PathSampler::kBsdfDirection), u1, u2);
+        const float u3 = ps.get1(PathSampler::at(depth, PathSampler::kLobe));
         float wi[3], w[3], pdf;
         if (!pf_pbr_scatter(&params, fr.ns, fr.ng, fr.wo, u1, u2, u3, PF_TRANSPORT_RADIANCE, wi,
                             w, &pdf))
           break;
         T = T * Vec3(w);
-        if (!(max3(T) > 0.f) || !roulette(depth, T, rng)) break;
+        if (!(max3(T) > 0.f) || !roulette(depth, T, ps)) break;
         bsdf_pdf = pdf;
         nee_could = true;  // NEE at a PBR point reaches every direction the BSDF samples
         specular = false;
         const Vec3 dir(wi);
         ray = spawn_ray(sh, dir, eps_);
       } else if (m.type == PF_MAT_MIRROR || m.type == PF_MAT_GLASS) {
-        const Vec3 wo = specular_bounce(m, sh, d, &rng, T);
+        const uint32_t lobe = PathSampler::at(depth, PathSampler::kLobe);
+        const Vec3 wo = specular_bounce_with(m, sh, d, [&] { return ps.get1(lobe); }, T);
         if (!(max3(T) > 0.f)) break;
-        if (!roulette(depth, T, rng)) break;
+        if (!roulette(depth, T, ps)) break;
         specular = true;
         ray = spawn_ray(sh, wo, eps_);
       } else {
@@ -198,14 +201,21 @@ class PathTracer {
   }
 
   // Russian roulette after rr_depth bounces: survive with q = min(1, max channel of T), T /= q.
-  bool roulette(int depth, Vec3& T, pf_rng& rng) const {
+  bool roulette(int depth, Vec3& T, const PathSampler& ps) const {
     if (depth < opt_.rr_depth) return true;
     const float q = std::min(1.f, max3(T));
     if (!(q > 0.f)) return false;
     if (q >= 1.f) return true;
-    if (pf_rng_next(&rng) >= q) return false;
+    if (ps.get1(PathSampler::at(depth, PathSampler::kRoulette)) >= q) return false;
     T = T * (1.f / q);
     return true;
+  }
+
+  // The numbers of the light sample at bounce `depth`: the light's choice ul (1-D) and the point
+  // on it (u1, u2; 2-D).
+  static void light_numbers(const PathSampler& ps, int depth, float& ul, float& u1, float& u2) {
+    ul = ps.get1(PathSampler::at(depth, PathSampler::kLightPick));
+    ps.get2(PathSampler::at(depth, PathSampler::kLightPoint), u1, u2);
   }
 
   // One light sample for a diffuse point p (shading normal n and geometric normal ng on the side
@@ -213,9 +223,10 @@ class PathTracer {
   // MIS-weighted for area lights and the environment under MisMode::Power. Multiply by f_r for
   // L_direct. The same estimator as eye_pass.cpp's direct_light (one sample; its shadow ray and
   // cut-offs), with the sample's radiance ls.le (the map's, for the environment).
-  Vec3 sample_light(const Vec3& p, const Vec3& n, const Vec3& ng, int32_t leaf, pf_rng& rng,
-                    uint64_t& rays) const {
-    const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+  Vec3 sample_light(const Vec3& p, const Vec3& n, const Vec3& ng, int32_t leaf,
+                    const PathSampler& ps, int depth, uint64_t& rays) const {
+    float ul, u1, u2;
+    light_numbers(ps, depth, ul, u1, u2);
     Scene::LightSample ls;
     if (!scene_.sample_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
     const pf_light& l = scene_.lights[ls.light];
@@ -241,9 +252,10 @@ class PathTracer {
     float ns[3], ng[3], wo[3];  // front shading and geometric normals, direction to the eye
   };
   Vec3 sample_light_pbr(const Vec3& p, const Vec3& ng_front, int32_t leaf,
-                        const pf_bsdf_params& params, const PbrFrame& fr, pf_rng& rng,
-                        uint64_t& rays) const {
-    const float ul = pf_rng_next(&rng), u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng);
+                        const pf_bsdf_params& params, const PbrFrame& fr,
+                        const PathSampler& ps, int depth, uint64_t& rays) const {
+    float ul, u1, u2;
+    light_numbers(ps, depth, ul, u1, u2);
     Scene::LightSample ls;
     if (!scene_.sample_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
     const pf_light& l = scene_.lights[ls.light];
@@ -320,6 +332,7 @@ Image pathtrace(const Scene& scene, const PathTraceOptions& opt,
     return img;
   };
 
+  const uint32_t sampler_key = PathSampler::key(opt.sampler, opt.seed);
   const int per_pass = int(std::max<uint64_t>(1, kPathsPerPass / std::max<size_t>(npix, 1)));
   while (st.samples < opt.spp) {
     int batch = std::min(per_pass, opt.spp - st.samples);
@@ -332,20 +345,17 @@ Image pathtrace(const Scene& scene, const PathTraceOptions& opt,
       for (int x = 0; x < W; ++x) {
         const size_t pix = size_t(y) * size_t(W) + size_t(x);
         for (int s = s0; s < s0 + batch; ++s) {
-          pf_rng rng = pf_rng_start(opt.seed, kPathStream + uint32_t(s), uint32_t(pix));
-          // Box filter: a uniform point in the pixel.
-          const float jx = pf_rng_next(&rng), jy = pf_rng_next(&rng);
-          // A thin lens: a uniform point on the lens next (none for a pinhole: its streams and
-          // images stay those of the pinhole camera).
-          float u1 = 0.5f, u2 = 0.5f;
-          if (cam.lens()) {
-            u1 = pf_rng_next(&rng);
-            u2 = pf_rng_next(&rng);
-          }
+          const PathSampler ps(opt.sampler, sampler_key,
+                               pf_rng_key(opt.seed, kPathStream + uint32_t(s)), uint32_t(pix),
+                               uint32_t(s));
+          // Box filter: a uniform point in the pixel; a thin lens: a uniform point on the lens.
+          float jx, jy, u1 = 0.5f, u2 = 0.5f;
+          ps.get2(PathSampler::kCameraPixel, jx, jy);
+          if (cam.lens()) ps.get2(PathSampler::kCameraLens, u1, u2);
           Ray ray;
           cam.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
           ray.leaf = tracer.camera_leaf();
-          Vec3 v = tracer.radiance(ray, rng, rays);
+          Vec3 v = tracer.radiance(ray, ps, rays);
           if (!finite(v)) {
             ++nonfinite;
             v = Vec3();

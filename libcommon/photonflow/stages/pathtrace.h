@@ -42,9 +42,12 @@
 // needs more is dropped: a fraction ρ^(max_depth+1) of it in a closed room of albedo ρ, 0.1% at
 // ρ = 0.9 and the default 64; photon mapping's defaults cut at 16 bounces).
 //
-// Random numbers are counter-based (rng.h): sample s of pixel p uses the stream
-// (seed, kPathStream + s, p), one dimension after the other (pixel jitter, then per bounce: light
-// choice and point, roulette, glass choice, bounce direction). A pixel's samples are added in
+// Random numbers are counter-based, by named dimension (sampling/path_sampler.h: the pixel
+// position and the lens, then per bounce the light's choice and point, the BSDF direction, the
+// lobe or glass choice, the roulette). PathSamplerKind::Sobol (the default) gives each dimension
+// its own per-pixel Owen-scrambled (0,2)-sequence indexed by the sample number s, so a pixel's
+// samples stratify every decision; Independent draws sample s of pixel p from the stream
+// (seed, kPathStream + s, p). A pixel's samples are added in
 // sample order, by whichever thread renders its row, in double precision: the image after n
 // samples does not depend on the thread count, on how the samples were batched into passes, or
 // on snapshots.
@@ -67,6 +70,7 @@
 #include "photonflow/image/image.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/scene.h"
+#include "photonflow/sampling/path_sampler.h"
 
 namespace pf {
 
@@ -81,6 +85,7 @@ struct PathTraceOptions {
   int max_depth = 64;       // scattering events per path (0: emitters seen directly only)
   int rr_depth = 3;         // bounces before Russian roulette starts
   MisMode mis = MisMode::Power;
+  PathSamplerKind sampler = PathSamplerKind::Sobol;  // path_sampler.h
   uint32_t seed = 1;
   int threads = 0;          // 0 = all cores; results do not depend on it
   int snapshot_every = 0;   // samples per pixel between snapshot callbacks; 0 = none
