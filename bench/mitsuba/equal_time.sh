@@ -8,7 +8,7 @@
 #
 # SCENE is any scene make_refs.sh knows: cornell-box, cornell-spheres, box-200k, glossy-room,
 # showcase (its thin lens from data/showcase.bake-options is in the baked scene.h5 every method
-# renders), showcase-caustics.
+# renders), showcase-caustics, window-room, hdri-object (their environment map likewise).
 # Per scene, REFS/<scene>/ must hold scene.h5 (the baked scene the reference was rendered from)
 # and ref/ref-s0.exr, ref/ref-s1.exr (two references from disjoint seeds: bench/mitsuba/make_refs.sh
 # makes all of it). Per run r = 1..RUNS, round robin (run 1 of every method, then run 2, ...), so
@@ -30,6 +30,12 @@
 #             independent is Mitsuba's default, multijitter converged fastest per spp here; kernel
 #             compilation is kept out by warm-up renders into the same DRJIT_CACHE_DIR before the
 #             timed runs, as accuracy.mk keeps PoCL's out)
+#   mi1-<S>   mi_render1.py --time T --sampler S    (Mitsuba as mi-<S>, but ONE mi.render call of N spp,
+#             N calibrated by short calls before it so that the call takes about T seconds; its
+#             actual seconds are the run's. Mitsuba's best at equal time: passes of MI_SPP spp with
+#             new seeds lose most of a stratified sampler's stratification and pay a call overhead
+#             each, which understates Mitsuba by about a third, ../shared/toolchain.md. The
+#             calibration calls are not counted, as the kernel compilation is not)
 #
 # every one with --threads THREADS (the machine's size, not a rendering choice) and seed r. Each run
 # records the 1-minute load average before and after it. The error of each image:
@@ -104,10 +110,11 @@ for s in $SCENES; do
   # Warm Dr.Jit's kernel cache for every sampler (not timed): Dr.Jit builds one kernel for
   # power-of-two spp and one for the others (the last pass is sized to the time left).
   for m in $METHODS; do
-    case $m in mi-*)
+    case $m in mi-*|mi1-*)
+      s_=${m#mi-}; s_=${s_#mi1-}
       for k in 1 3; do
         "$PY" "$HERE/mi_render.py" "$D/mi/scene.xml" "$O/warmup.exr" --time 0 --spp-per-pass $k \
-          --sampler "${m#mi-}" --threads "$THREADS" > /dev/null
+          --sampler "$s_" --threads "$THREADS" > /dev/null
       done ;;
     esac
   done
@@ -128,9 +135,11 @@ for s in $SCENES; do
                     --threads "$THREADS" --png none --stats "$rec" | tail -1 ;;
         mi-*)     "$PY" "$HERE/mi_render.py" "$D/mi/scene.xml" "$img" --time "$TIME" --spp-per-pass "$MI_SPP" \
                     --sampler "${m#mi-}" --seed-base $((100000000 + r * 100000)) --threads "$THREADS" | tail -1 ;;
+        mi1-*)    "$PY" "$HERE/mi_render1.py" "$D/mi/scene.xml" "$img" --time "$TIME" --sampler "${m#mi1-}" \
+                    --seed $((200000000 + r)) --threads "$THREADS" | tail -1 ;;
         *) v=FLAGS_$m
            [[ $m =~ ^[A-Za-z_][A-Za-z0-9_]*$ && -n ${!v:-} ]] || {
-             echo "equal_time.sh: unknown method $m (built in: defaults pppm pppm-issue pt mi-<sampler>; or set FLAGS_$m)" >&2; exit 2; }
+             echo "equal_time.sh: unknown method $m (built in: defaults pppm pppm-issue pt mi-<sampler> mi1-<sampler>; or set FLAGS_$m)" >&2; exit 2; }
            # shellcheck disable=SC2086 # FLAGS_<name> is a list of options
            "$BIN/render" --scene "$D/scene.h5" -o "$img" --time "$TIME" --seed "$r" --threads "$THREADS" \
              ${!v} --stats "$rec" | tail -1 ;;

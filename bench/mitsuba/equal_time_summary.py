@@ -37,11 +37,12 @@ for s in scenes:
         print("| %s | %d | %.1f | %s | %.5f | %.5f | %.5f | %.5f | %.5f | %.5f | %.1f–%.1f |"
               % (m, len(M), f("seconds"), M[-1]["passes_or_spp"], med[m][0], med[m][2], f("ref_rmse_all"),
                  med[m][1], med[m][3], f("ref_rmse_masked"), min(loads), max(loads)))
-    mis = [m for m in methods if m.startswith("mi-")]
+    mis = [m for m in methods if m.startswith("mi-") or m.startswith("mi1-")]
     if mis:
         best = min(mis, key=lambda m: med[m][0])
-        print("\nRatios to Mitsuba (%s, the lower of its samplers over all pixels; issue 34 item 2: all pixels "
-              "≤ 0.5×, away from the lights ≤ 1× on the diffuse box; both ≤ 0.5× on the ≥ 200k-triangle scene):\n"
+        print("\nRatios to Mitsuba (%s, the lowest of its methods over all pixels; issue 34 item 2: all pixels "
+              "≤ 0.5×, away from the lights ≤ 1× on the diffuse box; both ≤ 0.5× on the ≥ 200k-triangle scene; "
+              "issue 50 item 6: ≤ 0.5× both on window-room, ≤ 1× on hdri-object):\n"
               % best)
         print("| method | all pixels / mitsuba | away from lights / mitsuba | the same, net of the references' noise |")
         print("|---|---:|---:|---|")
@@ -55,4 +56,9 @@ for s in scenes:
                   "from the lights): %.2f, %.2f; net of the references' noise %s, %s"
                   % (base, what, med["defaults"][0] / med[base][0], med["defaults"][1] / med[base][1],
                      ratio(med["defaults"][2], med[base][2]), ratio(med["defaults"][3], med[base][3])))
+    if "guided" in med and "defaults" in med:
+        print("\nguided / defaults (issue 50 item 6 on window-room: --photon-guide visibility ≤ 0.33× uniform): "
+              "%.2f, %.2f; net of the references' noise %s, %s"
+              % (med["guided"][0] / med["defaults"][0], med["guided"][1] / med["defaults"][1],
+                 ratio(med["guided"][2], med["defaults"][2]), ratio(med["guided"][3], med["defaults"][3])))
     print()

@@ -14,7 +14,10 @@
 # glossy-room (bench/scenes/glossy-room.gltf: a white metal and a rough-glass ball), showcase
 # (data/showcase.gltf with data/showcase.bake-options: textures, an alpha-masked fence, a spot
 # light, the thin lens) and showcase-caustics (data/showcase-caustics.gltf: pinhole, the spot 3x,
-# the ceiling light dimmed). These three are not in the default list.
+# the ceiling light dimmed), window-room (data/window-room.gltf with data/window-room.bake-options:
+# an interior lit only through a window by data/sky.hdr, a sky with a sun) and hdri-object
+# (data/hdri-object.gltf with data/hdri-object.bake-options: an object on a floor outdoors under
+# the same sky). These five are not in the default list.
 #
 #   bench/mitsuba/make_refs.sh [SCENE ...]                  (default: all three, one after another)
 #   RESUME=1 REF_TIME=3600 bench/mitsuba/make_refs.sh S     (render REF_TIME more seconds onto S's reference)
@@ -58,6 +61,10 @@ bake() {  # $1 scene name, $2 output
     showcase) "$BIN/scene-bake" data/showcase.gltf --options-file data/showcase.bake-options -o "$2" \
                 --width 512 --height 512 ;;
     showcase-caustics) "$BIN/scene-bake" data/showcase-caustics.gltf -o "$2" --width 512 --height 512 ;;
+    # The environment map and its strength are bake options (--environment sky.hdr, relative to the
+    # options file's folder), named as for the showcase.
+    window-room|hdri-object) "$BIN/scene-bake" "data/$1.gltf" --options-file "data/$1.bake-options" -o "$2" \
+                --width 512 --height 512 ;;
     *) echo "make_refs.sh: unknown scene $1" >&2; return 2 ;;
   esac
 }

@@ -89,6 +89,18 @@ rows are in bench/mitsuba/README.md):
   directional lights (type 3) -> directional emitter, irradiance = the stored irradiance (W/m²),
               direction as stored (photonflow's emitting disc lies outside the scene's bounds,
               so inside them the light is the same).                                       exact
+  environment (type 4 light, /environment, format 6) -> envmap emitter, filename env.pfm (32-bit
+              float PFM, read linear), scale = strength, to_world = rotate(y, rotation_deg):
+              photonflow looks d up at d_l = R_y(−ρ)·d with R_y right-handed (+z towards +x for
+              90°), Mitsuba at to_world⁻¹·d with the same right-handed rotate, so to_world =
+              R_y(+ρ). Same u = atan2(d_l.x, −d_l.z)/2π, v = acos(d_l.y)/π. Mitsuba's envmap is
+              bilinear with column j at u = (j + ½)/W but row i at v = i/(H − 1) (rows at the
+              poles), photonflow texel-constant with row i over [i/H, (i + 1)/H): env.pfm is the map
+              resampled to ENV_UPSAMPLE·W columns (each texel repeated) and ENV_UPSAMPLE·H + 1 rows
+              (the row at v = r/(ENV_UPSAMPLE·H) is the texel it lies in, the mean of the two where
+              it lies on a texel edge), so Mitsuba's bilinear ramp is 1/ENV_UPSAMPLE of a texel wide
+              and centred on photonflow's texel edges (bench/mitsuba/check_env.py compares the two
+              lookups on random directions).                                   near-exact
   flat meshes (n0=n1=n2=geometric normal) -> face_normals=true; otherwise the file's vertex normals.
   camera -> perspective (thinlens with aperture_radius/focus_distance when aperture > 0),
             fov_axis="y", lookat eye/look_at/up, box rfilter (a pixel = the mean radiance over it,
@@ -107,6 +119,7 @@ import h5py
 import numpy as np
 
 MASK_SUPERSAMPLE = 8
+ENV_UPSAMPLE = 4
 SPOT_RES = 512
 ALPHA_MIN = 1e-3  # PF_BSDF_ALPHA_MIN
 
@@ -177,6 +190,20 @@ def diffuse_weight(ior, n=256):
     return float(np.mean((1 - F) * (2 * cv) * (2 * cl)))
 
 
+def env_resample(tex, k):
+    """photonflow's texel-constant H x 2H map as Mitsuba envmap data (k·2H columns, k·H + 1 rows):
+    column j (Mitsuba's u = (j + ½)/(k·W)) = texel column ⌊j/k⌋; row r (Mitsuba's v = r/(k·H)) =
+    texel row r/k, or the mean of rows r/k − 1 and r/k where r is a multiple of k inside the map."""
+    H = tex.shape[0]
+    t = np.repeat(np.asarray(tex, np.float64), k, axis=1)
+    r = np.arange(k * H + 1)
+    lo = np.clip((r - 1) // k, 0, H - 1)  # the row just above v, or v's own
+    hi = np.clip(r // k, 0, H - 1)
+    edge = (r % k == 0)
+    lo = np.where(edge, lo, hi)
+    return 0.5 * (t[lo] + t[hi])
+
+
 def spot_falloff(c, cos_inner, cos_outer):  # light_shared.h pf_spot_falloff
     width = max(cos_inner - cos_outer, 0.001)
     t = np.clip((c - cos_outer) / width, 0.0, 1.0)
@@ -207,6 +234,10 @@ class Converter:
             self.textures = f["textures/textures"][:] if "textures/textures" in f else None
             self.texels = f["textures/texels"][:].reshape(-1, 4) if "textures/texels" in f else None
             self.uvs = f["geometry/uvs"][:].reshape(-1, 6) if "geometry/uvs" in f else None
+            self.env = None
+            if "environment" in f:
+                e = f["environment"]
+                self.env = (e["texels"][:], float(e.attrs["strength"]), float(e.attrs["rotation_deg"]))
         self.has_mask = False
 
     # ---- textures ------------------------------------------------------------------------
@@ -404,6 +435,8 @@ class Converter:
             elif t == 3:
                 shapes.append('  <emitter type="directional"><vector name="direction" value="%s"/>'
                               '<rgb name="irradiance" value="%s"/></emitter>' % (fmt3(L["direction"]), fmt3(L["radiance"])))
+            elif t == 4:
+                shapes.append("  " + self.environment())
         cam = self.cam
         lens = ""
         sensor = "perspective"
@@ -434,6 +467,15 @@ class Converter:
                     % (os.path.basename(self.h5path), ", ".join("%d %s" % kv for kv in sorted(self.kinds.items()))))
             o.write(xml)
         return os.path.join(self.outdir, "scene.xml")
+
+    def environment(self):
+        if self.env is None:
+            refuse(self.h5path, "an environment light without /environment")
+        tex, strength, rot = self.env
+        write_pfm(os.path.join(self.outdir, "env.pfm"), env_resample(tex, ENV_UPSAMPLE))
+        return ('<emitter type="envmap"><string name="filename" value="env.pfm"/>'
+                '<float name="scale" value="%.9g"/><transform name="to_world"><rotate y="1" angle="%.9g"/>'
+                '</transform></emitter>' % (strength, rot))
 
     def spot_light(self, i, L):
         ci, co = float(L["cos_inner"]), float(L["cos_outer"])
