@@ -11,7 +11,9 @@
 #include "photonflow/estimators/sppm.h"
 #include "photonflow/foundations/error.h"
 #include "photonflow/foundations/rng.h"
+#include "photonflow/sampling/sampling.h"
 #include "photonflow/stages/eye_pass.h"
+#include "photonflow/stages/illuminate.h"
 #include "photonflow/stages/photon_guide.h"
 #include "photonflow/stages/photon_pass.h"
 #include "support.h"
@@ -95,7 +97,7 @@ TEST_CASE("photon guide: the uniform route traces the photons it traced before t
     CHECK(photon_hash(r) == g.hash);
     // A visible set given to the uniform route changes nothing, and its stats stay zero.
     VisibleSet vis;
-    vis.build(eye_pass_of(s, g.pass).hitpoints, {0.05f});
+    vis.build(eye_pass_of(s, g.pass).hitpoints, {0.05f}, {}, false);
     PhotonGuideStats st;
     st.uniform = 99;
     const PhotonPassResult r2 = trace_photons(s, g.pass, o, &vis, &st);
@@ -104,45 +106,80 @@ TEST_CASE("photon guide: the uniform route traces the photons it traced before t
   }
 }
 
-TEST_CASE("photon guide: the visible set answers as brute force with the gathers' distance rule",
+TEST_CASE("photon guide: the visible set answers as brute force with the gathers' rule",
           "[photon_guide]") {
+  // Points on two meshes with random normals, every third one transmissive PBR (gathers from both
+  // sides); photons with random directions, meshes and direct flags. V must take exactly what
+  // photon_accepted and the distance test take (illuminate.h), with and without skip_direct.
   std::vector<pf_hitpoint> pts(500);
+  std::vector<pf_pbr_point> bsdf(pts.size());
   std::vector<float> radius(pts.size());
+  auto unit = [](uint32_t key, uint32_t i, float out[3]) {
+    const Vec3 v = sample_uniform_sphere(pf_rng_float(key, 0, i, 0), pf_rng_float(key, 0, i, 1));
+    v.store(out);
+  };
   for (size_t k = 0; k < pts.size(); ++k) {
     pts[k] = pf_hitpoint{};
     for (int a = 0; a < 3; ++a) pts[k].position[a] = pf_rng_float(5, 0, uint32_t(k), uint32_t(a));
-    pts[k].mesh = k % 17 == 0 ? -1 : 0;  // no visible point: left out
+    unit(8, uint32_t(k), pts[k].normal);
+    pts[k].mesh = k % 17 == 0 ? -1 : int(k % 2);  // no visible point: left out
     radius[k] = 0.01f + 0.04f * pf_rng_float(5, 1, uint32_t(k), 0);
+    bsdf[k] = pf_pbr_point{};
+    if (k % 3 == 0) bsdf[k].params.transmission = 1.f;  // metallic 0: two-sided
   }
-  VisibleSet vis;
-  vis.build(pts, radius);
-  CHECK(vis.size() == pts.size() - (pts.size() + 16) / 17);
-  int hits = 0;
-  for (uint32_t q = 0; q < 20000; ++q) {
-    float p[3];
-    for (int a = 0; a < 3; ++a) p[a] = -0.1f + 1.2f * pf_rng_float(6, 0, q, uint32_t(a));
-    bool brute = false;
-    for (size_t k = 0; k < pts.size() && !brute; ++k)
-      brute = pts[k].mesh >= 0 &&
-              pf_ppm_in_radius(pf_ppm_dist2(pts[k].position[0], pts[k].position[1],
-                                            pts[k].position[2], p[0], p[1], p[2]),
-                               radius[k]);
-    hits += brute;
-    REQUIRE(vis.near(p) == brute);
+  for (bool skip_direct : {false, true}) {
+    INFO("skip_direct " << skip_direct);
+    VisibleSet vis;
+    vis.build(pts, radius, bsdf, skip_direct);
+    CHECK(vis.size() == pts.size() - (pts.size() + 16) / 17);
+    int hits = 0, near_only = 0;
+    for (uint32_t q = 0; q < 20000; ++q) {
+      pf_photon ph{};
+      for (int a = 0; a < 3; ++a) ph.position[a] = -0.1f + 1.2f * pf_rng_float(6, 0, q, uint32_t(a));
+      unit(9, q, ph.dir);
+      ph.mesh = int(q % 2);
+      ph.flags = q % 5 == 0 ? PF_PHOTON_DIRECT : 0;
+      bool brute = false, near = false;
+      for (size_t k = 0; k < pts.size() && !brute; ++k) {
+        if (pts[k].mesh < 0) continue;
+        const bool in = pf_ppm_in_radius(pf_ppm_dist2(pts[k].position[0], pts[k].position[1],
+                                                      pts[k].position[2], ph.position[0],
+                                                      ph.position[1], ph.position[2]),
+                                         radius[k]);
+        near = near || in;
+        brute = in && photon_accepted(pts[k], ph, skip_direct, pbr_two_sided_gather(&bsdf[k]));
+      }
+      hits += brute;
+      near_only += near && !brute;
+      REQUIRE(vis.near(ph) == brute);
+    }
+    CHECK(hits > 150);  // both answers occur (a quarter of the near photons pass the rule)
+    CHECK(hits < 19000);
+    CHECK(near_only > 500);  // the rule, not the distance alone, decides for many photons
   }
-  CHECK(hits > 500);  // both answers occur
-  CHECK(hits < 19000);
   // A photon on the float edge of a radius (support.h edge_photon) is near, as the gathers take it.
   const EdgePhoton e = edge_photon();
   pf_hitpoint h{};
   h.position[0] = e.q;
+  h.normal[1] = 1.f;
   VisibleSet one;
-  one.build({h}, {e.r});
-  const float at[3] = {e.p, 0.f, 0.f}, past[3] = {std::nextafter(e.q + 2 * e.r, INFINITY), 0, 0};
+  one.build({h}, {e.r}, {}, false);
+  pf_photon at{};
+  at.position[0] = e.p;
+  at.dir[1] = -1.f;  // arriving at the front
+  pf_photon past = at;
+  past.position[0] = std::nextafter(e.q + 2 * e.r, INFINITY);
   CHECK(one.near(at));
   CHECK_FALSE(one.near(past));
-  const float nan[3] = {NAN, 0, 0};
+  pf_photon nan = at;
+  nan.position[0] = NAN;
   CHECK_FALSE(one.near(nan));
+  pf_photon behind = at;  // the outside of a thin wall, the same place as the point
+  behind.dir[1] = 1.f;
+  CHECK_FALSE(one.near(behind));
+  pf_photon other = at;
+  other.mesh = 1;
+  CHECK_FALSE(one.near(other));
 }
 
 TEST_CASE("photon guide: the visible fraction is that of the uniform photons that reach a "
@@ -154,7 +191,7 @@ TEST_CASE("photon guide: the visible fraction is that of the uniform photons tha
   const EyePassResult eye = eye_pass_of(s, 2);
   const float r = 0.04f;
   VisibleSet vis;
-  vis.build(eye.hitpoints, {r});
+  vis.build(eye.hitpoints, {r}, {}, false);
   PhotonPassOptions o;
   o.photons = 6000;
   o.seed = 11;
@@ -170,7 +207,8 @@ TEST_CASE("photon guide: the visible fraction is that of the uniform photons tha
     if (i == uni.photons.size()) break;
     const float* p = uni.photons[i].position;
     for (const pf_hitpoint& h : eye.hitpoints)
-      if (pf_ppm_in_radius(pf_ppm_dist2(h.position[0], h.position[1], h.position[2], p[0], p[1],
+      if (h.mesh >= 0 && photon_accepted(h, uni.photons[i], false) &&
+          pf_ppm_in_radius(pf_ppm_dist2(h.position[0], h.position[1], h.position[2], p[0], p[1],
                                         p[2]),
                            r))
         this_path = true;
@@ -195,7 +233,7 @@ TEST_CASE("photon guide: the chains' acceptance rate adapts toward 0.234", "[pho
   PhotonGuideStats total;
   for (uint32_t pass = 0; pass < 2; ++pass) {
     VisibleSet vis;
-    vis.build(eye_pass_of(s, pass).hitpoints, {0.03f});
+    vis.build(eye_pass_of(s, pass).hitpoints, {0.03f}, {}, false);
     PhotonGuideStats st;
     trace_photons(s, pass, o, &vis, &st);
     total.add(st);
@@ -208,7 +246,7 @@ TEST_CASE("photon guide: the chains' acceptance rate adapts toward 0.234", "[pho
 TEST_CASE("photon guide: guided photons do not depend on the thread count", "[photon_guide]") {
   const Scene s = corner_room(PF_MAT_GLASS);
   VisibleSet vis;
-  vis.build(eye_pass_of(s, 1).hitpoints, {0.04f});
+  vis.build(eye_pass_of(s, 1).hitpoints, {0.04f}, {}, false);
   PhotonPassOptions o;
   o.photons = 7000;
   o.guide = PhotonGuide::Visibility;
@@ -242,7 +280,7 @@ TEST_CASE("photon guide: guided and uniform photons agree in mean where the came
   for (int p = 0; p < passes; ++p) {
     const EyePassResult eye = eye_pass_of(s, uint32_t(p));
     VisibleSet vis;
-    vis.build(eye.hitpoints, {r});
+    vis.build(eye.hitpoints, {r}, {}, false);
     mu.push_back(measure(s, eye, trace_photons(s, uint32_t(p), uo), r));
     mg.push_back(measure(s, eye, trace_photons(s, uint32_t(p), go, &vis), r));
   }

@@ -81,12 +81,12 @@ void sppm_visible(const EyePassResult& eye, const HitpointSet& state, VisibleSet
     const pf_hitpoint& v = eye.hitpoints[i];
     r[i] = state.hitpoints[size_t(v.pixel_y) * size_t(state.width) + size_t(v.pixel_x)].radius;
   }
-  out.build(eye.hitpoints, r);
+  out.build(eye.hitpoints, r, eye.bsdf, state.direct_mode == DirectMode::ShadowRays);
 }
-void own_radius_visible(const std::vector<pf_hitpoint>& points, VisibleSet& out) {
-  std::vector<float> r(points.size());
-  for (size_t i = 0; i < r.size(); ++i) r[i] = points[i].radius;
-  out.build(points, r);
+void own_radius_visible(const HitpointSet& state, VisibleSet& out) {
+  std::vector<float> r(state.hitpoints.size());
+  for (size_t i = 0; i < r.size(); ++i) r[i] = state.hitpoints[i].radius;
+  out.build(state.hitpoints, r, state.bsdf, state.direct_mode == DirectMode::ShadowRays);
 }
 bool guided(const RenderOptions& opt) { return opt.photons.guide == PhotonGuide::Visibility; }
 }  // namespace
@@ -183,7 +183,7 @@ void ProgressiveRenderer::run_iteration() {
   // The same photons and the same gather as trace_photons + ppm_pass, without the copies: the
   // grid is sorted straight out of the per-chunk buffers, and every buffer is reused.
   PhotonGuideStats gs;
-  if (guided(opt_)) own_radius_visible(state_.hitpoints, visible_);  // R shrinks pass by pass
+  if (guided(opt_)) own_radius_visible(state_, visible_);  // R shrinks pass by pass
   const uint64_t emitted =
       trace_photons_into(scene_, uint32_t(state_.passes), opt_.photons, photon_chunks_,
                          guided(opt_) ? &visible_ : nullptr, &gs);
@@ -246,7 +246,8 @@ void PppmRenderer::run_iteration() {
     EyePassOptions eo = opt_.eye;
     eo.pass = pass;
     trace_hitpoints_into(scene_, eo, eye_, eye_work_);
-    visible_.build(eye_.hitpoints, {pppm_pass_radius(sums_)});
+    visible_.build(eye_.hitpoints, {pppm_pass_radius(sums_)}, eye_.bsdf,
+                   opt_.eye.direct == DirectMode::ShadowRays);
     PhotonGuideStats gs;
     const uint64_t emitted = trace_photon_pass(scene_, opt_, pass, sums_.radius1, photon_chunks_,
                                                grid_, stored, &visible_, &gs);

@@ -8,6 +8,7 @@
 #include "photonflow/foundations/error.h"
 #include "photonflow/foundations/options.h"
 #include "photonflow/io/hitpoints_file.h"
+#include "photonflow/stages/illuminate.h"
 
 namespace pf {
 
@@ -45,11 +46,10 @@ bool VisibleSet::cell_of(const float p[3], float off, int64_t c[3]) const {
   return true;
 }
 
-void VisibleSet::build(const std::vector<pf_hitpoint>& points, const std::vector<float>& radius) {
-  x_.clear();
-  y_.clear();
-  z_.clear();
-  r_.clear();
+void VisibleSet::build(const std::vector<pf_hitpoint>& points, const std::vector<float>& radius,
+                       const std::vector<pf_pbr_point>& bsdf, bool skip_direct) {
+  pts_.clear();
+  skip_direct_ = skip_direct;
   rmax_ = 0.f;
   for (int a = 0; a < 3; ++a) lo_[a] = INFINITY;
   for (size_t k = 0; k < points.size(); ++k) {
@@ -58,14 +58,20 @@ void VisibleSet::build(const std::vector<pf_hitpoint>& points, const std::vector
     if (h.mesh < 0 || !(r >= 0.f) || !std::isfinite(r) || !std::isfinite(h.position[0]) ||
         !std::isfinite(h.position[1]) || !std::isfinite(h.position[2]))
       continue;
-    x_.push_back(h.position[0]);
-    y_.push_back(h.position[1]);
-    z_.push_back(h.position[2]);
-    r_.push_back(r);
+    Point q;
+    for (int a = 0; a < 3; ++a) {
+      q.x[a] = h.position[a];
+      q.n[a] = h.normal[a];
+    }
+    q.r = r;
+    q.mesh = h.mesh;
+    // A PBR point that is not on a PBR material has an all-zero entry: one-sided.
+    q.both_sides = k < bsdf.size() && pbr_two_sided_gather(&bsdf[k]);
+    pts_.push_back(q);
     rmax_ = std::max(rmax_, r);
     for (int a = 0; a < 3; ++a) lo_[a] = std::min(lo_[a], h.position[a]);
   }
-  const size_t n = x_.size();
+  const size_t n = pts_.size();
   if (n == 0) {
     start_.assign(2, 0);
     mask_ = 0;
@@ -81,30 +87,22 @@ void VisibleSet::build(const std::vector<pf_hitpoint>& points, const std::vector
   std::vector<uint32_t> slot(n);
   start_.assign(slots + 1, 0);
   for (size_t k = 0; k < n; ++k) {
-    const float p[3] = {x_[k], y_[k], z_[k]};
-    int64_t c[3];
-    cell_of(p, 0.f, c);
+    int64_t c[3] = {0, 0, 0};  // the position is finite (checked above)
+    cell_of(pts_[k].x, 0.f, c);
     slot[k] = uint32_t(slot_of(c[0], c[1], c[2]));
     start_[slot[k] + 1] += 1;
   }
   for (size_t s = 0; s < slots; ++s) start_[s + 1] += start_[s];
   std::vector<int32_t> cursor(start_.begin(), start_.end() - 1);
-  std::vector<float> x(n), y(n), z(n), r(n);
-  for (size_t k = 0; k < n; ++k) {  // stable counting sort by slot
-    const size_t at = size_t(cursor[slot[k]]++);
-    x[at] = x_[k];
-    y[at] = y_[k];
-    z[at] = z_[k];
-    r[at] = r_[k];
-  }
-  x_.swap(x);
-  y_.swap(y);
-  z_.swap(z);
-  r_.swap(r);
+  std::vector<Point> sorted(n);
+  for (size_t k = 0; k < n; ++k) sorted[size_t(cursor[slot[k]]++)] = pts_[k];  // stable, by slot
+  pts_.swap(sorted);
 }
 
-bool VisibleSet::near(const float p[3]) const {
-  if (x_.empty()) return false;
+bool VisibleSet::near(const pf_photon& ph) const {
+  if (pts_.empty()) return false;
+  if (skip_direct_ && (ph.flags & PF_PHOTON_DIRECT)) return false;
+  const float* p = ph.position;
   // The cells of the box p ± R_max (widened by a relative 1e-4, as PhotonGrid::for_each_in_radius:
   // a point outside it is farther than R_max in float).
   const float pad = rmax_ * 1.0001f;
@@ -114,11 +112,17 @@ bool VisibleSet::near(const float p[3]) const {
     for (int64_t cy = lo[1]; cy <= hi[1]; ++cy)
       for (int64_t cx = lo[0]; cx <= hi[0]; ++cx) {
         const size_t s = slot_of(cx, cy, cz);
-        for (int32_t k = start_[s]; k < start_[s + 1]; ++k)
-          if (pf_ppm_in_radius(pf_ppm_dist2(x_[size_t(k)], y_[size_t(k)], z_[size_t(k)], p[0],
-                                            p[1], p[2]),
-                               r_[size_t(k)]))
+        for (int32_t k = start_[s]; k < start_[s + 1]; ++k) {
+          const Point& q = pts_[size_t(k)];
+          // The gathers' rule without the slab (illuminate.h photon_accepted): the point's own
+          // mesh, arriving at its front unless it gathers from both sides.
+          if (q.mesh != ph.mesh) continue;
+          if (!q.both_sides &&
+              !(ph.dir[0] * q.n[0] + ph.dir[1] * q.n[1] + ph.dir[2] * q.n[2] < 0.f))
+            continue;
+          if (pf_ppm_in_radius(pf_ppm_dist2(q.x[0], q.x[1], q.x[2], p[0], p[1], p[2]), q.r))
             return true;
+        }
       }
   return false;
 }
@@ -131,7 +135,7 @@ void guide_points_from_file(const HitpointSet& h, const std::string& path, int f
                       "trace with --first-pass " + std::to_string(h.eye_pass) + " --passes 1");
   std::vector<float> r(h.hitpoints.size());
   for (size_t i = 0; i < r.size(); ++i) r[i] = h.hitpoints[i].radius;
-  out.build(h.hitpoints, r);
+  out.build(h.hitpoints, r, h.bsdf, h.direct_mode == DirectMode::ShadowRays);
 }
 
 }  // namespace pf

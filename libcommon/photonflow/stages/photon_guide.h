@@ -4,8 +4,8 @@
 //
 // A photon path is a function of its primary samples u ∈ [0,1)^d, the photon tracer's draws in
 // their order (light pick, position, direction, then per bounce; photon_pass.h). Its visibility
-// V(u) = 1 when one of its deposits lies within the radius of one of the pass's visible points
-// (VisibleSet below), else 0 (HJ11's importance function). With `visibility` every photon slot i of a pass
+// V(u) = 1 when one of its deposits is one that a visible point of the pass gathers (VisibleSet
+// below), else 0 (HJ11's importance function). With `visibility` every photon slot i of a pass
 //   1. traces the uniform photon of slot i (the stream (seed, pass, i): the very photon the
 //      uniform route traces there); when it is visible, its chain jumps to it (HJ11's replica
 //      exchange with the uniform photons: the chain reaches disconnected visible regions);
@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "photonflow/foundations/shared_types.h"
+#include "photonflow/material/pbr_point_shared.h"
 
 namespace pf {
 
@@ -52,29 +53,42 @@ constexpr float kGuideDeltaStart = 0.1f;       // δ of a chain's first mutation
 constexpr float kGuideDeltaMin = 1e-4f, kGuideDeltaMax = 0.5f;
 constexpr uint32_t kGuideMutationSalt = 0x6d757461u;  // "muta": the mutation streams' seed
 
-// The pass's visible points for V(u): "is a point p within the radius of any visible point".
-// Point k with radius r_k matches p when pf_ppm_in_radius(pf_ppm_dist2(x_k, p), r_k) (ppm.h: the
-// gathers' own test), so every photon a gather takes is near (V ⊇ what the gathers see; the mesh
-// and slab tests only narrow them further). A hashed grid of cells twice the largest radius wide.
+// The pass's visible points for V(u): "does photon deposit p land where a visible point gathers
+// it". Point k with radius r_k takes p when pf_ppm_in_radius(pf_ppm_dist2(x_k, p), r_k) (ppm.h:
+// the gathers' own test) and the gathers' acceptance holds (illuminate.h photon_accepted): p lies
+// on k's mesh, arrives at k's front (p.dir · n_k < 0) unless k is a transmissive PBR point
+// (pbr_two_sided_gather), and is not a direct photon when shadow rays give direct light. So V
+// holds every photon a gather takes (V ⊇ what the gathers see; only the slab narrows them
+// further), and no photon that no gather takes: a photon on the outside of a room's wall, a
+// radius away from a visible point inside, is not visible. A hashed grid of cells twice the
+// largest radius wide.
 class VisibleSet {
  public:
   VisibleSet() = default;
   // Points with a negative mesh (a pixel without a visible point) or a non-finite position or
   // radius are left out; radius[k] is point k's (one entry per point) or, with radius.size() == 1,
-  // every point's.
-  void build(const std::vector<pf_hitpoint>& points, const std::vector<float>& radius);
-  bool near(const float p[3]) const;
-  size_t size() const { return x_.size(); }
+  // every point's; bsdf[k] is point k's BSDF table entry (EyePassResult::bsdf; empty without PBR
+  // materials); skip_direct: the gathers skip PF_PHOTON_DIRECT photons (DirectMode::ShadowRays).
+  void build(const std::vector<pf_hitpoint>& points, const std::vector<float>& radius,
+             const std::vector<pf_pbr_point>& bsdf, bool skip_direct);
+  bool near(const pf_photon& p) const;
+  size_t size() const { return pts_.size(); }
   float max_radius() const { return rmax_; }
 
  private:
+  struct Point {
+    float x[3], n[3], r;
+    int32_t mesh;
+    bool both_sides;
+  };
   size_t slot_of(int64_t x, int64_t y, int64_t z) const;
   bool cell_of(const float p[3], float off, int64_t c[3]) const;
   float lo_[3] = {0, 0, 0};
   float cell_ = 1.f, rmax_ = 0.f;
   uint64_t mask_ = 0;
+  bool skip_direct_ = false;
   std::vector<int32_t> start_;  // slot k: points start_[k] .. start_[k+1) − 1
-  std::vector<float> x_, y_, z_, r_;
+  std::vector<Point> pts_;
 };
 
 struct HitpointSet;  // io/hitpoints_file.h

@@ -248,7 +248,7 @@ struct ChainSource {
 // V(u) of a traced path (photon_guide.h): one of its deposits lies near a visible point.
 bool path_visible(const VisibleSet& visible, const std::vector<pf_photon>& path) {
   for (const pf_photon& ph : path)
-    if (visible.near(ph.position)) return true;
+    if (visible.near(ph)) return true;
   return false;
 }
 
