@@ -269,9 +269,15 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
     /* thin lens: its point is drawn after the jitter (pixel_sampler.h) */
     float u1 = 0.5f, u2 = 0.5f;
     const int extra = smp >= spp;
+    /* the first glossy vertex's BSDF sample (pixel_sampler.h pf_eye_lobe_keyed) */
+    int lobe_sobol;
+    uint lobe_key, lobe_index;
     if (!extra) {
       const uint index = (uint)pix * (uint)spp + (uint)smp;
       rng = pf_rng_start(seed, PF_EYE_STREAM + pass, index);
+      lobe_sobol = sampler == PF_SAMPLER_SOBOL;
+      lobe_key = pf_sobol_key(seed);
+      lobe_index = pass * (uint)spp + (uint)smp;
       pf_eye_jitter(sampler, seed, pass, (uint)pix, smp, spp, columns, &rng, &jx, &jy);
       if (cam[14] > 0.0f)
         pf_eye_lens_keyed(sampler, pf_sobol_key(seed), pass, (uint)pix, smp, spp, &rng, &u1, &u2);
@@ -282,6 +288,9 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
       own_draws = pf_light_draws_from(pf_rng_start(seed, PF_GLOSSY_LIGHT_STREAM + pass, index));
       pf_sobol_pixel_sample_keyed(pf_glossy_sobol_key(seed), (uint)pix,
                                   pass * (uint)glossy_spp + (uint)k, &jx, &jy);
+      lobe_sobol = 1;
+      lobe_key = pf_glossy_sobol_key(seed);
+      lobe_index = pass * (uint)glossy_spp + (uint)k;
       if (cam[14] > 0.0f) {
         u1 = pf_rng_next(&rng);
         u2 = pf_rng_next(&rng);
@@ -379,9 +388,9 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
         float wi[3], wt[3], pdf = 0.0f;
         int sampled = 0;
         if (pbr && glossy_mis) {
-          const float u1 = pf_rng_next(&rng);
-          const float u2 = pf_rng_next(&rng);
-          const float u3 = pf_rng_next(&rng);
+          float u1, u2, u3;
+          pf_eye_lobe_keyed(lobe_sobol, lobe_key, (uint)pix, lobe_index, &rng, &u1, &u2, &u3);
+          lobe_sobol = 0;
           sampled = pf_pbr_scatter(&pt.params, sh.ns, sh.ng, wo, u1, u2, u3,
                                    PF_TRANSPORT_RADIANCE, wi, wt, &pdf);
         }

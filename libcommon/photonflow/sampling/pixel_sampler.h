@@ -153,6 +153,31 @@ PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint
   pf_eye_jitter_keyed(sampler, pf_sobol_key(seed), pass, pixel, s, spp, columns, rng, jx, jy);
 }
 
+/* The BSDF sample (u1, u2, u3) at the first glossy vertex of an eye path (GlossyMerge::Mis,
+ * eye_pass.cpp: the direction drawn there serves the vertex's direct light by MIS and the path's
+ * continuation), eye sample i = pass·spp + s of pixel `pixel` (a glossy sample: i = pass·G + k
+ * under pf_glossy_sobol_key). `sobol` 0: the next three dimensions of the eye stream `rng`, as at
+ * every later glossy vertex. `sobol` 1: a padded scrambled Sobol sequence, as pf_eye_lens_keyed:
+ * the index Owen-scrambled by the pixel's seed 9, then dimensions 0, 1 (the direction: a
+ * (0,2)-sequence) and 2 (the lobe choice) of sampling/sobol_shared.h, each Owen-scrambled with
+ * the pixel's seeds 10, 11, 12; `rng` skips the three dimensions it would have drawn. The
+ * pixel's lobe directions over all its passes then stratify the lobe as its positions stratify
+ * the pixel; each is uniform, so the estimates stay unbiased. */
+PF_INLINE void pf_eye_lobe_keyed(pf_int sobol, pf_uint key, pf_uint pixel, pf_uint i, pf_rng* rng,
+                                 pf_float* u1, pf_float* u2, pf_float* u3) {
+  if (!sobol) {
+    *u1 = pf_rng_next(rng);
+    *u2 = pf_rng_next(rng);
+    *u3 = pf_rng_next(rng);
+    return;
+  }
+  rng->dim += 3U;
+  const pf_uint j = pf_owen_scramble(i, pf_rng_bits(key, pixel, 9U));
+  *u1 = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(0U, j), pf_rng_bits(key, pixel, 10U)));
+  *u2 = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(1U, j), pf_rng_bits(key, pixel, 11U)));
+  *u3 = pf_rng_unit(pf_owen_scramble(pf_sobol_bits(2U, j), pf_rng_bits(key, pixel, 12U)));
+}
+
 /* The numbers of a visible point's light samples (the shadow rays of DirectMode::ShadowRays,
  * eye_pass.h; (ul, u1, u2) per sample: the light picked by power with ul, its point with u1, u2).
  *   STRATA, RANDOM  the shadow stream (seed, 0x5AD0000 + pass, pixel·spp + s), three dimensions a
@@ -171,7 +196,7 @@ PF_INLINE void pf_eye_jitter(pf_int sampler, pf_uint seed, pf_uint pass, pf_uint
  *                   point is uniform (Owen scrambling), so every estimate stays unbiased. j wraps past 2^32 samples per pixel (the
  *                   sequence then repeats: after 10^9 passes of 4 samples).
  * Seeds: pf_rng_bits(sobol_key, pixel, 5) for the index, 6, 7, 8 for the three dimensions (0–4
- * serve the pixel position and the lens). */
+ * serve the pixel position and the lens, 9–12 the first glossy vertex's BSDF sample). */
 typedef struct {
   pf_rng rng;        /* STRATA, RANDOM: the shadow stream */
   pf_uint sobol;     /* 1: Sobol points (SOBOL) */

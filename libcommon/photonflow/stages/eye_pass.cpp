@@ -274,9 +274,16 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
   // The light samples of a visible point: the pixel's (pixel_sampler.h pf_light_draws_start),
   // or a glossy sample's own stream.
   pf_light_draws own_draws{};
+  // The first glossy vertex's BSDF sample (pixel_sampler.h pf_eye_lobe_keyed): Sobol point
+  // `lobe_index` of the pixel under `lobe_key` when the pixel positions are Sobol's.
+  int lobe_sobol = 0;
+  uint32_t lobe_key = 0, lobe_index = 0;
   if (!extra) {
     const uint32_t index = uint32_t(pix * size_t(spp_) + size_t(s));
     rng = pf_rng{eye_key_, index, 0};  // = pf_rng_start(seed, kEyeStream + pass, index)
+    lobe_sobol = opt_.sampler == PixelSampler::Sobol;
+    lobe_key = sobol_key_;
+    lobe_index = opt_.pass * uint32_t(spp_) + uint32_t(s);
     pf_eye_jitter_keyed(int(opt_.sampler), sobol_key_, opt_.pass, uint32_t(pix), s, spp_,
                         columns_, &rng, &jx, &jy);
     // A thin lens draws its point on the lens next (pixel_sampler.h); a pinhole draws nothing,
@@ -291,6 +298,9 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
     own_draws = pf_light_draws_from(pf_rng_start(opt_.seed, PF_GLOSSY_LIGHT_STREAM + opt_.pass, index));
     pf_sobol_pixel_sample_keyed(glossy_key_, uint32_t(pix), opt_.pass * uint32_t(G) + uint32_t(k),
                                 &jx, &jy);
+    lobe_sobol = 1;
+    lobe_key = glossy_key_;
+    lobe_index = opt_.pass * uint32_t(G) + uint32_t(k);
     if (cam_.lens()) {
       u1 = pf_rng_next(&rng);
       u2 = pf_rng_next(&rng);
@@ -415,10 +425,13 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
                                        opt_.shadow_samples, rng, true, sh.leaf);
       }
-      // The BSDF's sample (radiance mode, u1, u2, u3 from the eye stream): the direct light's
-      // second strategy, and where the path goes on.
+      // The BSDF's sample (radiance mode): the direct light's second strategy, and where the
+      // path goes on; (u1, u2, u3) at the path's first glossy vertex by pf_eye_lobe_keyed, later
+      // from the eye stream.
       float wi[3], wt[3], pdf;
-      const float u1 = pf_rng_next(&rng), u2 = pf_rng_next(&rng), u3 = pf_rng_next(&rng);
+      float u1, u2, u3;
+      pf_eye_lobe_keyed(lobe_sobol, lobe_key, uint32_t(pix), lobe_index, &rng, &u1, &u2, &u3);
+      lobe_sobol = 0;
       const bool sampled =
           pf_pbr_scatter(&pt.params, ns, ng, wo, u1, u2, u3, PF_TRANSPORT_RADIANCE, wi, wt, &pdf);
       if (merge) {
