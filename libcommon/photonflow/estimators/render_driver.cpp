@@ -83,11 +83,6 @@ void sppm_visible(const EyePassResult& eye, const HitpointSet& state, VisibleSet
   }
   out.build(eye.hitpoints, r, eye.bsdf, state.direct_mode == DirectMode::ShadowRays);
 }
-void own_radius_visible(const HitpointSet& state, VisibleSet& out) {
-  std::vector<float> r(state.hitpoints.size());
-  for (size_t i = 0; i < r.size(); ++i) r[i] = state.hitpoints[i].radius;
-  out.build(state.hitpoints, r, state.bsdf, state.direct_mode == DirectMode::ShadowRays);
-}
 bool guided(const RenderOptions& opt) { return opt.photons.guide == PhotonGuide::Visibility; }
 }  // namespace
 
@@ -183,7 +178,7 @@ void ProgressiveRenderer::run_iteration() {
   // The same photons and the same gather as trace_photons + ppm_pass, without the copies: the
   // grid is sorted straight out of the per-chunk buffers, and every buffer is reused.
   PhotonGuideStats gs;
-  if (guided(opt_)) own_radius_visible(state_, visible_);  // R shrinks pass by pass
+  if (guided(opt_)) visible_at_own_radius(state_, visible_);  // R shrinks pass by pass
   const uint64_t emitted =
       trace_photons_into(scene_, uint32_t(state_.passes), opt_.photons, photon_chunks_,
                          guided(opt_) ? &visible_ : nullptr, &gs);

@@ -223,8 +223,8 @@ int gather_site(const Scene& scene, const PhotonGrid& grid, const pf_hitpoint& s
   const bool both_sides = pbr_two_sided_gather(pbr);  // a transmissive PBR point (illuminate.h)
   const auto facing = [&](int32_t i) {
     const pf_photon& p = photons[i];
-    if (p.mesh != mesh || (skip_direct && (p.flags & PF_PHOTON_DIRECT) != 0)) return false;
-    return both_sides || p.dir[0] * nrm[0] + p.dir[1] * nrm[1] + p.dir[2] * nrm[2] < 0.f;
+    if (skip_direct && (p.flags & PF_PHOTON_DIRECT) != 0) return false;
+    return photon_faces(p, mesh, nrm, both_sides);
   };
   const auto accepted = [&](int32_t i) {
     const pf_photon& p = photons[i];

@@ -148,12 +148,16 @@ void classic_estimate(const Scene& scene, HitpointSet& h, const std::vector<pf_p
 
 // True when photon `p` may contribute to hitpoint `hp` (the rule above, without the distance);
 // both_sides: a transmissive PBR point (pbr_two_sided_gather) skips the side test.
+// The mesh and side part of it: `p` lies on `mesh` and arrives at the front of unit normal `n`
+// (or both_sides). The gathers and the photon guide's visible set (photon_guide.h) call it.
+inline bool photon_faces(const pf_photon& p, int32_t mesh, const float n[3], bool both_sides) {
+  if (p.mesh != mesh) return false;
+  return both_sides || p.dir[0] * n[0] + p.dir[1] * n[1] + p.dir[2] * n[2] < 0.f;
+}
 inline bool photon_accepted(const pf_hitpoint& hp, const pf_photon& p, bool skip_direct,
                             bool both_sides = false) {
-  if (p.mesh != hp.mesh) return false;
   if (skip_direct && (p.flags & PF_PHOTON_DIRECT)) return false;
-  return both_sides ||
-         p.dir[0] * hp.normal[0] + p.dir[1] * hp.normal[1] + p.dir[2] * hp.normal[2] < 0.f;
+  return photon_faces(p, hp.mesh, hp.normal, both_sides);
 }
 
 }  // namespace pf

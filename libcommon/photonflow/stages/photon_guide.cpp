@@ -114,17 +114,20 @@ bool VisibleSet::near(const pf_photon& ph) const {
         const size_t s = slot_of(cx, cy, cz);
         for (int32_t k = start_[s]; k < start_[s + 1]; ++k) {
           const Point& q = pts_[size_t(k)];
-          // The gathers' rule without the slab (illuminate.h photon_accepted): the point's own
-          // mesh, arriving at its front unless it gathers from both sides.
-          if (q.mesh != ph.mesh) continue;
-          if (!q.both_sides &&
-              !(ph.dir[0] * q.n[0] + ph.dir[1] * q.n[1] + ph.dir[2] * q.n[2] < 0.f))
-            continue;
-          if (pf_ppm_in_radius(pf_ppm_dist2(q.x[0], q.x[1], q.x[2], p[0], p[1], p[2]), q.r))
+          // The gathers' rule without the slab (illuminate.h photon_accepted; its direct-photon
+          // test is made once above).
+          if (photon_faces(ph, q.mesh, q.n, q.both_sides) &&
+              pf_ppm_in_radius(pf_ppm_dist2(q.x[0], q.x[1], q.x[2], p[0], p[1], p[2]), q.r))
             return true;
         }
       }
   return false;
+}
+
+void visible_at_own_radius(const HitpointSet& h, VisibleSet& out) {
+  std::vector<float> r(h.hitpoints.size());
+  for (size_t i = 0; i < r.size(); ++i) r[i] = h.hitpoints[i].radius;
+  out.build(h.hitpoints, r, h.bsdf, h.direct_mode == DirectMode::ShadowRays);
 }
 
 void guide_points_from_file(const HitpointSet& h, const std::string& path, int first_pass,
@@ -133,9 +136,7 @@ void guide_points_from_file(const HitpointSet& h, const std::string& path, int f
     throw input_error(path, "is eye pass " + std::to_string(h.eye_pass) +
                                 ", it guides photon pass " + std::to_string(h.eye_pass) + " alone",
                       "trace with --first-pass " + std::to_string(h.eye_pass) + " --passes 1");
-  std::vector<float> r(h.hitpoints.size());
-  for (size_t i = 0; i < r.size(); ++i) r[i] = h.hitpoints[i].radius;
-  out.build(h.hitpoints, r, h.bsdf, h.direct_mode == DirectMode::ShadowRays);
+  visible_at_own_radius(h, out);
 }
 
 }  // namespace pf

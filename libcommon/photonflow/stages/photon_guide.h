@@ -93,6 +93,10 @@ class VisibleSet {
 
 struct HitpointSet;  // io/hitpoints_file.h
 
+// The visible points of a hitpoint set, each at its own radius, under the set's direct mode
+// (PPM's fixed hitpoints, whose R shrinks pass by pass, and trace-photons --hitpoints FILE).
+void visible_at_own_radius(const HitpointSet& h, VisibleSet& out);
+
 // The visible points of trace-photons --hitpoints FILE (each at its own radius, for pppm r_1 >=
 // the pass's r_i: V is wider than the gather, never narrower): an eye pass of trace-hitpoints
 // for the staged sppm and pppm routes, or PPM's fixed eye pass or state. An eye pass of pass
