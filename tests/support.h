@@ -318,6 +318,25 @@ inline Scene room_scene(int sphere_material_type, int width, int height) {
   return s;
 }
 
+// A w × w/2 sky of radiance `sky` (brighter towards the zenith) with a 2-texel sun of `sun` high
+// in it (row w/16).
+inline Environment sky_with_sun(int w, float sky, float sun) {
+  Environment e;
+  e.width = w;
+  e.height = w / 2;
+  e.texels.resize(size_t(w) * size_t(w / 2) * 3);
+  for (int row = 0; row < w / 2; ++row)
+    for (int col = 0; col < w; ++col) {
+      const float v = (float(row) + 0.5f) / float(w / 2);
+      const bool in_sun = row == w / 16 && (col == w / 3 || col == w / 3 + 1);
+      const float r = in_sun ? sun : sky * (1.5f - v);
+      for (int c = 0; c < 3; ++c)
+        e.texels[3 * (size_t(row) * size_t(w) + size_t(col)) + size_t(c)] = r * (c == 2 ? 1.f : 0.8f);
+    }
+  e.source = "test sky";
+  return e;
+}
+
 // Σ v² over all values of a layer (> 0: the layer is not black).
 inline double sum_squares(const std::vector<float>& v) {
   double s = 0;

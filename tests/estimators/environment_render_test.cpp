@@ -57,24 +57,6 @@ double image_mean(const Image& img) {
   return sum / (double(img.width) * img.height);
 }
 
-// A w × w/2 sky of radiance `sky` (brighter towards the zenith) with a small sun of `sun`.
-Environment sky_with_sun(int w, float sky, float sun) {
-  Environment e;
-  e.width = w;
-  e.height = w / 2;
-  e.texels.resize(size_t(w) * size_t(w / 2) * 3);
-  for (int row = 0; row < w / 2; ++row)
-    for (int col = 0; col < w; ++col) {
-      const float v = (float(row) + 0.5f) / float(w / 2);
-      const bool in_sun = row == w / 16 && (col == w / 3 || col == w / 3 + 1);
-      const float r = in_sun ? sun : sky * (1.5f - v);
-      for (int c = 0; c < 3; ++c)
-        e.texels[3 * (size_t(row) * size_t(w) + size_t(col)) + size_t(c)] = r * (c == 2 ? 1.f : 0.8f);
-    }
-  e.source = "test sky";
-  return e;
-}
-
 // A sphere of `m` over a diffuse floor under `env`, seen from the side.
 Scene sphere_scene(const pf_material& m, const Environment& env, int w, int h) {
   Scene s;
@@ -139,7 +121,7 @@ TEST_CASE("environment in the photon mappers: glossy metal and rough glass under
   // The sun is a texel 10^3 times the sky: the light sampling finds it, MIS keeps the glossy
   // highlights bounded; the image means of sppm and pppm (both rules) and the path tracer agree
   // within their spread over seeds plus the photon estimators' smoothing bias (5 %).
-  const Environment env = sky_with_sun(64, 0.5f, 500.f);
+  const Environment env = test::sky_with_sun(64, 0.5f, 500.f);
   const bool glass = GENERATE(false, true);
   const Scene s = sphere_scene(glass ? pbr(0, 0.2f, 1) : pbr(1, 0.3f, 0), env, 24, 18);
   INFO((glass ? "rough glass" : "rough metal"));
@@ -174,7 +156,7 @@ TEST_CASE("environment in the photon mappers: the OpenCL route renders the CPU's
           "[environment][opencl]") {
   auto dev = test::test_device();
   if (!dev) return;
-  const Scene s = sphere_scene(pbr(1, 0.3f, 0), sky_with_sun(64, 0.5f, 500.f), 32, 24);
+  const Scene s = sphere_scene(pbr(1, 0.3f, 0), test::sky_with_sun(64, 0.5f, 500.f), 32, 24);
   test::check_device_route(s, Estimator::Pppm, GatherMethod::HashGrid, 3, 6000, *dev,
                            GlossyMerge::Mis);
   test::check_device_route(s, Estimator::Sppm, GatherMethod::HashGrid, 3, 6000, *dev,

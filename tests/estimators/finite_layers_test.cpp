@@ -44,24 +44,6 @@ pf_material material(int type, float rho, float metallic = 0.f, float roughness 
   return m;
 }
 
-// The sky of 0.4 (brighter at the zenith) with a 2-texel sun of 4000 high in the sky.
-Environment sky(int w) {
-  Environment e;
-  e.width = w;
-  e.height = w / 2;
-  e.texels.resize(size_t(w) * size_t(w / 2) * 3);
-  for (int row = 0; row < w / 2; ++row)
-    for (int col = 0; col < w; ++col) {
-      const bool sun = row == w / 10 && (col == w / 5 || col == w / 5 + 1);
-      const float v = (float(row) + 0.5f) / float(w / 2);
-      for (int c = 0; c < 3; ++c)
-        e.texels[3 * (size_t(row) * size_t(w) + size_t(col)) + size_t(c)] =
-            sun ? 4000.f : 0.4f * (1.5f - v) * (c == 2 ? 1.f : 0.8f);
-    }
-  e.source = "test sky with a sun";
-  return e;
-}
-
 // Seven objects on a floor, an area lamp above them; a low camera, so the floor is seen at
 // grazing angles and the objects against the sky.
 Scene everything_scene(int w, int h) {
@@ -110,7 +92,7 @@ Scene everything_scene(int w, int h) {
   normalize(Vec3(-0.3f, -1.f, -0.2f)).store(sun.direction);
   for (float& c : sun.radiance) c = 1.5f;
   s.lights = {point, spot, sun};
-  s.environment = sky(64);
+  s.environment = test::sky_with_sun(64, 0.4f, 4000.f);  // a sun 10⁴ times the sky
   s.camera = pf_camera{{0.1f, 0.12f, 2.6f}, {0.1f, 0.3f, 0.f}, {0, 1, 0}, 55.f, w, h};
   finish_scene(s);
   return s;
