@@ -7,7 +7,7 @@
  * ropes (intersect_shared.h) — the spatial index the thesis's GPU tracer did not have.
  *
  * Random numbers: stream (seed, kEyeStream + pass, pixel·spp + s) for jitter (pixel_sampler.h)
- * and glass choices; the shadow rays' light samples by pf_light_draws (pixel_sampler.h: the
+ * and glass choices; the shadow rays' light samples by pf_light_draws_vertex (pixel_sampler.h: the
  * pixel's Sobol points under the SOBOL sampler, stream (seed, kShadowStream + pass, same index)
  * otherwise) — the CPU's streams and dimension order. PPM's one eye pass is pass 0; SPPM and
  * PPPM trace one per pass.
@@ -264,7 +264,6 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
     const size_t slot = (size_t)local_pix * (size_t)slots_per_pixel + (size_t)smp;
     used[slot] = 0;
     pf_rng rng;
-    pf_light_draws own_draws;
     float jx, jy;
     /* thin lens: its point is drawn after the jitter (pixel_sampler.h) */
     float u1 = 0.5f, u2 = 0.5f;
@@ -285,7 +284,6 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
       const int k = smp - spp;
       const uint index = (uint)pix * (uint)glossy_spp + (uint)k;
       rng = pf_rng_start(seed, PF_GLOSSY_STREAM + pass, index);
-      own_draws = pf_light_draws_from(pf_rng_start(seed, PF_GLOSSY_LIGHT_STREAM + pass, index));
       pf_sobol_pixel_sample_keyed(pf_glossy_sobol_key(seed), (uint)pix,
                                   pass * (uint)glossy_spp + (uint)k, &jx, &jy);
       lobe_sobol = 1;
@@ -296,6 +294,10 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
         u2 = pf_rng_next(&rng);
       }
     }
+    /* eye_pass.cpp nee_draws: the light draws of the path's vertices with next-event
+     * estimation, in order (pixel_sampler.h pf_light_draws_vertex) */
+    const int draws_sobol = extra || sampler == PF_SAMPLER_SOBOL;
+    int nee = 0, eye_draws = 0;
     float o[3], d[3];
     pf_camera_ray(cam, width, height, (float)x + jx, (float)y + jy, u1, u2, o, d);
     const float w0 = 1.0f / (float)n_samples;
@@ -365,20 +367,12 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
             q = pf_merge_probability(&pt.params, o_loc);
             const float u_merge = pf_rng_next(&rng);
             merge = q >= 1.0f || (q > 0.0f && u_merge < q);
-            if (merge) {
-              pf_light_draws draws = extra ? own_draws
-                                                  : pf_light_draws_start(sampler, seed,
-                                                                         pf_sobol_key(seed), pass,
-                                                                         (uint)pix, smp, spp,
-                                                                         shadow_samples);
-              pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws,
-                                  1, eps, T, direct, leaf);
-            } else {
-              pf_light_draws gd = pf_light_draws_from(rng);
-              pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &gd, 1,
-                                  eps, T, direct, leaf);
-              rng = gd.rng;
-            }
+            pf_light_draws draws =
+                pf_light_draws_vertex(draws_sobol, lobe_key, seed, pass, (uint)pix, smp, spp,
+                                      lobe_index, shadow_samples, nee++, rng, &eye_draws);
+            pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws, 1,
+                                eps, T, direct, leaf);
+            if (eye_draws) rng = draws.rng;
           }
         } else if (pf_texture_factor(textures, texels, mat_tex, uvs, sh.material, &h, tf)) {
           for (int k = 0; k < 3; ++k) T[k] = T[k] * tf[k];
@@ -452,23 +446,18 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
           pf_offset_origin(&sh, d, eps, o);
           continue;
         }
-        if (shadow_rays && pbr) {
-          pf_light_draws draws = extra ? own_draws
-                                              : pf_light_draws_start(sampler, seed,
-                                                                     pf_sobol_key(seed), pass,
-                                                                     (uint)pix, smp, spp,
-                                                                     shadow_samples);
-          pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws, 0,
-                              eps, T, direct, leaf);
-        } else if (shadow_rays) {
-          float ng[3];
-          for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
-          pf_light_draws draws = extra ? own_draws
-                                              : pf_light_draws_start(sampler, seed,
-                                                                     pf_sobol_key(seed), pass,
-                                                                     (uint)pix, smp, spp,
-                                                                     shadow_samples);
-          pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, &draws, eps, T, direct, leaf);
+        if (shadow_rays) {
+          pf_light_draws draws =
+              pf_light_draws_vertex(draws_sobol, lobe_key, seed, pass, (uint)pix, smp, spp,
+                                    lobe_index, shadow_samples, nee++, rng, &eye_draws);
+          if (pbr) {
+            pf_direct_light_pbr(&s, sh.p, sh.ng, sh.ns, &pt.params, wo, shadow_samples, &draws, 0,
+                                eps, T, direct, leaf);
+          } else {
+            float ng[3];
+            for (int k = 0; k < 3; ++k) ng[k] = sh.front ? sh.ng[k] : -sh.ng[k];
+            pf_direct_light(&s, sh.p, ng, n, m, shadow_samples, &draws, eps, T, direct, leaf);
+          }
         }
         break;
       }

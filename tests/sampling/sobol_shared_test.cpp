@@ -154,6 +154,72 @@ TEST_CASE("Light samples: a pixel's Sobol draws over the passes stratify the lig
   }
 }
 
+TEST_CASE("Light samples: the first two vertices of an eye path each draw a stratified set, "
+          "later ones the eye stream",
+          "[sobol][eye]") {
+  // pf_light_draws_vertex: vertex 0 = pf_light_draws_start's set; vertex 1 = a second set, over
+  // the passes a (0,k,2)-net too and not the first's points; vertex 2 on = the eye stream. The
+  // same under a glossy sample's key with sobol set (index pass·G + k).
+  const int k = 8, n = 1 << k, samples = 1, spp = 1;
+  const uint32_t pixel = 4242, seed = 9;
+  for (uint32_t key : {pf_sobol_key(seed), pf_glossy_sobol_key(seed)}) {
+    std::vector<float> u[2][3];
+    int same = 0;
+    for (int pass = 0; pass < n; ++pass) {
+      const pf_rng eye = pf_rng_start(seed, 0xE7E0000u + uint32_t(pass), pixel);
+      float v[2][3];
+      for (int vertex = 0; vertex < 2; ++vertex) {
+        pf_int from_eye = -1;
+        pf_light_draws d = pf_light_draws_vertex(1, key, seed, uint32_t(pass), pixel, 0, spp,
+                                                 uint32_t(pass), samples, vertex, eye, &from_eye);
+        CHECK(from_eye == 0);
+        pf_light_draws_next(&d, &v[vertex][0], &v[vertex][1], &v[vertex][2]);
+        for (int c = 0; c < 3; ++c) u[vertex][c].push_back(v[vertex][c]);
+      }
+      if (key == pf_sobol_key(seed)) {  // vertex 0 is the pixel's set of pf_light_draws_start
+        pf_light_draws d0 = pf_light_draws_start(PF_SAMPLER_SOBOL, seed, key, uint32_t(pass),
+                                                 pixel, 0, spp, samples);
+        float a, b, c;
+        pf_light_draws_next(&d0, &a, &b, &c);
+        CHECK((a == v[0][0] && b == v[0][1] && c == v[0][2]));
+      }
+      same += v[0][1] == v[1][1] && v[0][2] == v[1][2];
+      // vertex 2 continues the eye stream
+      pf_int from_eye = 0;
+      pf_light_draws d2 = pf_light_draws_vertex(1, key, seed, uint32_t(pass), pixel, 0, spp,
+                                                uint32_t(pass), samples, 2, eye, &from_eye);
+      CHECK(from_eye == 1);
+      pf_rng r = eye;
+      float a, b, c;
+      pf_light_draws_next(&d2, &a, &b, &c);
+      CHECK((a == pf_rng_next(&r) && b == pf_rng_next(&r) && c == pf_rng_next(&r)));
+      CHECK((d2.rng.index == r.index && d2.rng.dim == r.dim));
+    }
+    for (int vertex = 0; vertex < 2; ++vertex) {
+      INFO("vertex " << vertex);
+      CHECK(test::is_net(u[vertex][1], u[vertex][2], k));
+      CHECK(stratified_1d(u[vertex][0], k));
+    }
+    CHECK(same == 0);
+  }
+  // Without Sobol draws vertex 0 is the shadow stream, vertex 1 already the eye stream.
+  const pf_rng eye = pf_rng_start(seed, 0xE7E0000u + 3u, pixel);
+  pf_int from_eye = -1;
+  pf_light_draws d0 = pf_light_draws_vertex(0, pf_sobol_key(seed), seed, 3, pixel, 1, 2, 7, 4, 0,
+                                            eye, &from_eye);
+  CHECK(from_eye == 0);
+  pf_rng r0 = pf_rng_start(seed, PF_SHADOW_STREAM_SLOT + 3, pixel * 2 + 1);
+  float a, b, c;
+  pf_light_draws_next(&d0, &a, &b, &c);
+  CHECK((a == pf_rng_next(&r0) && b == pf_rng_next(&r0) && c == pf_rng_next(&r0)));
+  pf_light_draws d1 = pf_light_draws_vertex(0, pf_sobol_key(seed), seed, 3, pixel, 1, 2, 7, 4, 1,
+                                            eye, &from_eye);
+  CHECK(from_eye == 1);
+  pf_rng r1 = eye;
+  pf_light_draws_next(&d1, &a, &b, &c);
+  CHECK((a == pf_rng_next(&r1) && b == pf_rng_next(&r1) && c == pf_rng_next(&r1)));
+}
+
 TEST_CASE("Light samples: Sobol draws give the same direct light with less variance than "
           "independent ones",
           "[sobol][eye][transport]") {

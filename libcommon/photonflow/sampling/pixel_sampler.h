@@ -60,10 +60,11 @@ PF_INLINE pf_uint pf_emission_sobol_key(pf_uint seed) { return pf_rng_key(seed, 
 /* Glossy samples (eye_pass.h, EyePassOptions::glossy_spp): eye samples more in the pixels whose
  * first glossy vertex continues. Sample k of G of pixel `pixel` in pass `pass` jitters by point
  * pass·G + k of a third scrambled (0,2)-sequence of the pixel (key pf_glossy_sobol_key, pass slot
- * 0x50B2000) and draws everything else from stream (seed, PF_GLOSSY_STREAM + pass, pixel·G + k),
- * its light samples from stream (seed, PF_GLOSSY_LIGHT_STREAM + pass, same index). */
+ * 0x50B2000), takes its first glossy vertex's BSDF sample and the light samples of its first two
+ * vertices with next-event estimation from the same key (pf_eye_lobe_keyed, pf_light_draws_vertex
+ * at point pass·G + k), and draws everything else from stream (seed, PF_GLOSSY_STREAM + pass,
+ * pixel·G + k). */
 #define PF_GLOSSY_STREAM 0xE6E0000U
-#define PF_GLOSSY_LIGHT_STREAM 0xE6F0000U
 PF_INLINE pf_uint pf_glossy_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B2000U); }
 
 /* The numbers of emission sample k of pixel `pixel`: stream (seed, PF_EMISSION_STREAM + pass,
@@ -196,7 +197,8 @@ PF_INLINE void pf_eye_lobe_keyed(pf_int sobol, pf_uint key, pf_uint pixel, pf_ui
  *                   point is uniform (Owen scrambling), so every estimate stays unbiased. j wraps past 2^32 samples per pixel (the
  *                   sequence then repeats: after 10^9 passes of 4 samples).
  * Seeds: pf_rng_bits(sobol_key, pixel, 5) for the index, 6, 7, 8 for the three dimensions (0–4
- * serve the pixel position and the lens, 9–12 the first glossy vertex's BSDF sample). */
+ * serve the pixel position and the lens, 9–12 the first glossy vertex's BSDF sample, 13–16 the
+ * light samples of a path's second vertex with next-event estimation, pf_light_draws_vertex). */
 typedef struct {
   pf_rng rng;        /* STRATA, RANDOM: the shadow stream */
   pf_uint sobol;     /* 1: Sobol points (SOBOL) */
@@ -207,18 +209,30 @@ typedef struct {
 /* Random stream of the shadow rays: pass slot 0x5AD (eye_pass.cpp kShadowStream). */
 #define PF_SHADOW_STREAM_SLOT 0x5AD0000U
 
+/* Sobol draws under `key` from point (i·samples) on; `set` 0 takes seeds 5–8, set 1 seeds 13–16
+ * (an independently scrambled second sequence of the pixel). */
+PF_INLINE pf_light_draws pf_light_draws_sobol(pf_uint key, pf_uint pixel, pf_uint i, pf_int samples,
+                                              pf_uint set) {
+  pf_light_draws d;
+  d.rng.key = d.rng.index = d.rng.dim = 0U;
+  d.sobol = 1U;
+  d.next = i * (pf_uint)samples;
+  const pf_uint slot = set == 0U ? 5U : 13U;
+  for (pf_uint k = 0U; k < 4U; ++k) d.seeds[k] = pf_rng_bits(key, pixel, slot + k);
+  return d;
+}
+
 PF_INLINE pf_light_draws pf_light_draws_start(pf_int sampler, pf_uint seed, pf_uint sobol_key,
                                               pf_uint pass, pf_uint pixel, pf_int s, pf_int spp,
                                               pf_int samples) {
+  const pf_uint i = pass * (pf_uint)spp + (pf_uint)s;
+  if (sampler == PF_SAMPLER_SOBOL) return pf_light_draws_sobol(sobol_key, pixel, i, samples, 0U);
+  /* Only the draws in use are keyed: the shadow stream. */
   pf_light_draws d;
-  d.sobol = sampler == PF_SAMPLER_SOBOL ? 1U : 0U;
-  /* Only the draws in use are keyed: the shadow stream, or the pixel's four seeds. */
-  d.rng.key = d.rng.index = d.rng.dim = 0U;
-  if (!d.sobol)
-    d.rng = pf_rng_start(seed, PF_SHADOW_STREAM_SLOT + pass, pixel * (pf_uint)spp + (pf_uint)s);
-  d.next = (pass * (pf_uint)spp + (pf_uint)s) * (pf_uint)samples;
-  for (pf_uint k = 0U; k < 4U; ++k)
-    d.seeds[k] = d.sobol ? pf_rng_bits(sobol_key, pixel, 5U + k) : 0U;
+  d.sobol = 0U;
+  d.rng = pf_rng_start(seed, PF_SHADOW_STREAM_SLOT + pass, pixel * (pf_uint)spp + (pf_uint)s);
+  d.next = i * (pf_uint)samples;
+  for (pf_uint k = 0U; k < 4U; ++k) d.seeds[k] = 0U;
   return d;
 }
 
@@ -230,6 +244,26 @@ PF_INLINE pf_light_draws pf_light_draws_from(pf_rng rng) {
   d.next = 0U;
   for (pf_uint k = 0U; k < 4U; ++k) d.seeds[k] = 0U;
   return d;
+}
+
+/* The light draws at the `vertex`-th vertex of eye sample s's path that estimates direct light
+ * (0 = the first; an eye path through glossy points estimates it at each, eye_pass.cpp). With
+ * Sobol draws (`sobol`: the pixel sampler is SOBOL, or a glossy sample) vertex 0 takes the
+ * pixel's set 0 under `key` and vertex 1 its set 1, both from point i·samples on (i = pass·spp +
+ * s, or pass·G + k for glossy sample k, under its own key); so the light samples of the first two
+ * vertices both stratify over the passes. Otherwise vertex 0 takes the shadow stream
+ * (pf_light_draws_start). Later vertices draw from the eye stream `eye`: *from_eye is then 1, and
+ * the caller's eye stream goes on from the returned draws' rng after their use. */
+PF_INLINE pf_light_draws pf_light_draws_vertex(pf_int sobol, pf_uint key, pf_uint seed,
+                                               pf_uint pass, pf_uint pixel, pf_int s, pf_int spp,
+                                               pf_uint i, pf_int samples, pf_int vertex,
+                                               pf_rng eye, pf_int* from_eye) {
+  *from_eye = 0;
+  if (sobol && vertex < 2) return pf_light_draws_sobol(key, pixel, i, samples, (pf_uint)vertex);
+  if (vertex == 0) return pf_light_draws_start(PF_SAMPLER_RANDOM, seed, 0U, pass, pixel, s, spp,
+                                               samples);
+  *from_eye = 1;
+  return pf_light_draws_from(eye);
 }
 
 /* The next light sample's (ul, u1, u2). */

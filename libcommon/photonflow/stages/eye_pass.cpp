@@ -157,16 +157,6 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
   return direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, draws, false);
 }
 
-Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
-                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_rng& rng, bool mis, int32_t leaf) {
-  pf_light_draws draws = pf_light_draws_from(rng);
-  const Vec3 l = direct_light_pbr(scene, p, ng_front, ns_front, params, wo, samples, draws,
-                                  mis, leaf);
-  rng = draws.rng;  // the caller's stream goes on after the draws
-  return l;
-}
-
 void check_options(const EyePassOptions& opt) {
   require_positive("spp", opt.spp);
   require_positive("max-depth", opt.max_depth);
@@ -271,9 +261,6 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
   pf_rng rng;
   float jx, jy;
   float u1 = 0.5f, u2 = 0.5f;
-  // The light samples of a visible point: the pixel's (pixel_sampler.h pf_light_draws_start),
-  // or a glossy sample's own stream.
-  pf_light_draws own_draws{};
   // The first glossy vertex's BSDF sample (pixel_sampler.h pf_eye_lobe_keyed): Sobol point
   // `lobe_index` of the pixel under `lobe_key` when the pixel positions are Sobol's.
   int lobe_sobol = 0;
@@ -295,7 +282,6 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
     const int G = opt_.glossy_spp, k = s - spp_;
     const uint32_t index = uint32_t(pix * size_t(G) + size_t(k));
     rng = pf_rng_start(opt_.seed, PF_GLOSSY_STREAM + opt_.pass, index);
-    own_draws = pf_light_draws_from(pf_rng_start(opt_.seed, PF_GLOSSY_LIGHT_STREAM + opt_.pass, index));
     pf_sobol_pixel_sample_keyed(glossy_key_, uint32_t(pix), opt_.pass * uint32_t(G) + uint32_t(k),
                                 &jx, &jy);
     lobe_sobol = 1;
@@ -306,7 +292,19 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       u2 = pf_rng_next(&rng);
     }
   }
-  auto draws_here = [&]() { return extra ? own_draws : light_draws(pix, s); };
+  // The light samples of the path's vertices with next-event estimation, in order
+  // (pixel_sampler.h pf_light_draws_vertex): Sobol points of the pixel (a glossy sample's under
+  // its own key) at the first two, the eye stream after; `eye_draws` says the last call drew
+  // from the eye stream, which then goes on from the draws' (nee_done).
+  const int draws_sobol = extra || opt_.sampler == PixelSampler::Sobol;
+  int nee = 0, eye_draws = 0;
+  auto nee_draws = [&]() {
+    return pf_light_draws_vertex(draws_sobol, lobe_key, opt_.seed, opt_.pass, uint32_t(pix), s,
+                                 spp_, lobe_index, opt_.shadow_samples, nee++, rng, &eye_draws);
+  };
+  auto nee_done = [&](const pf_light_draws& d) {
+    if (eye_draws) rng = d.rng;
+  };
   Ray ray;
   cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
   ray.leaf = camera_leaf_;
@@ -367,9 +365,10 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       hp.mesh = sh.mesh;
       hp.material = sh.material;
       if (opt_.direct == DirectMode::ShadowRays) {
-        pf_light_draws draws = draws_here();
+        pf_light_draws draws = nee_draws();
         direct += T * direct_light(scene_, sh.p, sh.front ? sh.ng : -sh.ng, n, m,
                                    opt_.shadow_samples, draws, sh.leaf);
+        nee_done(draws);
       }
       if (pbr) *pbr = pf_pbr_point{};
       return true;
@@ -398,9 +397,10 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         // No random number is drawn here; direct light by light sampling alone.
         visible_point(T);
         if (opt_.direct == DirectMode::ShadowRays) {
-          pf_light_draws draws = draws_here();
+          pf_light_draws draws = nee_draws();
           direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
                                          opt_.shadow_samples, draws, false, sh.leaf);
+          nee_done(draws);
         }
         return true;
       }
@@ -414,16 +414,13 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       const float q = pf_merge_probability(&pt.params, o);
       const float u_merge = pf_rng_next(&rng);
       const bool merge = q >= 1.f || (q > 0.f && u_merge < q);
-      // Direct light: next-event estimation weighted against the BSDF's sample below (from the
-      // pixel's light draws where the point is the visible point, as at a diffuse one, from the
-      // eye stream where the path goes on).
-      if (merge) {
-        pf_light_draws draws = draws_here();
+      // Direct light: next-event estimation weighted against the BSDF's sample below, whether
+      // the point is the visible point or the path goes on.
+      {
+        pf_light_draws draws = nee_draws();
         direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
                                        opt_.shadow_samples, draws, true, sh.leaf);
-      } else {
-        direct += T * direct_light_pbr(scene_, sh.p, sh.ng, sh.ns, pt.params, -d,
-                                       opt_.shadow_samples, rng, true, sh.leaf);
+        nee_done(draws);
       }
       // The BSDF's sample (radiance mode): the direct light's second strategy, and where the
       // path goes on; (u1, u2, u3) at the path's first glossy vertex by pf_eye_lobe_keyed, later

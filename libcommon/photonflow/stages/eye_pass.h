@@ -64,9 +64,10 @@ struct EyePassOptions {
   uint32_t seed = 1;
   int threads = 0;         // 0 = all cores; results do not depend on it
   // Which eye pass this is: SPPM and probabilistic PPM trace a new one before every photon pass
-  // (pass p uses eye stream (seed, 0xE7E0000 + p, pixel·spp + s), and for its light samples
-  // the pixel's Sobol points under PixelSampler::Sobol or the shadow stream (seed, 0x5AD0000 + p,
-  // same index) otherwise: pixel_sampler.h pf_light_draws); PPM's one eye pass is pass 0.
+  // (pass p uses eye stream (seed, 0xE7E0000 + p, pixel·spp + s), and for the light samples of
+  // a path's vertices the pixel's Sobol points under PixelSampler::Sobol or the shadow stream
+  // (seed, 0x5AD0000 + p, same index) otherwise: pixel_sampler.h pf_light_draws_vertex); PPM's
+  // one eye pass is pass 0.
   uint32_t pass = 0;
   PixelSampler sampler = PixelSampler::Strata;
   // What an eye path does at a PF_MAT_PBR point (GlossyMerge below). render's and
@@ -233,11 +234,6 @@ class EyeTracer {
   // Mis): against the shadow_samples light samples next-event estimation drew there.
   float emitter_hit_weight(const Ray& ray, const Hit& h, const SurfaceHit& sh,
                            float bsdf_pdf) const;
-  // The light samples of eye sample s of pixel `pix` (pixel_sampler.h pf_light_draws_start).
-  pf_light_draws light_draws(size_t pix, int s) const {
-    return pf_light_draws_start(int(opt_.sampler), opt_.seed, sobol_key_, opt_.pass,
-                                pf_uint(pix), s, spp_, opt_.shadow_samples);
-  }
 };
 
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with
@@ -266,10 +262,5 @@ Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
 Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
                       const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
                       int samples, pf_light_draws& draws, bool mis, int32_t leaf = -1);
-// The same drawing from `rng` (a glossy vertex's samples come from the eye stream), which comes
-// back advanced past the draws.
-Vec3 direct_light_pbr(const Scene& scene, const Vec3& p, const Vec3& ng_front,
-                      const Vec3& ns_front, const pf_bsdf_params& params, const Vec3& wo,
-                      int samples, pf_rng& rng, bool mis, int32_t leaf = -1);
 
 }  // namespace pf
