@@ -7,7 +7,7 @@
 #include "photonflow/opencl/cl_backend.h"
 #include "photonflow/opencl/device_options.h"
 #include "photonflow/foundations/options.h"
-#include "photonflow/stages/photon_pass.h"
+#include "photonflow/stages/photon_run.h"
 #include "photonflow/foundations/progress.h"
 #include "photonflow/estimators/render_defaults.h"
 #include "photonflow/io/stage_files.h"
@@ -66,33 +66,17 @@ int main(int argc, char** argv) {
     if (given == 0) opt.photons = pf::choose_defaults(scene).photons;
     const uint32_t photons = opt.photons;
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "trace-photons");
-    if (guided && dev)
-      throw pf::input_error("", "--photon-guide visibility traces photons on the CPU only",
-                            "drop --device opencl, or use --photon-guide uniform");
-    pf::VisibleSet visible;
     std::string hitpoints_path;
     pf::HitpointSet eye;
     if (guided) {
       hitpoints_path = a["hitpoints"].as<std::string>();
       eye = pf::load_hitpoints(hitpoints_path);
-      pf::require_scene(hitpoints_path, eye.scene_id, scene.scene_id, scene.source);
-      pf::guide_points_from_file(eye, hitpoints_path, first, passes, visible);
     }
-    pf::PhotonGuideStats guide;
-    pf::PhotonSet set;
-    set.first_pass = first;
-    set.seed = opt.seed;
-    set.scene_id = scene.scene_id;
     pf::Progress progress("pass", passes, "photons");
-    for (int p = 0; p < passes; ++p) {
-      pf::PhotonGuideStats gs;
-      pf::PhotonPassResult r = dev ? pf::trace_photons(scene, uint32_t(first + p), opt, *dev)
-                                   : pf::trace_photons(scene, uint32_t(first + p), opt,
-                                                       guided ? &visible : nullptr, &gs);
-      guide.add(gs);
-      set.append_pass(r.photons, r.emitted);
-      progress.update(p + 1, double(photons) * (p + 1));
-    }
+    pf::PhotonRun run = pf::trace_photon_run(scene, first, passes, opt, dev.get(),
+                                             guided ? &eye : nullptr, hitpoints_path, &progress);
+    const pf::PhotonSet& set = run.set;
+    const pf::PhotonGuideStats& guide = run.guide;
     pf::Provenance prov;
     prov.tool = "trace-photons";
     prov.seed = opt.seed;
