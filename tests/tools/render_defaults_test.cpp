@@ -27,6 +27,38 @@ std::map<std::string, std::string> record_parameters(const std::string& file) {
   return out;
 }
 
+// The staged route with no estimator, direct light, photon count or shadow samples:
+// trace-hitpoints and illuminate default to render's, trace-photons to its count; pass p > 0
+// names only its pass and the state before it. Returns synthesize's image of `passes` passes.
+Image staged_image(test::TempDir& tmp, const std::string& scene, int passes) {
+  std::string state;
+  for (int p = 0; p < passes; ++p) {
+    const std::string eye = tmp / ("eye" + std::to_string(p) + ".h5");
+    const std::string ph = tmp / ("ph" + std::to_string(p) + ".h5");
+    const std::string next = tmp / ("sums" + std::to_string(p) + ".h5");  // pppm's pass sums
+    REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) +
+                                                  (p > 0 ? " --pass " + std::to_string(p) : "") +
+                                                  " -o " + q(eye),
+                           tmp)
+                .exit_code == 0);
+    REQUIRE(test::run_tool("trace-photons", "--scene " + q(scene) + " --first-pass " +
+                                                std::to_string(p) + " -o " + q(ph),
+                           tmp)
+                .exit_code == 0);
+    REQUIRE(test::run_tool("illuminate", "--scene " + q(scene) + " --hitpoints " +
+                                             q(eye) + " --photons " + q(ph) +
+                                             (state.empty() ? "" : " --state " + q(state)) +
+                                             " -o " + q(next),
+                           tmp)
+                .exit_code == 0);
+    state = next;
+  }
+  REQUIRE(test::run_tool("synthesize", "--sums " + q(state) + " -o " + q(tmp / "staged.exr"),
+                         tmp)
+              .exit_code == 0);
+  return read_exr(tmp / "staged.exr");
+}
+
 // Runs of white space (cxxopts' line wrapping and column padding) as one space.
 std::string squeeze(const std::string& text) {
   std::string out;
@@ -311,35 +343,40 @@ TEST_CASE("make render, the staged route and render without options give one ima
   CHECK(record_parameters(tmp / "plain.json").at("photons") == std::to_string(kMinAutoPhotons));
   const Image made = read_exr(dir + "/render.exr"), plain = read_exr(tmp / "plain.exr");
   CHECK(made.rgb == plain.rgb);
-  // The staged route with no estimator, direct light or photon count: trace-hitpoints and
-  // illuminate default to render's estimator and direct light, trace-photons to its count; pass
-  // p > 0 names only its pass and the state before it.
-  std::string state;
-  for (int p = 0; p < 2; ++p) {
-    const std::string eye = tmp / ("eye" + std::to_string(p) + ".h5");
-    const std::string ph = tmp / ("ph" + std::to_string(p) + ".h5");
-    const std::string next = tmp / ("sums" + std::to_string(p) + ".h5");  // pppm's pass sums
-    REQUIRE(test::run_tool("trace-hitpoints", "--scene " + q(scene) +
-                                                  (p > 0 ? " --pass " + std::to_string(p) : "") +
-                                                  " -o " + q(eye),
-                           tmp)
-                .exit_code == 0);
-    REQUIRE(test::run_tool("trace-photons", "--scene " + q(scene) + " --first-pass " +
-                                                std::to_string(p) + " -o " + q(ph),
-                           tmp)
-                .exit_code == 0);
-    REQUIRE(test::run_tool("illuminate", "--scene " + q(scene) + " --hitpoints " +
-                                             q(eye) + " --photons " + q(ph) +
-                                             (state.empty() ? "" : " --state " + q(state)) +
-                                             " -o " + q(next),
-                           tmp)
-                .exit_code == 0);
-    state = next;
-  }
-  REQUIRE(test::run_tool("synthesize", "--sums " + q(state) + " -o " + q(tmp / "staged.exr"),
+  CHECK(staged_image(tmp, scene, 2).rgb == plain.rgb);
+}
+
+TEST_CASE("shadow samples: auto is 4 where an environment lights the scene, on both routes",
+          "[render_defaults][environment]") {
+  test::TempDir tmp("render-defaults-env");
+  const std::string dae = test::source_dir() + "/data/cornell-box.dae";
+  const std::string scene = tmp / "env.h5";
+  REQUIRE(test::run_tool("scene-bake", q(dae) + " -o " + q(scene) +
+                                           " --width 40 --height 30 --environment 0.5,0.6,0.7",
                          tmp)
               .exit_code == 0);
-  CHECK(read_exr(tmp / "staged.exr").rgb == plain.rgb);
+  REQUIRE(auto_shadow_samples(Estimator::Pppm, load_scene(scene)) == kEnvironmentShadowSamples);
+  REQUIRE(auto_shadow_samples(Estimator::Sppm, load_scene(scene)) == kEnvironmentShadowSamples);
+  REQUIRE(auto_shadow_samples(Estimator::Ppm, load_scene(scene)) == kPpmShadowSamples);
+  REQUIRE(kEnvironmentShadowSamples != kDefaultShadowSamples);
+  const auto r = test::run_tool("render", "--scene " + q(scene) + " --passes 2 -o " +
+                                              q(tmp / "plain.exr") + " --stats " +
+                                              q(tmp / "plain.json"),
+                                tmp);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const auto p = record_parameters(tmp / "plain.json");
+  CHECK(p.at("shadow-samples") == std::to_string(kEnvironmentShadowSamples));
+  CHECK(p.at("shadow-samples_auto") == "true");
+  CHECK(r.out.find(std::to_string(kEnvironmentShadowSamples) + " shadow samples (auto)") !=
+        std::string::npos);
+  // trace-hitpoints chooses the same from the scene: the staged image is render's.
+  CHECK(staged_image(tmp, scene, 2).rgb == read_exr(tmp / "plain.exr").rgb);
+  const auto one = test::run_tool("render", "--scene " + q(scene) + " --passes 2 -o " +
+                                                q(tmp / "one.exr") + " --shadow-samples 1",
+                                  tmp);
+  REQUIRE(one.exit_code == 0);
+  CHECK(read_exr(tmp / "one.exr").rgb != read_exr(tmp / "plain.exr").rgb);
 }
 
 TEST_CASE("trace-hitpoints and illuminate: --help and the run record say render's estimator and "

@@ -90,8 +90,9 @@ int main(int argc, char** argv) {
        cxxopts::value<std::string>()->default_value(pf::direct_mode_name(pf::kDefaultDirect)))
       ("shadow-samples", "light samples per visible point and pass with --direct shadow-rays, "
        "or auto: " + std::to_string(pf::kDefaultShadowSamples) + " for sppm and pppm (a pixel's "
-       "samples over the passes are Sobol points), " + std::to_string(pf::kPpmShadowSamples) +
-       " for ppm (render_defaults.h)", cxxopts::value<std::string>()->default_value("auto"))
+       "samples over the passes are Sobol points), " +
+       std::to_string(pf::kEnvironmentShadowSamples) + " in a scene with an environment light, " +
+       std::to_string(pf::kPpmShadowSamples) + " for ppm (render_defaults.h)", cxxopts::value<std::string>()->default_value("auto"))
       ("radius", "initial radius R0 in world units, or " + pf::auto_radius_rule() + " (0 is "
        "auto too)", cxxopts::value<std::string>()->default_value("auto"))
       ("seed", "random seed", cxxopts::value<uint32_t>()->default_value("1"))
@@ -151,8 +152,9 @@ int main(int argc, char** argv) {
     opt.eye.spp = a["spp"].as<int>();
     opt.eye.max_depth = a["max-depth"].as<int>();
     opt.eye.direct = direct == "photons" ? pf::DirectMode::Photons : pf::DirectMode::ShadowRays;
-    opt.eye.shadow_samples =
-        pf::parse_shadow_samples(a["shadow-samples"].as<std::string>(), opt.estimator);
+    // 0 (auto): a placeholder for check_options, chosen from the scene once it is read.
+    const int shadow_samples = pf::parse_shadow_samples(a["shadow-samples"].as<std::string>());
+    opt.eye.shadow_samples = shadow_samples > 0 ? shadow_samples : 1;
     opt.eye.radius = pf::parse_radius_option(a["radius"].as<std::string>());
     opt.eye.seed = seed;
     opt.eye.threads = threads;
@@ -221,8 +223,10 @@ int main(int argc, char** argv) {
     chosen.radius = chosen.radius_auto ? defaults.radius : opt.eye.radius;
     chosen.emission_spp = opt.eye.emission_spp;
     chosen.emission_spp_auto = a["emission-spp"].as<std::string>() == "auto";
+    chosen.shadow_samples_auto = shadow_samples == 0;
+    if (chosen.shadow_samples_auto)
+      opt.eye.shadow_samples = pf::auto_shadow_samples(opt.estimator, scene);
     chosen.shadow_samples = opt.eye.shadow_samples;
-    chosen.shadow_samples_auto = a["shadow-samples"].as<std::string>() == "auto";
     chosen.gather_area = opt.ppm.gather_area;
     chosen.gather_area_auto = a["gather-area"].as<std::string>() == "auto";
     opt.photons.photons = chosen.photons;

@@ -31,7 +31,8 @@ int main(int argc, char** argv) {
        "(render_defaults.h)",
        cxxopts::value<std::string>()->default_value(pf::direct_mode_name(pf::kDefaultDirect)))
       ("shadow-samples", "light samples per visible point with --direct shadow-rays, or auto: " +
-       std::to_string(pf::kDefaultShadowSamples) + " for sppm and pppm, " +
+       std::to_string(pf::kDefaultShadowSamples) + " for sppm and pppm (" +
+       std::to_string(pf::kEnvironmentShadowSamples) + " in a scene with an environment light), " +
        std::to_string(pf::kPpmShadowSamples) + " for ppm (render's: render_defaults.h)",
        cxxopts::value<std::string>()->default_value("auto"))
       ("radius", "initial radius R0 in world units; 0 = automatic: 1.5 x max(scene diagonal / "
@@ -104,12 +105,15 @@ int main(int argc, char** argv) {
     if (opt.glossy_spp > 0 && estimator != pf::Estimator::Pppm)
       throw pf::input_error("", "--glossy-spp applies to --estimator pppm",
                             "sppm keeps one visible point per pixel and ppm one eye pass");
-    opt.shadow_samples = pf::parse_shadow_samples(a["shadow-samples"].as<std::string>(), estimator);
+    // 0 (auto): a placeholder for check_options, chosen from the scene once it is read.
+    const int shadow_samples = pf::parse_shadow_samples(a["shadow-samples"].as<std::string>());
+    opt.shadow_samples = shadow_samples > 0 ? shadow_samples : 1;
     pf::check_options(opt);
 
     pf::Stopwatch clock;
     std::string scene_path = a["scene"].as<std::string>();
     pf::Scene scene = pf::load_scene(scene_path);
+    if (shadow_samples == 0) opt.shadow_samples = pf::auto_shadow_samples(estimator, scene);
     std::unique_ptr<pf::ClContext> dev = pf::open_device(pf::device_options(a), "trace-hitpoints");
     pf::EyePassResult r = dev ? pf::trace_hitpoints(scene, opt, *dev) : pf::trace_hitpoints(scene, opt);
 

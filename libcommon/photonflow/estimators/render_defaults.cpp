@@ -119,9 +119,13 @@ float parse_radius_option(const std::string& text) {
   return r;
 }
 
-int parse_shadow_samples(const std::string& text, Estimator e) {
-  return count_or_auto(text, "shadow-samples", 1, kMaxShadowSamples,
-                       e == Estimator::Ppm ? kPpmShadowSamples : kDefaultShadowSamples);
+int parse_shadow_samples(const std::string& text) {
+  return count_or_auto(text, "shadow-samples", 1, kMaxShadowSamples, 0);
+}
+
+int auto_shadow_samples(Estimator e, const Scene& scene) {
+  if (e == Estimator::Ppm) return kPpmShadowSamples;
+  return scene.environment.present() ? kEnvironmentShadowSamples : kDefaultShadowSamples;
 }
 
 std::string describe_choices(const RenderChoices& c) {
