@@ -9,8 +9,8 @@ Mitsuba venv's python).
 Evaluates both on a grid of SUB × SUB directions per texel (cell centres in u, v; the grid is
 that of photonflow's texels, so the map and the sun are resolved) and prints: the fraction of
 directions where the two agree within 10⁻⁴ and within 10 % relative (a direction disagrees only in
-Mitsuba's bilinear ramp across a texel edge: 1/ENV_UPSAMPLE of a texel wide across columns,
-2/ENV_UPSAMPLE across rows), and ∫ L dω of both over the sphere (sin θ weights, per channel; the
+Mitsuba's bilinear ramp across a texel edge: 1/ENV_UPSAMPLE_COLS of a texel wide across
+columns, 2/ENV_UPSAMPLE_ROWS across rows), and ∫ L dω of both over the sphere (sin θ weights, per channel; the
 sky's irradiance scale), then the same with the rotation's sign flipped (which must disagree
 where the map is not symmetric about the y axis). Exit 0 when ≥ 50 % agree within 10⁻⁴, ≥ 90 %
 within 10 %, and the integrals within 0.5 %.

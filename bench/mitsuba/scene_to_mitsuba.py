@@ -96,11 +96,13 @@ rows are in bench/mitsuba/README.md):
               R_y(+ρ). Same u = atan2(d_l.x, −d_l.z)/2π, v = acos(d_l.y)/π. Mitsuba's envmap is
               bilinear with column j at u = (j + ½)/W but row i at v = i/(H − 1) (rows at the
               poles), photonflow texel-constant with row i over [i/H, (i + 1)/H): env.pfm is the map
-              resampled to ENV_UPSAMPLE·W columns (each texel repeated) and ENV_UPSAMPLE·H + 1 rows
-              (the row at v = r/(ENV_UPSAMPLE·H) is the texel it lies in, the mean of the two where
-              it lies on a texel edge), so Mitsuba's bilinear ramp is 1/ENV_UPSAMPLE of a texel wide
-              and centred on photonflow's texel edges (bench/mitsuba/check_env.py compares the two
-              lookups on random directions).                                   near-exact
+              resampled to ENV_UPSAMPLE_COLS·W columns (each texel repeated) and
+              ENV_UPSAMPLE_ROWS·H + 1 rows (the row at v = r/(ENV_UPSAMPLE_ROWS·H) is the texel it
+              lies in, the mean of the two where it lies on a texel edge), so Mitsuba's bilinear
+              ramp is 1/ENV_UPSAMPLE_COLS of a texel wide across columns, 2/ENV_UPSAMPLE_ROWS across
+              rows, centred on photonflow's texel edges (bench/mitsuba/check_env.py compares the
+              two lookups on a grid of directions). Rows get more: a horizon is a row edge seen
+              directly.                                                          near-exact
   flat meshes (n0=n1=n2=geometric normal) -> face_normals=true; otherwise the file's vertex normals.
   camera -> perspective (thinlens with aperture_radius/focus_distance when aperture > 0),
             fov_axis="y", lookat eye/look_at/up, box rfilter (a pixel = the mean radiance over it,
@@ -119,7 +121,8 @@ import h5py
 import numpy as np
 
 MASK_SUPERSAMPLE = 8
-ENV_UPSAMPLE = 4
+ENV_UPSAMPLE_COLS = 4   # 512 x 256 map: ramp 0.18 deg wide across columns
+ENV_UPSAMPLE_ROWS = 32  # and 0.044 deg across rows (0.6 px of a 38-deg, 512-px camera)
 SPOT_RES = 512
 ALPHA_MIN = 1e-3  # PF_BSDF_ALPHA_MIN
 
@@ -190,12 +193,12 @@ def diffuse_weight(ior, n=256):
     return float(np.mean((1 - F) * (2 * cv) * (2 * cl)))
 
 
-def env_resample(tex, k):
-    """photonflow's texel-constant H x 2H map as Mitsuba envmap data (k·2H columns, k·H + 1 rows):
-    column j (Mitsuba's u = (j + ½)/(k·W)) = texel column ⌊j/k⌋; row r (Mitsuba's v = r/(k·H)) =
+def env_resample(tex, kc, k):
+    """photonflow's texel-constant H x 2H map as Mitsuba envmap data (kc·2H columns, k·H + 1 rows):
+    column j (Mitsuba's u = (j + ½)/(kc·W)) = texel column ⌊j/kc⌋; row r (Mitsuba's v = r/(k·H)) =
     texel row r/k, or the mean of rows r/k − 1 and r/k where r is a multiple of k inside the map."""
     H = tex.shape[0]
-    t = np.repeat(np.asarray(tex, np.float64), k, axis=1)
+    t = np.repeat(np.asarray(tex, np.float32), kc, axis=1)
     r = np.arange(k * H + 1)
     lo = np.clip((r - 1) // k, 0, H - 1)  # the row just above v, or v's own
     hi = np.clip(r // k, 0, H - 1)
@@ -472,7 +475,7 @@ class Converter:
         if self.env is None:
             refuse(self.h5path, "an environment light without /environment")
         tex, strength, rot = self.env
-        write_pfm(os.path.join(self.outdir, "env.pfm"), env_resample(tex, ENV_UPSAMPLE))
+        write_pfm(os.path.join(self.outdir, "env.pfm"), env_resample(tex, ENV_UPSAMPLE_COLS, ENV_UPSAMPLE_ROWS))
         return ('<emitter type="envmap"><string name="filename" value="env.pfm"/>'
                 '<float name="scale" value="%.9g"/><transform name="to_world"><rotate y="1" angle="%.9g"/>'
                 '</transform></emitter>' % (strength, rot))
