@@ -92,8 +92,11 @@ render: $(DIR)/image.exr
 	@echo "render: $(DIR)/image.exr ($(PASSES) passes, staged)"
 endif
 
+# scene.d (scene-bake --depfile): every file the last bake read (its buffers, textures, inserts,
+# environment map), so editing any of them bakes again; absent before the first bake.
 $(DIR)/scene.h5: $(SCENE_FILE) $(SCENE_BAKE_OPTIONS) $(BIN)/scene-bake $(call param_stamp,$(DIR)/bake.params,$(BAKE_P))
-	$(BIN)/scene-bake $(SCENE_FILE) -o $@ $(BAKE_P)
+	$(BIN)/scene-bake $(SCENE_FILE) -o $@ $(BAKE_P) --depfile $(DIR)/scene.d
+-include $(DIR)/scene.d
 
 $(DIR)/hitpoints.h5: $(DIR)/scene.h5 $(BIN)/trace-hitpoints $(call param_stamp,$(DIR)/eye.params,$(EYE_P))
 	$(BIN)/trace-hitpoints --scene $< -o $@ --estimator ppm $(EYE_P) $(T)

@@ -7,7 +7,10 @@
 #include <sstream>
 
 #include "photonflow/geometry/bake_options.h"
+#include "photonflow/foundations/make_depfile.h"
 #include "photonflow/foundations/options.h"
+#include "photonflow/foundations/text_file.h"
+#include "photonflow/geometry/scene_inputs.h"
 #include "photonflow/io/provenance.h"
 #include "photonflow/geometry/scene.h"
 #include "photonflow/geometry/scene_file.h"
@@ -107,6 +110,10 @@ int run(int argc, char** argv) {
   opts.add_options()
     ("threads", "threads for the kd-tree build (0 = all cores; the result does not depend "
                 "on it)", cxxopts::value<int>()->default_value("0"))
+    ("depfile", "also write a make dependency file here: the output's name and every file the "
+                "bake read (scene, options file, inserts, buffers, textures, environment map; "
+                "names make would read as syntax left out), for pipelines/render.mk",
+     cxxopts::value<std::string>())
     ("h,help", "print this help");
   // clang-format on
   opts.parse_positional({"input"});
@@ -125,16 +132,30 @@ int run(int argc, char** argv) {
   const pf::BakeOptions o =
       pf::bake_options(args, args["input"].as<std::string>(), args["threads"].as<int>());
   const std::string out = args["output"].as<std::string>();
-  std::vector<std::string> inputs;
-  for (const pf::MeshInsert& ins : o.inserts) inputs.push_back(ins.path);
+  const std::string depfile = args.count("depfile") ? args["depfile"].as<std::string>() : "";
+  if (args.count("depfile") && depfile.empty())
+    throw pf::input_error("", "--depfile is empty", "give it a file name");
+  if (!depfile.empty() && !pf::make_safe_name(out))
+    throw pf::input_error(out, "--depfile: make would read this output name as syntax",
+                          "name the output with A-Z a-z 0-9 . _ / + ~ @ , - only, not starting with - or ~");
+  std::vector<std::string> inserted;
+  for (const pf::MeshInsert& ins : o.inserts) inserted.push_back(ins.path);
+  std::vector<std::string> inputs = inserted;
   inputs.push_back(o.input);
-  pf::check_outputs(inputs, {out});
+  pf::check_outputs(inputs, {out, depfile});
 
   pf::BakeReport report;
   pf::Scene scene = pf::bake_scene(o, report);
   pf::Provenance prov = pf::bake_provenance(args, o, out, pf::join_command_line(argc, argv));
   prov.wall_time_s = clock.seconds();
   pf::save_scene(scene, out, prov);
+  if (!depfile.empty()) {
+    const std::string options_file =
+        args.count("options-file") ? args["options-file"].as<std::string>() : "";
+    std::vector<std::string> read =
+        pf::bake_input_files(o.input, inserted, o.environment, options_file);
+    pf::write_text_atomic(depfile, pf::make_depfile_text(out, read));
+  }
 
   for (const std::string& w : pf::bake_warnings(o, report)) std::cerr << kTool << ": " << w << "\n";
   print_summary(scene, report, out);

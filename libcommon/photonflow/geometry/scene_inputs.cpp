@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "photonflow/foundations/error.h"
+#include "photonflow/geometry/environment.h"
 #include "photonflow/geometry/gltf_json.h"
 
 namespace pf {
@@ -324,6 +325,31 @@ void check_scene_inputs(const std::string& scene_file, const std::vector<std::st
                         "put the file beside the scene, or export the scene with it embedded");
     }
   }
+}
+
+std::vector<std::string> bake_input_files(const std::string& scene_file,
+                                          const std::vector<std::string>& inserts,
+                                          const std::string& environment,
+                                          const std::string& options_file) {
+  std::vector<std::string> out = {scene_file};
+  if (!options_file.empty()) out.push_back(options_file);
+  std::vector<std::string> files = {scene_file};
+  files.insert(files.end(), inserts.begin(), inserts.end());
+  const std::string root = input_root(scene_file);
+  InputPolicy lenient;
+  lenient.missing_textures_warn = true;  // the bake has applied its own policy already
+  for (size_t k = 0; k < files.size(); ++k) {
+    if (k > 0) out.push_back(files[k]);
+    std::vector<std::string> ignored;
+    for (const SceneReference& ref : scene_references(files[k], lenient, root, ignored)) {
+      std::error_code ec;
+      if (std::filesystem::is_regular_file(ref.path, ec)) out.push_back(ref.path);
+    }
+  }
+  float rgb[3];
+  if (!environment.empty() && !parse_environment_colour(environment, rgb))
+    out.push_back(environment);
+  return out;
 }
 
 }  // namespace pf

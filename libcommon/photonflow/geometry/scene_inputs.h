@@ -62,4 +62,13 @@ bool outside_root(const std::string& path, const std::string& root);
 void check_scene_inputs(const std::string& scene_file, const std::vector<std::string>& inserts,
                         const InputPolicy& policy, std::vector<std::string>& warnings);
 
+// Every file a finished bake read, for scene-bake --depfile (make_depfile.h): the scene file, the
+// options file (when one was read), each insert, the existing files each of those references
+// (scene_references), and the environment map (not a colour R,G,B), in that order. Paths as
+// they were opened.
+std::vector<std::string> bake_input_files(const std::string& scene_file,
+                                          const std::vector<std::string>& inserts,
+                                          const std::string& environment,
+                                          const std::string& options_file);
+
 }  // namespace pf
