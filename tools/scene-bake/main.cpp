@@ -112,8 +112,8 @@ int run(int argc, char** argv) {
                 "on it)", cxxopts::value<int>()->default_value("0"))
     ("depfile", "also write a make dependency file here: the output's name and every file the "
                 "bake read (scene, options file, inserts, buffers, textures, environment map; "
-                "names make would read as syntax left out), for pipelines/render.mk",
-     cxxopts::value<std::string>())
+                "names make would read as syntax left out), for pipelines/render.mk; \"\" = none",
+     cxxopts::value<std::string>()->default_value(""))
     ("h,help", "print this help");
   // clang-format on
   opts.parse_positional({"input"});
