@@ -287,7 +287,7 @@ inline void record_scene(Provenance& prov, const cxxopts::ParseResult& a, const 
 
 // The provenance of a baked scene file, as scene-bake writes it and render --keep-scene too:
 // tool "scene-bake" (the stage whose function, options and checks made it; command_line says which
-// executable ran it), every bake option (record_bake_options), input, output and threads, and
+// executable ran it), every bake option (record_bake_options), input, output, threads and depfile, and
 // the inputs "source" and "insert<i>" (hashed here: InputError if one is unreadable).
 inline Provenance bake_provenance(const cxxopts::ParseResult& a, const BakeOptions& o,
                                   const std::string& output, const std::string& command_line) {
@@ -299,6 +299,8 @@ inline Provenance bake_provenance(const cxxopts::ParseResult& a, const BakeOptio
   prov.param("options-file", path_option(a, "options-file"));  // "" none
   prov.param("output", output);
   prov.param("threads", o.kd.threads);
+  // scene-bake --depfile ("" none, and for render --keep-scene, which has no such option)
+  prov.param("depfile", a.count("depfile") ? a["depfile"].as<std::string>() : std::string());
   add_bake_inputs(prov, o);
   return prov;
 }
