@@ -27,6 +27,15 @@ std::map<std::string, std::string> record_parameters(const std::string& file) {
   return out;
 }
 
+// render with nothing but the scene, the passes, the output (plain.exr) and its record
+// (plain.json): every choice automatic.
+test::ToolRun plain_render(test::TempDir& tmp, const std::string& scene, int passes) {
+  return test::run_tool("render", "--scene " + q(scene) + " --passes " + std::to_string(passes) +
+                                      " -o " + q(tmp / "plain.exr") + " --stats " +
+                                      q(tmp / "plain.json"),
+                        tmp);
+}
+
 // The staged route with no estimator, direct light, photon count or shadow samples:
 // trace-hitpoints and illuminate default to render's, trace-photons to its count; pass p > 0
 // names only its pass and the state before it. Returns synthesize's image of `passes` passes.
@@ -334,10 +343,7 @@ TEST_CASE("make render, the staged route and render without options give one ima
   const std::string dir = tmp / "cornell-box";
   const std::string scene = dir + "/scene.h5";
   // render with nothing but the scene, the passes and the output.
-  const auto r = test::run_tool("render", "--scene " + q(scene) + " --passes 2 -o " +
-                                              q(tmp / "plain.exr") + " --stats " +
-                                              q(tmp / "plain.json"),
-                                tmp);
+  const auto r = plain_render(tmp, scene, 2);
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   CHECK(record_parameters(tmp / "plain.json").at("photons") == std::to_string(kMinAutoPhotons));
@@ -359,10 +365,7 @@ TEST_CASE("shadow samples: auto is 4 where an environment lights the scene, on b
   REQUIRE(auto_shadow_samples(Estimator::Sppm, load_scene(scene)) == kEnvironmentShadowSamples);
   REQUIRE(auto_shadow_samples(Estimator::Ppm, load_scene(scene)) == kPpmShadowSamples);
   REQUIRE(kEnvironmentShadowSamples != kDefaultShadowSamples);
-  const auto r = test::run_tool("render", "--scene " + q(scene) + " --passes 2 -o " +
-                                              q(tmp / "plain.exr") + " --stats " +
-                                              q(tmp / "plain.json"),
-                                tmp);
+  const auto r = plain_render(tmp, scene, 2);
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   const auto p = record_parameters(tmp / "plain.json");
