@@ -497,6 +497,51 @@ TEST_CASE("pathtrace: mirror and glass in a furnace: emitters count after specul
   }
 }
 
+TEST_CASE("pathtrace: the roulette by energy through rough glass leaves the mean unchanged",
+          "[pathtrace][roulette]") {
+  // A rough-glass sphere (PF_MAT_PBR, transmission 1, roughness 0.3, ior 1.5) in the furnace.
+  // Inside the glass a path's throughput carries the radiance's 1/η², after it 2.25× that; the
+  // roulette weighs T·η_scale instead (pathtrace.h). Roulette from the first bounce must give the
+  // mean of no roulette at all (rr_depth = max_depth), within the two runs' noise, and end paths
+  // sooner. (GGX loses the energy of multiple scattering, so the sphere is not the walls' Le/(1−ρ):
+  // the no-roulette run is the answer.)
+  pf_material glass{};
+  glass.type = PF_MAT_PBR;
+  for (float& c : glass.color) c = 1.f;
+  glass.roughness = 0.3f;
+  glass.transmission = 1.f;
+  glass.ior = 1.5f;
+  Scene s = box_furnace(0.5f, 1.f, 24, 16, make_sphere(Vec3(0.5f, 0.5f, 0.4f), 0.25f, 800, {1, 1}),
+                        {glass});
+  auto run = [&](int rr_depth, double& mean, double& se, uint64_t& rays) {
+    PathTraceOptions opt;
+    opt.spp = 256;
+    opt.rr_depth = rr_depth;
+    PathTraceStatus st;
+    Image img = pathtrace(s, opt, {}, &st);
+    const std::vector<float>& var = img.layers.at("variance");
+    double sum = 0, v = 0;
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 24; ++x) {
+        sum += luminance(img.get(x, y));
+        v += var[size_t(y * 24 + x)];
+      }
+    mean = sum / (24.0 * 16.0);
+    se = std::sqrt(v) / (24.0 * 16.0);
+    rays = st.rays;
+    CHECK(st.nonfinite == 0);
+  };
+  double m_rr, se_rr, m_all, se_all;
+  uint64_t rays_rr, rays_all;
+  run(0, m_rr, se_rr, rays_rr);
+  run(64, m_all, se_all, rays_all);
+  INFO("roulette " << m_rr << " ± " << se_rr << ", none " << m_all << " ± " << se_all);
+  CHECK(m_all > 1.5);  // most of the image is the walls' 2 or the sphere's a little less
+  CHECK(std::fabs(m_rr - m_all) < 5.0 * std::sqrt(se_rr * se_rr + se_all * se_all));
+  CHECK(se_rr < 0.01);
+  CHECK(rays_rr * 4 < rays_all);  // the roulette ends paths: ~1/(1 − ρ) bounces against 64
+}
+
 // The same room (small ceiling lamp) with a diffuse, a mirror and a glass sphere, rendered by
 // both methods (check_against_ppm); compared on the image mean and on 8×8-pixel block means.
 // PPM is consistent but biased at a finite radius (R0 = 0.02 here: blur across edges and mesh

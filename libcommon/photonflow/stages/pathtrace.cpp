@@ -86,6 +86,7 @@ class PathTracer {
     // `nee_could` is false when NEE there could not have produced this direction).
     bool specular = true, nee_could = false;
     float bsdf_pdf = 0.f;
+    float eta_scale = 1.f;  // (η_i/η_o)² of the refractions so far (roulette)
     for (int depth = 0;; ++depth) {
       Hit h;
       ++rays;
@@ -141,7 +142,7 @@ class PathTracer {
         L += T * albedo * kInvPi * sample_light(sh.p, n, ng, sh.leaf, ps, depth, rays);
         // Continue with f_r·cos/pdf = ρ (cosine sampling around n), after Russian roulette.
         T = T * albedo;
-        if (!(max3(T) > 0.f) || !roulette(depth, T, ps)) break;
+        if (!(max3(T) > 0.f) || !roulette(depth, T, eta_scale, ps)) break;
         float u1, u2;
         ps.get2(PathSampler::at(depth, PathSampler::kBsdfDirection), u1, u2);
         const Vec3 wi = sample_cosine_hemisphere(n, u1, u2);
@@ -169,17 +170,19 @@ class PathTracer {
                             w, &pdf))
           break;
         T = T * Vec3(w);
-        if (!(max3(T) > 0.f) || !roulette(depth, T, ps)) break;
+        const Vec3 dir(wi);
+        if (params.transmission > 0.f && (dot(dir, sh.ng) > 0.f) != sh.front)  // refracted
+          eta_scale *= sh.front ? params.ior * params.ior : 1.f / (params.ior * params.ior);
+        if (!(max3(T) > 0.f) || !roulette(depth, T, eta_scale, ps)) break;
         bsdf_pdf = pdf;
         nee_could = true;  // NEE at a PBR point reaches every direction the BSDF samples
         specular = false;
-        const Vec3 dir(wi);
         ray = spawn_ray(sh, dir, eps_);
       } else if (m.type == PF_MAT_MIRROR || m.type == PF_MAT_GLASS) {
         const uint32_t lobe = PathSampler::at(depth, PathSampler::kLobe);
         const Vec3 wo = specular_bounce_with(m, sh, d, [&] { return ps.get1(lobe); }, T);
         if (!(max3(T) > 0.f)) break;
-        if (!roulette(depth, T, ps)) break;
+        if (!roulette(depth, T, eta_scale, ps)) break;
         specular = true;
         ray = spawn_ray(sh, wo, eps_);
       } else {
@@ -200,10 +203,14 @@ class PathTracer {
     return scene_.light_cdf[li] - (li ? scene_.light_cdf[li - 1] : 0.f);
   }
 
-  // Russian roulette after rr_depth bounces: survive with q = min(1, max channel of T), T /= q.
-  bool roulette(int depth, Vec3& T, const PathSampler& ps) const {
+  // Russian roulette after rr_depth bounces (Arvo & Kirk 1990): survive with probability
+  // q = min(1, max channel of T·η_scale) and divide T by q. η_scale undoes the
+  // radiance's (η_o/η_i)² at every rough-glass refraction (pbrt-v3's etaScale, Mitsuba 3's η²):
+  // the roulette sees the path's energy throughput, so that a path which has just left a glass
+  // object (T ×2.25 at η = 1.5) is not exempt from it, nor one inside it penalised.
+  bool roulette(int depth, Vec3& T, float eta_scale, const PathSampler& ps) const {
     if (depth < opt_.rr_depth) return true;
-    const float q = std::min(1.f, max3(T));
+    const float q = std::min(1.f, max3(T) * eta_scale);
     if (!(q > 0.f)) return false;
     if (q >= 1.f) return true;
     if (ps.get1(PathSampler::at(depth, PathSampler::kRoulette)) >= q) return false;

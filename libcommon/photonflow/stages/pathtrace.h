@@ -37,8 +37,11 @@
 // (A · cos θ_y). Either way every path is counted exactly once in expectation.
 //
 // Russian roulette (Arvo & Kirk 1990): after `rr_depth` bounces a path survives a bounce with
-// probability q = min(1, max channel of its throughput) and its throughput is divided by q, which
-// leaves the estimate unbiased. `max_depth` bounds the scattering events of a path (light that
+// probability q = min(1, max channel of T·η_scale) and its throughput T is divided by q, which
+// leaves the estimate unbiased. η_scale is the product of (η_i/η_o)² over the path's rough-glass
+// refractions so far: it undoes the radiance's (η_o/η_i)² (pbrt-v3's etaScale; Mitsuba 3 applies
+// η² likewise), so that the roulette weighs the energy a path carries: a path that has just left
+// a glass object (T × 2.25 at η = 1.5) survives by that energy, not with certainty. `max_depth` bounds the scattering events of a path (light that
 // needs more is dropped: a fraction ρ^(max_depth+1) of it in a closed room of albedo ρ, 0.1% at
 // ρ = 0.9 and the default 64; photon mapping's defaults cut at 16 bounces).
 //
