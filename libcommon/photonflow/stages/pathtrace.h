@@ -22,8 +22,10 @@
 //             sample's pdf. Pairs the geometric and shading normals disagree on end the path.
 //
 // Direct light by next-event estimation (Veach 1997, §9.2; the area form of the light transport
-// integral, eq. 8.3 there): at every diffuse vertex x one light is picked in proportion to power
-// (Scene::pick_light, probability p_l) and one point y on it (uniform on its triangle, 1/A):
+// integral, eq. 8.3 there): at every diffuse vertex x one light is picked (probability p_l: in
+// proportion to power, Scene::pick_light, in a scene of one emitter or of many lights; else
+// ½ by the light's unoccluded irradiance at x, ¼ by power, ¼ uniformly over the emitters,
+// pathtrace.cpp) and one point y on it (uniform on its triangle, 1/A):
 //   L_direct ≈ f_r · L_e(y → x) · V(x, y) · cos θ_x · cos θ_y / |x − y|² · A / p_l,
 // and point lights (intensity I) give f_r · I · V · cos θ_x / |x − y|² / p_l, spot lights the same
 // times the KHR_lights_punctual falloff, directional lights (irradiance E) f_r · E · V · cos θ_x / p_l
