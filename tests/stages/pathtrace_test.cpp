@@ -497,7 +497,8 @@ TEST_CASE("pathtrace: mirror and glass in a furnace: emitters count after specul
   }
 }
 
-TEST_CASE("pathtrace: two emitters: the light choice's MIS weights keep MIS's mean", "[pathtrace][mis]") {
+TEST_CASE("pathtrace: two emitters: the light choice's MIS weights keep MIS's mean",
+          "[pathtrace][mis]") {
   // The furnace's walls (one emitter) and a small bright sphere of a second emissive material:
   // next-event estimation picks between the two emitters by the defensive mixture of
   // pathtrace.cpp (not by power), and the power heuristic must weigh an emitter hit by that same

@@ -223,7 +223,7 @@ class PathTracer {
   // give light (E_l's centroid estimate is 0 for a triangle that only partly faces x), ½ and ½
   // when every E_l(x) is 0. Emitter hits after a BSDF sample weigh by p_l at the vertex they
   // left. Otherwise (one emitter, whose triangles go by power, i.e. area; or more lights) the
-  // scene's power choice. docs/RESULTS.md "The path tracer's light choice" measures the mixture
+  // scene's power choice. docs/RESULTS.md "`pathtrace` against Mitsuba 3" measures the mixture
   // against its parts.
   static constexpr size_t kLocalChoiceMax = 16;
   void build_light_choice() {
@@ -246,11 +246,12 @@ class PathTracer {
     auto slot = [&](int64_t g) {
       return size_t(std::lower_bound(keys.begin(), keys.end(), g) - keys.begin());
     };
-    for (size_t li = 0; li < n; ++li)
-      share[slot(group[li])] += double(scene_.light_cdf[li] - (li ? scene_.light_cdf[li - 1] : 0.f));
-    light_centre_.resize(n);
     for (size_t li = 0; li < n; ++li) {
       power_p_[li] = scene_.light_cdf[li] - (li ? scene_.light_cdf[li - 1] : 0.f);
+      share[slot(group[li])] += double(power_p_[li]);
+    }
+    light_centre_.resize(n);
+    for (size_t li = 0; li < n; ++li) {
       const double g = share[slot(group[li])];
       if (g > 0.0) uniform_p_[li] = float(double(power_p_[li]) / g / double(keys.size()));
       const pf_light& l = scene_.lights[li];
