@@ -44,7 +44,8 @@ int main(int argc, char** argv) {
        "needs more is dropped; 0 = emitters seen directly only",
        cxxopts::value<int>()->default_value("64"))
       ("rr-depth", "bounces before Russian roulette starts (survival = max channel of the "
-       "path throughput)", cxxopts::value<int>()->default_value("3"))
+       "energy the path carries: its throughput without the radiance's (eta_o/eta_i)^2 at "
+       "refractions)", cxxopts::value<int>()->default_value("3"))
       ("mis", "power: next-event estimation and emitters hit after a diffuse bounce combined by "
        "the power heuristic; off: after a diffuse bounce only next-event estimation counts",
        cxxopts::value<std::string>()->default_value("power"))
