@@ -100,6 +100,15 @@ double block_luminance(const Image& img, int x0, int y0, int x1, int y1) {
   return s / double((x1 - x0) * (y1 - y0));
 }
 
+// The whole image's mean luminance and its standard error sqrt(Σ_p var_p) / pixels (the
+// "variance" layer; see the top of this file).
+void image_mean_se(const Image& img, double& mean, double& se) {
+  mean = block_luminance(img, 0, 0, img.width, img.height);
+  double v = 0;
+  for (float x : img.layers.at("variance")) v += double(x);
+  se = std::sqrt(v) / (double(img.width) * double(img.height));
+}
+
 // Path tracing against PPM in the test room with a sphere of material `sphere` (see the tests
 // below).
 void check_against_ppm(int sphere) {
@@ -513,16 +522,7 @@ TEST_CASE("pathtrace: two emitters: the light choice's MIS weights keep MIS's me
     opt.spp = 512;
     opt.mis = mis;
     PathTraceStatus st;
-    Image img = pathtrace(s, opt, {}, &st);
-    const std::vector<float>& var = img.layers.at("variance");
-    double sum = 0, v = 0;
-    for (int y = 0; y < 16; ++y)
-      for (int x = 0; x < 24; ++x) {
-        sum += luminance(img.get(x, y));
-        v += var[size_t(y * 24 + x)];
-      }
-    mean[k] = sum / (24.0 * 16.0);
-    se[k] = std::sqrt(v) / (24.0 * 16.0);
+    image_mean_se(pathtrace(s, opt, {}, &st), mean[k], se[k]);
     CHECK(st.nonfinite == 0);
     ++k;
   }
@@ -552,16 +552,7 @@ TEST_CASE("pathtrace: the roulette by energy through rough glass leaves the mean
     opt.spp = 256;
     opt.rr_depth = rr_depth;
     PathTraceStatus st;
-    Image img = pathtrace(s, opt, {}, &st);
-    const std::vector<float>& var = img.layers.at("variance");
-    double sum = 0, v = 0;
-    for (int y = 0; y < 16; ++y)
-      for (int x = 0; x < 24; ++x) {
-        sum += luminance(img.get(x, y));
-        v += var[size_t(y * 24 + x)];
-      }
-    mean = sum / (24.0 * 16.0);
-    se = std::sqrt(v) / (24.0 * 16.0);
+    image_mean_se(pathtrace(s, opt, {}, &st), mean, se);
     rays = st.rays;
     CHECK(st.nonfinite == 0);
   };
