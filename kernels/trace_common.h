@@ -54,6 +54,7 @@ static int pf_leaf_test4(__global const pf_kd_node* leaf, __global const pf_int*
 #include "photonflow/foundations/rng.h"
 #include "photonflow/sampling/sampling_shared.h"
 #include "photonflow/geometry/light_shared.h"
+#include "photonflow/geometry/light_choice_shared.h"
 #include "photonflow/geometry/environment_shared.h"
 
 struct pf_trace_hit_s {
@@ -154,6 +155,10 @@ typedef struct {
   int light_count;
   pf_alpha_view alpha; /* read only when alpha_on (PF_ALPHA_VIEW) */
   int alpha_on;
+  /* NEE's light choice (light_choice_shared.h; Scene::light_choice), one entry per light; read
+   * only when choice_on (the eye kernel sets both; every other kernel picks by power) */
+  __global const pf_light_choice* choice;
+  int choice_on;
 } pf_scene_view;
 
 /* Kernel parameters of the scene, in this order in every tracing kernel. */
@@ -178,7 +183,9 @@ typedef struct {
   s.env = env;             \
   s.node_count = node_count; \
   s.light_count = light_count; \
-  s.alpha_on = 0
+  s.alpha_on = 0; \
+  s.choice = 0; \
+  s.choice_on = 0
 
 /* Alpha cut-outs: the kernel parameters after PF_TEXTURE_PARAMS in every tracing kernel (the
  * texture parameters hold the alpha textures and UVs). alpha_mats: one pf_alpha_material per
@@ -317,6 +324,36 @@ static inline int pf_pick_light(const pf_scene_view* s, float u, float* p_light)
   const int li = lo < s->light_count - 1 ? lo : s->light_count - 1;
   *p_light = s->light_cdf[li] - (li ? s->light_cdf[li - 1] : 0.0f);
   return li;
+}
+
+/* Scene::sample_light's choice: the light that u picks for next-event estimation at x, by power
+ * or by x's local choice where the view has one (light_choice_shared.h eq. 1). Writes the pick's
+ * probability. */
+static inline int pf_pick_nee_light(const pf_scene_view* s, const float* x, float u,
+                                    float* p_light) {
+  if (!s->choice_on) return pf_pick_light(s, u, p_light);
+  float pr[PF_LIGHT_CHOICE_MAX];
+  pf_light_choice_probabilities(s->lights, s->choice, s->light_count, x, pr);
+  const int li = pf_light_choice_pick(pr, s->light_count, u);
+  *p_light = pr[li];
+  return li;
+}
+
+/* Scene::light_pick_probability: the probability that NEE at x picks light li. */
+static inline float pf_nee_pick_probability(const pf_scene_view* s, int li, const float* x) {
+  if (!s->choice_on) return s->light_cdf[li] - (li ? s->light_cdf[li - 1] : 0.0f);
+  float pr[PF_LIGHT_CHOICE_MAX];
+  pf_light_choice_probabilities(s->lights, s->choice, s->light_count, x, pr);
+  return pr[li];
+}
+
+/* Scene::environment_light_pdf(d, x): NEE's density of the unit direction d at x, per unit solid
+ * angle, with x's light choice. */
+static inline float pf_env_light_pdf_at(const pf_scene_view* s, const float* d, const float* x) {
+  const float pdf = pf_env_light_pdf(s->env, d); /* p_pick by power × pdf_ω */
+  if (!s->choice_on || !(pdf > 0.0f)) return pdf;
+  const int li = s->light_count - 1; /* the environment is the last light */
+  return pdf * (pf_nee_pick_probability(s, li, x) / s->choice[li].power_p);
 }
 
 /* Diffuse for light transport: Lambertian, or an emitter whose surface reflects (eye_pass.cpp). */

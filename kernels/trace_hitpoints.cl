@@ -73,7 +73,7 @@ static void pf_direct_light(const pf_scene_view* s, const float* p, const float*
     float ul, u1, u2;
     pf_light_draws_next(draws, &ul, &u1, &u2);
     float p_light;
-    const int li = pf_pick_light(s, ul, &p_light);
+    const int li = pf_pick_nee_light(s, p, ul, &p_light);
     if (p_light <= 0.0f) continue;
     float q[3], w[3];
     float le[3];
@@ -110,7 +110,7 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
     float ul, u1, u2;
     pf_light_draws_next(draws, &ul, &u1, &u2);
     float p_light;
-    const int li = pf_pick_light(s, ul, &p_light);
+    const int li = pf_pick_nee_light(s, p, ul, &p_light);
     if (p_light <= 0.0f) continue;
     float q[3], w[3];
     float le[3];
@@ -137,17 +137,18 @@ static void pf_direct_light_pbr(const pf_scene_view* s, const float* p, const fl
 }
 
 /* EyeTracer::emitter_hit_weight: the BSDF sample's power-heuristic weight against next-event
- * estimation's n light samples at the vertex it left, for an emitter hit at distance dist along
- * unit direction d (triangle tri, front geometric normal ng); 1 where the triangle is no light. */
+ * estimation's n light samples at the vertex `from` it left, for an emitter hit at distance dist
+ * along unit direction d (triangle tri, front geometric normal ng); 1 where the triangle is no
+ * light. */
 static float pf_emitter_hit_weight(const pf_scene_view* s, __global const int* tri_light, int tri,
-                                   const float* d, const float* ng, float dist, float bsdf_pdf,
-                                   int samples) {
+                                   const float* from, const float* d, const float* ng,
+                                   float dist, float bsdf_pdf, int samples) {
   const int li = tri_light[tri];
   if (li < 0) return 1.0f;
   __global const pf_light* l = &s->lights[li];
   const float cos_l = -pf_dot3(d, ng);
   if (!(cos_l > 0.0f) || !(l->area > 0.0f)) return 1.0f;
-  const float p_pick = s->light_cdf[li] - (li ? s->light_cdf[li - 1] : 0.0f);
+  const float p_pick = pf_nee_pick_probability(s, li, from);
   const float p_light = p_pick * dist * dist / (l->area * cos_l);
   return pf_power_heuristic(bsdf_pdf, (float)samples * p_light);
 }
@@ -246,11 +247,14 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
                               __global pf_pbr_point* pbr_slots,
                               __global const uchar* emit_pixels, int emission_spp,
                               __global const int* tri_light, __global const uchar* glossy_pixels,
-                              int glossy_spp) {
+                              int glossy_spp, __global const pf_light_choice* light_choice,
+                              int light_choice_on) {
   const int local_pix = (int)get_global_id(0);
   if (local_pix >= pixel_count) return;
   PF_SCENE_VIEW(s);
   PF_ALPHA_VIEW(s);
+  s.choice = light_choice;
+  s.choice_on = light_choice_on;
   const int pix = pixel_offset + local_pix;
   const int x = pix % width, y = pix / width;
   float emitted[3] = {0.0f, 0.0f, 0.0f}, direct[3] = {0.0f, 0.0f, 0.0f};
@@ -306,6 +310,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
     int from_glossy = 0, last = 0, merged = 0, glossy = 0;
     float glossy_pdf = 0.0f;
     float Td[3] = {0.0f, 0.0f, 0.0f};
+    float glossy_p[3] = {0.0f, 0.0f, 0.0f}; /* that vertex (its NEE's light choice) */
     int leaf = -1;  /* the kd leaf of the last hit: the next ray's start (pf_trace_from) */
     for (int depth = 0; depth <= max_depth; ++depth) {
       pf_ray_hit h;
@@ -317,7 +322,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
           pf_env_radiance(s.env, dn, le);
           if (from_glossy) {
             const float wl = pf_power_heuristic(
-                glossy_pdf, (float)shadow_samples * pf_env_light_pdf(s.env, dn));
+                glossy_pdf, (float)shadow_samples * pf_env_light_pdf_at(&s, dn, glossy_p));
             for (int k = 0; k < 3; ++k) direct[k] = direct[k] + Td[k] * le[k] * wl;
           } else {
             float* layer = glossy ? direct : emitted;
@@ -331,8 +336,8 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
       __global const pf_material* m = &s.mats[sh.material];
       if (m->type == PF_MAT_EMITTER && sh.front) {
         if (from_glossy) {
-          const float wl = pf_emitter_hit_weight(&s, tri_light, h.tri, d, sh.ng, h.t, glossy_pdf,
-                                                 shadow_samples);
+          const float wl = pf_emitter_hit_weight(&s, tri_light, h.tri, glossy_p, d, sh.ng, h.t,
+                                                 glossy_pdf, shadow_samples);
           for (int k = 0; k < 3; ++k) direct[k] = direct[k] + Td[k] * m->emission[k] * wl;
         } else {
           float* layer = glossy ? direct : emitted;
@@ -401,6 +406,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
             T[k] = Td[k] * share;
           }
           glossy_pdf = pdf;
+          for (int k = 0; k < 3; ++k) glossy_p[k] = sh.p[k];
           from_glossy = glossy = 1;
           if (!(pf_luminance3(Td) > 0.0f)) break;
           last = !(pf_luminance3(T) > 0.0f);
@@ -441,6 +447,7 @@ __kernel void trace_hitpoints(PF_SCENE_PARAMS, PF_TEXTURE_PARAMS, PF_ALPHA_PARAM
           if (!sampled) break;
           for (int k = 0; k < 3; ++k) Td[k] = T[k] * wt[k];
           glossy_pdf = pdf;
+          for (int k = 0; k < 3; ++k) glossy_p[k] = sh.p[k];
           from_glossy = last = merged = 1;
           for (int k = 0; k < 3; ++k) d[k] = wi[k];
           pf_offset_origin(&sh, d, eps, o);

@@ -5,13 +5,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
+#include <random>
 #include <string>
 #include <utility>
 
 #include "photonflow/foundations/error.h"
 #include "photonflow/foundations/memory_cap.h"
+#include "photonflow/geometry/scene_file.h"
 #include "photonflow/geometry/scene_import.h"
+#include "photonflow/io/provenance.h"
 #include "support.h"
 
 using namespace pf;
@@ -306,6 +310,56 @@ TEST_CASE("the light CDF is the cumulative fraction of the lights' power", "[sce
     CHECK(s.pick_light(u, p) == i);
     CHECK(p == Approx(s.lights[i].power / total).epsilon(1e-5));
   }
+}
+
+TEST_CASE("next-event estimation's local light choice: a distribution at every point, sampled as "
+          "stated, and derived again on load",
+          "[scene_import][light-choice]") {
+  // camera.dae: an emissive triangle and a point light, two emitters: Scene::sample_light picks
+  // by p_l(x) of light_choice_shared.h eq. 1. At points around the scene the probabilities sum
+  // to one, each is at least a quarter of the light's power share, the nearer light gains, and
+  // sample_light's picks over a fine grid of u follow light_pick_probability. scene.h5 does not
+  // hold the table: load_scene derives the same one.
+  Scene s = bake("tests/data/camera.dae");
+  REQUIRE(s.lights.size() == 2);
+  REQUIRE(s.light_choice.size() == 2);
+  const Vec3 lo = s.bounds.lo, ext = s.bounds.extent();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> uni(0.f, 1.f);
+  int moved = 0;
+  for (int t = 0; t < 50; ++t) {
+    const Vec3 x = lo + Vec3(uni(rng) * ext.x, uni(rng) * ext.y, uni(rng) * ext.z);
+    double sum = 0;
+    for (size_t li = 0; li < 2; ++li) {
+      const float p = s.light_pick_probability(li, x);
+      const float power = s.light_cdf[li] - (li ? s.light_cdf[li - 1] : 0.f);
+      CHECK(p >= 0.25f * power * (1.f - 1e-5f));
+      moved += std::fabs(p - power) > 0.01f;
+      sum += p;
+    }
+    CHECK(sum == Approx(1.0).epsilon(1e-5));
+    const int n = 2000;
+    int picked0 = 0, other_p = 0;
+    for (int k = 0; k < n; ++k) {
+      Scene::LightSample ls;
+      if (!s.sample_light((float(k) + 0.5f) / float(n), 0.3f, 0.6f, x, ls)) continue;
+      picked0 += ls.light == 0;
+      other_p += ls.p_light != s.light_pick_probability(ls.light, x);
+    }
+    CHECK(other_p == 0);  // the sample's p_light is the stated probability
+    // light 0 is picked on [0, p_0): a point light always sends light, the triangle where it
+    // faces x; count the picks of light 0 only where its sample is valid.
+    Scene::LightSample probe;
+    if (s.sample_light(0.f, 0.3f, 0.6f, x, probe))
+      CHECK(double(picked0) / n == Approx(s.light_pick_probability(0, x)).margin(1.5 / n));
+  }
+  CHECK(moved > 10);  // the choice is not the power choice
+  test::TempDir tmp("light-choice");
+  save_scene(s, tmp / "scene.h5", Provenance{});
+  const Scene back = load_scene(tmp / "scene.h5");
+  REQUIRE(back.light_choice.size() == s.light_choice.size());
+  for (size_t li = 0; li < s.light_choice.size(); ++li)
+    CHECK(std::memcmp(&back.light_choice[li], &s.light_choice[li], sizeof(pf_light_choice)) == 0);
 }
 
 TEST_CASE("OBJ illum 5 is a mirror, illum 6 glass, a coloured Kd with Ks stays diffuse",

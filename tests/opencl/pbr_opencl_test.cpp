@@ -46,7 +46,9 @@ pf_material material(int type, float r, float g, float b) {
   return m;
 }
 
-Scene pbr_room(int width, int height) {
+// `spot`: a spot light besides the lamp (two emitters: next-event estimation's local light
+// choice, light_choice_shared.h).
+Scene pbr_room(int width, int height, bool spot = false) {
   Scene s;
   s.triangles = make_cornell_room(400);
   auto light = make_box(Vec3(0.4f, 0.98f, 0.4f), Vec3(0.6f, 0.99f, 0.6f), false, {3, 3});
@@ -97,6 +99,19 @@ Scene pbr_room(int width, int height) {
     }
   }
   s.camera = pf_camera{{0.5f, 0.5f, 0.97f}, {0.5f, 0.45f, 0.f}, {0, 1, 0}, 70.f, width, height};
+  if (spot) {
+    pf_light l{};
+    l.type = PF_LIGHT_SPOT;
+    const float pos[3] = {0.75f, 0.9f, 0.6f}, dir[3] = {-0.3f, -0.9539392f, 0.f};
+    for (int k = 0; k < 3; ++k) {
+      l.position[k] = pos[k];
+      l.direction[k] = dir[k];
+      l.radiance[k] = 0.6f;
+    }
+    l.cos_inner = 0.9f;
+    l.cos_outer = 0.8f;
+    s.lights.push_back(l);
+  }
   finish_scene(s);
   return s;
 }
@@ -328,7 +343,10 @@ TEST_CASE("OpenCL PBR: eye paths share glossy vertices' light with their continu
   // and BSDF samples under MIS) equal the CPU's one for one (the same draws from the eye stream).
   auto dev = test::test_device();
   if (!dev) return;
-  const Scene s = pbr_room(48, 36);
+  const bool spot = GENERATE(false, true);  // with a spot: the local light choice
+  INFO((spot ? "lamp and spot" : "lamp"));
+  const Scene s = pbr_room(48, 36, spot);
+  REQUIRE(s.light_choice.empty() == !spot);
   EyePassOptions eo;
   eo.direct = DirectMode::ShadowRays;
   eo.seed = 3;

@@ -119,6 +119,54 @@ void Scene::compute_light_cdf() {
   given.swap(lights);
   derive_lights(triangles, materials, given, lights, light_cdf, &environment);
   pack_environment_buffer();
+  derive_light_choice();
+}
+
+void Scene::derive_light_choice() {
+  light_choice.clear();
+  const size_t n = lights.size();
+  if (n < 2 || n > PF_LIGHT_CHOICE_MAX || light_cdf.size() != n) return;
+  // Emitters: an area light's key is its triangle's material, every other light its own key.
+  std::vector<int64_t> group(n);
+  for (size_t li = 0; li < n; ++li) {
+    const pf_light& l = lights[li];
+    group[li] = l.type == PF_LIGHT_AREA ? int64_t(triangles[size_t(l.triangle)].material)
+                                        : -1 - int64_t(li);
+  }
+  std::vector<int64_t> keys = group;
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  if (keys.size() < 2) return;
+  auto slot = [&](int64_t g) {
+    return size_t(std::lower_bound(keys.begin(), keys.end(), g) - keys.begin());
+  };
+  light_choice.assign(n, pf_light_choice{});
+  std::vector<double> share(keys.size(), 0.0);  // each emitter's power share
+  for (size_t li = 0; li < n; ++li) {
+    light_choice[li].power_p = light_cdf[li] - (li ? light_cdf[li - 1] : 0.f);
+    share[slot(group[li])] += double(light_choice[li].power_p);
+  }
+  for (size_t li = 0; li < n; ++li) {
+    pf_light_choice& c = light_choice[li];
+    const double g = share[slot(group[li])];
+    if (g > 0.0) c.uniform_p = float(double(c.power_p) / g / double(keys.size()));
+    const pf_light& l = lights[li];
+    if (l.type == PF_LIGHT_AREA) {
+      const pf_triangle& t = triangles[size_t(l.triangle)];
+      ((Vec3(t.v0) + Vec3(t.v1) + Vec3(t.v2)) * (1.f / 3.f)).store(c.centre);
+      face_normal(t).store(c.normal);
+    } else {
+      for (int k = 0; k < 3; ++k) c.centre[k] = l.position[k];
+    }
+  }
+}
+
+float Scene::light_pick_probability(size_t li, const Vec3& x) const {
+  if (light_choice.empty()) return light_cdf[li] - (li ? light_cdf[li - 1] : 0.f);
+  float pr[PF_LIGHT_CHOICE_MAX] = {};
+  const float fx[3] = {x.x, x.y, x.z};
+  pf_light_choice_probabilities(lights.data(), light_choice.data(), int(lights.size()), fx, pr);
+  return pr[li];
 }
 
 void Scene::pack_environment_buffer() {
@@ -143,6 +191,13 @@ Vec3 Scene::environment_radiance(const Vec3& d) const {
 float Scene::environment_light_pdf(const Vec3& d) const {
   const float fd[3] = {d.x, d.y, d.z};
   return pf_env_light_pdf(env_data(), fd);
+}
+
+float Scene::environment_light_pdf(const Vec3& d, const Vec3& x) const {
+  const float pdf = environment_light_pdf(d);  // p_pick by power × pdf_ω
+  if (light_choice.empty() || !(pdf > 0.f)) return pdf;
+  const size_t li = lights.size() - 1;  // the environment is the last light
+  return pdf * (light_pick_probability(li, x) / light_choice[li].power_p);
 }
 
 float Scene::light_incident(size_t li, const Vec3& p, float u1, float u2, Vec3& w,
@@ -185,7 +240,16 @@ bool Scene::light_point_cut_away(size_t li, float u1, float u2) const {
 
 bool Scene::sample_light(float ul, float u1, float u2, const Vec3& p, LightSample& s) const {
   if (lights.empty()) return false;
-  s.light = pick_light(ul, s.p_light);
+  if (light_choice.empty()) {
+    s.light = pick_light(ul, s.p_light);
+  } else {
+    float pr[PF_LIGHT_CHOICE_MAX] = {};
+    const float fp[3] = {p.x, p.y, p.z};
+    const int n = int(lights.size());
+    pf_light_choice_probabilities(lights.data(), light_choice.data(), n, fp, pr);
+    s.light = size_t(pf_light_choice_pick(pr, n, ul));
+    s.p_light = pr[s.light];
+  }
   if (!(s.p_light > 0.f)) return false;
   s.g = light_incident(s.light, p, u1, u2, s.w, s.q, &s.le);
   return s.g > 0.f;

@@ -6,6 +6,7 @@
 
 #include "photonflow/geometry/environment.h"
 #include "photonflow/geometry/kdtree.h"
+#include "photonflow/geometry/light_choice_shared.h"
 #include "photonflow/material/alpha_shared.h"
 #include "photonflow/material/texture_shared.h"
 #include "photonflow/foundations/shared_types.h"
@@ -60,6 +61,10 @@ struct Scene {
   std::vector<std::string> material_names;
   std::vector<pf_light> lights;
   std::vector<float> light_cdf;    // cumulative power, light_cdf.back() == 1 (sampling by power)
+  // Next-event estimation's light choice (light_choice_shared.h): one entry per light where the
+  // local choice applies, empty for the power choice. Derived (derive_light_choice, by
+  // compute_light_cdf and load_scene; not serialised).
+  std::vector<pf_light_choice> light_choice;
   pf_camera camera{};
   KdTree kd;
   Bounds bounds;                   // of all triangles
@@ -111,6 +116,10 @@ struct Scene {
   void compute_light_cdf();
   // env_packed from environment, bounds, lights and light_cdf.
   void pack_environment_buffer();
+  // light_choice from lights, light_cdf and triangles: the local choice (light_choice_shared.h
+  // eq. 1) in a scene of 2 to PF_LIGHT_CHOICE_MAX lights with at least two emitters (area lights
+  // grouped by material, every other light its own), else empty (the power choice).
+  void derive_light_choice();
   // The packed environment buffer for the shared functions (environment_shared.h), never null
   // once compute_light_cdf or load_scene ran (the header alone, width 0, without an environment).
   const float* env_data() const { return env_packed.empty() ? kNoEnvironment : env_packed.data(); }
@@ -122,6 +131,11 @@ struct Scene {
   // (pf_env_light_pdf), for weighing an escaping BSDF sample against NEE by MIS.
   Vec3 environment_radiance(const Vec3& d) const;
   float environment_light_pdf(const Vec3& d) const;
+  // The same density for NEE at point x, with x's light choice (light_pick_probability).
+  float environment_light_pdf(const Vec3& d, const Vec3& x) const;
+  // The probability that next-event estimation at x picks light li (sample_light's choice): its
+  // power share, or p_l(x) of light_choice_shared.h eq. 1 where light_choice is not empty.
+  float light_pick_probability(size_t li, const Vec3& x) const;
   // One next-event sample of light `li` at point p from two uniform numbers (light_shared.h
   // pf_light_incident, the one sampling of every light type for host and kernels): writes w (unit,
   // p → light) and q (the shadow ray's end) and returns G, with L_direct ≈ L_e·f·|cos θ_x|·G /
@@ -136,8 +150,9 @@ struct Scene {
   // light_incident gives 0 there and photon emission sends nothing. False in a scene without
   // masks and for other light types.
   bool light_point_cut_away(size_t li, float u1, float u2) const;
-  // One next-event light sample at p from three uniform numbers: the light picked in proportion
-  // to power (pick_light, ul), then its light_incident (u1, u2). False when the scene has no
+  // One next-event light sample at p from three uniform numbers: the light picked by ul (in
+  // proportion to power, pick_light, or by p's local choice where light_choice is not empty;
+  // light_pick_probability), then its light_incident (u1, u2). False when the scene has no
   // light, the pick's probability is 0 or the light sends nothing to p (G = 0).
   struct LightSample {
     size_t light = 0;

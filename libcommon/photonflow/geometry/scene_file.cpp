@@ -103,6 +103,7 @@ Scene load_scene(const std::string& path) {
   for (const pf_alpha_material& a : s.material_alpha) masked = masked || pf_alpha_masked(a.cutoff);
   if (!masked) s.material_alpha.clear();
   s.pack_environment_buffer();  // derived: the sampling tables (environment_shared.h)
+  s.derive_light_choice();      // derived: NEE's light choice (light_choice_shared.h)
   s.kd.bounds.lo = Vec3(s.kd.nodes[0].lo);
   s.kd.bounds.hi = Vec3(s.kd.nodes[0].hi);
   // The id names the content: a file edited after baking (or damaged) no longer matches it.

@@ -21,6 +21,8 @@ struct ClSceneBuffers {
   bool has_pbr = false;  // a PF_MAT_PBR material: the eye pass writes a pf_pbr_point table
   ClBuffer alpha_mats;   // alpha cut-outs (PF_ALPHA_PARAMS)
   cl_int alpha_on = 0;
+  ClBuffer light_choice;  // NEE's light choice (Scene::light_choice), or a one-entry stand-in
+  cl_int light_choice_on = 0;
   cl_int node_count = 0, light_count = 0;
   std::string scene_id;
   size_t triangle_count = 0;
@@ -84,6 +86,12 @@ ClSceneBuffers& scene_buffers(const Scene& scene, ClContext& dev) {
   s->mats = upload_array(dev, scene.materials, "materials");
   s->lights = upload_array(dev, scene.lights, "lights");
   s->light_cdf = upload_array(dev, scene.light_cdf, "light CDF");
+  {
+    std::vector<pf_light_choice> choice = scene.light_choice;
+    s->light_choice_on = choice.empty() ? 0 : 1;
+    if (choice.empty()) choice.resize(1);  // never read (light_choice_on 0)
+    s->light_choice = upload_array(dev, choice, "light choice");
+  }
   {
     std::vector<float> env = scene.env_packed;
     if (env.empty()) env.assign(Scene::kNoEnvironment, Scene::kNoEnvironment + 16);
@@ -228,7 +236,8 @@ EyePassResult trace_hitpoints(const Scene& scene, const EyePassOptions& opt, ClC
              cl_int(opt.max_depth), shadow, cl_int(opt.shadow_samples), res.radius,
              glossy_mis, cl_uint(opt.seed), cl_uint(opt.pass), cl_int(int(opt.sampler)), eps,
              cl_int(off), count, slots, used, emitted, direct, cl_int(sb.has_pbr ? 1 : 0), pbr,
-             emit_pixels, cl_int(opt.emission_spp), tri_light, glossy_marks, cl_int(G));
+             emit_pixels, cl_int(opt.emission_spp), tri_light, glossy_marks, cl_int(G),
+             sb.light_choice, sb.light_choice_on);
     dev.run(k, size_t(count));
     const size_t nslots = size_t(count) * size_t(per_pixel);
     flags.resize(nslots);

@@ -318,7 +318,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
   // on through a PBR vertex; the emitters it finds then go to `direct`.
   bool from_glossy = false, last = false, merged = false, glossy = false;
   float glossy_pdf = 0.f;
-  Vec3 T_direct;
+  Vec3 T_direct, glossy_p;  // glossy_p: that vertex (its NEE's light choice, for the MIS weight)
   for (int depth = 0; depth <= opt_.max_depth; ++depth) {
     Hit h;
     if (!caster_.closest(ray, h)) {
@@ -331,7 +331,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         if (from_glossy)
           direct += T_direct * le *
                     pf_power_heuristic(glossy_pdf, float(opt_.shadow_samples) *
-                                                       scene_.environment_light_pdf(d));
+                                                       scene_.environment_light_pdf(d, glossy_p));
         else
           (glossy ? direct : emitted) += T * le;
       }
@@ -341,7 +341,8 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
     const pf_material& m = scene_.materials[size_t(sh.material)];
     if (m.type == PF_MAT_EMITTER && sh.front) {
       if (from_glossy)
-        direct += T_direct * Vec3(m.emission) * emitter_hit_weight(ray, h, sh, glossy_pdf);
+        direct += T_direct * Vec3(m.emission) *
+                  emitter_hit_weight(ray, h, sh, glossy_p, glossy_pdf);
       else
         (glossy ? direct : emitted) += T * Vec3(m.emission);
     }
@@ -438,6 +439,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
         if (!sampled) return true;
         T_direct = T * Vec3(wt);
         glossy_pdf = pdf;
+        glossy_p = sh.p;
         from_glossy = last = merged = true;
         ray = spawn_ray(sh, Vec3(wi), eps_);
         continue;  // the next hit adds an emitter's MIS-weighted light, and returns
@@ -453,6 +455,7 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
       T_direct = T * Vec3(wt);
       T = T_direct * share;
       glossy_pdf = pdf;
+      glossy_p = sh.p;
       from_glossy = glossy = true;
       if (!(luminance(T_direct) > 0.f)) return false;
       last = !(luminance(T) > 0.f);  // w_m = 1 here: only the emitter's light is left
@@ -470,17 +473,18 @@ bool EyeTracer::sample(int x, int y, int s, pf_hitpoint& hp, Vec3& emitted, Vec3
 // The BSDF sample's weight against next-event estimation's n = shadow_samples light samples at
 // the vertex it left (direct_light_pbr with mis): the power heuristic of the BSDF's density
 // against n p_light, p_light = P(pick) · d² / (A cos θ_y) per unit solid angle (Veach 1997
-// eq. 9.13; pathtrace.cpp's emitter hits). An emitter triangle that is no light (none in
+// eq. 9.13; pathtrace.cpp's emitter hits), P(pick) that of NEE at the vertex `from` the sample
+// left (Scene::light_pick_probability). An emitter triangle that is no light (none in
 // Scene::lights) was not sampled by NEE: weight 1.
 float EyeTracer::emitter_hit_weight(const Ray& ray, const Hit& h, const SurfaceHit& sh,
-                                    float bsdf_pdf) const {
+                                    const Vec3& from, float bsdf_pdf) const {
   const int32_t li = tri_light_.empty() ? -1 : tri_light_[size_t(sh.tri)];
   if (li < 0) return 1.f;
   const pf_light& l = scene_.lights[size_t(li)];
   const Vec3 d = normalize(ray.d);
   const float cos_l = -dot(d, sh.ng);
   if (!(cos_l > 0.f) || !(l.area > 0.f)) return 1.f;
-  const float p_pick = scene_.light_cdf[size_t(li)] - (li ? scene_.light_cdf[size_t(li) - 1] : 0.f);
+  const float p_pick = scene_.light_pick_probability(size_t(li), from);
   const float dist = h.t * length(ray.d);
   const float p_light = p_pick * dist * dist / (l.area * cos_l);
   return pf_power_heuristic(bsdf_pdf, float(opt_.shadow_samples) * p_light);

@@ -231,15 +231,17 @@ class EyeTracer {
   pf_uint glossy_key_;                         // the glossy samples' scrambling key
   Vec3 emission_sample(int x, int y, int k) const;
   // The power-heuristic weight of an emitter hit by a glossy vertex's BSDF sample (GlossyMerge::
-  // Mis): against the shadow_samples light samples next-event estimation drew there.
-  float emitter_hit_weight(const Ray& ray, const Hit& h, const SurfaceHit& sh,
+  // Mis): against the shadow_samples light samples next-event estimation drew at `from`, the
+  // vertex the sample left.
+  float emitter_hit_weight(const Ray& ray, const Hit& h, const SurfaceHit& sh, const Vec3& from,
                            float bsdf_pdf) const;
 };
 
 // Irradiance-weighted direct radiance L_direct = ρ/π · E at a diffuse point, by light sampling with
 // shadow rays (`samples` per call, each drawing (ul, u1, u2) from `draws`: pixel_sampler.h
 // pf_light_draws, Sobol points under PF_SAMPLER_SOBOL, the shadow stream otherwise): area, point,
-// spot and directional lights (light_shared.h).
+// spot and directional lights (light_shared.h) and the environment, each sample's light picked by
+// Scene::sample_light (by power, or p's local choice: light_choice_shared.h).
 // `leaf`: the kd leaf p lies in (SurfaceHit::leaf), where the shadow rays start their walk.
 Vec3 direct_light(const Scene& scene, const Vec3& p, const Vec3& ng, const Vec3& ns,
                   const pf_material& m, int samples, pf_light_draws& draws, int32_t leaf = -1);

@@ -70,7 +70,6 @@ class PathTracer {
       light_normal_[li] = face_normal(t);
       tri_light_[size_t(l.triangle)] = int32_t(li);
     }
-    build_light_choice();
   }
 
   // The kd leaf of the eye point: the camera rays' Ray::leaf.
@@ -103,12 +102,8 @@ class PathTracer {
           if (specular) {
             L += T * le;
           } else if (opt_.mis == MisMode::Power) {
-            // environment_light_pdf holds the power choice's p_l; the local one's replaces it.
-            float light_pdf = nee_could ? scene_.environment_light_pdf(d) : 0.f;
-            if (local_ && light_pdf > 0.f) {
-              const size_t le_i = scene_.lights.size() - 1;  // the environment is the last light
-              light_pdf *= pick_probability(le_i, nee_p) / power_p_[le_i];
-            }
+            // NEE's density of d at the vertex the ray left, with that vertex's light choice.
+            const float light_pdf = nee_could ? scene_.environment_light_pdf(d, nee_p) : 0.f;
             L += T * le * power_heuristic(bsdf_pdf, light_pdf);
           }
         }
@@ -131,7 +126,7 @@ class PathTracer {
             // vertex: p_l · dist² / (A · cos θ_y).
             const pf_light& l = scene_.lights[size_t(li)];
             const float cos_l = -dot(d, light_normal_[size_t(li)]);
-            const float p_pick = pick_probability(size_t(li), nee_p);
+            const float p_pick = scene_.light_pick_probability(size_t(li), nee_p);
             const float dist = h.t * length(ray.d);
             const float light_pdf = cos_l > 0.f ? p_pick * dist * dist / (l.area * cos_l) : 0.f;
             w = power_heuristic(bsdf_pdf, light_pdf);
@@ -208,112 +203,6 @@ class PathTracer {
     return l.type == PF_LIGHT_AREA || l.type == PF_LIGHT_ENVIRONMENT;
   }
 
-  // The light choice of next-event estimation. By power alone (Scene::pick_light) a weak light
-  // that a BSDF peak points at is picked rarely and counted at 1/p_l when it is: a spot light of
-  // 9 % of the power, focused on the showcase's rough-glass ball, made its fireflies. So in a
-  // scene of 2 to kLocalChoiceMax lights and at least two emitters (an emissive material's
-  // triangles are one emitter, as a Mitsuba 3 mesh emitter; every other light is one), light l
-  // is picked at x with the one-sample mixture (Veach 1997 §9.2.2)
-  //   p_l(x) = ½ E_l(x) / Σ_k E_k(x) + ¼ Φ_l / Σ_k Φ_k + ¼ (1/G) Φ_l / Φ_g(l)
-  // of three strategies: E_l(x) the irradiance light l would give x with no occluder, facing it
-  // (L_e·A·max(0, cos θ_l)/d² for an area light, from its centroid; I/d² inside a spot's outer
-  // cone, 0 outside, and for a point light; E for a directional light; Φ/(πR²) for the
-  // environment); power; and Mitsuba 3's uniform choice of the G emitters (Φ_g an emitter's
-  // power, its triangles by power within it). The last two keep p_l > 0 wherever a light can
-  // give light (E_l's centroid estimate is 0 for a triangle that only partly faces x), ½ and ½
-  // when every E_l(x) is 0. Emitter hits after a BSDF sample weigh by p_l at the vertex they
-  // left. Otherwise (one emitter, whose triangles go by power, i.e. area; or more lights) the
-  // scene's power choice. docs/RESULTS.md "`pathtrace` against Mitsuba 3" measures the mixture
-  // against its parts.
-  static constexpr size_t kLocalChoiceMax = 16;
-  void build_light_choice() {
-    const size_t n = scene_.lights.size();
-    if (n < 2 || n > kLocalChoiceMax) return;
-    std::vector<int64_t> group(n);
-    for (size_t li = 0; li < n; ++li) {
-      const pf_light& l = scene_.lights[li];
-      group[li] = l.type == PF_LIGHT_AREA ? int64_t(scene_.triangles[size_t(l.triangle)].material)
-                                          : -1 - int64_t(li);
-    }
-    std::vector<int64_t> keys = group;
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    if (keys.size() < 2) return;
-    local_ = true;
-    power_p_.resize(n);
-    uniform_p_.assign(n, 0.f);
-    std::vector<double> share(keys.size(), 0.0);
-    auto slot = [&](int64_t g) {
-      return size_t(std::lower_bound(keys.begin(), keys.end(), g) - keys.begin());
-    };
-    for (size_t li = 0; li < n; ++li) {
-      power_p_[li] = scene_.light_cdf[li] - (li ? scene_.light_cdf[li - 1] : 0.f);
-      share[slot(group[li])] += double(power_p_[li]);
-    }
-    light_centre_.resize(n);
-    for (size_t li = 0; li < n; ++li) {
-      const double g = share[slot(group[li])];
-      if (g > 0.0) uniform_p_[li] = float(double(power_p_[li]) / g / double(keys.size()));
-      const pf_light& l = scene_.lights[li];
-      if (l.type == PF_LIGHT_AREA) {
-        const pf_triangle& t = scene_.triangles[size_t(l.triangle)];
-        light_centre_[li] = (Vec3(t.v0) + Vec3(t.v1) + Vec3(t.v2)) * (1.f / 3.f);
-      } else {
-        light_centre_[li] = Vec3(l.position);
-      }
-    }
-  }
-
-  // E_l(x) of the choice above (luminance).
-  float local_irradiance(size_t li, const Vec3& x) const {
-    const pf_light& l = scene_.lights[li];
-    if (l.type == PF_LIGHT_DIRECTIONAL) return luminance(Vec3(l.radiance));
-    if (l.type == PF_LIGHT_ENVIRONMENT) return l.area > 0.f ? l.power / l.area : 0.f;
-    const Vec3 v = x - light_centre_[li];  // from the light to x
-    const float d2 = std::max(dot(v, v), 1e-8f);
-    if (l.type == PF_LIGHT_AREA) {
-      const float cos_l = dot(v, light_normal_[li]) / std::sqrt(d2);
-      return cos_l > 0.f ? l.power * kInvPi * cos_l / d2 : 0.f;  // power = π·A·L_e
-    }
-    const float I = luminance(Vec3(l.radiance));
-    if (l.type == PF_LIGHT_SPOT && dot(v, Vec3(l.direction)) < l.cos_outer * std::sqrt(d2))
-      return 0.f;
-    return I / d2;
-  }
-
-  // p_l(x) of every light into pr (size lights), for the local choice.
-  void local_choice(const Vec3& x, float* pr) const {
-    const size_t n = scene_.lights.size();
-    float total = 0.f;
-    for (size_t li = 0; li < n; ++li) total += (pr[li] = local_irradiance(li, x));
-    const float a = total > 0.f ? 0.5f / total : 0.f, b = total > 0.f ? 0.25f : 0.5f;
-    for (size_t li = 0; li < n; ++li) pr[li] = a * pr[li] + b * (power_p_[li] + uniform_p_[li]);
-  }
-
-  // The probability that next-event estimation at x picks light li.
-  float pick_probability(size_t li, const Vec3& x) const {
-    if (!local_) return scene_.light_cdf[li] - (li ? scene_.light_cdf[li - 1] : 0.f);
-    float pr[kLocalChoiceMax];
-    local_choice(x, pr);
-    return pr[li];
-  }
-
-  // Scene::sample_light with the light choice above.
-  bool sample_nee_light(float ul, float u1, float u2, const Vec3& p, Scene::LightSample& s) const {
-    if (!local_) return scene_.sample_light(ul, u1, u2, p, s);
-    float pr[kLocalChoiceMax];
-    local_choice(p, pr);
-    const size_t n = scene_.lights.size();
-    size_t i = 0;
-    float acc = pr[0];
-    while (i + 1 < n && !(ul < acc)) acc += pr[++i];
-    s.light = i;
-    s.p_light = pr[i];
-    if (!(s.p_light > 0.f)) return false;
-    s.g = scene_.light_incident(i, p, u1, u2, s.w, s.q, &s.le);
-    return s.g > 0.f;
-  }
-
   // Russian roulette after rr_depth bounces (Arvo & Kirk 1990): survive with probability
   // q = min(1, max channel of T·η_scale) and divide T by q. η_scale undoes the
   // radiance's (η_o/η_i)² at every rough-glass refraction (pbrt-v3's etaScale, Mitsuba 3's η²):
@@ -346,7 +235,7 @@ class PathTracer {
     float ul, u1, u2;
     light_numbers(ps, depth, ul, u1, u2);
     Scene::LightSample ls;
-    if (!sample_nee_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
+    if (!scene_.sample_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
     const pf_light& l = scene_.lights[ls.light];
     const float cos_x = dot(ls.w, n);
     if (cos_x <= 0.f || dot(ls.w, ng) <= 0.f) return {};
@@ -375,7 +264,7 @@ class PathTracer {
     float ul, u1, u2;
     light_numbers(ps, depth, ul, u1, u2);
     Scene::LightSample ls;
-    if (!sample_nee_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
+    if (!scene_.sample_light(ul, u1, u2, p, ls)) return {};  // light_shared.h
     const pf_light& l = scene_.lights[ls.light];
     float wv[3], f[3];
     ls.w.store(wv);
@@ -399,10 +288,6 @@ class PathTracer {
   const bool env_;                  // the scene has an environment light
   std::vector<int32_t> tri_light_;  // light index of an emissive triangle, −1 otherwise
   std::vector<Vec3> light_normal_;  // unit front normal of each area light
-  bool local_ = false;              // NEE's light choice is the local one (build_light_choice)
-  std::vector<float> power_p_;      // local choice: each light's power share
-  std::vector<float> uniform_p_;    // local choice: 1/G of its emitter, by power within it
-  std::vector<Vec3> light_centre_;  // local choice: area lights' centroids, others' positions
 };
 
 void check_options(const PathTraceOptions& opt) {
