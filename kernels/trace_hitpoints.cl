@@ -189,10 +189,9 @@ static void pf_emission_sample(const pf_scene_view* s, __global const float* cam
   pf_sobol_pixel_sample_keyed(pf_emission_sobol_key(seed), (uint)pix, pass * (uint)K + (uint)k,
                               &jx, &jy);
   float u1 = 0.5f, u2 = 0.5f;
-  if (cam[14] > 0.0f) {
-    u1 = pf_rng_next(&rng);
-    u2 = pf_rng_next(&rng);
-  }
+  if (cam[14] > 0.0f) /* the lens point stratified as the jitter (pixel_sampler.h) */
+    pf_eye_lens_keyed(PF_SAMPLER_SOBOL, pf_emission_sobol_key(seed), pass, (uint)pix, k, K, &rng,
+                      &u1, &u2);
   float o[3], d[3];
   pf_camera_ray(cam, width, height, (float)(pix % width) + jx, (float)(pix / width) + jy, u1, u2,
                 o, d);

@@ -52,8 +52,10 @@ PF_INLINE pf_uint pf_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B0000
  * mirrors and glass to the emitters a pixel sees. Sample k of K of pixel `pixel` in pass `pass`
  * jitters by point pass·K + k of a second scrambled (0,2)-sequence of the pixel (key
  * pf_emission_sobol_key, pass slot 0x50B1000), so a pixel's emission samples of all passes
- * together are one low-discrepancy sequence, and draws its lens point and glass choices from
- * pf_emission_rng. */
+ * together are one low-discrepancy sequence; its lens point (a thin-lens camera) is
+ * pf_eye_lens_keyed's SOBOL point pass·K + k under the same key (its seeds 2–4), so the lens is
+ * stratified as the jitter (a defocused lamp's edge converges as the pixel's own does), and its
+ * glass choices come from pf_emission_rng. */
 #define PF_EMISSION_STREAM 0xE3E0000U
 PF_INLINE pf_uint pf_emission_sobol_key(pf_uint seed) { return pf_rng_key(seed, 0x50B1000U); }
 

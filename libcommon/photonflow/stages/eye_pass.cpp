@@ -500,10 +500,8 @@ Vec3 EyeTracer::emission_sample(int x, int y, int k) const {
   float jx, jy;
   pf_sobol_pixel_sample_keyed(emission_key_, pix, opt_.pass * uint32_t(K) + uint32_t(k), &jx, &jy);
   float u1 = 0.5f, u2 = 0.5f;
-  if (cam_.lens()) {
-    u1 = pf_rng_next(&rng);
-    u2 = pf_rng_next(&rng);
-  }
+  if (cam_.lens())  // the lens point stratified as the jitter (pixel_sampler.h)
+    pf_eye_lens_keyed(PF_SAMPLER_SOBOL, emission_key_, opt_.pass, pix, k, K, &rng, &u1, &u2);
   Ray ray;
   cam_.ray(float(x) + jx, float(y) + jy, u1, u2, ray.o, ray.d);
   ray.leaf = camera_leaf_;
