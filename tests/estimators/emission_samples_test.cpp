@@ -303,7 +303,8 @@ TEST_CASE("emission samples: through a thin lens their lens points are stratifie
   const std::vector<uint8_t> marks = emission_pixels(s);
   constexpr int kShort = 16, kLong = 256;
   std::vector<std::vector<float>> layers;
-  for (uint32_t p = 0; p < uint32_t(kShort + kLong); ++p) layers.push_back(emitted(s, 8, p, &marks));
+  for (uint32_t p = 0; p < uint32_t(kShort + kLong); ++p)
+    layers.push_back(emitted(s, 8, p, &marks));
   double err2 = 0, var_sum = 0;
   size_t marked = 0;
   for (size_t i = 0; i < marks.size(); ++i) {

@@ -20,9 +20,10 @@
  *   u_l     uniform over the emitters, split inside an emitter by power.
  * Where every E_l(x) is 0 the first half goes to the other two. Every light keeps p_l(x) ≥ ¼ of
  * its power share, so no light is starved (E_l's estimate from the centroid is 0 for a triangle
- * that only partly faces x, which may still light it); MIS weights of emitters hit by a BSDF sample use the
- * same p_l at the vertex the sample left (pathtrace.cpp, eye_pass.cpp). docs/RESULTS.md
- * "`pathtrace` against Mitsuba 3" measures (1) against each of its parts.
+ * that only partly faces x, which may still light it). MIS weights of emitters hit by a BSDF
+ * sample use the same p_l at the vertex the sample left (pathtrace.cpp, eye_pass.cpp).
+ * docs/RESULTS.md "`pathtrace` against Mitsuba 3" measures (1) against each of its parts, and
+ * "The light choice and the lens points of emission samples" what it gives the photon mappers.
  *
  * The table (one pf_light_choice per light, Scene::light_choice) is derived from the lights on
  * load and never stored in scene.h5; an empty table means the power choice.
