@@ -49,6 +49,19 @@ inline bool find_device(cl_device_id& device, std::string& platform_name) {
   return false;
 }
 
+// Builds `program` for `device` with `options`; false on failure, with the compiler's build log
+// in `log`.
+inline bool build_program(cl_program program, cl_device_id device,
+                          const std::string& options, std::string& log) {
+  if (clBuildProgram(program, 1, &device, options.c_str(), nullptr, nullptr) == CL_SUCCESS)
+    return true;
+  size_t len = 0;
+  clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &len);
+  log.assign(len, '\0');
+  if (len) clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, len, &log[0], nullptr);
+  return false;
+}
+
 // The short names the tests use: `using namespace pf::test::cl_raw;`.
 namespace cl_raw {
 using Context = ClContextHandle;
@@ -56,6 +69,7 @@ using Queue = ClQueueHandle;
 using Program = ClProgramHandle;
 using Kernel = ClKernelHandle;
 using Buffer = ClBufferHandle;
+using pf::test::build_program;
 using pf::test::find_device;
 using pf::test::upload;
 }  // namespace cl_raw

@@ -83,14 +83,8 @@ TEST_CASE("intersect_shared.h runs as OpenCL C and matches the host", "[raycast]
   REQUIRE(err == CL_SUCCESS);
   const std::string options = "-cl-std=CL1.2 -I " + pf::test::source_dir() + "/libcommon" +
                               pf::cl_float_options(device);
-  err = clBuildProgram(program.h, 1, &device, options.c_str(), nullptr, nullptr);
-  if (err != CL_SUCCESS) {
-    size_t len = 0;
-    clGetProgramBuildInfo(program.h, device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &len);
-    std::string log(len, '\0');
-    clGetProgramBuildInfo(program.h, device, CL_PROGRAM_BUILD_LOG, len, &log[0], nullptr);
-    FAIL("OpenCL build failed:\n" << log);
-  }
+  std::string log;
+  if (!build_program(program.h, device, options, log)) FAIL("OpenCL build failed:\n" << log);
   Kernel kernel(clCreateKernel(program.h, "cast_rays", &err));
   REQUIRE(err == CL_SUCCESS);
 

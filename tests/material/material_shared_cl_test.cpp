@@ -146,14 +146,8 @@ TEST_CASE("material headers run as OpenCL C and match the host", "[material][ope
   Program program(clCreateProgramWithSource(ctx.h, 1, &src, nullptr, &err));
   REQUIRE(err == CL_SUCCESS);
   const std::string options = "-cl-std=CL1.2" + pf::cl_float_options(device);  // no -I
-  err = clBuildProgram(program.h, 1, &device, options.c_str(), nullptr, nullptr);
-  if (err != CL_SUCCESS) {
-    size_t len = 0;
-    clGetProgramBuildInfo(program.h, device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &len);
-    std::string log(len, '\0');
-    clGetProgramBuildInfo(program.h, device, CL_PROGRAM_BUILD_LOG, len, &log[0], nullptr);
-    FAIL("OpenCL build failed:\n" << log);
-  }
+  std::string log;
+  if (!build_program(program.h, device, options, log)) FAIL("OpenCL build failed:\n" << log);
   std::mt19937 rng(17);
   std::uniform_real_distribution<float> uni(0.f, 1.f);
   auto run = [&](const char* name, const std::vector<cl_mem>& bufs, const std::vector<cl_int>& ints,

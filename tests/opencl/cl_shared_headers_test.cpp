@@ -14,6 +14,7 @@
 #include "photonflow/opencl/cl_runtime.h"
 #include "photonflow/estimators/ppm.h"
 #include "photonflow/foundations/rng.h"
+#include "cl_raw.h"
 #include "support.h"
 
 namespace {
@@ -86,14 +87,9 @@ bool open_cl(Cl& cl, std::string& why) {
   REQUIRE(err == CL_SUCCESS);
   std::string options = "-cl-std=CL1.2 -I " + pf::test::source_dir() + "/libcommon" +
                         pf::cl_float_options(cl.device);
-  err = clBuildProgram(cl.program, 1, &cl.device, options.c_str(), nullptr, nullptr);
-  if (err != CL_SUCCESS) {
-    size_t len = 0;
-    clGetProgramBuildInfo(cl.program, cl.device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &len);
-    std::string log(len, '\0');
-    clGetProgramBuildInfo(cl.program, cl.device, CL_PROGRAM_BUILD_LOG, len, &log[0], nullptr);
+  std::string log;
+  if (!pf::test::build_program(cl.program, cl.device, options, log))
     FAIL("OpenCL build of rng.h/ppm.h failed:\n" << log);
-  }
   return true;
 }
 
