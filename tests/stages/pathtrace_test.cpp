@@ -510,7 +510,7 @@ TEST_CASE("pathtrace: two emitters: the light choice's MIS weights keep MIS's me
           "[pathtrace][mis]") {
   // The furnace's walls (one emitter) and a small bright sphere of a second emissive material:
   // next-event estimation picks between the two emitters by the defensive mixture of
-  // pathtrace.cpp (not by power), and the power heuristic must weigh an emitter hit by that same
+  // light_choice_shared.h (not by power), and the power heuristic must weigh an emitter hit by that same
   // choice's probability: MIS on and off (NEE alone after diffuse bounces) agree in mean. With
   // the power share in the weights instead, MIS on is off by several standard errors here.
   Scene s = box_furnace(0.5f, 1.f, 24, 16, make_sphere(Vec3(0.5f, 0.3f, 0.45f), 0.06f, 200, {1, 1}),

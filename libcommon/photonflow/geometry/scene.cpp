@@ -161,11 +161,15 @@ void Scene::derive_light_choice() {
   }
 }
 
+void Scene::light_choice_at(const Vec3& x, float* pr) const {
+  const float fx[3] = {x.x, x.y, x.z};
+  pf_light_choice_probabilities(lights.data(), light_choice.data(), int(lights.size()), fx, pr);
+}
+
 float Scene::light_pick_probability(size_t li, const Vec3& x) const {
   if (light_choice.empty()) return light_cdf[li] - (li ? light_cdf[li - 1] : 0.f);
   float pr[PF_LIGHT_CHOICE_MAX] = {};
-  const float fx[3] = {x.x, x.y, x.z};
-  pf_light_choice_probabilities(lights.data(), light_choice.data(), int(lights.size()), fx, pr);
+  light_choice_at(x, pr);
   return pr[li];
 }
 
@@ -244,10 +248,8 @@ bool Scene::sample_light(float ul, float u1, float u2, const Vec3& p, LightSampl
     s.light = pick_light(ul, s.p_light);
   } else {
     float pr[PF_LIGHT_CHOICE_MAX] = {};
-    const float fp[3] = {p.x, p.y, p.z};
-    const int n = int(lights.size());
-    pf_light_choice_probabilities(lights.data(), light_choice.data(), n, fp, pr);
-    s.light = size_t(pf_light_choice_pick(pr, n, ul));
+    light_choice_at(p, pr);
+    s.light = size_t(pf_light_choice_pick(pr, int(lights.size()), ul));
     s.p_light = pr[s.light];
   }
   if (!(s.p_light > 0.f)) return false;

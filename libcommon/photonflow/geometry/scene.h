@@ -136,6 +136,9 @@ struct Scene {
   // The probability that next-event estimation at x picks light li (sample_light's choice): its
   // power share, or p_l(x) of light_choice_shared.h eq. 1 where light_choice is not empty.
   float light_pick_probability(size_t li, const Vec3& x) const;
+  // p_l(x) of every light into pr[0 .. lights.size()) (light_choice_shared.h eq. 1); only where
+  // light_choice is not empty.
+  void light_choice_at(const Vec3& x, float* pr) const;
   // One next-event sample of light `li` at point p from two uniform numbers (light_shared.h
   // pf_light_incident, the one sampling of every light type for host and kernels): writes w (unit,
   // p → light) and q (the shadow ray's end) and returns G, with L_direct ≈ L_e·f·|cos θ_x|·G /
