@@ -1,7 +1,9 @@
 // The two data/ scenes lit from outside (issue 50 item 5): data/make_outside.py writes exactly the
 // committed files (sky.hdr, window-room.gltf, hdri-object.gltf, outside.bin and their bake
 // options), the window room bakes with the environment as its only light, sunlight comes in
-// through the window onto a floor the camera sees, and a short render is not black inside.
+// through the window onto a floor the camera sees, and a short render is not black inside. And
+// the bench scene of the same room behind a glass pane (bench/scenes/make_window_pane.py): the
+// script writes the committed files, and the pane closes the window to every sunbeam.
 
 #include <catch2/catch.hpp>
 
@@ -27,12 +29,13 @@ std::string python3() {
   return std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
 }
 
-// Bakes data/<scene>.gltf as make render and docs/SCENES.md do: from the repository root, with
+// Bakes <dir>/<scene>.gltf as make render and docs/SCENES.md do: from the repository root, with
 // its NAME.bake-options (whose --environment sky.hdr is resolved against the options file's folder).
-Scene bake_from_root(const test::TempDir& tmp, const std::string& scene, const std::string& extra) {
+Scene bake_from_root(const test::TempDir& tmp, const std::string& scene, const std::string& extra,
+                     const std::string& dir = "data") {
   const std::string out = tmp / (scene + ".h5"), log = tmp / (scene + ".log");
   const std::string cmd = "cd '" + test::source_dir() + "' && '" + test::bin_dir() +
-                          "/scene-bake' data/" + scene + ".gltf -o '" + out + "' " + extra + " > '" +
+                          "/scene-bake' " + dir + "/" + scene + ".gltf -o '" + out + "' " + extra + " > '" +
                           log + "' 2>&1";
   const int status = std::system(cmd.c_str());
   INFO(cmd << "\n" << test::file_bytes(log));
@@ -157,4 +160,67 @@ TEST_CASE("the object outdoors: the sky is its one light, and it renders", "[out
     sum += x;
   }
   CHECK(sum > 0);
+}
+
+TEST_CASE("the window room behind glass: the script writes the committed files, the pane closes "
+          "the window",
+          "[outside]") {
+  test::TempDir tmp("outside-pane");
+  const std::string bench = test::source_dir() + "/bench/scenes";
+  const std::string cmd = python3() + " " + bench + "/make_window_pane.py --out " +
+                          tmp.dir.string() + " > " + (tmp / "log.txt") + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  INFO(cmd << "\n" << test::file_bytes(tmp / "log.txt"));
+  REQUIRE(status == 0);
+  for (const char* name : {"window-pane.gltf", "window-pane.bin", "window-pane.bake-options"}) {
+    INFO(name << ": bench/scenes differs from what make_window_pane.py writes; run it and commit");
+    const std::string committed = test::file_bytes(bench + "/" + name);
+    CHECK(!committed.empty());
+    CHECK(test::file_bytes(tmp / name) == committed);
+  }
+
+  const Scene open = bake_from_root(tmp, "window-room", "--width 32 --height 32");
+  const Scene pane = bake_from_root(tmp, "window-pane", "--width 32 --height 32", "bench/scenes");
+  REQUIRE(pane.lights.size() == 1u);
+  CHECK(pane.lights[0].type == PF_LIGHT_ENVIRONMENT);
+  CHECK(pane.environment.source == open.environment.source);  // the same sky
+  size_t glass = 0;
+  for (const pf_material& m : pane.materials) glass += m.type == PF_MAT_GLASS;
+  CHECK(glass == 1u);  // the pane (the rough-glass sphere is a metallic-roughness material)
+
+  // The sun's direction: the brightest texel.
+  const Environment& env = pane.environment;
+  size_t sun = 0;
+  for (size_t i = 0; i < size_t(env.width) * size_t(env.height); ++i)
+    if (luminance(&env.texels[3 * i]) > luminance(&env.texels[3 * sun])) sun = i;
+  const Vec3 to_sun = texel_direction(env, int(sun) / env.width, int(sun) % env.width);
+  // Every floor point the open window lets the sun reach has the pane's glass first on its ray to
+  // the sun, and behind the glass the sky: the pane fills the window, and nothing else changed.
+  int sunlit = 0, through_glass = 0, then_sky = 0;
+  for (int i = 0; i < 40; ++i)
+    for (int k = 0; k < 50; ++k) {
+      const Vec3 p(open.bounds.lo.x + (float(i) + 0.5f) / 40.f * (open.bounds.hi.x - open.bounds.lo.x),
+                   1e-3f,
+                   open.bounds.lo.z + (float(k) + 0.5f) / 50.f * (open.bounds.hi.z - open.bounds.lo.z));
+      if (intersect_any(open, Ray{p, to_sun})) continue;
+      ++sunlit;
+      Hit h;
+      if (!intersect_closest(pane, Ray{p, to_sun}, h)) continue;
+      if (pane.materials[size_t(pane.triangles[size_t(h.tri)].material)].type != PF_MAT_GLASS)
+        continue;
+      ++through_glass;
+      // Leave the slab: the far face, then nothing more.
+      const Vec3 q = p + to_sun * (h.t + 1e-4f);
+      Hit h2;
+      if (!intersect_closest(pane, Ray{q, to_sun}, h2)) continue;
+      const Vec3 r = q + to_sun * (h2.t + 1e-4f);
+      then_sky += pane.materials[size_t(pane.triangles[size_t(h2.tri)].material)].type ==
+                          PF_MAT_GLASS &&
+                      !intersect_any(pane, Ray{r, to_sun});
+    }
+  INFO(sunlit << " floor points in the sun through the open window, " << through_glass
+              << " of them behind the pane's glass, " << then_sky << " then see the sky");
+  CHECK(sunlit > 40);
+  CHECK(through_glass == sunlit);
+  CHECK(then_sky == sunlit);
 }
