@@ -3,7 +3,7 @@
 differ only in --seed, against the two-stream references of make_refs.sh.
 
     error_split.py REF_S0 REF_S1 RUN.exr RUN.exr [RUN.exr ...] [--mask mask.exr] [--blocks 8]
-                   [--label NAME]
+                   [--label NAME] [--region NAME:Y0:Y1:X0:X1] [--outside NAME:Y0:Y1:X0:X1]
 
 Per pixel p (the mean over R, G, B of squared differences), with runs x_1..x_R, their mean m and
 the reference mean ref = (s0 + s1) / 2:
@@ -16,7 +16,9 @@ lights, as equal_time.sh writes it): the means of v, b and n, the RMSE net of th
 noise sqrt(b + v), and the share of the variance held by the noisiest 0.1 %, 1 % and 10 % of the
 pixels; then, with --blocks B, each block's share of the net squared error and of the variance
 (B x B blocks, top row first). bias^2 from few runs is an estimate whose own noise is of the
-order of v / R per pixel; its mean over many pixels is what to read.
+order of v / R per pixel; its mean over many pixels is what to read. --region adds the pixels of
+rows Y0..Y1-1 and columns X0..X1-1 (top row 0) as a region of its own, --outside all pixels but
+those (repeatable; the blocks are of the last region, the mask's if none is given).
 
 Reads EXR through Mitsuba's Bitmap (the venv of bench/mitsuba/README.md).
 """
@@ -41,6 +43,9 @@ def main():
     ap.add_argument("--mask", help="mask.exr: pixels > 0.5 are 'away from the lights'")
     ap.add_argument("--blocks", type=int, default=0, help="print B x B block shares")
     ap.add_argument("--label", default="")
+    ap.add_argument("--region", action="append", default=[], help="NAME:Y0:Y1:X0:X1, a rectangle")
+    ap.add_argument("--outside", action="append", default=[],
+                    help="NAME:Y0:Y1:X0:X1, every pixel but the rectangle's")
     a = ap.parse_args()
     if len(a.runs) < 2:
         sys.exit("error_split.py: needs at least two runs (seeds) of the method")
@@ -59,6 +64,17 @@ def main():
     regions = [("all", np.ones(v.shape, bool))]
     if a.mask:
         regions.append(("away", load(a.mask)[..., 0] > 0.5))
+    for spec, inside in [(t, True) for t in a.region] + [(t, False) for t in a.outside]:
+        parts = spec.split(":")
+        try:
+            name, (y0, y1, x0, x1) = parts[0], [int(t) for t in parts[1:]]
+        except ValueError:
+            sys.exit(f"error_split.py: region '{spec}' is not NAME:Y0:Y1:X0:X1 (integers)")
+        rect = np.zeros(v.shape, bool)
+        rect[y0:y1, x0:x1] = True
+        if not rect.any():
+            sys.exit(f"error_split.py: region '{spec}' holds no pixel of the {v.shape[1]}x{v.shape[0]} image")
+        regions.append((name, rect if inside else ~rect))
     label = (a.label + " ") if a.label else ""
     for name, sel in regions:
         vs = np.sort(v[sel])[::-1]
