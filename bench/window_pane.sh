@@ -12,10 +12,11 @@
 #    tracer cannot render this room. The sun (1.1e-3 sr) lights the room only through glass,
 #    which next-event estimation cannot see through, so a path reaches it only when a BSDF
 #    sample from a sunlit point happens to leave through the pane towards the sun disc (about
-#    2.5e-4 of its cosine-weighted directions); Mitsuba's own run below shows what that costs. A photonflow reference cannot see
-#    photonflow's bias: the figures are the guide's error against uniform photons', the target's
-#    own terms, with both methods' common bias hidden. docs/RESULTS.md "Photons where the camera
-#    looks" has them, and the error_split.py command that says where the error lies.
+#    2.5e-4 of its cosine-weighted directions); Mitsuba's own run below shows what that costs.
+#    A photonflow reference cannot see photonflow's bias: the figures are the guide's error
+#    against uniform photons', the target's own terms, with both methods' common bias hidden.
+#    docs/RESULTS.md "Photons where the camera looks" has them, and the error_split.py command
+#    that says where the error lies.
 # 3. bench/mitsuba/equal_time.sh window-pane with METHODS (default: defaults guided
 #    mi1-multijitter), RUNS runs of TIME seconds (defaults 3 and 30).
 #
@@ -30,7 +31,8 @@ PY=${PY:-.venv-mitsuba/bin/python}
 D=$REFS/window-pane
 mkdir -p "$D/ref"
 if [ ! -f "$D/scene.h5" ]; then
-  "$BIN/scene-bake" bench/scenes/window-pane.gltf --options-file bench/scenes/window-pane.bake-options \
+  "$BIN/scene-bake" bench/scenes/window-pane.gltf \
+    --options-file bench/scenes/window-pane.bake-options \
     -o "$D/scene.h5" --width 512 --height 512 > "$D/bake.log"
   "$PY" bench/mitsuba/scene_to_mitsuba.py "$D/scene.h5" "$D/mi" > /dev/null
 fi

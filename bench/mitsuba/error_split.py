@@ -73,7 +73,8 @@ def main():
         rect = np.zeros(v.shape, bool)
         rect[y0:y1, x0:x1] = True
         if not rect.any():
-            sys.exit(f"error_split.py: region '{spec}' holds no pixel of the {v.shape[1]}x{v.shape[0]} image")
+            sys.exit(f"error_split.py: region '{spec}' holds no pixel of the "
+                     f"{v.shape[1]}x{v.shape[0]} image")
         regions.append((name, rect if inside else ~rect))
     label = (a.label + " ") if a.label else ""
     for name, sel in regions:
