@@ -30,13 +30,14 @@ std::string python3() {
 }
 
 // Bakes <dir>/<scene>.gltf as make render and docs/SCENES.md do: from the repository root, with
-// its NAME.bake-options (whose --environment sky.hdr is resolved against the options file's folder).
+// its NAME.bake-options (whose --environment sky.hdr is resolved against the options file's
+// folder).
 Scene bake_from_root(const test::TempDir& tmp, const std::string& scene, const std::string& extra,
                      const std::string& dir = "data") {
   const std::string out = tmp / (scene + ".h5"), log = tmp / (scene + ".log");
   const std::string cmd = "cd '" + test::source_dir() + "' && '" + test::bin_dir() +
-                          "/scene-bake' " + dir + "/" + scene + ".gltf -o '" + out + "' " + extra + " > '" +
-                          log + "' 2>&1";
+                          "/scene-bake' " + dir + "/" + scene + ".gltf -o '" + out + "' " + extra +
+                          " > '" + log + "' 2>&1";
   const int status = std::system(cmd.c_str());
   INFO(cmd << "\n" << test::file_bytes(log));
   REQUIRE(status == 0);
@@ -199,9 +200,9 @@ TEST_CASE("the window room behind glass: the script writes the committed files, 
   int sunlit = 0, through_glass = 0, then_sky = 0;
   for (int i = 0; i < 40; ++i)
     for (int k = 0; k < 50; ++k) {
-      const Vec3 p(open.bounds.lo.x + (float(i) + 0.5f) / 40.f * (open.bounds.hi.x - open.bounds.lo.x),
-                   1e-3f,
-                   open.bounds.lo.z + (float(k) + 0.5f) / 50.f * (open.bounds.hi.z - open.bounds.lo.z));
+      const Vec3 lo = open.bounds.lo, hi = open.bounds.hi;
+      const Vec3 p(lo.x + (float(i) + 0.5f) / 40.f * (hi.x - lo.x), 1e-3f,
+                   lo.z + (float(k) + 0.5f) / 50.f * (hi.z - lo.z));
       if (intersect_any(open, Ray{p, to_sun})) continue;
       ++sunlit;
       Hit h;
