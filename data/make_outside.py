@@ -29,7 +29,6 @@ outside").
 Determinism: as make_showcase.py (vertex values rounded to 2^-20, JSON numbers to 9 digits); the
 sky's radiance is rounded to 2^-20 before its 8-bit RGBE encoding.
 """
-import argparse
 import json
 import math
 import os
@@ -37,7 +36,8 @@ import sys
 
 sys.dont_write_bytecode = True  # no __pycache__ in data/ when the test runs this script
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import make_showcase as ms  # noqa: E402  (the meshes, the glTF writer, look_rotation, num, quant)
+# The meshes, the glTF writer, look_rotation, num, quant, and the --out folder and file writing.
+import make_showcase as ms  # noqa: E402
 
 num, quant, quad, sub = ms.num, ms.quant, ms.quad, ms.sub
 
@@ -252,11 +252,7 @@ def bake_options(scene, strength, what):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)),
-                    help="output folder (default: the script's folder, data/)")
-    out = ap.parse_args().out
-    os.makedirs(out, exist_ok=True)
+    out = ms.output_folder(__doc__, __file__)
     room, obj, binary = build()
     files = {
         "sky.hdr": sky_hdr(),
@@ -269,10 +265,7 @@ def main():
         "hdri-object.bake-options": bake_options(
             "hdri-object", OBJ_STRENGTH, "The only light: the sky and its sun.").encode(),
     }
-    for name, data in files.items():
-        with open(os.path.join(out, name), "wb") as f:
-            f.write(data)
-        print("%-26s %7d bytes" % (name, len(data)))
+    ms.write_files(out, files)
     p = sun_patch_centre()
     print("sun: elevation %.2f deg, direction (%.4f, %.4f, %.4f), radiance %.1f (luminance), "
           "%.0f x the zenith's; sun patch centre in the room (%.2f, 0, %.2f)"

@@ -505,12 +505,28 @@ def bake_options():
             "--aperture %s --focus-distance %s\n" % (num(APERTURE), "%.4f" % focus))
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)),
-                    help="output folder (default: the script's folder, data/)")
+def output_folder(doc, script):
+    """The scene scripts' one option, --out DIR (default: the folder of `script`), created; `doc`
+    is the script's docstring, whose first line is its description."""
+    ap = argparse.ArgumentParser(description=doc.split("\n")[0])
+    ap.add_argument("--out", default=os.path.dirname(os.path.abspath(script)),
+                    help="output folder (default: the script's folder)")
     out = ap.parse_args().out
     os.makedirs(out, exist_ok=True)
+    return out
+
+
+def write_files(out, files):
+    """Writes each file of `files` (name: bytes) into `out`, and lists it with its size."""
+    width = max(len(name) for name in files) + 2
+    for name, data in files.items():
+        with open(os.path.join(out, name), "wb") as f:
+            f.write(data)
+        print("%-*s %7d bytes" % (width, name, len(data)))
+
+
+def main():
+    out = output_folder(__doc__, __file__)
     files = {}
     bins = set()
     for variant in ("showcase", "showcase-caustics"):
@@ -523,10 +539,7 @@ def main():
     files["showcase_fence.png"] = fence_png()
     files["showcase_mr.png"] = mr_png()
     files["showcase.bake-options"] = bake_options().encode()
-    for name, data in files.items():
-        with open(os.path.join(out, name), "wb") as f:
-            f.write(data)
-        print("%-24s %7d bytes" % (name, len(data)))
+    write_files(out, files)
 
 
 if __name__ == "__main__":

@@ -22,15 +22,14 @@ each vertex). Bake and render:
     build/bin/scene-bake bench/scenes/glossy-room.gltf -o glossy-room.h5 --width 512 --height 512
     build/bin/render --scene glossy-room.h5 -o glossy-room.exr
 """
-import argparse
 import json
 import math
 import os
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "data"))
-from make_showcase import (GltfWriter, look_rotation, num, pbr, quad, sub,  # noqa: E402
-                           uv_sphere, WHITE, RED, GREEN)
+from make_showcase import (GltfWriter, look_rotation, num, output_folder, pbr,  # noqa: E402
+                           quad, sub, uv_sphere, write_files, WHITE, RED, GREEN)
 
 X, Y, Z0, Z1 = 1.0, 2.0, -1.0, 1.0
 METAL_CENTER, GLASS_CENTER, BALL_R = [-0.45, 0.38, -0.3], [0.45, 0.38, 0.25], 0.38
@@ -105,15 +104,10 @@ def build():
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))
-    out = ap.parse_args().out
-    os.makedirs(out, exist_ok=True)
+    out = output_folder(__doc__, __file__)
     doc, binary = build()
-    for name, data in (("glossy-room.gltf", (json.dumps(doc, indent=1) + "\n").encode()), ("glossy-room.bin", binary)):
-        with open(os.path.join(out, name), "wb") as f:
-            f.write(data)
-        print("%-20s %7d bytes" % (name, len(data)))
+    write_files(out, {"glossy-room.gltf": (json.dumps(doc, indent=1) + "\n").encode(),
+                      "glossy-room.bin": binary})
 
 
 if __name__ == "__main__":

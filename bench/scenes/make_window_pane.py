@@ -20,7 +20,6 @@ Bake and render:
     build/bin/scene-bake bench/scenes/window-pane.gltf -o window-pane.h5 --width 512 --height 512
     build/bin/render --scene window-pane.h5 -o window-pane.exr --time 30
 """
-import argparse
 import json
 import os
 import sys
@@ -85,11 +84,7 @@ def build():
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)),
-                    help="output folder (default: the script's folder, bench/scenes/)")
-    out = ap.parse_args().out
-    os.makedirs(out, exist_ok=True)
+    out = mo.ms.output_folder(__doc__, __file__)
     doc, binary = build()
     options = ("# scene-bake options of bench/scenes/window-pane.gltf (written by\n"
                "# bench/scenes/make_window_pane.py): data/window-room's sky, through glass.\n"
@@ -98,9 +93,7 @@ def main():
                % mo.num(mo.ROOM_STRENGTH))
     files = {"window-pane.gltf": (json.dumps(doc, indent=1) + "\n").encode(),
              "window-pane.bin": binary, "window-pane.bake-options": options.encode()}
-    for name, data in files.items():
-        with open(os.path.join(out, name), "wb") as f:
-            f.write(data)
+    mo.ms.write_files(out, files)
 
 
 if __name__ == "__main__":
