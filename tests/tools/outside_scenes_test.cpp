@@ -54,6 +54,21 @@ Vec3 texel_direction(const Environment& env, int row, int col) {
   return Vec3(std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi));
 }
 
+// The brightest texel of the map (the sun), as an index into its texels.
+size_t brightest_texel(const Environment& env) {
+  size_t best = 0;
+  for (size_t i = 0; i < size_t(env.width) * size_t(env.height); ++i)
+    if (luminance(&env.texels[3 * i]) > luminance(&env.texels[3 * best])) best = i;
+  return best;
+}
+
+// Point (i, k) of a kFloorX × kFloorZ grid over the floor y = 0 of bounds b, 1 mm above it.
+constexpr int kFloorX = 40, kFloorZ = 50;
+Vec3 floor_point(const Bounds& b, int i, int k) {
+  return Vec3(b.lo.x + (float(i) + 0.5f) / float(kFloorX) * (b.hi.x - b.lo.x), 1e-3f,
+              b.lo.z + (float(k) + 0.5f) / float(kFloorZ) * (b.hi.z - b.lo.z));
+}
+
 }  // namespace
 
 TEST_CASE("make_outside.py writes exactly the committed sky and outside scenes", "[outside]") {
@@ -91,9 +106,7 @@ TEST_CASE("the window room: the sky is its one light, the sun comes in through t
   CHECK(env.strength > 1.f);
 
   // The sun: the brightest texel, 10^3 .. 10^4 times the zenith's radiance, above the horizon.
-  size_t sun = 0;
-  for (size_t i = 0; i < size_t(env.width) * size_t(env.height); ++i)
-    if (luminance(&env.texels[3 * i]) > luminance(&env.texels[3 * sun])) sun = i;
+  const size_t sun = brightest_texel(env);
   const float zenith = luminance(&env.texels[3 * size_t(env.width / 2)]);
   const float ratio = luminance(&env.texels[3 * sun]) / zenith;
   CHECK(ratio > 1e3f);
@@ -105,10 +118,9 @@ TEST_CASE("the window room: the sky is its one light, the sun comes in through t
   // and the camera sees some of them (its ray to the point hits the floor there).
   int sunlit = 0, seen = 0;
   const Vec3 eye(s.camera.eye);
-  for (int i = 0; i < 40; ++i)
-    for (int k = 0; k < 50; ++k) {
-      const Vec3 p(s.bounds.lo.x + (float(i) + 0.5f) / 40.f * (s.bounds.hi.x - s.bounds.lo.x), 1e-3f,
-                   s.bounds.lo.z + (float(k) + 0.5f) / 50.f * (s.bounds.hi.z - s.bounds.lo.z));
+  for (int i = 0; i < kFloorX; ++i)
+    for (int k = 0; k < kFloorZ; ++k) {
+      const Vec3 p = floor_point(s.bounds, i, k);
       if (intersect_any(s, Ray{p, to_sun})) continue;
       ++sunlit;
       const Vec3 d = p - eye;
@@ -191,18 +203,14 @@ TEST_CASE("the window room behind glass: the script writes the committed files, 
 
   // The sun's direction: the brightest texel.
   const Environment& env = pane.environment;
-  size_t sun = 0;
-  for (size_t i = 0; i < size_t(env.width) * size_t(env.height); ++i)
-    if (luminance(&env.texels[3 * i]) > luminance(&env.texels[3 * sun])) sun = i;
+  const size_t sun = brightest_texel(env);
   const Vec3 to_sun = texel_direction(env, int(sun) / env.width, int(sun) % env.width);
   // Every floor point the open window lets the sun reach has the pane's glass first on its ray to
   // the sun, and behind the glass the sky: the pane fills the window, and nothing else changed.
   int sunlit = 0, through_glass = 0, then_sky = 0;
-  for (int i = 0; i < 40; ++i)
-    for (int k = 0; k < 50; ++k) {
-      const Vec3 lo = open.bounds.lo, hi = open.bounds.hi;
-      const Vec3 p(lo.x + (float(i) + 0.5f) / 40.f * (hi.x - lo.x), 1e-3f,
-                   lo.z + (float(k) + 0.5f) / 50.f * (hi.z - lo.z));
+  for (int i = 0; i < kFloorX; ++i)
+    for (int k = 0; k < kFloorZ; ++k) {
+      const Vec3 p = floor_point(open.bounds, i, k);
       if (intersect_any(open, Ray{p, to_sun})) continue;
       ++sunlit;
       Hit h;
